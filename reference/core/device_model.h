@@ -1,0 +1,35 @@
+// The device-model interface the observer and the tick use (thesis (2.1)-(2.2), (3.7)).
+//
+// Joint-space dynamics, generalised coordinates q (n = dof()):
+//     M(q) qdd + C(q, qd) qd + g(q) + tau_f(q, qd) = tau + f_h
+// with M symmetric positive definite, C any factorisation with dM/dt = C + C^T (Christoffel),
+// g(q) the generalised gravity force, tau_f the joint friction (viscous B_d qd plus Coulomb),
+// tau the motor torques and f_h the human's joint torques. Gravity and friction are what the
+// device would need compensated; the thesis assumes them compensated (2.1) — the observer
+// includes them explicitly so that an uncompensated device gives no bias.
+#pragma once
+
+#include "reference/core/types.h"
+
+namespace dentsim {
+
+class DeviceModel {
+ public:
+  virtual ~DeviceModel() = default;
+  virtual int dof() const = 0;
+  virtual MatX mass_matrix(const VecX& q) const = 0;                        // M(q)
+  virtual MatX coriolis_matrix(const VecX& q, const VecX& qd) const = 0;     // C(q, qd)
+  virtual VecX gravity(const VecX& q) const = 0;                             // g(q)
+  virtual VecX friction_torque(const VecX& q, const VecX& qd) const = 0;     // tau_f(q, qd)
+};
+
+// A 6-DoF device with a tool-tip frame: forward kinematics (x1, R1) and the modified Jacobian
+// J1 of (2.2), qd = J1 V1 with V1 = [v1 (world); w1 (body)].
+class SixDofDeviceModel : public DeviceModel {
+ public:
+  int dof() const override { return 6; }
+  virtual Pose forward_kinematics(const VecX& q) const = 0;
+  virtual Mat6 twist_to_joint(const VecX& q) const = 0;  // J1(q)
+};
+
+}  // namespace dentsim
