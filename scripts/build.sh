@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# Configures and builds one flavour of dentsim.  Usage: scripts/build.sh release|asan [targets...]
+#   release: build/release, Release (the default flavour, what the simulator and benchmarks use)
+#   asan:    build/asan, Release + AddressSanitizer + UndefinedBehaviorSanitizer (tests only)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+flavour=${1:-release}
+shift || true
+jobs=$(nproc 2>/dev/null || echo 2)
+case "$flavour" in
+  release) extra=(-DCMAKE_BUILD_TYPE=Release) ;;
+  asan)    extra=(-DCMAKE_BUILD_TYPE=Release -DDENTSIM_SANITIZE=ON -DDENTSIM_BUILD_BENCHMARKS=OFF) ;;
+  *) echo "build.sh: unknown flavour '$flavour' (expected release or asan)" >&2; exit 2 ;;
+esac
+mkdir -p build
+log="build/$flavour.configure.log"
+cmake -S . -B "build/$flavour" "${extra[@]}" > "$log" 2>&1 || { cat "$log" >&2; exit 1; }
+if [ $# -gt 0 ]; then
+  cmake --build "build/$flavour" -j"$jobs" --target "$@"
+else
+  cmake --build "build/$flavour" -j"$jobs"
+fi

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# README command 2: install what is missing, build, and run the whole test suite — first the
+# Release build, then the same suite under AddressSanitizer + UndefinedBehaviorSanitizer.
+# Stress suites run in their short form unless DENTSIM_STRESS=full.
+# Usage: scripts/test.sh            (both flavours)
+#        scripts/test.sh release    (one flavour)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/setup.sh
+jobs=$(nproc 2>/dev/null || echo 2)
+flavours=("$@")
+[ ${#flavours[@]} -gt 0 ] || flavours=(release asan)
+for f in "${flavours[@]}"; do
+  echo "== build ($f)"
+  start=$(date +%s)
+  scripts/build.sh "$f"
+  echo "== build ($f) took $(( $(date +%s) - start )) s"
+  echo "== tests ($f)"
+  start=$(date +%s)
+  (cd "build/$f" && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
+     UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+     ctest --output-on-failure -j"$jobs" --timeout 900)
+  echo "== tests ($f) took $(( $(date +%s) - start )) s"
+done
