@@ -1,0 +1,91 @@
+#include "reference/pmi.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "reference/core/io.h"
+#include "reference/core/so3.h"
+
+namespace dentsim {
+
+namespace {
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw InputError("ProxyParams: " + what);
+}
+
+}  // namespace
+
+void validate_proxy_params(const ProxyParams& p) {
+  require(std::isfinite(p.mass) && p.mass > 0.0,
+          "mass must be finite and > 0 kg, got " + std::to_string(p.mass));
+  require(p.inertia.allFinite(), "inertia must be finite");
+  require((p.inertia - p.inertia.transpose()).norm() <= 1e-12 * p.inertia.norm(),
+          "inertia must be symmetric");
+  const Eigen::SelfAdjointEigenSolver<Mat3> eig(p.inertia, Eigen::EigenvaluesOnly);
+  require(eig.eigenvalues().minCoeff() > 0.0, "inertia must be positive definite (kg m^2)");
+  require(std::isfinite(p.damping_lin) && p.damping_lin >= 0.0,
+          "damping_lin must be finite and >= 0 N s/m, got " + std::to_string(p.damping_lin));
+  require(std::isfinite(p.damping_ang) && p.damping_ang >= 0.0,
+          "damping_ang must be finite and >= 0 N m s/rad, got " + std::to_string(p.damping_ang));
+}
+
+void validate_tick_length(double T) {
+  if (!(std::isfinite(T) && T > 0.0)) {
+    throw InputError("tick length T must be finite and > 0 s, got " + std::to_string(T));
+  }
+}
+
+PmiSystem pmi_inertia_system(const ProxyParams& p, const ProxyState& s, double T) {
+  validate_proxy_params(p);
+  validate_tick_length(T);
+  const Mat6 M = p.M();
+  PmiSystem sys;
+  sys.A = M * (2.0 / T) + p.B();  // (4.2) left-hand side
+  if (p.gyroscopic) {
+    // (2.8): C_k = diag(0, -S(J w_k)), skew, so it does no work on V_hat.
+    sys.A.bottomRightCorner<3, 3>() -= skew(p.inertia * ang(s.V));
+  }
+  sys.b = M * (2.0 / T) * s.V;  // (4.2) right-hand side, inertia part
+  return sys;
+}
+
+Vec6 pmi_solve(const PmiSystem& sys) {
+  if (!sys.A.allFinite() || !sys.b.allFinite()) {
+    throw std::runtime_error("pmi_solve: the PMI system (4.9) is not finite");
+  }
+  // Symmetric diagonal scaling with D = diag(1/sqrt|A_ii|): solve (D A D) y = D b, V_hat = D y.
+  Vec6 d;
+  for (int i = 0; i < 6; ++i) {
+    const double a = std::abs(sys.A(i, i));
+    d(i) = a > 0.0 ? 1.0 / std::sqrt(a) : 1.0;
+  }
+  const Mat6 As = d.asDiagonal() * sys.A * d.asDiagonal();
+  const Eigen::FullPivLU<Mat6> lu(As);
+  if (!lu.isInvertible()) {
+    throw std::runtime_error("pmi_solve: the PMI matrix A of (4.9) is singular");
+  }
+  const Vec6 y = lu.solve(d.cwiseProduct(sys.b));
+  const Vec6 V_hat = d.cwiseProduct(y);
+  if (!V_hat.allFinite()) throw std::runtime_error("pmi_solve: V_hat is not finite");
+  return V_hat;
+}
+
+ProxyState pmi_advance(const ProxyState& s, const Vec6& V_hat, double T) {
+  validate_tick_length(T);
+  ProxyState n;
+  n.V = 2.0 * V_hat - s.V;                          // (2.7): V_hat = (V_k + V_k+1)/2
+  n.pose.x = s.pose.x + T * lin(V_hat);             // (2.7): v_hat = (x_k+1 - x_k)/T
+  n.pose.R = s.pose.R * exp_so3(T * ang(V_hat));    // R_k+1 = R_k exp(S(w_hat T))
+  n.V_hat_prev = V_hat;                             // seen by the device side (4.3)-(4.4)
+  return n;
+}
+
+double proxy_kinetic_energy(const ProxyParams& p, const Vec6& V) {
+  return 0.5 * V.dot(p.M() * V);
+}
+
+}  // namespace dentsim
