@@ -1,0 +1,72 @@
+// Explicit double instantiation of the Phantom model and the DeviceModel adapter.
+#include "reference/phantom/phantom_model.h"
+
+#include <stdexcept>
+#include <string>
+
+namespace dentsim {
+
+template class PhantomModelT<double>;
+template PhantomTreeT<double> phantom_tree<double>(const PhantomParams&);
+
+const char* phantom_tree_body_name(int body) {
+  static const char* const kNames[kPhantomTreeDof] = {
+      "base", "upper_arm", "forearm", "crank", "parallel_link", "gimbal_yaw", "gimbal_pitch",
+      "gimbal_roll"};
+  if (body < 0 || body >= kPhantomTreeDof) throw std::out_of_range("phantom tree body index");
+  return kNames[body];
+}
+
+int phantom_actuated_tree_joint(int device_joint) {
+  static const int kMap[6] = {kBase, kUpperArm, kCrank, kGimbalYaw, kGimbalPitch, kGimbalRoll};
+  if (device_joint < 0 || device_joint >= 6) throw std::out_of_range("phantom device joint");
+  return kMap[device_joint];
+}
+
+Eigen::Matrix<double, kPhantomTreeDof, 6> phantom_tree_map() {
+  Eigen::Matrix<double, kPhantomTreeDof, 6> G = Eigen::Matrix<double, kPhantomTreeDof, 6>::Zero();
+  G(kBase, 0) = 1.0;                                         // theta_0 = q1
+  G(kUpperArm, 1) = 1.0;                                     // theta_1 = q2
+  G(kForearm, 1) = -1.0;  G(kForearm, 2) = 1.0;              // theta_2 = q3 - q2 (elbow)
+  G(kCrank, 2) = 1.0;                                        // theta_3 = q3
+  G(kParallelLink, 1) = 1.0;  G(kParallelLink, 2) = -1.0;    // theta_4 = q2 - q3
+  G(kGimbalYaw, 3) = 1.0;
+  G(kGimbalPitch, 4) = 1.0;
+  G(kGimbalRoll, 5) = 1.0;
+  return G;
+}
+
+namespace {
+Vec6 as6(const VecX& v, const char* what) {
+  if (v.size() != 6) {
+    throw std::invalid_argument(std::string("PhantomModel: ") + what + " must have 6 entries, got " +
+                                std::to_string(v.size()));
+  }
+  return v;
+}
+}  // namespace
+
+PhantomModel::PhantomModel(PhantomParams params)
+    : params_(std::move(params)), model_(params_) {}
+
+MatX PhantomModel::mass_matrix(const VecX& q) const { return model_.M(as6(q, "q")); }
+
+MatX PhantomModel::coriolis_matrix(const VecX& q, const VecX& qd) const {
+  return model_.C(as6(q, "q"), as6(qd, "qd"));
+}
+
+VecX PhantomModel::gravity(const VecX& q) const { return model_.g(as6(q, "q")); }
+
+VecX PhantomModel::friction_torque(const VecX& /*q*/, const VecX& qd) const {
+  return model_.friction(as6(qd, "qd"));
+}
+
+Pose PhantomModel::forward_kinematics(const VecX& q) const {
+  Pose pose;
+  model_.fk(as6(q, "q"), &pose.x, &pose.R);
+  return pose;
+}
+
+Mat6 PhantomModel::twist_to_joint(const VecX& q) const { return model_.J1(as6(q, "q")); }
+
+}  // namespace dentsim
