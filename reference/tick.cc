@@ -1,0 +1,152 @@
+#include "reference/tick.h"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "reference/contact.h"
+#include "reference/coupling.h"
+#include "reference/decomposition.h"
+#include "reference/explicit_euler.h"
+#include "reference/friction.h"
+#include "reference/observer.h"
+#include "reference/pmi.h"
+
+namespace dentsim {
+
+ReferencePipeline::ReferencePipeline(const SixDofDeviceModel& device, PipelineConfig config)
+    : device_(device), config_(std::move(config)) {
+  const int n = device_.dof();
+  if (config_.observer_gain.size() != 0) {
+    if (config_.observer_gain.size() != n) {
+      throw std::invalid_argument("observer gain has " +
+                                  std::to_string(config_.observer_gain.size()) +
+                                  " entries; the device has " + std::to_string(n) + " joints");
+    }
+    observer_ = std::make_unique<MomentumObserver>(device_, config_.observer_gain);
+  } else if (config_.method == Method::kPmiPd) {
+    throw std::invalid_argument("method pmi-pd needs the observer gain L (one per joint)");
+  }
+  if (config_.torque_limit.size() != 0 && config_.torque_limit.size() != n) {
+    throw std::invalid_argument("torque limit has " +
+                                std::to_string(config_.torque_limit.size()) +
+                                " entries; the device has " + std::to_string(n) + " joints");
+  }
+  tau_prev_ = VecX::Zero(n);
+  result_.tau = VecX::Zero(n);
+}
+
+ReferencePipeline::~ReferencePipeline() = default;
+
+void ReferencePipeline::reset(const DeviceSample& s) {
+  proxy_ = ProxyState{};
+  proxy_.pose = device_.forward_kinematics(s.q);
+  tau_prev_.setZero();
+  if (observer_) observer_->reset(s.q, s.qd);
+  t_prev_ = s.t;
+  have_prev_ = false;
+  result_ = TickResult{};
+  result_.tau = VecX::Zero(device_.dof());
+}
+
+const TickResult& ReferencePipeline::tick(const DeviceSample& s, double T,
+                                          ContactProvider& contacts) {
+  if (!(T > 0.0) || !std::isfinite(T)) {
+    throw std::invalid_argument("tick length must be positive and finite");
+  }
+  TickResult& r = result_;
+  const Method method = config_.method;
+  const Scheme scheme = method == Method::kExplicitVc ? Scheme::kExplicit : Scheme::kMidpoint;
+
+  // Device kinematics (2.2): x1, R1, V1 = J1^-1 qd.
+  r.device = device_.forward_kinematics(s.q);
+  const Mat6 J1 = device_.twist_to_joint(s.q);
+  const Eigen::PartialPivLU<Mat6> J1_lu(J1);
+  r.V1 = J1_lu.solve(Vec6(s.qd));
+
+  // Observer (3.7)-(3.8): joint estimate from the torque applied over the last tick, which
+  // lasted from the previous sample to this one (tick lengths may vary).
+  r.F1_hat.setZero();
+  const double T_last = have_prev_ && s.t > t_prev_ ? s.t - t_prev_ : T;
+  t_prev_ = s.t;
+  have_prev_ = true;
+  if (observer_) {
+    const VecX& f1_hat = observer_->update(s.q, s.qd, tau_prev_, T_last);
+    r.F1_hat = J1.transpose() * f1_hat;  // F1 = J1^T f1
+  }
+
+  // Collision.
+  contacts.contacts(proxy_.pose, r.contacts);
+  r.max_depth = 0.0;
+  for (const Contact& c : r.contacts) {
+    r.max_depth = std::max(r.max_depth, penetration_depth(c, proxy_.pose));
+  }
+
+  // Force elements on the proxy, affine in the velocity they are evaluated at.
+  const AffineWrench coupling =
+      coupling_proxy_wrench(config_.coupling, r.device, r.V1, proxy_, T, scheme);
+  const AffineWrench contact = contact_wrench(r.contacts, proxy_.pose, T, scheme);
+  AffineWrench pd_T1, pd_T2;
+  if (method == Method::kPmiPd) {
+    const Mat6 M1 = J1.transpose() * device_.mass_matrix(s.q) * J1;  // (2.2)
+    const Decomposition d = decompose(M1, config_.proxy.M(), r.device.R, proxy_.pose.R);
+    const PdFeedforward pd = pd_feedforward(d, config_.tool, r.V1, r.F1_hat, contact);
+    pd_T1 = pd.T1;
+    pd_T2 = pd.T2;
+  }
+
+  // Device-side coupling (4.3)-(4.4): uses the proxy at k and V_hat_2,k-1.
+  r.T1_vc = coupling_device_wrench(config_.coupling, r.device, r.V1, proxy_, T, scheme);
+
+  Vec6 friction_wrench = Vec6::Zero();
+  r.friction_sliding = false;
+  if (method == Method::kExplicitVc) {
+    // Explicit Euler: every force at V_k.
+    r.V_hat = proxy_.V;
+    const Vec6 F = coupling.at(proxy_.V) + contact.at(proxy_.V);
+    r.F_coupling = coupling.at(proxy_.V);
+    r.F_contact = contact.at(proxy_.V);
+    r.T1_pd.setZero();
+    proxy_ = explicit_euler_advance(config_.proxy, proxy_, F, T);
+  } else {
+    // PMI (4.9): one linear solve for V_hat, friction as tangential multipliers (2.21)-(2.22).
+    PmiSystem sys = pmi_inertia_system(config_.proxy, proxy_, T);
+    sys.add(coupling);
+    sys.add(contact);
+    if (method == Method::kPmiPd) sys.add(pd_T2);
+    if (config_.friction.enabled && !r.contacts.empty()) {
+      const FrictionSolution fs =
+          solve_with_friction(sys, r.contacts, proxy_.pose, contact, config_.friction);
+      r.V_hat = fs.V;
+      r.friction_sliding = fs.sliding;
+      friction_wrench = sys.A * fs.V - sys.b;  // what the multipliers added to the balance
+    } else {
+      r.V_hat = pmi_solve(sys);
+    }
+    r.F_coupling = coupling.at(r.V_hat);
+    r.F_contact = contact.at(r.V_hat) + friction_wrench;
+    r.T1_pd = method == Method::kPmiPd ? pd_T1.at(r.V_hat) : Vec6::Zero();
+    proxy_ = pmi_advance(proxy_, r.V_hat, T);
+  }
+
+  // Device command: tau1 = J1^-T T1, scaled down uniformly (direction kept) to the limits.
+  r.T1 = r.T1_vc + r.T1_pd;
+  r.tau = J1_lu.transpose().solve(r.T1);
+  r.saturated = false;
+  if (config_.torque_limit.size() != 0) {
+    double scale = 1.0;
+    for (int i = 0; i < r.tau.size(); ++i) {
+      const double a = std::abs(r.tau(i));
+      if (a > config_.torque_limit(i)) scale = std::min(scale, config_.torque_limit(i) / a);
+    }
+    if (scale < 1.0) {
+      r.tau *= scale;
+      r.saturated = true;
+    }
+  }
+  tau_prev_ = r.tau;
+  return r;
+}
+
+}  // namespace dentsim
