@@ -44,13 +44,6 @@ class NoContacts : public ContactProvider {
   void contacts(const Pose&, std::vector<Contact>& out) override { out.clear(); }
 };
 
-// One device sample as the driver reports it.
-struct DeviceSample {
-  VecX q;          // joint angles [rad] (or the model's coordinates)
-  VecX qd;         // joint velocities as the driver computes them
-  double t = 0.0;  // time of the sample [s]
-};
-
 struct PipelineConfig {
   Method method = Method::kPmiVc;
   ProxyParams proxy;

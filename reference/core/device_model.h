@@ -13,6 +13,14 @@
 
 namespace dentsim {
 
+// One device sample at the start of a tick, as the driver reports it (device/ and the pipeline
+// share it).
+struct DeviceSample {
+  VecX q;          // joint angles [rad] as the encoders report them (quantised)
+  VecX qd;         // joint velocities [rad/s] as the driver estimates them from q
+  double t = 0.0;  // device clock [s]
+};
+
 class DeviceModel {
  public:
   virtual ~DeviceModel() = default;

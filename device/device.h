@@ -1,0 +1,101 @@
+// The haptic-device interface of dentsim (issue #3): what every backend (the MuJoCo-simulated
+// Phantom, the OpenHaptics backend, log replay) implements and what the servo loop talks to.
+//
+// One servo tick, as on hardware (DESIGN.md "One servo tick"):
+//     device.read(sample);        // q [rad], qd [rad/s] (estimated), t [s] at the start of tick k
+//     ... pipeline computes tau ...
+//     device.write(tau);          // joint torques [N m], held (zero-order hold) over tick k
+//     device.advance();           // the device runs tick k (length T_k); a real backend waits
+//
+// Units: SI. q and tau are in the device's joint coordinates (for the Phantom: q1 base yaw, q2
+// upper-arm elevation, q3 absolute forearm angle, q4..q6 gimbal), index 1 = device.
+//
+// Command chain (STYLE.md "Real-time loop"): every command passes finite check -> fault threshold
+// -> saturation to the device limits. A fault (non-finite torque, torque beyond the fault
+// threshold, non-monotonic time, encoder jump) latches a named flag and brings the device to a
+// safe stop: zero torque until clear_faults(). Nothing in read/write/advance allocates once the
+// sample has been sized with make_sample().
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "reference/core/device_model.h"
+#include "reference/core/types.h"
+
+namespace dentsim {
+
+// DeviceSample (q, qd, t) is shared with the pipeline: reference/core/device_model.h.
+
+// Latched fault flags (bit set). A set flag means the device is in safe stop (zero torque).
+enum DeviceFault : std::uint32_t {
+  kFaultNone = 0,
+  kFaultNonFiniteTorque = 1u << 0,    // a commanded torque was NaN or infinite
+  kFaultTorqueBeyondLimit = 1u << 1,  // |tau_cmd_i| > tau_fault_i
+  kFaultNonMonotonicTime = 1u << 2,   // sample time did not increase (t_k <= t_k-1)
+  kFaultEncoderJump = 1u << 3,        // |q_k - q_k-1| > max_joint_step on some joint
+};
+
+// Name of one flag ("non_finite_torque", ...); "none" for kFaultNone, "unknown" otherwise.
+const char* fault_name(DeviceFault f);
+// All set flags, comma separated ("none" when no flag is set).
+std::string fault_string(std::uint32_t faults);
+
+// Limits of a device, per joint.
+struct DeviceLimits {
+  VecX tau_max;     // saturation [N m]: the torque applied is clipped to [-tau_max, tau_max]
+  VecX tau_fault;   // fault threshold [N m]: |tau_cmd| > tau_fault is a fault (safe stop)
+  double max_joint_step = 0.1;  // [rad] largest credible encoder change in one tick
+};
+
+// What a device can do and report.
+struct DeviceCapabilities {
+  int dof = 0;
+  bool measures_velocity = false;  // false: qd is differentiated from q by the driver
+  bool has_force_sensor = false;
+  bool simulated = false;
+  double nominal_period = 1e-3;    // nominal servo tick [s]
+  VecX encoder_quantum;            // joint-angle resolution [rad] (0 = not quantised)
+};
+
+class Device {
+ public:
+  virtual ~Device() = default;
+  virtual const DeviceCapabilities& capabilities() const = 0;
+  virtual const DeviceLimits& limits() const = 0;
+  int dof() const { return capabilities().dof; }
+
+  // Writes the latest sample into `out` (sized by make_sample(): no allocation).
+  virtual void read(DeviceSample& out) const = 0;
+  // Commands joint torques [N m] for the next tick; they pass the command chain and are held.
+  virtual void write(const VecX& tau) = 0;
+  // Runs one servo tick.
+  virtual void advance() = 0;
+  // The torque actually applied over the last (or next) tick, after the command chain [N m].
+  virtual const VecX& applied_torque() const = 0;
+
+  virtual std::uint32_t faults() const = 0;
+  virtual void clear_faults() = 0;
+
+  // A sample sized for this device (allocate once, before the loop).
+  DeviceSample make_sample() const {
+    DeviceSample s;
+    s.q = VecX::Zero(dof());
+    s.qd = VecX::Zero(dof());
+    return s;
+  }
+};
+
+// The command chain shared by all backends: finite check -> fault threshold -> saturation
+// (when `saturate`). Writes the torque to apply into `tau_out` (same size as tau_cmd; zero on a
+// fault) and returns the fault flags found (kFaultNone if the command is acceptable). Throws
+// InputError if the sizes of tau_cmd and the limits differ. Does not allocate when tau_out has the
+// right size.
+std::uint32_t condition_command(const VecX& tau_cmd, const DeviceLimits& limits, bool saturate,
+                                VecX& tau_out);
+
+// Faults visible in a new sample given the previous one: non-monotonic time and encoder jumps.
+std::uint32_t check_sample(const VecX& q_prev, double t_prev, const VecX& q, double t,
+                           const DeviceLimits& limits);
+
+}  // namespace dentsim
