@@ -35,8 +35,8 @@ AffineWrench coupling_proxy_wrench(const CouplingGains& g, const Pose& device, c
   AffineWrench F;
   // (4.5)/(4.6): the parts independent of the proxy velocity.
   lin(F.f0) = -g.k_lin * (proxy.pose.x - device.x) + g.b_lin * lin(V1);
-  ang(F.f0) = g.k_ang * so3_spring_vector(R21)            // -k(-phi_21/(2 sin phi_21) w_bar_21)
-              + g.b_ang * (R21 * ang(V1));                // w1 seen in the proxy frame
+  ang(F.f0) = g.k_ang * so3_spring_vector(R21)  // -k(-phi_21/(2 sin phi_21) w_bar_21)
+              + g.b_ang * (R21 * ang(V1));      // w1 seen in the proxy frame
   // Velocity-dependent parts: dampers on V, plus the midpoint terms T/2 v_hat (2.7) and
   // T/2 w_hat (2.13) of the springs for PMI.
   const double half_T = scheme == Scheme::kMidpoint ? 0.5 * T : 0.0;
@@ -56,8 +56,8 @@ Vec6 coupling_device_wrench(const CouplingGains& g, const Pose& device, const Ve
   const Vec3 w1 = ang(V1);
   Vec6 F;
   lin(F) = -g.k_lin * (device.x - proxy.pose.x) - g.b_lin * (lin(V1) - lin(V2));  // (4.3)
-  ang(F) = g.k_ang * so3_spring_vector(R12)              // -k(-phi_12/(2 sin phi_12) w_bar_12)
-           - g.b_ang * (w1 - R12 * ang(V2));              // (4.4) damper, w2 seen in frame 1
+  ang(F) = g.k_ang * so3_spring_vector(R12)   // -k(-phi_12/(2 sin phi_12) w_bar_12)
+           - g.b_ang * (w1 - R12 * ang(V2));  // (4.4) damper, w2 seen in frame 1
   if (scheme == Scheme::kMidpoint) ang(F) -= g.k_ang * 0.5 * T * w1;  // (4.4) T/2 w1 term
   return F;
 }

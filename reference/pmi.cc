@@ -77,15 +77,13 @@ Vec6 pmi_solve(const PmiSystem& sys) {
 ProxyState pmi_advance(const ProxyState& s, const Vec6& V_hat, double T) {
   validate_tick_length(T);
   ProxyState n;
-  n.V = 2.0 * V_hat - s.V;                          // (2.7): V_hat = (V_k + V_k+1)/2
-  n.pose.x = s.pose.x + T * lin(V_hat);             // (2.7): v_hat = (x_k+1 - x_k)/T
-  n.pose.R = s.pose.R * exp_so3(T * ang(V_hat));    // R_k+1 = R_k exp(S(w_hat T))
-  n.V_hat_prev = V_hat;                             // seen by the device side (4.3)-(4.4)
+  n.V = 2.0 * V_hat - s.V;                        // (2.7): V_hat = (V_k + V_k+1)/2
+  n.pose.x = s.pose.x + T * lin(V_hat);           // (2.7): v_hat = (x_k+1 - x_k)/T
+  n.pose.R = s.pose.R * exp_so3(T * ang(V_hat));  // R_k+1 = R_k exp(S(w_hat T))
+  n.V_hat_prev = V_hat;                           // seen by the device side (4.3)-(4.4)
   return n;
 }
 
-double proxy_kinetic_energy(const ProxyParams& p, const Vec6& V) {
-  return 0.5 * V.dot(p.M() * V);
-}
+double proxy_kinetic_energy(const ProxyParams& p, const Vec6& V) { return 0.5 * V.dot(p.M() * V); }
 
 }  // namespace dentsim

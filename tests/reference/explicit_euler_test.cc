@@ -1,12 +1,13 @@
 // Tests for reference/explicit_euler.h: the explicit-Euler baseline proxy ("standard" virtual
 // coupling, thesis §4.2), against closed forms and against PMI with the same coupling.
+// Tolerances: docs/tolerance_policy.md (round-off bounds state c and the scale; discretisation
+// orders are checked by the error ratio when T is halved).
 #include "reference/explicit_euler.h"
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
 #include <Eigen/LU>
-
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -115,8 +116,8 @@ double energy(const ProxyParams& p, const CouplingGains& g, const ProxyState& s)
   return proxy_kinetic_energy(p, s.V) + coupling_potential(g, Pose{}, s.pose);
 }
 
-// Explicit Euler of m x'' = -k x maps (omega x, v) to sqrt(1 + (omega T)^2) times a rotation, so the
-// energy is multiplied by exactly 1 + (omega T)^2 every tick: per period of n = round(2 pi /
+// Explicit Euler of m x'' = -k x maps (omega x, v) to sqrt(1 + (omega T)^2) times a rotation, so
+// the energy is multiplied by exactly 1 + (omega T)^2 every tick: per period of n = round(2 pi /
 // (omega T)) ticks, by (1 + (omega T)^2)^n. PMI with the same coupling conserves it.
 TEST(ExplicitEuler, UndampedCouplingGainsEnergyEveryPeriodWherePmiDoesNot) {
   const ProxyParams p = test_params();
@@ -142,9 +143,10 @@ TEST(ExplicitEuler, UndampedCouplingGainsEnergyEveryPeriodWherePmiDoesNot) {
         const double E = energy(p, o.g, ee);
         const double growth = E / E_prev;
         if (period == 0) {
-          std::printf("%s, T = %.0e s: %ld ticks/period, explicit growth per period %.6f, "
-                      "closed form %.6f; PMI max rel energy error %.2e\n",
-                      o.name, T, n, growth, closed_form, worst_pmi);
+          std::printf(
+              "%s, T = %.0e s: %ld ticks/period, explicit growth per period %.6f, "
+              "closed form %.6f; PMI max rel energy error %.2e\n",
+              o.name, T, n, growth, closed_form, worst_pmi);
         }
         EXPECT_GT(growth, 1.0);
         EXPECT_NEAR(growth / closed_form, 1.0, 0.01) << o.name << " T " << T;

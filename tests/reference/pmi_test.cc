@@ -5,6 +5,8 @@
 // with D_k = T V_hat^T B V_hat. PMI satisfies it exactly in exact arithmetic, so the tests compare
 // the residual with the round-off of the energies involved (unit round-off u = 1.1e-16 times the
 // energy level per operation).
+// Tolerances: docs/tolerance_policy.md (round-off bounds state c and the scale; discretisation
+// orders are checked by the error ratio when T is halved).
 #include "reference/pmi.h"
 
 #include <gtest/gtest.h>
@@ -33,7 +35,9 @@ AffineWrench anchor_spring(double k, const Vec3& a, const Vec3& x, double T) {
   return F;
 }
 
-double spring_energy(double k, const Vec3& a, const Vec3& x) { return 0.5 * k * (x - a).squaredNorm(); }
+double spring_energy(double k, const Vec3& a, const Vec3& x) {
+  return 0.5 * k * (x - a).squaredNorm();
+}
 
 ProxyParams test_params() {
   ProxyParams p;
@@ -88,8 +92,8 @@ TEST(Pmi, AdvanceImplementsThe27Kinematics) {
   const double T = 2e-3;
   const ProxyState n = pmi_advance(s, V_hat, T);
   EXPECT_LT((n.V - (2.0 * V_hat - s.V)).norm(), 1e-15);
-  EXPECT_LT((0.5 * (n.V + s.V) - V_hat).norm(), 1e-15);                       // (2.7)
-  EXPECT_LT(((n.pose.x - s.pose.x) / T - lin(V_hat)).norm(), 1e-12);         // (2.7)
+  EXPECT_LT((0.5 * (n.V + s.V) - V_hat).norm(), 1e-15);               // (2.7)
+  EXPECT_LT(((n.pose.x - s.pose.x) / T - lin(V_hat)).norm(), 1e-12);  // (2.7)
   EXPECT_LT((s.pose.R.transpose() * n.pose.R - exp_so3(T * ang(V_hat))).norm(), 1e-15);
   EXPECT_EQ(n.V_hat_prev, V_hat);
 }
@@ -160,13 +164,14 @@ TEST(Pmi, DiscreteEnergyBalancePerTickLinearSpringDamper) {
     const double dP = spring_energy(k, a, n.pose.x) - spring_energy(k, a, s.pose.x);
     const double D = T * V_hat.dot(p.B() * V_hat);
     ASSERT_GT(D, 0.0);
-    const double scale = proxy_kinetic_energy(p, s.V) + spring_energy(k, a, s.pose.x) +
-                         std::abs(W) + D;
+    const double scale =
+        proxy_kinetic_energy(p, s.V) + spring_energy(k, a, s.pose.x) + std::abs(W) + D;
     const double rel = std::abs(W - dKE - dP - D) / scale;
     worst = std::max(worst, rel);
     s = n;
   }
-  std::printf("energy balance (2.6): worst |W - dKE - dP - D| / E = %.3e over 20000 ticks\n", worst);
+  std::printf("energy balance (2.6): worst |W - dKE - dP - D| / E = %.3e over 20000 ticks\n",
+              worst);
   // Each term is a handful of operations on O(E) numbers: a few u = 1.1e-16 of E.
   EXPECT_LT(worst, 1e-13);
 }
@@ -211,8 +216,8 @@ TEST(PmiStress, UndampedEnergyConservedAtAnyStiffnessAndTick) {
   }
   for (const Case& c : cases) {
     const double err = run_undamped(c.k, c.T, ticks);
-    std::printf("k = %.0e N/m, T = %.0e s, %ld ticks: max relative energy error %.3e\n", c.k,
-                c.T, ticks, err);
+    std::printf("k = %.0e N/m, T = %.0e s, %ld ticks: max relative energy error %.3e\n", c.k, c.T,
+                ticks, err);
     EXPECT_LT(err, 1e-9) << "k " << c.k << " T " << c.T;
   }
 }
@@ -350,8 +355,8 @@ FreeBodyResult run_free_body(double T, long ticks) {
     r.L_drift = std::max(r.L_drift, (L - L0).norm() / L0.norm());
     const double step = (L - L_prev).norm();
     r.L_step_max = std::max(r.L_step_max, step / L0.norm());
-    r.L_step_ratio = std::max(
-        r.L_step_ratio, step / (0.5 * T * T * ang(V_hat).squaredNorm() * Jw.norm()));
+    r.L_step_ratio =
+        std::max(r.L_step_ratio, step / (0.5 * T * T * ang(V_hat).squaredNorm() * Jw.norm()));
     L_prev = L;
   }
   r.orth_drift = (s.pose.R.transpose() * s.pose.R - Mat3::Identity()).norm();
@@ -368,8 +373,8 @@ TEST(Pmi, TorqueFreeRigidBodyConservesEnergyAndBoundsMomentumDrift) {
         "T = %.2e s: KE error %.3e, per-tick |dL|/|L0| max %.4e (%.4f of T^2/2 |w|^2 |Jw|), "
         "drift max |L - L0|/|L0| = %.4e, |R^T R - I| = %.2e\n",
         T, r.ke_err, r.L_step_max, r.L_step_ratio, r.L_drift, r.orth_drift);
-    EXPECT_LT(r.ke_err, 1e-12);                // skew C_k: energy exact to round-off
-    EXPECT_LT(r.L_step_ratio, 1.01);           // the O(T^2) local bound above
+    EXPECT_LT(r.ke_err, 1e-12);       // skew C_k: energy exact to round-off
+    EXPECT_LT(r.L_step_ratio, 1.01);  // the O(T^2) local bound above
     // Summing the per-tick bound over t_end/T ticks with |w_hat|^2 <= 2 KE / lambda_min(J) =
     // 71 rad^2/s^2 and |J w_k| = |L_k| ~ |L0|: drift <= 1.01 t_end T/2 * 71 (= 0.071 at 1e-3 s).
     EXPECT_LT(r.L_drift, 1.01 * t_end * 0.5 * T * 71.0);
