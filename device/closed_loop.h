@@ -1,0 +1,45 @@
+// The closed loop of one servo tick against any Device (DESIGN.md "One servo tick"):
+//
+//   device.read(sample) -> pipeline.tick(sample, T_k, contacts) -> device.write(tau) -> device.advance()
+//
+// T_k handed to the pipeline is the length of the tick about to run. A device cannot know it in
+// advance: the loop uses the last measured tick length (t_k - t_k-1; the nominal period on the
+// first tick), which is what a real servo loop sees and what PMI's varying-T_k form allows.
+//
+// Passivity observer at the device port: E_v = sum_k tau_k^T (q_k+1 - q_k), the energy the
+// virtual side put into the device through the motors, from the torque actually applied (after
+// the device's command chain) and the measured joint angles. Exact for a torque held over the
+// tick (zero-order hold) up to encoder quantisation; E_v <= 0 means passive.
+#pragma once
+
+#include "device/device.h"
+#include "reference/tick.h"
+
+namespace dentsim {
+
+class ClosedLoop {
+ public:
+  // All references must outlive the loop.
+  ClosedLoop(Device& device, Pipeline& pipeline, ContactProvider& contacts);
+
+  // Reads the first sample and resets the pipeline on it (proxy at the device, at rest).
+  void start();
+  // One tick: read, tick, write, advance. Returns the tick's result (valid until the next step).
+  const TickResult& step();
+
+  const DeviceSample& sample() const { return sample_; }        // the sample of the last step
+  double energy_virtual_j() const { return energy_; }           // E_v so far
+  double last_tick_length() const { return T_; }
+  long ticks() const { return ticks_; }
+
+ private:
+  Device& device_;
+  Pipeline& pipeline_;
+  ContactProvider& contacts_;
+  DeviceSample sample_, next_;
+  double T_ = 1e-3;
+  double energy_ = 0.0;
+  long ticks_ = 0;
+};
+
+}  // namespace dentsim
