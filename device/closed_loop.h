@@ -27,7 +27,7 @@ class ClosedLoop {
   // One tick: read, tick, write, advance. Returns the tick's result (valid until the next step).
   const TickResult& step();
 
-  const DeviceSample& sample() const { return sample_; }        // the sample of the last step
+  const DeviceSample& sample() const { return sample_; }        // latest sample (after the last step)
   double energy_virtual_j() const { return energy_; }           // E_v so far
   double last_tick_length() const { return T_; }
   long ticks() const { return ticks_; }
