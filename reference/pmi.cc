@@ -39,15 +39,18 @@ void validate_tick_length(double T) {
   }
 }
 
-PmiSystem pmi_inertia_system(const ProxyParams& p, const ProxyState& s, double T) {
+PmiSystem pmi_inertia_system(const ProxyParams& p, const ProxyState& s, double T,
+                             GyroVelocity gyro) {
   validate_proxy_params(p);
   validate_tick_length(T);
   const Mat6 M = p.M();
   PmiSystem sys;
   sys.A = M * (2.0 / T) + p.B();  // (4.2) left-hand side
   if (p.gyroscopic) {
-    // (2.8): C_k = diag(0, -S(J w_k)), skew, so it does no work on V_hat.
-    sys.A.bottomRightCorner<3, 3>() -= skew(p.inertia * ang(s.V));
+    // (2.8): C_k = diag(0, -S(J w)), skew, so it does no work on V_hat.
+    const Vec3 w =
+        gyro == GyroVelocity::kStart ? Vec3(ang(s.V)) : Vec3(2.0 * ang(s.V) - ang(s.V_hat_prev));
+    sys.A.bottomRightCorner<3, 3>() -= skew(p.inertia * w);
   }
   sys.b = M * (2.0 / T) * s.V;  // (4.2) right-hand side, inertia part
   return sys;

@@ -31,9 +31,23 @@ void validate_proxy_params(const ProxyParams& p);
 // Throws InputError unless T is finite and > 0.
 void validate_tick_length(double T);
 
-// Inertia/damping part of (4.2)/(4.9): A = M 2/T + B (+ C_k = diag(0, -S(J w_k)) if
-// p.gyroscopic), b = M 2/T V_k. Other forces are added with PmiSystem::add(AffineWrench).
-PmiSystem pmi_inertia_system(const ProxyParams& p, const ProxyState& s, double T);
+// Which angular velocity the gyroscopic matrix C = diag(0, -S(J w)) of (2.8) is evaluated at
+// (only used if p.gyroscopic). Both keep C skew, so the energy balance stays exact.
+enum class GyroVelocity {
+  // w_k, as (2.8) prints it. One tick changes the world angular momentum R J w by
+  // -T^2/2 R_k (w_hat x (w_hat x J w_k)) + O(T^3): a drift of O(T) over a fixed horizon.
+  kStart,
+  // w_e = 2 w_k - w_hat_k-1 = w_k + (w_k - w_k-1)/2 ~ w(t_k + T/2), from s.V_hat_prev: the O(T^2)
+  // term above cancels, so the drift is O(T^2) (pmi_test). s.V_hat_prev must be the previous
+  // tick's V_hat (set it to s.V when starting or resetting a proxy). Not in the thesis.
+  kExtrapolated,
+};
+
+// Inertia/damping part of (4.2)/(4.9): A = M 2/T + B (+ C_k = diag(0, -S(J w)) if
+// p.gyroscopic, w chosen by `gyro`), b = M 2/T V_k. Other forces are added with
+// PmiSystem::add(AffineWrench).
+PmiSystem pmi_inertia_system(const ProxyParams& p, const ProxyState& s, double T,
+                             GyroVelocity gyro = GyroVelocity::kStart);
 
 // Solves A V_hat = b (one 6x6 linear solve, no iteration). The columns and rows are first scaled
 // by 1/sqrt|A_ii| so the singularity test does not depend on the units mixed in A (N s/m against

@@ -228,13 +228,13 @@ TEST(Coupling, BadGainsThrowNamingTheField) {
 }
 
 // A prescribed device trajectory, sampled at t_k and held over each tick.
-struct DeviceSample {
+struct HeldDeviceSample {
   Pose pose;
   Vec6 V;  // [v1 (world); w1 (device body)]
 };
 
-DeviceSample device_at(double t, bool rotate) {
-  DeviceSample d;
+HeldDeviceSample device_at(double t, bool rotate) {
+  HeldDeviceSample d;
   d.V = Vec6::Zero();
   d.pose.x =
       Vec3(0.02 * std::sin(7.0 * t), 0.015 * std::sin(11.0 * t + 0.3), 0.01 * std::cos(5.0 * t));
@@ -281,11 +281,11 @@ BalanceResult run_passivity(const CouplingGains& g, double T, double t_end, bool
   BalanceResult r{0, 0, 0, 0, 0, 0, 0};
   double sum_W = 0.0, sum_D = 0.0, scale_max = 0.0;
   const long ticks = std::lround(t_end / T);
-  DeviceSample d = device_at(0.0, rotate);
+  HeldDeviceSample d = device_at(0.0, rotate);
   const double E0 = proxy_kinetic_energy(p, s.V) + coupling_potential(g, d.pose, s.pose);
   double E = E0;
   for (long k = 0; k < ticks; ++k) {
-    const DeviceSample dn = device_at((k + 1) * T, rotate);
+    const HeldDeviceSample dn = device_at((k + 1) * T, rotate);
     PmiSystem sys = pmi_inertia_system(p, s, T);
     sys.add(coupling_proxy_wrench(g, d.pose, d.V, s, T, Scheme::kMidpoint));
     const Vec6 V_hat = pmi_solve(sys);
