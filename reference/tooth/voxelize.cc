@@ -410,7 +410,8 @@ void assign_materials(VoxelGrid& grid, const std::vector<std::uint8_t>& pulp,
     lo[d] = std::max(lo[d] - 1, 0);
     hi[d] = std::min(hi[d] + 1, n - 1);
   }
-  const int clip = std::min(255, static_cast<int>(std::ceil(std::min(t_top, n * h) / h)) + 2);
+  const int clip =
+      std::min(255, static_cast<int>(std::ceil(std::min(enamel_cusp_m, n * h) / h)) + 2);
   const auto d2 = edt_box(grid, lo, hi, clip);
   const int bx = hi[0] - lo[0] + 1, by = hi[1] - lo[1] + 1;
   for (int k = lo[2]; k <= hi[2]; ++k) {
@@ -420,7 +421,7 @@ void assign_materials(VoxelGrid& grid, const std::vector<std::uint8_t>& pulp,
         if (grid.voxels[x] != kDentin) continue;
         const double s = crown.axis.dot(grid.center(i, j, k)) - crown.cej;  // height above CEJ
         if (s < 0) continue;
-        const double t = t_top * std::min(1.0, s / height);  // t(s)
+        const double t = std::min(enamel_cusp_m, t_top * s / height);  // t(s)
         const std::size_t b =
             static_cast<std::size_t>(i - lo[0]) +
             static_cast<std::size_t>(bx) *

@@ -18,11 +18,11 @@
 //  4. assign_materials: pulp = solid voxels inside the mesh's pulp group (`Nerve`/`pulp`, by its
 //     own stages 1-3) or the procedural pulp; enamel = solid voxels on the crown whose depth below
 //     the outer surface (exact Euclidean distance transform to the nearest empty voxel, minus half
-//     a voxel) is below t(s), s the height above the cemento-enamel junction (CEJ). t tapers
-//     linearly, t(s) = t_top s / H (H the crown height), from 0 at the CEJ, with
-//     t_top = t_cusp H / (H - t_cusp) so that straight down from the crown's top (s = H) the enamel
-//     is exactly t_cusp thick (at depth t_cusp, t(H - t_cusp) = t_cusp); at mid-crown the lateral
-//     enamel is t_top / 2 (1.9 mm for t_cusp = 2.5 mm, H = 7.5 mm). dentin = the rest.
+//     a voxel) is below t(s), s the height above the cemento-enamel junction (CEJ):
+//     t(s) = min(t_cusp, t_top s / H), H the crown height, t_top = t_cusp H / (H - t_cusp): zero at
+//     the CEJ, growing linearly to t_cusp at s = H - t_cusp, so that straight down from the crown's
+//     top (s = H) the enamel is t_cusp thick (at depth t_cusp, t = t_cusp) and the lateral enamel
+//     at mid-crown is t_top / 2 (1.9 mm for t_cusp = 2.5 mm, H = 7.5 mm). dentin = the rest.
 //
 // Units: metres, world frame {O}; the grid is axis-aligned (voxel_grid.h).
 #pragma once

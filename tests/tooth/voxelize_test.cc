@@ -336,7 +336,7 @@ TEST(Materials, EnamelByDepthOnTheCrownOnly) {
         const double depth =
             std::min({1e-3 - std::abs(p.x()), 1e-3 - std::abs(p.y()), 2e-3 - std::abs(p.z())});
         const double s = p.z();
-        const double t = s < 0 ? -1 : t_top * std::min(1.0, s / 2e-3);
+        const double t = s < 0 ? -1 : std::min(t_cusp, t_top * s / 2e-3);
         if (s < 0) {
           EXPECT_EQ(m, kDentin);
         } else if (depth < t - 0.5 * h) {
