@@ -2,6 +2,7 @@
 
 #include <Eigen/LU>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
@@ -14,6 +15,31 @@
 #include "reference/pmi.h"
 
 namespace dentsim {
+
+const char* tick_stage_name(int stage) {
+  static const char* const kNames[kStageCount] = {"kinematics", "observer", "collision", "solve",
+                                                  "command"};
+  return stage >= 0 && stage < kStageCount ? kNames[stage] : "?";
+}
+
+namespace {
+
+// Records the wall-clock time of consecutive stages.
+class StageClock {
+ public:
+  explicit StageClock(long* out) : out_(out), last_(std::chrono::steady_clock::now()) {}
+  void lap(int stage) {
+    const auto now = std::chrono::steady_clock::now();
+    out_[stage] = std::chrono::duration_cast<std::chrono::nanoseconds>(now - last_).count();
+    last_ = now;
+  }
+
+ private:
+  long* out_;
+  std::chrono::steady_clock::time_point last_;
+};
+
+}  // namespace
 
 ReferencePipeline::ReferencePipeline(const SixDofDeviceModel& device, PipelineConfig config)
     : device_(device), config_(std::move(config)) {
@@ -56,6 +82,7 @@ const TickResult& ReferencePipeline::tick(const DeviceSample& s, double T,
     throw std::invalid_argument("tick length must be positive and finite");
   }
   TickResult& r = result_;
+  StageClock clock(r.stage_ns);
   const Method method = config_.method;
   const Scheme scheme = method == Method::kExplicitVc ? Scheme::kExplicit : Scheme::kMidpoint;
 
@@ -64,6 +91,7 @@ const TickResult& ReferencePipeline::tick(const DeviceSample& s, double T,
   const Mat6 J1 = device_.twist_to_joint(s.q);
   const Eigen::PartialPivLU<Mat6> J1_lu(J1);
   r.V1 = J1_lu.solve(Vec6(s.qd));
+  clock.lap(kStageKinematics);
 
   // Observer (3.7)-(3.8): joint estimate from the torque applied over the last tick, which
   // lasted from the previous sample to this one (tick lengths may vary).
@@ -75,6 +103,7 @@ const TickResult& ReferencePipeline::tick(const DeviceSample& s, double T,
     const VecX& f1_hat = observer_->update(s.q, s.qd, tau_prev_, T_last);
     r.F1_hat = J1.transpose() * f1_hat;  // F1 = J1^T f1
   }
+  clock.lap(kStageObserver);
 
   // Collision.
   contacts.contacts(proxy_.pose, r.contacts);
@@ -82,6 +111,7 @@ const TickResult& ReferencePipeline::tick(const DeviceSample& s, double T,
   for (const Contact& c : r.contacts) {
     r.max_depth = std::max(r.max_depth, penetration_depth(c, proxy_.pose));
   }
+  clock.lap(kStageCollision);
 
   // Force elements on the proxy, affine in the velocity they are evaluated at.
   const AffineWrench coupling =
@@ -129,6 +159,7 @@ const TickResult& ReferencePipeline::tick(const DeviceSample& s, double T,
     r.T1_pd = method == Method::kPmiPd ? pd_T1.at(r.V_hat) : Vec6::Zero();
     proxy_ = pmi_advance(proxy_, r.V_hat, T);
   }
+  clock.lap(kStageSolve);
 
   // Device command: tau1 = J1^-T T1, scaled down uniformly (direction kept) to the limits.
   r.T1 = r.T1_vc + r.T1_pd;
@@ -146,6 +177,7 @@ const TickResult& ReferencePipeline::tick(const DeviceSample& s, double T,
     }
   }
   tau_prev_ = r.tau;
+  clock.lap(kStageCommand);
   return r;
 }
 

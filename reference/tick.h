@@ -54,6 +54,11 @@ struct PipelineConfig {
   VecX torque_limit;            // |tau_i| <= torque_limit_i [N m]; empty = no saturation
 };
 
+// Stages of the tick, for timing (TickResult::stage_ns).
+enum TickStage { kStageKinematics, kStageObserver, kStageCollision, kStageSolve, kStageCommand,
+                 kStageCount };
+const char* tick_stage_name(int stage);  // "kinematics", "observer", "collision", "solve", "command"
+
 // Everything one tick computed (for logging, tests and the fast path's differential tests).
 struct TickResult {
   Pose device;                        // x1, R1
@@ -70,6 +75,7 @@ struct TickResult {
   std::vector<Contact> contacts;      // the contact set of this tick
   double max_depth = 0.0;             // deepest penetration in the set [m]
   bool friction_sliding = false;
+  long stage_ns[kStageCount] = {};    // wall-clock time of each stage [ns] (steady_clock)
 };
 
 // The pipeline interface both reference/ and fast/ implement.
