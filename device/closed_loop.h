@@ -1,6 +1,7 @@
 // The closed loop of one servo tick against any Device (DESIGN.md "One servo tick"):
 //
-//   device.read(sample) -> pipeline.tick(sample, T_k, contacts) -> device.write(tau) -> device.advance()
+//   device.read(sample) -> pipeline.tick(sample, T_k, contacts) -> device.write(tau) ->
+//   device.advance()
 //
 // T_k handed to the pipeline is the length of the tick about to run. A device cannot know it in
 // advance: the loop uses the last measured tick length (t_k - t_k-1; the nominal period on the
@@ -27,8 +28,8 @@ class ClosedLoop {
   // One tick: read, tick, write, advance. Returns the tick's result (valid until the next step).
   const TickResult& step();
 
-  const DeviceSample& sample() const { return sample_; }        // latest sample (after the last step)
-  double energy_virtual_j() const { return energy_; }           // E_v so far
+  const DeviceSample& sample() const { return sample_; }  // latest sample (after the last step)
+  double energy_virtual_j() const { return energy_; }     // E_v so far
   double last_tick_length() const { return T_; }
   long ticks() const { return ticks_; }
 

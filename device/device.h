@@ -43,8 +43,8 @@ std::string fault_string(std::uint32_t faults);
 
 // Limits of a device, per joint.
 struct DeviceLimits {
-  VecX tau_max;     // saturation [N m]: the torque applied is clipped to [-tau_max, tau_max]
-  VecX tau_fault;   // fault threshold [N m]: |tau_cmd| > tau_fault is a fault (safe stop)
+  VecX tau_max;    // saturation [N m]: the torque applied is clipped to [-tau_max, tau_max]
+  VecX tau_fault;  // fault threshold [N m]: |tau_cmd| > tau_fault is a fault (safe stop)
   double max_joint_step = 0.1;  // [rad] largest credible encoder change in one tick
 };
 
@@ -54,8 +54,8 @@ struct DeviceCapabilities {
   bool measures_velocity = false;  // false: qd is differentiated from q by the driver
   bool has_force_sensor = false;
   bool simulated = false;
-  double nominal_period = 1e-3;    // nominal servo tick [s]
-  VecX encoder_quantum;            // joint-angle resolution [rad] (0 = not quantised)
+  double nominal_period = 1e-3;  // nominal servo tick [s]
+  VecX encoder_quantum;          // joint-angle resolution [rad] (0 = not quantised)
 };
 
 class Device {

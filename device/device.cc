@@ -1,0 +1,78 @@
+#include "device/device.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "reference/core/io.h"
+
+namespace dentsim {
+
+const char* fault_name(DeviceFault f) {
+  switch (f) {
+    case kFaultNone:
+      return "none";
+    case kFaultNonFiniteTorque:
+      return "non_finite_torque";
+    case kFaultTorqueBeyondLimit:
+      return "torque_beyond_limit";
+    case kFaultNonMonotonicTime:
+      return "non_monotonic_time";
+    case kFaultEncoderJump:
+      return "encoder_jump";
+  }
+  return "unknown";
+}
+
+std::string fault_string(std::uint32_t faults) {
+  if (faults == kFaultNone) return "none";
+  std::string s;
+  for (std::uint32_t bit = 1; bit != 0; bit <<= 1) {
+    if ((faults & bit) == 0) continue;
+    if (!s.empty()) s += ",";
+    s += fault_name(static_cast<DeviceFault>(bit));
+  }
+  return s;
+}
+
+std::uint32_t condition_command(const VecX& tau_cmd, const DeviceLimits& limits, bool saturate,
+                                VecX& tau_out) {
+  const Eigen::Index n = tau_cmd.size();
+  if (limits.tau_max.size() != n || limits.tau_fault.size() != n) {
+    throw InputError("device command: torque has " + std::to_string(n) +
+                     " entries, limits tau_max/tau_fault have " +
+                     std::to_string(limits.tau_max.size()) + "/" +
+                     std::to_string(limits.tau_fault.size()) + "; expected equal sizes");
+  }
+  if (tau_out.size() != n) tau_out.resize(n);
+  std::uint32_t faults = kFaultNone;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double u = tau_cmd[i];
+    if (!std::isfinite(u)) {
+      faults |= kFaultNonFiniteTorque;
+    } else if (std::abs(u) > limits.tau_fault[i]) {
+      faults |= kFaultTorqueBeyondLimit;
+    }
+  }
+  if (faults != kFaultNone) {
+    tau_out.setZero();  // safe stop
+    return faults;
+  }
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double u = tau_cmd[i];
+    const double lim = limits.tau_max[i];
+    tau_out[i] = saturate ? std::clamp(u, -lim, lim) : u;
+  }
+  return kFaultNone;
+}
+
+std::uint32_t check_sample(const VecX& q_prev, double t_prev, const VecX& q, double t,
+                           const DeviceLimits& limits) {
+  std::uint32_t faults = kFaultNone;
+  if (!(t > t_prev)) faults |= kFaultNonMonotonicTime;
+  for (Eigen::Index i = 0; i < q.size(); ++i) {
+    if (!(std::abs(q[i] - q_prev[i]) <= limits.max_joint_step)) faults |= kFaultEncoderJump;
+  }
+  return faults;
+}
+
+}  // namespace dentsim
