@@ -1,0 +1,164 @@
+#include "reference/tooth/octree.h"
+
+#include <array>
+#include <cmath>
+#include <string>
+
+#include "reference/core/io.h"
+
+namespace dentsim {
+namespace {
+
+// Spreads the low 10 bits of v so that bit b lands on bit 3 b.
+std::size_t spread_bits(int v) {
+  std::size_t r = 0;
+  for (int b = 0; b < 10; ++b) {
+    r |= static_cast<std::size_t>((v >> b) & 1) << (3 * b);
+  }
+  return r;
+}
+
+std::size_t morton(int x, int y, int z) {
+  return spread_bits(x) | (spread_bits(y) << 1) | (spread_bits(z) << 2);
+}
+
+int log2_exact(int n) {
+  int l = 0;
+  while ((1 << l) < n) ++l;
+  return l;
+}
+
+}  // namespace
+
+std::size_t FullOctree::internal_node_count(int levels) {
+  std::size_t count = 0;
+  std::size_t per_level = 1;
+  for (int l = 0; l < levels; ++l) {
+    count += per_level;
+    per_level *= 8;
+  }
+  return count;
+}
+
+std::size_t FullOctree::node_index(int level, int x, int y, int z) {
+  return internal_node_count(level) + morton(x, y, z);
+}
+
+std::size_t FullOctree::memory_bytes_for(int n) {
+  const std::size_t nn = static_cast<std::size_t>(n);
+  return internal_node_count(log2_exact(n)) * sizeof(std::uint8_t) + nn * nn * nn;
+}
+
+std::size_t FullOctree::memory_bytes() const {
+  return masks_.size() * sizeof(std::uint8_t) + grid_.voxels.size() * sizeof(std::uint8_t);
+}
+
+FullOctree::FullOctree(VoxelGrid grid) : grid_(std::move(grid)) {
+  const int n = grid_.n;
+  if (n < 1 || n > 1024 || (n & (n - 1)) != 0) {
+    throw InputError("voxel grid: n = " + std::to_string(n) +
+                     ", expected a power of two in [1, 1024]");
+  }
+  if (!(grid_.voxel_size > 0.0) || !std::isfinite(grid_.voxel_size)) {
+    throw InputError("voxel grid: voxel_size = " + std::to_string(grid_.voxel_size) +
+                     ", expected a finite value > 0 [m]");
+  }
+  if (!grid_.origin.allFinite()) throw InputError("voxel grid: origin is not finite");
+  const std::size_t nn = static_cast<std::size_t>(n);
+  if (grid_.voxels.size() != nn * nn * nn) {
+    throw InputError("voxel grid: " + std::to_string(grid_.voxels.size()) +
+                     " voxels, expected n^3 = " + std::to_string(nn * nn * nn));
+  }
+  for (std::size_t v = 0; v < grid_.voxels.size(); ++v) {
+    if (grid_.voxels[v] >= kMaterialCount) {
+      throw InputError("voxel grid: voxel " + std::to_string(v) + " has material id " +
+                       std::to_string(grid_.voxels[v]) + ", expected 0..3");
+    }
+  }
+  levels_ = log2_exact(n);
+  masks_.assign(internal_node_count(levels_), 0);
+  // Level L-1 from the leaves, then each level from the one below.
+  for (int l = levels_ - 1; l >= 0; --l) {
+    const int nl = 1 << l;
+    for (int z = 0; z < nl; ++z) {
+      for (int y = 0; y < nl; ++y) {
+        for (int x = 0; x < nl; ++x) {
+          std::uint8_t mask = 0;
+          for (int c = 0; c < 8; ++c) {
+            if (occupied(l + 1, 2 * x + (c & 1), 2 * y + ((c >> 1) & 1), 2 * z + ((c >> 2) & 1))) {
+              mask |= static_cast<std::uint8_t>(1u << c);
+            }
+          }
+          masks_[node_index(l, x, y, z)] = mask;
+        }
+      }
+    }
+  }
+}
+
+bool FullOctree::occupied(int level, int x, int y, int z) const {
+  if (level == levels_) return grid_.solid(x, y, z);
+  return masks_[node_index(level, x, y, z)] != 0;
+}
+
+void FullOctree::query_sphere(const Vec3& c, double rho, std::vector<std::size_t>* out) const {
+  if (grid_.n == 0 || !occupied(0, 0, 0, 0)) return;
+  const int n = grid_.n;
+  if (!sphere_intersects_cells(grid_, 0, 0, 0, n, n, n, c, rho)) return;
+  if (levels_ == 0) {  // a single voxel: the root is the leaf
+    out->push_back(0);
+    return;
+  }
+  struct Node {
+    int level, x, y, z;
+  };
+  // Depth-first: at most 7 pending siblings per level plus the node being expanded.
+  std::array<Node, 8 * 11> stack;
+  int top = 0;
+  stack[top++] = {0, 0, 0, 0};
+  while (top > 0) {
+    const Node node = stack[--top];
+    const std::uint8_t mask = masks_[node_index(node.level, node.x, node.y, node.z)];
+    const int child_level = node.level + 1;
+    const int s = 1 << (levels_ - child_level);  // child size in voxels
+    for (int child = 0; child < 8; ++child) {
+      if ((mask & (1u << child)) == 0) continue;
+      const int cx = 2 * node.x + (child & 1);
+      const int cy = 2 * node.y + ((child >> 1) & 1);
+      const int cz = 2 * node.z + ((child >> 2) & 1);
+      if (!sphere_intersects_cells(grid_, cx * s, cy * s, cz * s, (cx + 1) * s, (cy + 1) * s,
+                                   (cz + 1) * s, c, rho)) {
+        continue;
+      }
+      if (child_level == levels_) {
+        out->push_back(grid_.index(cx, cy, cz));
+      } else {
+        stack[top++] = {child_level, cx, cy, cz};
+      }
+    }
+  }
+}
+
+std::uint8_t FullOctree::remove_voxel(int i, int j, int k) {
+  if (!grid_.inside(i, j, k)) {
+    throw InputError("remove_voxel: (" + std::to_string(i) + ", " + std::to_string(j) + ", " +
+                     std::to_string(k) + ") outside the " + std::to_string(grid_.n) + "^3 grid");
+  }
+  const std::uint8_t material = grid_.at(i, j, k);
+  if (material == kEmpty) return kEmpty;
+  grid_.set(i, j, k, kEmpty);
+  // Clear the child bit in each ancestor while the child has become empty.
+  int x = i, y = j, z = k;
+  for (int l = levels_ - 1; l >= 0; --l) {
+    const int bit = (x & 1) | ((y & 1) << 1) | ((z & 1) << 2);
+    x >>= 1;
+    y >>= 1;
+    z >>= 1;
+    std::uint8_t& mask = masks_[node_index(l, x, y, z)];
+    mask = static_cast<std::uint8_t>(mask & ~(1u << bit));
+    if (mask != 0) break;
+  }
+  return material;
+}
+
+}  // namespace dentsim
