@@ -1,0 +1,149 @@
+// Penalty contact with PMI terms and damping (thesis §2.3, (2.15)-(2.19), (4.9)).
+// See reference/contact.h for units, frames and the equations; derivations in
+// docs/derivations/contact_and_friction.md.
+#include "reference/contact.h"
+
+#include <cmath>
+#include <sstream>
+#include <string>
+
+#include "reference/core/io.h"
+#include "reference/core/so3.h"
+
+namespace dentsim {
+namespace {
+
+// A normal is accepted as unit if | |n| - 1 | <= this (collision normalises its normals).
+constexpr double kUnitNormalTolerance = 1e-9;
+
+[[noreturn]] void bad_member(const char* where, std::size_t i, const std::string& field,
+                             const std::string& what) {
+  std::ostringstream msg;
+  msg << where << ": contacts[" << i << "]." << field << ": " << what;
+  throw InputError(msg.str());
+}
+
+std::string num(double v) {
+  std::ostringstream s;
+  s.precision(17);
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+void validate_contacts(std::span<const Contact> contacts, const char* where) {
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    const Contact& c = contacts[i];
+    if (!c.x_o.allFinite()) bad_member(where, i, "x_o", "expected a finite point");
+    if (!c.r.allFinite()) bad_member(where, i, "r", "expected a finite body-frame offset");
+    if (!c.n.allFinite() || std::abs(c.n.norm() - 1.0) > kUnitNormalTolerance) {
+      bad_member(where, i, "n", "expected a unit normal, got |n| = " + num(c.n.norm()));
+    }
+    if (!std::isfinite(c.stiffness) || c.stiffness < 0.0) {
+      bad_member(where, i, "stiffness", "expected K_tooth >= 0 N/m, got " + num(c.stiffness));
+    }
+    if (!std::isfinite(c.damping) || c.damping < 0.0) {
+      bad_member(where, i, "damping", "expected B_tooth >= 0 N s/m, got " + num(c.damping));
+    }
+    if (!std::isfinite(c.weight) || c.weight < 0.0) {
+      bad_member(where, i, "weight", "expected a finite weight >= 0, got " + num(c.weight));
+    }
+  }
+}
+
+Vec3 contact_point(const Contact& c, const Pose& proxy) { return proxy.x + proxy.R * c.r; }
+
+double penetration_depth(const Contact& c, const Pose& proxy) {
+  return c.n.dot(c.x_o - contact_point(c, proxy));  // delta = n^T (x_o - x_c)  (§2.3)
+}
+
+Mat36 contact_point_jacobian(const Vec3& r, const Mat3& R) {
+  // xdot_c = v + R S(w) r = v - R S(r) w.
+  Mat36 J;
+  J << Mat3::Identity(), -R * skew(r);
+  return J;
+}
+
+Mat63 contact_wrench_map(const Vec3& r, const Mat3& R) {
+  // J_c^T = [I; -S(r)^T R^T] = [I; S(r) R^T]  (2.15), torque frame as derived in the header.
+  Mat63 Jt;
+  Jt << Mat3::Identity(), skew(r) * R.transpose();
+  return Jt;
+}
+
+std::vector<double> contact_weights(std::span<const Contact> contacts) {
+  double sum = 0.0;
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    const double w = contacts[i].weight;
+    if (!std::isfinite(w) || w < 0.0) {
+      bad_member("contact_weights", i, "weight", "expected a finite weight >= 0, got " + num(w));
+    }
+    sum += w;
+  }
+  std::vector<double> out(contacts.size());
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    out[i] = sum > 0.0 ? contacts[i].weight / sum : 1.0 / static_cast<double>(contacts.size());
+  }
+  return out;
+}
+
+AffineWrench contact_wrench(std::span<const Contact> contacts, const Pose& proxy, double T,
+                            Scheme scheme) {
+  if (!std::isfinite(T) || T <= 0.0) {
+    throw InputError("contact_wrench: tick length T = " + num(T) + " s (expected finite > 0)");
+  }
+  validate_contacts(contacts, "contact_wrench");
+  const std::vector<double> w = contact_weights(contacts);
+  AffineWrench F;
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    const Contact& c = contacts[i];
+    const double delta = penetration_depth(c, proxy);
+    if (!(delta > 0.0)) continue;  // unilateral: no spring or damper unless penetrating
+    const Mat36 J = contact_point_jacobian(c.r, proxy.R);
+    const Mat63 Jt = J.transpose();
+    const Eigen::Matrix<double, 1, 6> d = -c.n.transpose() * J;  // d(delta)/dt = d V   (2.16)
+    const double k = w[i] * c.stiffness;
+    const double b = w[i] * c.damping;
+    F.f0 += Jt * (k * delta * c.n);  // K delta_k n                                    (2.16)
+    // PMI: K T/2 (delta_k+1 - delta_k)/T ~ K T/2 d V_hat ((2.16)-(2.18)); damping B d V (2.19).
+    const double g = (scheme == Scheme::kMidpoint ? 0.5 * T * k : 0.0) + b;
+    F.G += (Jt * c.n) * (g * d);
+  }
+  return F;
+}
+
+double contact_potential(std::span<const Contact> contacts, const Pose& proxy) {
+  const std::vector<double> w = contact_weights(contacts);
+  double U = 0.0;
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    const double delta = penetration_depth(contacts[i], proxy);
+    if (delta > 0.0) U += w[i] * 0.5 * contacts[i].stiffness * delta * delta;
+  }
+  return U;
+}
+
+BlendedContact blended_contact(std::span<const Contact> contacts, const Pose& proxy) {
+  const std::vector<double> w = contact_weights(contacts);
+  BlendedContact out;
+  double a = 0.0;
+  Vec3 n = Vec3::Zero(), r = Vec3::Zero();
+  double depth = 0.0;
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    const double delta = penetration_depth(contacts[i], proxy);
+    if (!(delta > 0.0)) continue;
+    a += w[i];
+    n += w[i] * contacts[i].n;
+    r += w[i] * contacts[i].r;
+    depth += w[i] * delta;
+  }
+  // Active members with zero weight exert no normal force, hence no friction either.
+  if (a <= 0.0 || n.norm() <= 1e-12 * a) return out;
+  out.active = true;
+  out.n = n.normalized();
+  out.r = r / a;
+  out.depth = depth / a;
+  return out;
+}
+
+}  // namespace dentsim
