@@ -1,0 +1,77 @@
+#include "reference/tooth/drilling.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "reference/core/io.h"
+
+namespace dentsim {
+
+DrillState make_drill_state(const VoxelTooth& tooth) {
+  DrillState state;
+  state.work_j.assign(tooth.grid().voxels.size(), 0.0);
+  state.voxel_volume_m3 = tooth.grid().voxel_volume();
+  return state;
+}
+
+double removal_threshold_j(std::uint8_t material, double voxel_size) {
+  if (material == kEmpty || material >= kMaterialCount) {
+    throw InputError("removal_threshold_j: material id " + std::to_string(material) +
+                     ", expected 1 (enamel), 2 (dentin) or 3 (pulp)");
+  }
+  constexpr double kJoulePerMm3ToJoulePerM3 = 1e9;
+  return material_properties(material).removal_energy_j_per_mm3 * kJoulePerMm3ToJoulePerM3 *
+         voxel_size * voxel_size * voxel_size;
+}
+
+int drill_tick(const std::vector<Contact>& contacts, const std::vector<std::size_t>& contact_voxels,
+               const ToolTip& tip, const DrillParams& params, double T, VoxelTooth* tooth,
+               DrillState* state, std::vector<std::size_t>* removed) {
+  if (contacts.size() != contact_voxels.size()) {
+    throw InputError("drill_tick: " + std::to_string(contacts.size()) + " contacts but " +
+                     std::to_string(contact_voxels.size()) + " contact voxels, expected equal");
+  }
+  if (!(T > 0.0) || !std::isfinite(T)) {
+    throw InputError("drill_tick: T = " + std::to_string(T) + ", expected a finite tick > 0 [s]");
+  }
+  if (!(params.bur_speed_rad_s >= 0.0) || !(params.cutting_coefficient >= 0.0)) {
+    throw InputError("drill params: bur_speed_rad_s and cutting_coefficient must be >= 0");
+  }
+  if (state->work_j.size() != tooth->grid().voxels.size()) {
+    throw InputError("drill_tick: drill state sized for another tooth");
+  }
+  double total_weight = 0.0;
+  for (const Contact& ct : contacts) total_weight += ct.weight;
+  if (!(total_weight > 0.0)) return 0;
+
+  // W_i = mu_c f_i omega rho T_k with f_i the contact's share of the blended normal force.
+  const double speed = params.bur_speed_rad_s * tip.radius;  // u = omega rho [m/s]
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    const Contact& ct = contacts[i];
+    const double f_i = ct.weight / total_weight * ct.stiffness * std::max(0.0, ct.depth);
+    state->work_j[contact_voxels[i]] += params.cutting_coefficient * f_i * speed * T;
+  }
+
+  int count = 0;
+  const VoxelGrid& grid = tooth->grid();
+  const int n = grid.n;
+  const double h = grid.voxel_size;
+  for (const std::size_t v : contact_voxels) {
+    const std::uint8_t material = grid.voxels[v];
+    if (material == kEmpty) continue;  // already removed this tick (several faces of one voxel)
+    if (state->work_j[v] < removal_threshold_j(material, h)) continue;
+    const int i = static_cast<int>(v % n);
+    const int j = static_cast<int>((v / n) % n);
+    const int k = static_cast<int>(v / (static_cast<std::size_t>(n) * n));
+    tooth->octree.remove_voxel(i, j, k);
+    reencode_local(tooth->octree.grid(), i, j, k, &tooth->codes);
+    state->work_j[v] = 0.0;
+    ++state->removed_voxels[material];
+    if (removed != nullptr) removed->push_back(v);
+    ++count;
+  }
+  return count;
+}
+
+}  // namespace dentsim

@@ -1,0 +1,64 @@
+// Drilling of the voxel tooth (thesis §2.5.2 "Drilling"; DESIGN.md "Voxel tooth", last stage of
+// "One servo tick").
+//
+// Model (docs/tooth_octree.md "Drilling"): the bur is the tip sphere of radius rho spinning at
+// omega [rad/s]; its cutting surface moves at u = omega rho [m/s] against the tooth. Contact i of
+// the tick's set (reference/tooth/collision.h) carries the normal force share
+//   f_i = (w_i / sum_j w_j) K_i depth_i                   [N]  (the blend of the contact stage)
+// and the bur's tangential cutting force mu_c f_i (mu_c: cutting coefficient, the ratio of
+// tangential to normal bur force) does the work
+//   W_i = mu_c f_i u T_k = mu_c f_i omega rho T_k          [J]
+// on contact i's voxel during the tick of length T_k [s]. Each voxel sums the work done on it over
+// the ticks; once it reaches its material's threshold
+//   E_m = removal_energy_j_per_mm3(m) * 1e9 [J/m^3] * h^3   (materials.cc: enamel 3.0 J/mm^3,
+//                                                           dentin 0.6 J/mm^3, pulp 0.01 J/mm^3)
+// it is removed: FullOctree::remove_voxel updates the occupancy up to the root and reencode_local
+// re-encodes it and its six neighbours. Removed voxels never come back. The removed volume is
+// counted per material.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "reference/core/params.h"
+#include "reference/tooth/collision.h"
+#include "reference/tooth/materials.h"
+
+namespace dentsim {
+
+struct DrillParams {
+  // omega [rad/s]. Default 300 000 rpm: an air-turbine handpiece such as the thesis's KaVo
+  // Super-Torque 625C (§4.1) runs at a few 10^5 rpm.
+  double bur_speed_rad_s = 300000.0 * 2.0 * 3.14159265358979323846 / 60.0;
+  // mu_c, tangential / normal bur force: a model parameter (documented in docs/tooth_octree.md).
+  double cutting_coefficient = 0.5;
+};
+
+struct DrillState {
+  std::vector<double> work_j;                                 // accumulated work per voxel [J]
+  std::array<std::int64_t, kMaterialCount> removed_voxels{};  // count per material id
+  double voxel_volume_m3 = 0.0;                               // h^3
+
+  // Removed volume of material m [m^3].
+  double removed_volume_m3(int m) const { return voxel_volume_m3 * removed_voxels[m]; }
+};
+
+// A zero-work state sized for the tooth (allocates once).
+DrillState make_drill_state(const VoxelTooth& tooth);
+
+// Work needed to remove one voxel of `material` of edge h [J]; throws InputError for kEmpty or an
+// unknown id.
+double removal_threshold_j(std::uint8_t material, double voxel_size);
+
+// One drilling step after the tick's collision: adds each contact's work to its voxel
+// (contact_voxels[i] is contact i's flat voxel index, as returned by collide_tool_tip), then
+// removes every contacted voxel whose work reached its threshold. Appends the removed flat indices
+// to `removed` if not null and returns their number. The contact set is stale afterwards. Throws
+// InputError if the vectors differ in length, T <= 0, or the params are negative.
+int drill_tick(const std::vector<Contact>& contacts, const std::vector<std::size_t>& contact_voxels,
+               const ToolTip& tip, const DrillParams& params, double T, VoxelTooth* tooth,
+               DrillState* state, std::vector<std::size_t>* removed = nullptr);
+
+}  // namespace dentsim

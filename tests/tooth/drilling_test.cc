@@ -1,0 +1,246 @@
+// Drilling (reference/tooth/drilling.h): thresholds, the work model in closed form, the exact tick
+// of removal, enamel harder than dentin, and the invariants under random drilling: removed voxels
+// never come back, every octree level matches the leaves, codes equal a full re-encode, removed
+// volume per material equals the change in the voxel counts.
+#include "reference/tooth/drilling.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "reference/core/io.h"
+
+namespace dentsim {
+namespace {
+
+constexpr double kK = 3000.0;    // K_tooth [N/m]
+constexpr double kB = 2.0;       // B_tooth [N s/m]
+constexpr double kRho = 0.5e-3;  // bur radius [m]
+constexpr double kT = 1e-3;      // tick [s]
+constexpr std::uint64_t kSeed = 99;
+
+// Contacts of the tip centred at c.
+void collide(const VoxelTooth& tooth, const Vec3& c, std::vector<Contact>* contacts,
+             std::vector<std::size_t>* voxels) {
+  Pose pose;
+  pose.x = c;
+  ToolTip tip;
+  tip.radius = kRho;
+  CollisionScratch scratch;
+  contacts->clear();
+  voxels->clear();
+  collide_tool_tip(tooth, pose, tip, kK, kB, &scratch, contacts, voxels);
+}
+
+ToolTip tip() {
+  ToolTip t;
+  t.radius = kRho;
+  return t;
+}
+
+// Layers k < top of material m (a slab under z = top * h).
+VoxelTooth slab(int n, double h, int top, std::uint8_t m) {
+  VoxelGrid g(n, Vec3::Zero(), h);
+  for (int k = 0; k < top; ++k) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) g.set(i, j, k, m);
+    }
+  }
+  return VoxelTooth(std::move(g));
+}
+
+TEST(Drilling, RemovalThresholds) {
+  // E = u_m [J/mm^3] * 1e9 * h^3: h = 0.1 mm -> 1e-3 mm^3.
+  EXPECT_NEAR(removal_threshold_j(kEnamel, 1e-4), 3.0e-3, 1e-18);
+  EXPECT_NEAR(removal_threshold_j(kDentin, 1e-4), 0.6e-3, 1e-18);
+  EXPECT_NEAR(removal_threshold_j(kPulp, 1e-4), 1e-5, 1e-20);
+  EXPECT_GE(material_properties(kEnamel).removal_energy_j_per_mm3,
+            4.0 * material_properties(kDentin).removal_energy_j_per_mm3);
+  EXPECT_THROW(removal_threshold_j(kEmpty, 1e-4), InputError);
+  EXPECT_THROW(removal_threshold_j(9, 1e-4), InputError);
+  EXPECT_EQ(parse_material("dentin"), kDentin);
+  EXPECT_THROW(parse_material("bone"), InputError);
+}
+
+TEST(Drilling, WorkPerTickIsMuFOmegaRhoT) {
+  // Flat enamel face, tip at depth delta: the blended normal force is K delta, so the work done
+  // in one tick, summed over the contacted voxels, is mu_c K delta omega rho T.
+  VoxelTooth tooth = slab(32, 0.1e-3, 16, kEnamel);
+  DrillState state = make_drill_state(tooth);
+  const DrillParams params;
+  const double delta = 0.08e-3;
+  std::vector<Contact> contacts;
+  std::vector<std::size_t> voxels;
+  collide(tooth, Vec3(1.63e-3, 1.57e-3, 1.6e-3 + kRho - delta), &contacts, &voxels);
+  ASSERT_GT(contacts.size(), 4u);
+  EXPECT_EQ(drill_tick(contacts, voxels, tip(), params, kT, &tooth, &state), 0);
+  double total = 0.0;
+  for (const double w : state.work_j) total += w;
+  const double expected =
+      params.cutting_coefficient * kK * delta * params.bur_speed_rad_s * kRho * kT;
+  std::printf("work per tick %.6g J (closed form %.6g J)\n", total, expected);
+  EXPECT_NEAR(total, expected, 1e-12 * expected);
+}
+
+// Ticks until the single contacted voxel goes: the oracle accumulates W per tick.
+int ticks_to_remove(std::uint8_t material, double* closed_form) {
+  const double h = 0.1e-3;
+  VoxelGrid g(8, Vec3::Zero(), h);
+  g.set(4, 4, 4, material);  // an isolated voxel; the tip presses its top face at the centre
+  VoxelTooth tooth(std::move(g));
+  DrillState state = make_drill_state(tooth);
+  const DrillParams params;
+  const double delta = 1e-6;  // footprint radius sqrt(2 rho delta) = 0.032 mm < h / 2: one face
+  const Vec3 c = tooth.grid().center(4, 4, 4) + Vec3(0, 0, 0.5 * h + kRho - delta);
+  std::vector<Contact> contacts;
+  std::vector<std::size_t> voxels;
+  collide(tooth, c, &contacts, &voxels);
+  EXPECT_EQ(contacts.size(), 1u);
+  EXPECT_EQ(contacts[0].stiffness, kK * material_properties(material).stiffness_scale);
+  EXPECT_NEAR(contacts[0].depth, delta, 1e-18);
+  // W = mu_c f omega rho T, evaluated in the order drill_tick uses, so the tick count is exact.
+  const double f = contacts[0].stiffness * contacts[0].depth;
+  const double w = params.cutting_coefficient * f * (params.bur_speed_rad_s * kRho) * kT;
+  const double e = removal_threshold_j(material, h);
+  *closed_form = std::ceil(e / w);
+  int expected = 0;
+  for (double acc = 0.0; acc < e; acc += w) ++expected;
+  for (int tick = 1; tick <= 100000; ++tick) {
+    collide(tooth, c, &contacts, &voxels);
+    EXPECT_EQ(contacts.size(), 1u);
+    const int removed = drill_tick(contacts, voxels, tip(), params, kT, &tooth, &state);
+    if (removed > 0) {
+      EXPECT_EQ(tick, expected);
+      EXPECT_EQ(state.removed_voxels[material], 1);
+      EXPECT_NEAR(state.removed_volume_m3(material), h * h * h, 1e-25);
+      EXPECT_FALSE(tooth.octree.occupied(0, 0, 0, 0));  // the octree is empty up to the root
+      EXPECT_EQ(tooth.codes.code[tooth.grid().index(4, 4, 4)], 0);
+      return tick;
+    }
+  }
+  return -1;
+}
+
+TEST(Drilling, ExactTickOfRemovalAndEnamelHarderThanDentin) {
+  double enamel_closed = 0, dentin_closed = 0, pulp_closed = 0;
+  const int enamel = ticks_to_remove(kEnamel, &enamel_closed);
+  const int dentin = ticks_to_remove(kDentin, &dentin_closed);
+  const int pulp_ticks = ticks_to_remove(kPulp, &pulp_closed);
+  std::printf("ticks to remove one voxel: enamel %d (ceil(E/W) = %.0f), dentin %d, pulp %d\n",
+              enamel, enamel_closed, dentin, pulp_ticks);
+  EXPECT_NEAR(enamel, enamel_closed, 1.0);
+  // Ratio (E_enamel / E_dentin) / (K_enamel / K_dentin) = 5 * 0.7 = 3.5.
+  EXPECT_GT(enamel, 3 * dentin);
+  EXPECT_GT(dentin, pulp_ticks);
+}
+
+TEST(Drilling, SameDrillingTakesLongerInEnamelThanInDentin) {
+  // The tip held 0.1 mm below a flat surface: ticks until 30 voxels (0.03 mm^3) are gone. The
+  // expected ratio is (E_enamel / E_dentin) / (K_enamel / K_dentin) = 5 * 0.7 = 3.5.
+  int ticks[2] = {0, 0};
+  const std::uint8_t materials[2] = {kEnamel, kDentin};
+  for (int m = 0; m < 2; ++m) {
+    VoxelTooth tooth = slab(32, 0.1e-3, 16, materials[m]);
+    DrillState state = make_drill_state(tooth);
+    std::vector<Contact> contacts;
+    std::vector<std::size_t> voxels;
+    while (state.removed_voxels[materials[m]] < 30 && ticks[m] < 10000) {
+      collide(tooth, Vec3(1.6e-3, 1.6e-3, 1.6e-3 + kRho - 0.1e-3), &contacts, &voxels);
+      drill_tick(contacts, voxels, tip(), DrillParams{}, kT, &tooth, &state);
+      ++ticks[m];
+    }
+  }
+  std::printf("ticks to remove 0.03 mm^3: enamel %d, dentin %d (ratio %.2f)\n", ticks[0], ticks[1],
+              static_cast<double>(ticks[0]) / ticks[1]);
+  EXPECT_LT(ticks[0], 10000);
+  EXPECT_GT(ticks[0], 3 * ticks[1]);
+}
+
+TEST(Drilling, InvariantsUnderRandomDrilling) {
+  std::printf("seed %llu\n", static_cast<unsigned long long>(kSeed));
+  // A layered ball: enamel shell, dentin, pulp core, N = 32, h = 0.1 mm.
+  const int n = 32;
+  VoxelGrid g(n, Vec3::Zero(), 0.1e-3);
+  const Vec3 mid = Vec3::Constant(1.6e-3);
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        const double r = (g.center(i, j, k) - mid).norm();
+        g.set(i, j, k, r < 0.5e-3 ? kPulp : r < 1.0e-3 ? kDentin : r < 1.4e-3 ? kEnamel : kEmpty);
+      }
+    }
+  }
+  VoxelTooth tooth(g);
+  const std::vector<std::uint8_t> initial = tooth.grid().voxels;
+  std::array<long, kMaterialCount> initial_count{};
+  for (const std::uint8_t m : initial) ++initial_count[m];
+  DrillState state = make_drill_state(tooth);
+  DrillParams params;
+  params.bur_speed_rad_s *= 20.0;  // a fast bur so that the walk reaches the pulp
+
+  std::mt19937_64 rng(kSeed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  std::vector<Contact> contacts;
+  std::vector<std::size_t> voxels, removed;
+  std::vector<bool> gone(initial.size(), false);
+  Vec3 dir = Vec3(gauss(rng), gauss(rng), gauss(rng)).normalized();
+  double radius = 1.4e-3 + kRho;
+  long total_removed = 0;
+  for (int tick = 0; tick < 1500; ++tick) {
+    // The tip moves inward along a slowly turning ray, pressing 0.1 mm into what is left.
+    if (tick % 100 == 0) {
+      dir = Vec3(gauss(rng), gauss(rng), gauss(rng)).normalized();
+      radius = 1.4e-3 + kRho;
+    }
+    radius = std::max(0.2e-3, radius - 8e-6);
+    collide(tooth, mid + radius * dir, &contacts, &voxels);
+    removed.clear();
+    total_removed += drill_tick(contacts, voxels, tip(), params, kT, &tooth, &state, &removed);
+    for (const std::size_t v : removed) {
+      ASSERT_FALSE(gone[v]) << "voxel " << v << " removed twice";
+      ASSERT_NE(initial[v], kEmpty);
+      gone[v] = true;
+    }
+    // Removed voxels never come back; nothing else changes.
+    const std::vector<std::uint8_t>& now = tooth.grid().voxels;
+    for (std::size_t v = 0; v < now.size(); ++v) {
+      ASSERT_EQ(now[v], gone[v] ? std::uint8_t{kEmpty} : initial[v])
+          << "voxel " << v << " tick " << tick;
+    }
+    if (tick % 10 == 0 || !removed.empty()) {
+      const FullOctree rebuilt(tooth.grid());
+      ASSERT_EQ(tooth.octree.masks(), rebuilt.masks()) << "tick " << tick;
+      ASSERT_EQ(tooth.codes.code, encode_neighbors(tooth.grid()).code) << "tick " << tick;
+    }
+  }
+  std::array<long, kMaterialCount> count{};
+  for (const std::uint8_t m : tooth.grid().voxels) ++count[m];
+  for (int m = 1; m < kMaterialCount; ++m) {
+    EXPECT_EQ(state.removed_voxels[m], initial_count[m] - count[m]) << "material " << m;
+    EXPECT_NEAR(state.removed_volume_m3(m), (initial_count[m] - count[m]) * 1e-12, 1e-24);
+  }
+  std::printf("removed voxels: enamel %lld, dentin %lld, pulp %lld (total %ld)\n",
+              static_cast<long long>(state.removed_voxels[kEnamel]),
+              static_cast<long long>(state.removed_voxels[kDentin]),
+              static_cast<long long>(state.removed_voxels[kPulp]), total_removed);
+  EXPECT_GT(state.removed_voxels[kEnamel], 50);
+  EXPECT_GT(state.removed_voxels[kDentin], 10);
+}
+
+TEST(Drilling, RejectsBadInput) {
+  VoxelTooth tooth = slab(8, 1e-4, 4, kEnamel);
+  DrillState state = make_drill_state(tooth);
+  std::vector<Contact> contacts(2);
+  std::vector<std::size_t> voxels(1, 0);
+  EXPECT_THROW(drill_tick(contacts, voxels, tip(), DrillParams{}, kT, &tooth, &state), InputError);
+  voxels.push_back(1);
+  EXPECT_THROW(drill_tick(contacts, voxels, tip(), DrillParams{}, 0.0, &tooth, &state), InputError);
+  DrillParams negative;
+  negative.cutting_coefficient = -1.0;
+  EXPECT_THROW(drill_tick(contacts, voxels, tip(), negative, kT, &tooth, &state), InputError);
+}
+
+}  // namespace
+}  // namespace dentsim
