@@ -379,15 +379,21 @@ MeshReport validate_and_repair(TriangleMesh& mesh, const std::string& name) {
 }
 
 LoadedMesh parse_stl(const std::string& bytes, const std::string& name) {
+  std::size_t i = 0;
+  while (i < bytes.size() && std::isspace(static_cast<unsigned char>(bytes[i]))) ++i;
+  const bool starts_solid = lower(bytes.substr(i, 5)) == "solid";
+  // Binary headers may also start with "solid": ASCII needs a "facet" keyword early on too.
+  if (starts_solid && lower(bytes.substr(0, 1024)).find("facet") != std::string::npos) {
+    return parse_stl_ascii(bytes, name);
+  }
   if (bytes.size() >= 84) {
     std::uint32_t n = 0;
     std::memcpy(&n, bytes.data() + 80, 4);
-    if (bytes.size() == 84 + 50 * static_cast<std::uint64_t>(n))
+    if (bytes.size() == 84 + 50 * static_cast<std::uint64_t>(n)) {
       return parse_stl_binary(bytes, name);
+    }
   }
-  std::size_t i = 0;
-  while (i < bytes.size() && std::isspace(static_cast<unsigned char>(bytes[i]))) ++i;
-  if (lower(bytes.substr(i, 5)) == "solid") return parse_stl_ascii(bytes, name);
+  if (starts_solid) return parse_stl_ascii(bytes, name);
   throw InputError("STL '" + name + "': neither binary (size 84 + 50 * triangle count, here " +
                    std::to_string(bytes.size()) + " bytes) nor ASCII (starting with 'solid')");
 }

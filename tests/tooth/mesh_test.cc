@@ -94,6 +94,14 @@ TEST(Mesh, BinaryStlIsWeldedToEightVertices) {
   EXPECT_EQ(signed_volume(m.mesh), 1.0);
 }
 
+TEST(Mesh, BinaryStlWhoseHeaderSaysSolidIsBinary) {
+  std::string bytes = stl_binary(triangles_of(cube()));
+  bytes.replace(0, 12, "solid cube  ");  // many exporters write this
+  const LoadedMesh m = parse_stl(bytes, "solid-header.stl");
+  EXPECT_EQ(m.mesh.triangles.size(), 12u);
+  EXPECT_EQ(signed_volume(m.mesh), 1.0);
+}
+
 TEST(Mesh, AsciiStlWithTwoSolidsGivesTwoGroups) {
   // A tetrahedron (volume 1/6) written as ASCII, followed by a second solid: a far tetrahedron.
   std::ostringstream s;
