@@ -114,7 +114,9 @@ std::string phantom_mjcf(const PhantomParams& p, const PhantomMjcfOptions& o) {
   s << "    </fixed>\n";
   s << "  </tendon>\n";
   const std::string solref =
-      "solref=\"" + fmt_num(o.equality_timeconst_s) + " " + fmt_num(o.equality_dampratio) + "\"";
+      "solref=\"" + fmt_num(o.equality_timeconst_s) + " " + fmt_num(o.equality_dampratio) +
+      "\" solimp=\"" + fmt_num(o.equality_impedance) + " " + fmt_num(o.equality_impedance) +
+      " 0.001 0.5 2\"";
   s << "  <equality>\n";
   s << "    <joint name=\"parallel_link\" joint1=\"link_c\" joint2=\"elbow\" "
        "polycoef=\"0 -1 0 0 0\" "

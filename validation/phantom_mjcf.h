@@ -32,6 +32,10 @@ struct PhantomMjcfOptions {
   // (0.02, 1); a stiffer closure keeps the chain closed tighter (docs/phantom.md).
   double equality_timeconst_s = 0.002;
   double equality_dampratio = 1.0;
+  // Equality impedance d (solimp dmin = dmax): MuJoCo's constraints are soft, and a fraction
+  // 1 - d of the unconstrained acceleration leaks through them; 0.9999 is MuJoCo's maximum
+  // (default 0.9 .. 0.95, which lets the chain open under gravity).
+  double equality_impedance = 0.9999;
 };
 
 // MJCF names: joints per tree body (theta_0..theta_7), actuators per device joint, the tip site.

@@ -170,7 +170,7 @@ PhantomParams default_phantom_params() {
   // df: about the shoulder (7.11, 0.629, 6.246)e-4, shifted by m l6^2 = 0.1906 * 0.0527^2 on x, z:
   // CoM (1.81648526, 0.629, 0.95248526)e-4; Ixx set to 1.58e-4, excess 0.23648526e-4 -> q3.
   p.crank = {0.1906, Vec3(0, -0.0527, 0), Vec3(0.000158, 0.0000629, 0.000095248526)};
-  p.parallel_link = {0.0249, Vec3(0, 0, 0.1075), Vec3(0.0000959, 0.0000959, 0.0000051)};
+  p.parallel_link = {0.0249, Vec3(0, 0, 0.1075), Vec3(0.0000959, 0.0000959, 0.00000051)};
   // Gimbal: not published (PHANTOM.md); nominal values of a light yoke, ring and stylus, to be
   // identified by calibration/.
   p.gimbal_yaw = {0.015, Vec3(0, 0.005, -0.01), Vec3(3.0e-6, 2.0e-6, 2.0e-6)};

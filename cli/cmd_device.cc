@@ -1,0 +1,46 @@
+// `dentsim device show [MODEL]` and `dentsim device check MODEL`: the Phantom device model file
+// (reference/phantom/phantom_params.h, format in docs/phantom.md).
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "cli/registry.h"
+#include "reference/core/io.h"
+#include "reference/phantom/phantom_params.h"
+
+namespace dentsim::cli {
+namespace {
+
+struct DeviceOptions {
+  std::string model;
+};
+
+void setup_device(CLI::App& app) {
+  CLI::App* device = group(app, "device", "Device model files (Phantom Premium 1.5/6DoF)");
+
+  auto show_opts = std::make_shared<DeviceOptions>();
+  CLI::App* show = device->add_subcommand(
+      "show", "Print a device model file (the built-in Premium 1.5A default when none is given),\n"
+              "validated, so a new device can start from it");
+  show->add_option("MODEL", show_opts->model, "device model file (JSON)");
+  show->callback([show_opts] {
+    const std::string text = show_opts->model.empty()
+                                 ? default_phantom_model_file()
+                                 : phantom_params_to_text(load_phantom_params(show_opts->model));
+    std::fputs(text.c_str(), stdout);
+  });
+
+  auto check_opts = std::make_shared<DeviceOptions>();
+  CLI::App* check = device->add_subcommand(
+      "check", "Validate a device model file: every field, and M(q) positive definite over the\n"
+               "joint-limit box; exit 0 if valid, 2 with a message naming the field otherwise");
+  check->add_option("MODEL", check_opts->model, "device model file (JSON)")->required();
+  check->callback([check_opts] {
+    const PhantomParams p = load_phantom_params(check_opts->model);
+    std::printf("%s: valid device model \"%s\"\n", check_opts->model.c_str(), p.name.c_str());
+  });
+}
+DENTSIM_REGISTER_COMMAND(setup_device);
+
+}  // namespace
+}  // namespace dentsim::cli

@@ -1,0 +1,173 @@
+// Device model file: defaults, round trip, validation messages, and the `dentsim device` CLI.
+#include "reference/phantom/phantom_params.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <regex>
+#include <string>
+
+#include "reference/core/io.h"
+
+namespace dentsim {
+namespace {
+
+using ::testing::AllOf;
+using ::testing::HasSubstr;
+
+TEST(PhantomParams, DefaultFileRoundTripsExactly) {
+  const PhantomParams p = default_phantom_params();
+  const std::string text = default_phantom_model_file();
+  const PhantomParams back = parse_phantom_params(text, "default");
+  EXPECT_TRUE(back == p);
+  EXPECT_EQ(phantom_params_to_text(back), text);
+  // Published values survive (PHANTOM.md): l1, l2, l3 and the forearm mass.
+  EXPECT_EQ(back.l1_m, 0.215);
+  EXPECT_EQ(back.l2_m, 0.170);
+  EXPECT_EQ(back.l3_m, 0.0325);
+  EXPECT_EQ(back.forearm.mass_kg, 0.0202);
+}
+
+// Returns the InputError message of parsing `text`, or "" if it parsed.
+std::string error_of(const std::string& text) {
+  try {
+    parse_phantom_params(text, "model.json");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::string replace(std::string text, const std::string& from, const std::string& to) {
+  const size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
+
+TEST(PhantomParams, MissingFieldIsNamed) {
+  const std::string bad =
+      replace(default_phantom_model_file(), "\"forearm\": {\"mass_kg\": 0.0202, ", "\"forearm\": {");
+  EXPECT_THAT(error_of(bad), AllOf(HasSubstr("model.json"), HasSubstr("bodies.forearm.mass_kg"),
+                                   HasSubstr("missing")));
+}
+
+TEST(PhantomParams, NegativeMassIsNamed) {
+  const std::string bad = replace(default_phantom_model_file(), "\"mass_kg\": 0.1906", "\"mass_kg\": -0.1906");
+  EXPECT_THAT(error_of(bad), AllOf(HasSubstr("bodies.crank.mass_kg"), HasSubstr("positive"),
+                                   HasSubstr("-0.1906")));
+}
+
+TEST(PhantomParams, WrongTypeIsNamed) {
+  const std::string bad = replace(default_phantom_model_file(), "\"l1_m\": 0.215", "\"l1_m\": \"0.215\"");
+  EXPECT_THAT(error_of(bad), AllOf(HasSubstr("arm.l1_m"), HasSubstr("expected a number"),
+                                   HasSubstr("string")));
+  const std::string bad2 = replace(default_phantom_model_file(), "\"coulomb_n_m\": [0.008, ",
+                                   "\"coulomb_n_m\": [");
+  EXPECT_THAT(error_of(bad2), AllOf(HasSubstr("joints.coulomb_n_m"), HasSubstr("6 numbers")));
+}
+
+TEST(PhantomParams, PhysicallyImpossibleInertiaIsNamed) {
+  // The published be moments about the shoulder, as CoM moments, break the triangle inequality.
+  const std::string bad = replace(default_phantom_model_file(), "\"inertia_kg_m2\": [0.000745,",
+                                  "\"inertia_kg_m2\": [0.000789534784,");
+  EXPECT_THAT(error_of(bad), AllOf(HasSubstr("bodies.upper_arm.inertia_kg_m2"),
+                                   HasSubstr("triangle inequality")));
+}
+
+TEST(PhantomParams, NonPositiveDefiniteMassMatrixIsNamed) {
+  // A roll body with (numerically) no inertia and no rotor: M(q) is singular along q6.
+  PhantomParams p = default_phantom_params();
+  p.gimbal_roll.inertia_kg_m2 = Vec3(1e-30, 1e-30, 1e-30);
+  p.gimbal_roll.com_m.setZero();
+  p.armature_kg_m2(5) = 0.0;
+  const std::string bad = phantom_params_to_text(p);
+  EXPECT_THAT(error_of(bad), AllOf(HasSubstr("joints.armature_kg_m2[5]"),
+                                   HasSubstr("bodies.gimbal_roll.inertia_kg_m2"),
+                                   HasSubstr("not positive definite")));
+}
+
+TEST(PhantomParams, OtherBadInputs) {
+  EXPECT_THAT(error_of("{ not json"), AllOf(HasSubstr("model.json"), HasSubstr("not valid JSON")));
+  EXPECT_THAT(error_of(replace(default_phantom_model_file(), "\"gimbal\": {",
+                               "\"gimbal\": {\"extra\": 1, ")),
+              HasSubstr("gimbal.extra: unknown key"));
+  EXPECT_THAT(error_of(replace(default_phantom_model_file(), "\"q_max_rad\": [0.9,",
+                               "\"q_max_rad\": [-1.9,")),
+              HasSubstr("joints.q_max_rad[0]"));
+  EXPECT_THAT(error_of(replace(default_phantom_model_file(), "\"yaw_axis\": [0, 1, 0]",
+                               "\"yaw_axis\": [0, 2, 0]")),
+              AllOf(HasSubstr("gimbal.yaw_axis"), HasSubstr("unit vector")));
+  EXPECT_THAT(error_of(replace(default_phantom_model_file(), "\"version\": 1", "\"version\": 7")),
+              HasSubstr("version"));
+  EXPECT_THROW(load_phantom_params("/nonexistent/phantom.json"), InputError);
+}
+
+// ---- CLI: dentsim device show / check ----------------------------------------------------------
+
+struct RunResult {
+  int status = -1;
+  std::string out;
+};
+
+RunResult run(const std::string& args) {
+  const std::string cmd = std::string(DENTSIM_BINARY) + " " + args;
+  RunResult r;
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf;
+  size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.out.append(buf.data(), n);
+  const int st = pclose(pipe);
+  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  return r;
+}
+
+std::string temp_path(const std::string& name) {
+  return (std::filesystem::temp_directory_path() /
+          ("dentsim_phantom_" + std::to_string(::getpid()) + "_" + name))
+      .string();
+}
+
+TEST(DeviceCli, ShowPrintsTheDefaultWhichReloadsToTheSameParams) {
+  const RunResult r = run("device show");
+  ASSERT_EQ(r.status, 0);
+  EXPECT_EQ(r.out, default_phantom_model_file());
+  EXPECT_TRUE(parse_phantom_params(r.out, "stdout") == default_phantom_params());
+  // show FILE prints the file's model: start a new device from the default and re-show it.
+  PhantomParams p = default_phantom_params();
+  p.name = "my device";
+  p.forearm.mass_kg = 0.025;
+  const std::string path = temp_path("mine.json");
+  write_file_atomic(path, phantom_params_to_text(p));
+  const RunResult r2 = run("device show " + path);
+  ASSERT_EQ(r2.status, 0);
+  EXPECT_TRUE(parse_phantom_params(r2.out, "stdout") == p);
+  std::filesystem::remove(path);
+}
+
+TEST(DeviceCli, CheckAcceptsGoodAndRejectsBadNamingTheField) {
+  const std::string good = temp_path("good.json");
+  const std::string bad = temp_path("bad.json");
+  write_file_atomic(good, default_phantom_model_file());
+  write_file_atomic(bad, replace(default_phantom_model_file(), "\"mass_kg\": 0.0249",
+                                 "\"mass_kg\": -1"));
+  const RunResult ok = run("device check " + good + " 2>&1");
+  EXPECT_EQ(ok.status, 0);
+  EXPECT_THAT(ok.out, HasSubstr("valid"));
+  const RunResult ko = run("device check " + bad + " 2>&1");
+  EXPECT_EQ(ko.status, 2);
+  EXPECT_THAT(ko.out, AllOf(HasSubstr(bad), HasSubstr("bodies.parallel_link.mass_kg")));
+  const RunResult missing = run("device check 2>&1");
+  EXPECT_EQ(missing.status, 2);
+  std::filesystem::remove(good);
+  std::filesystem::remove(bad);
+}
+
+}  // namespace
+}  // namespace dentsim
