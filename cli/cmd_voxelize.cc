@@ -8,12 +8,14 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "cli/png_writer.h"
 #include "cli/registry.h"
 #include "reference/core/io.h"
 #include "reference/tooth/materials.h"
 #include "reference/tooth/mesh.h"
+#include "reference/tooth/octree.h"
 #include "reference/tooth/procedural_molar.h"
 #include "reference/tooth/render_png.h"
 #include "reference/tooth/voxelize.h"
@@ -32,19 +34,6 @@ struct Options {
   std::string png;
   int png_size = 512;
 };
-
-// Bytes of the full octree over an N^3 grid: one occupancy byte per internal node
-// ((8^L - 1) / 7 of them, L = log2 N) plus the N^3 leaf bytes -- the formula of
-// reference/tooth/octree.h (FullOctree::memory_bytes_for), kept here until that header is in.
-std::size_t full_octree_bytes(int n) {
-  std::size_t internal = 0, level_nodes = 1;
-  for (int side = 1; side < n; side *= 2) {
-    internal += level_nodes;
-    level_nodes *= 8;
-  }
-  const std::size_t nn = static_cast<std::size_t>(n);
-  return internal + nn * nn * nn;
-}
 
 nlohmann::json vec_mm(const Vec3& v) { return {v.x() * 1e3, v.y() * 1e3, v.z() * 1e3}; }
 
@@ -128,7 +117,6 @@ void run(const Options& o) {
   j["resolution"] = grid.n;
   j["voxel_size_mm"] = grid.voxel_size * 1e3;
   j["origin_mm"] = vec_mm(grid.origin);
-  j["octree_bytes"] = full_octree_bytes(grid.n);
   j["crown"] = {{"axis", {rep.crown.axis.x(), rep.crown.axis.y(), rep.crown.axis.z()}},
                 {"cej_mm", rep.crown.cej * 1e3},
                 {"height_mm", rep.crown.crown_height * 1e3}};
@@ -143,7 +131,13 @@ void run(const Options& o) {
     j["png"] = o.png;
     t_png = ms_since(t0);
   }
-  j["timing_breakdown_ms"] = {{"load", t_load}, {"voxelize", t_voxelize}, {"png", t_png}};
+  // The full octree of the collision stage over this grid (it takes the grid over).
+  const auto t_octree = std::chrono::steady_clock::now();
+  const FullOctree octree(std::move(grid));
+  j["octree_bytes"] = octree.memory_bytes();
+  j["octree_levels"] = octree.levels();
+  j["timing_breakdown_ms"] = {
+      {"load", t_load}, {"voxelize", t_voxelize}, {"png", t_png}, {"octree", ms_since(t_octree)}};
   j["timing_ms"] = ms_since(t_start);
   write_json(o.json, j);
 }
