@@ -8,22 +8,30 @@
 // 1. candidates: FullOctree::query_sphere(c, rho) -- descend from the root into occupied children
 //    whose boxes intersect the sphere, down to the solid voxels the sphere intersects;
 // 2. for every exposed face f of a candidate (NeighborCodes; faces shared with a solid neighbour
-//    are skipped, so the edge between face-adjacent voxels gives no force), with outward normal
-//    n = face_normal(f) and signed distance d = n^T (c - p) of the centre from the face plane
-//    (p any point of the plane): if |d| < rho, the plane cuts the sphere in a disk of radius
-//    a = sqrt(rho^2 - d^2) centred at the projection of c; the face's weight is the area of
-//    (face square) ∩ (that disk), in closed form (disk_rect_area). A face with weight > 0 emits
-//      n,  x_o = the point of the face square nearest to c (on the face plane),
-//      x_c = c - rho n (the deepest point of the sphere along -n),
+//    are skipped, so the edge between face-adjacent voxels gives no force), with face normal
+//    n_f = face_normal(f) and signed distance d = n_f^T (c - p) of the centre outside the face
+//    plane (p on the plane), |d| < rho:
+//    - patch: the rectangle spanned by the runs of coplanar exposed faces through f along its two
+//      in-plane axes; q = the point of the patch nearest to c (on the face plane);
+//    - d > 0: n = (c - q) / |c - q|, depth = rho - |c - q|, taper t = n^T n_f = d / |c - q|
+//      (over the patch n = n_f and depth = rho - d; past a patch edge or corner, the sphere-edge
+//      contact, whose depth goes to 0 as the sphere leaves);
+//    - d <= 0 (penetration >= rho): n = n_f, depth = rho - d if c projects onto the patch, else
+//      the face is skipped;
+//    - weight = t * area((face square) ∩ (disk where the plane cuts the sphere, radius
+//      sqrt(rho^2 - d^2))), closed form disk_rect_area;
+//    a face with weight > 0 emits
+//      n,  x_o = q,  x_c = c - rho n (the deepest point of the sphere along -n),
 //      r = R_2^T (x_c - x_2) = o - rho R_2^T n   (x_c = x_2 + R_2 r, body frame),
-//      depth = n^T (x_o - x_c) = rho - d > 0                        (2.15 delta),
+//      depth = n^T (x_o - x_c) > 0                                   (2.15 delta),
 //      stiffness = K_tooth * stiffness_scale(material), damping = B_tooth * damping_scale,
-//      weight = area [m^2], material id.
+//      weight [m^2], material id.
 // The contact stage blends the set with weights normalised to sum 1 (params.h Contact): on a flat
-// face the face weights partition the disk, so the force is K delta n whatever the resolution and
-// wherever the sphere sits relative to voxel boundaries; every weight is continuous in c and
-// vanishes as a face leaves the sphere, so the blended force has no jump (docs/tooth_octree.md
-// states the measured smoothness and resolution bounds).
+// patch the weights partition the disk and all members share n and depth, so the force is
+// K delta n whatever the resolution and wherever the sphere sits relative to voxel boundaries;
+// weights, normals and depths are continuous in c while the penetration is below rho, so the
+// blended force has no jump there (docs/tooth_octree.md: measured smoothness and resolution
+// bounds, and the deep-penetration limit).
 #pragma once
 
 #include <cstddef>
