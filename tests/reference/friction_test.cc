@@ -178,6 +178,60 @@ TEST(Friction, ExplicitSchemeSticksAndSlides) {
   EXPECT_NEAR(a_from_x / a_expected, 1.0, 0.01);
 }
 
+// Stick-slip: a block on a level plane pulled by a horizontal PMI spring whose anchor moves at
+// constant speed. It sticks (no motion at all) until the spring force at the midpoint exceeds
+// mu m g and breaks away on exactly that tick; while sticking friction balances the spring.
+TEST(Friction, SpringPulledBlockBreaksAwayAtMuMg) {
+  const double T = 1e-3, K = 2e4, k_s = 200.0, v_a = 0.02, mu = 0.4;
+  const Mat6 M = block_inertia();
+  const double m = M(0, 0);
+  Contact c;
+  c.n = Vec3::UnitZ();
+  c.stiffness = K;
+  c.x_o = Vec3(0, 0, m * kG / K);  // block at the origin, at the equilibrium depth
+  Pose pose;
+  Vec6 V = Vec6::Zero();
+  FrictionParams fp;
+  fp.enabled = true;
+  fp.mu = mu;
+  int first_slide = -1;
+  for (int k = 0; k < 400 && first_slide < 0; ++k) {
+    const double x_a = v_a * (k + 0.5) * T;  // anchor at the midpoint of the tick
+    AffineWrench spring;                     // f_x = -k_s (x_k + T/2 v_hat - x_a)
+    spring.f0(0) = -k_s * (pose.x.x() - x_a);
+    spring.G(0, 0) = -k_s * T / 2;
+    AffineWrench gravity;
+    gravity.f0(2) = -m * kG;
+    const AffineWrench normal = contact_wrench(std::span(&c, 1), pose, T, Scheme::kMidpoint);
+    PmiSystem sys;
+    sys.A = M * (2.0 / T);
+    sys.b = sys.A * V;
+    sys.add(spring);
+    sys.add(gravity);
+    sys.add(normal);
+    const FrictionSolution sol = solve_with_friction(sys, std::span(&c, 1), pose, normal, fp);
+    if (sol.sliding) {
+      first_slide = k;
+      EXPECT_NEAR(sol.f_t.norm(), mu * m * kG, 1e-9);
+      EXPECT_GT(sol.V(0), 0.0);  // moves towards the anchor
+      break;
+    }
+    // Sticking: friction balances the spring exactly and the block does not move.
+    EXPECT_NEAR(sol.f_t.x(), -spring.at(sol.V)(0), 1e-12);
+    EXPECT_LT(sol.V.norm(), 1e-15);
+    V = 2.0 * sol.V - V;
+    pose.x += T * lin(sol.V);
+  }
+  // Break-away tick: the first k with k_s v_a (k + 1/2) T > mu m g.
+  const int expected = static_cast<int>(std::floor(mu * m * kG / (k_s * v_a * T) - 0.5)) + 1;
+  std::printf(
+      "break-away at tick %d (expected %d), spring force there %.6f N, mu m g %.6f N, "
+      "creep before it %.3e m\n",
+      first_slide, expected, k_s * v_a * (first_slide + 0.5) * T, mu * m * kG, pose.x.norm());
+  EXPECT_EQ(first_slide, expected);
+  EXPECT_LT(pose.x.norm(), 1e-15);  // no creep before break-away (round-off only)
+}
+
 // A random PMI-like system: A = M 2/T + coupling (K_vc T/2 + B_vc, SPD) + proxy damping
 // + gyroscopic C_k (skew), b random; the contact wrench of a random set is added to it.
 struct RandomCase {
@@ -192,7 +246,8 @@ RandomCase random_case(Rng& rng) {
   RandomCase rc;
   const double T = uni(rng, 1e-4, 2e-3);
   const double m = uni(rng, 0.01, 0.5);
-  Mat3 L = Mat3::Random() * 1e-5;
+  Mat3 L;
+  L << random_vec(rng, 1e-5), random_vec(rng, 1e-5), random_vec(rng, 1e-5);
   const Mat3 J = L * L.transpose() + uni(rng, 1e-6, 1e-4) * Mat3::Identity();
   const Mat6 M = block_diag(m * Mat3::Identity(), J);
   const Mat6 Kvc =
@@ -312,6 +367,48 @@ TEST(FrictionStress, ConeAndDissipationHoldOverRandomStates) {
   EXPECT_GT(slide, samples / 20);
   EXPECT_GT(inactive, samples / 20);
   EXPECT_GT(released, 0);
+}
+
+// Friction inherits the aggregation: the same contact reported 1, 4, 16 or 64 times (weights
+// arbitrary) gives the same solution, force and sliding state.
+TEST(Friction, SolutionIndependentOfReportCount) {
+  const unsigned seed = 24;
+  std::printf("seed %u\n", seed);
+  Rng rng(seed);
+  double worst = 0.0;
+  long sliding = 0, sticking = 0;
+  for (int s = 0; s < 300; ++s) {
+    RandomCase rc = random_case(rng);
+    rc.set.resize(1);
+    if (penetration_depth(rc.set[0], rc.pose) <= 0.0) continue;
+    const PmiSystem base = [&] {
+      PmiSystem sys = rc.sys;
+      sys.A += rc.normal.G;  // remove the multi-member normal that random_case added
+      sys.b -= rc.normal.f0;
+      return sys;
+    }();
+    const double T = 1e-3;
+    const AffineWrench n1 = contact_wrench(rc.set, rc.pose, T, Scheme::kMidpoint);
+    PmiSystem sys1 = base;
+    sys1.add(n1);
+    const FrictionSolution ref = solve_with_friction(sys1, rc.set, rc.pose, n1, rc.fp);
+    (ref.sliding ? sliding : sticking)++;
+    for (int N : {4, 16, 64}) {
+      std::vector<Contact> set(N, rc.set[0]);
+      for (Contact& c : set) c.weight = uni(rng, 0.1, 1.0);
+      const AffineWrench nN = contact_wrench(set, rc.pose, T, Scheme::kMidpoint);
+      PmiSystem sysN = base;
+      sysN.add(nN);
+      const FrictionSolution sol = solve_with_friction(sysN, set, rc.pose, nN, rc.fp);
+      EXPECT_EQ(sol.sliding, ref.sliding);
+      worst = std::max({worst, (sol.V - ref.V).norm() / (1e-9 + ref.V.norm()),
+                        (sol.f_t - ref.f_t).norm() / (1e-9 + ref.f_t.norm())});
+    }
+  }
+  std::printf("stick %ld, slide %ld; worst relative difference %.3e\n", sticking, sliding, worst);
+  EXPECT_GT(sticking, 10);
+  EXPECT_GT(sliding, 10);
+  EXPECT_LT(worst, 1e-10);
 }
 
 TEST(Friction, DisabledOrNoContactIsThePlainSolve) {
