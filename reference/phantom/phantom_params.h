@@ -34,6 +34,8 @@ struct PhantomBody {
   double mass_kg = 0.0;
   Vec3 com_m = Vec3::Zero();          // centre of mass in the body frame [m]
   Vec3 inertia_kg_m2 = Vec3::Zero();  // principal moments about the CoM, body axes [kg m^2]
+
+  bool operator==(const PhantomBody&) const = default;
 };
 
 struct PhantomParams {

@@ -100,8 +100,8 @@ TEST(PhantomParams, OtherBadInputs) {
   EXPECT_THAT(error_of(replace(default_phantom_model_file(), "\"q_max_rad\": [0.9,",
                                "\"q_max_rad\": [-1.9,")),
               HasSubstr("joints.q_max_rad[0]"));
-  EXPECT_THAT(error_of(replace(default_phantom_model_file(), "\"yaw_axis\": [0, 1, 0]",
-                               "\"yaw_axis\": [0, 2, 0]")),
+  EXPECT_THAT(error_of(replace(default_phantom_model_file(), "\"yaw_axis\": [0.0, 1.0, 0.0]",
+                               "\"yaw_axis\": [0.0, 2.0, 0.0]")),
               AllOf(HasSubstr("gimbal.yaw_axis"), HasSubstr("unit vector")));
   EXPECT_THAT(error_of(replace(default_phantom_model_file(), "\"version\": 1", "\"version\": 7")),
               HasSubstr("version"));
