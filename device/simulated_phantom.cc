@@ -176,9 +176,12 @@ SimulatedPhantom::SimulatedPhantom(const MujocoPlant& plant, SimulatedDeviceConf
   tau_applied_ = VecX::Zero(n);
   tau_hand_avg_ = VecX::Zero(n);
   tau_hand_sub_ = VecX::Zero(n);
+  tau_hand_inertia_ = VecX::Zero(n);
   Q_tree_ = VecX::Zero(nv);
   jacp_.assign(3 * nv, 0.0);
   jacr_.assign(3 * nv, 0.0);
+  jacp_prev_.assign(3 * nv, 0.0);
+  jacr_prev_.assign(3 * nv, 0.0);
   scratch_ = mj_makeData(m);
 
   // Initial state: q0 at rest, t = 0.
@@ -261,16 +264,22 @@ void SimulatedPhantom::apply_hand(double t) {
   Eigen::Map<const RowMat3X> Jr(jacr_.data(), 3, nv);
   Eigen::Map<const VecX> qvel(d->qvel, nv);
   Vec6 V;
-  V.head<3>().noalias() = Jp * qvel;                         // v (world)
-  V.tail<3>().noalias() = tip_.R.transpose() * (Jr * qvel);  // w (body)
+  V.head<3>().noalias() = Jp * qvel;  // v (world)
+  V_world_.head<3>().noalias() = Jp * qvel;
+  V_world_.tail<3>().noalias() = Jr * qvel;
+  V.tail<3>().noalias() = tip_.R.transpose() * V_world_.tail<3>();  // w (body)
   F_hand_ = hand_->wrench(tip_, V, t);
   const Vec3 f = F_hand_.head<3>();
   const Vec3 tau_w = tip_.R * F_hand_.tail<3>();  // body -> world
   // xfrc_applied acts at the body's centre of mass (xipos): move the force from the tip point.
+  // The human carries the weight of their own hand: a force -m_h g at the tip cancels the
+  // gravity on the mass added to the tip body (it is not part of the hand's wrench on the tool).
+  const Eigen::Map<const Vec3> gravity(m->opt.gravity);
+  const Vec3 f_total = f - hand_->impedance().mass * gravity;
   const Eigen::Map<const Vec3> xipos(d->xipos + 3 * b);
-  const Vec3 tau_com = tau_w + (tip_.x - xipos).cross(f);
+  const Vec3 tau_com = tau_w + (tip_.x - xipos).cross(f_total);
   for (int i = 0; i < 3; ++i) {
-    d->xfrc_applied[6 * b + i] = f[i];
+    d->xfrc_applied[6 * b + i] = f_total[i];
     d->xfrc_applied[6 * b + 3 + i] = tau_com[i];
   }
   // The hand's joint torques G^T (J_p^T f + J_r^T tau_w).
@@ -298,10 +307,16 @@ void SimulatedPhantom::advance() {
     for (int s = 0; s < N; ++s) {
       if (hand_ != nullptr) {
         apply_hand(d->time);
+        if (s > 0) subtract_hand_inertia(T);
         tau_hand_avg_ += (h / T) * tau_hand_sub_;
+        save_hand_substep();
       }
       mj_step(m, d);
       if (hook_) hook_(d->time, m, d);
+    }
+    if (hand_ != nullptr) {
+      apply_hand(d->time);  // state at the end of the tick closes the last substep
+      subtract_hand_inertia(T);
     }
     n_sub_last_ = N;
   }
@@ -316,10 +331,33 @@ void SimulatedPhantom::advance() {
   if (faults_ != kFaultNone) tau_applied_.setZero();
   // Tip state (and the hand's wrench) at the sample time.
   if (hand_ != nullptr) {
-    apply_hand(d->time);
+    if (!(T > 0.0)) apply_hand(d->time);
   } else {
     update_tip_kinematics();
   }
+}
+
+void SimulatedPhantom::save_hand_substep() {
+  std::copy(jacp_.begin(), jacp_.end(), jacp_prev_.begin());
+  std::copy(jacr_.begin(), jacr_.end(), jacr_prev_.begin());
+  V_world_prev_ = V_world_;
+}
+
+void SimulatedPhantom::subtract_hand_inertia(double T) {
+  // The hand's mass moves with the tool: over a substep the hand-tool contact wrench differs from
+  // the spring-damper wrench by the hand's momentum change, m_h dv and J_h dw (isotropic J_h about
+  // the tip, world frame). Its joint torques, with the Jacobian at the substep start:
+  // G^T (J_p^T m_h dv + J_r^T J_h dw) / T, removed from the tick average.
+  const int nv = h_->model()->nv;
+  Eigen::Map<const RowMat3X> Jp(jacp_prev_.data(), 3, nv);
+  Eigen::Map<const RowMat3X> Jr(jacr_prev_.data(), 3, nv);
+  const HandImpedance& z = hand_->impedance();
+  const Vec3 dp = z.mass * (V_world_.head<3>() - V_world_prev_.head<3>());
+  const Vec3 dL = z.inertia * (V_world_.tail<3>() - V_world_prev_.tail<3>());
+  Q_tree_.noalias() = Jp.transpose() * dp;
+  Q_tree_.noalias() += Jr.transpose() * dL;
+  tau_hand_inertia_.noalias() = plant_.G.transpose() * Q_tree_;
+  tau_hand_avg_ -= tau_hand_inertia_ / T;
 }
 
 void SimulatedPhantom::refresh_truth() {

@@ -21,7 +21,8 @@
 //   trace of measured tick lengths (cycled); seeded (std::mt19937_64). A drawn T_k <= 0 is a
 //   clock fault: the physics does not run backwards, the sample's time does not increase and the
 //   device latches kFaultNonMonotonicTime.
-// - The scripted hand (scripted_hand.h): its mass and inertia are added to the tip body, its
+// - The scripted hand (scripted_hand.h): its mass and inertia are added to the tip body (the
+//   human carries its weight: -m_h g is applied at the tip with it), its
 //   wrench is recomputed at every substep from the tip state and applied to the tip body through
 //   xfrc_applied (force at the tip point, world frame), so the device physics sees it. The hand's
 //   true wrench and its joint torques G^T J^T F (time-averaged over the tick) are exposed as
@@ -122,8 +123,11 @@ class SimulatedPhantom : public Device {
   int last_substeps() const { return n_sub_last_; }
   Pose tip_pose() const;                               // tip pose now
   Vec6 tip_twist() const;                              // V = [v (world); w (body)] now
-  const Vec6& hand_wrench() const { return F_hand_; }  // hand's F at the last substep start
-  // The hand's joint torques G^T (J_p^T f + J_r^T R tau), time-averaged over the last tick.
+  const Vec6& hand_wrench() const { return F_hand_; }  // hand's spring-damper F at the sample
+  // The joint torques of the hand-tool contact wrench, time-averaged over the last tick:
+  // G^T (J_p^T f + J_r^T R tau) of the spring-damper wrench minus the hand's own inertial
+  // reaction G^T (J_p^T m_h dv + J_r^T J_h dw) / T (its mass rides on the tip). This is what the
+  // device feels from the human: the observer's ground truth. At rest it is G^T J^T F.
   const VecX& hand_joint_torque() const { return tau_hand_avg_; }
   // Mechanical energy of the plant (kinetic + gravitational potential) now [J].
   double energy() const;
@@ -140,6 +144,8 @@ class SimulatedPhantom : public Device {
   void refresh_truth();
   void sample_encoders();
   void merge_hand_mass(bool attach);
+  void save_hand_substep();
+  void subtract_hand_inertia(double T);
 
   MujocoPlant plant_;
   SimulatedDeviceConfig cfg_;
@@ -162,6 +168,7 @@ class SimulatedPhantom : public Device {
   std::vector<int> dof_simplenum0_;
 
   VecX q_true_, qd_true_, q_meas_, q_meas_prev_, tau_applied_, tau_hand_avg_, tau_hand_sub_;
+  VecX tau_hand_inertia_;
   VecX Q_tree_;  // nv scratch
   double t_sample_ = 0.0, t_prev_sample_ = 0.0, T_last_ = 0.0;
   int n_sub_last_ = 0;
@@ -169,6 +176,8 @@ class SimulatedPhantom : public Device {
   Vec6 F_hand_ = Vec6::Zero();
   Pose tip_;
   std::vector<double> jacp_, jacr_;  // 3 x nv each, row-major
+  std::vector<double> jacp_prev_, jacr_prev_;
+  Vec6 V_world_ = Vec6::Zero(), V_world_prev_ = Vec6::Zero();  // tip [v; w], both world
 };
 
 }  // namespace dentsim

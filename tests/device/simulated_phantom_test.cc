@@ -344,6 +344,11 @@ TEST(SimulatedPhantom, HandMassJoinsTheTipBody) {
   dev.write(VecX::Constant(1, u));
   dev.advance();
   EXPECT_NEAR(dev.true_qd()[0], u * T / (kWheelInertia + z.mass * r * r + z.inertia), 1e-12);
+  // The hand-tool contact torque is the hand's inertial reaction -(m_h r^2 + J_h) qdd.
+  const double qdd = u / (kWheelInertia + z.mass * r * r + z.inertia);
+  std::printf("contact torque %.9e, expected %.9e N m\n", dev.hand_joint_torque()[0],
+              -(z.mass * r * r + z.inertia) * qdd);
+  EXPECT_NEAR(dev.hand_joint_torque()[0], -(z.mass * r * r + z.inertia) * qdd, 1e-9);
   // Released: back to the bare wheel.
   SimulatedPhantom bare(wheel_plant(), ideal_config(), VecX::Zero(1));
   bare.set_hand(&hand);

@@ -1,0 +1,302 @@
+#include "device/observer_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+
+#include "device/phantom_device.h"
+#include "reference/core/io.h"
+#include "reference/observer.h"
+#include "reference/phantom/phantom_model.h"
+
+namespace dentsim {
+namespace {
+
+struct Trace {
+  std::vector<double> t;
+  std::vector<VecX> f_hat, f_true;
+};
+
+// Hand profile: hold the start pose; a 1 ms ramp to f_step at t_step; from t_move a triangle wave
+// of the reference along x.
+std::vector<HandKeyframe> hand_profile(const ObserverReportConfig& c, const Vec3& x0) {
+  std::vector<HandKeyframe> k;
+  auto add = [&](double t, const Vec3& x, const Vec3& f) {
+    HandKeyframe h;
+    h.t = t;
+    h.x_ref = x;
+    h.wrench_ff.head<3>() = f;
+    k.push_back(h);
+  };
+  add(0.0, x0, Vec3::Zero());
+  add(c.t_step, x0, Vec3::Zero());
+  add(c.t_step + 1e-3, x0, c.f_step);
+  add(c.t_move, x0, c.f_step);
+  const double P = c.move_period;
+  const Vec3 ex = Vec3::UnitX() * c.move_amplitude;
+  double t = c.t_move + 0.25 * P;
+  int sign = 1;
+  while (t < c.t_end + P) {
+    add(t, x0 + sign * ex, c.f_step);
+    sign = -sign;
+    t += 0.5 * P;
+  }
+  return k;
+}
+
+Trace simulate(const PhantomParams& params, const ObserverReportConfig& c,
+               const DeviceModel& model) {
+  SimulatedDeviceConfig dc = phantom_device_config(params);
+  dc.jitter = c.jitter;
+  dc.friction_on = c.device_friction;
+  if (c.ideal_sensing) dc.quantize = false;
+  const VecX q_hold = phantom_home_q(params);
+  SimulatedPhantom dev(phantom_plant(params), dc, q_hold);
+  const Pose p0 = dev.tip_pose();
+  const ScriptedHand hand(c.hand, hand_profile(c, p0.x), p0.R);
+  dev.set_hand(&hand);
+
+  MomentumObserver obs(model, VecX::Constant(6, c.gain_L));
+  DeviceSample s = dev.make_sample();
+  dev.read(s);
+  if (c.ideal_sensing) s.qd = dev.true_qd();
+  obs.reset(s.q, s.qd);
+  const VecX Kp = c.K_p, Kd = c.K_d;
+  Trace tr;
+  double t_prev = s.t;
+  while (s.t < c.t_end) {
+    // Motors: gravity compensation by the model + joint hold spring-damper.
+    if (c.ideal_sensing) s.qd = dev.true_qd();
+    const VecX tau = model.gravity(s.q) + Kp.cwiseProduct(q_hold - s.q) - Kd.cwiseProduct(s.qd);
+    dev.write(tau);
+    const VecX tau_applied = dev.applied_torque();
+    dev.advance();
+    dev.read(s);
+    if (c.ideal_sensing) s.qd = dev.true_qd();
+    const VecX f_hat = obs.update(s.q, s.qd, tau_applied, s.t - t_prev);
+    t_prev = s.t;
+    tr.t.push_back(s.t);
+    tr.f_hat.push_back(f_hat);
+    tr.f_true.push_back(dev.hand_joint_torque());
+  }
+  if (dev.faults() != kFaultNone) {
+    throw std::runtime_error("observer report: the simulated device faulted: " +
+                             fault_string(dev.faults()));
+  }
+  return tr;
+}
+
+VecX window_mean(const Trace& tr, const std::vector<VecX>& x, double t0, double t1) {
+  VecX m = VecX::Zero(6);
+  int n = 0;
+  for (std::size_t k = 0; k < tr.t.size(); ++k) {
+    if (tr.t[k] >= t0 && tr.t[k] < t1) {
+      m += x[k];
+      ++n;
+    }
+  }
+  if (n == 0) throw InputError("observer report: empty evaluation window; check the phase times");
+  return m / n;
+}
+
+// The observer's ideal output for the truth x: the sampled first-order lag with gain L,
+// y_k = y_k-1 + L T_k (x_k - y_k-1) (f_hat_k = f (1 - (1 - L T)^k) for a step), started from
+// y = f_hat at index k0 - 1.
+std::vector<double> first_order_lag(const Trace& tr, const std::vector<VecX>& x, int j,
+                                    std::size_t k0, std::size_t k1, double L) {
+  std::vector<double> y(k1 - k0);
+  double yk = tr.f_hat[k0 - 1][j];
+  for (std::size_t k = k0; k < k1; ++k) {
+    yk += L * (tr.t[k] - tr.t[k - 1]) * (x[k][j] - yk);
+    y[k - k0] = yk;
+  }
+  return y;
+}
+
+std::size_t index_at(const Trace& tr, double t) {
+  std::size_t k = 1;
+  while (k < tr.t.size() && tr.t[k] < t) ++k;
+  return k;
+}
+
+// The gain L_fit whose first-order lag of f_true best matches f_hat on joint j over [t0, t1)
+// (least squares, log grid over 1..10^4 1/s refined by golden section); the lag is 1/L_fit.
+double fit_lag_gain(const Trace& tr, int j, double t0, double t1) {
+  const std::size_t k0 = index_at(tr, t0), k1 = index_at(tr, t1);
+  auto cost = [&](double logL) {
+    const std::vector<double> y = first_order_lag(tr, tr.f_true, j, k0, k1, std::exp(logL));
+    double c = 0.0;
+    for (std::size_t k = k0; k < k1; ++k) c += std::pow(tr.f_hat[k][j] - y[k - k0], 2);
+    return c;
+  };
+  double best = 0.0, best_c = 1e300;
+  for (int i = 0; i <= 400; ++i) {
+    const double lg = std::log(1.0) + i * (std::log(1e4) - std::log(1.0)) / 400;
+    const double c = cost(lg);
+    if (c < best_c) best_c = c, best = lg;
+  }
+  double a = best - 0.03, b = best + 0.03;
+  const double g = (std::sqrt(5.0) - 1.0) / 2.0;
+  for (int it = 0; it < 60; ++it) {
+    const double x1 = b - g * (b - a), x2 = a + g * (b - a);
+    if (cost(x1) < cost(x2)) {
+      b = x2;
+    } else {
+      a = x1;
+    }
+  }
+  return std::exp(0.5 * (a + b));
+}
+
+VecX window_median(const Trace& tr, const std::vector<VecX>& x, double t0, double t1) {
+  VecX m = VecX::Zero(6);
+  std::vector<double> v;
+  for (int j = 0; j < 6; ++j) {
+    v.clear();
+    for (std::size_t k = 0; k < tr.t.size(); ++k) {
+      if (tr.t[k] >= t0 && tr.t[k] < t1) v.push_back(x[k][j]);
+    }
+    if (v.empty()) throw InputError("observer report: empty evaluation window");
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    m[j] = v[v.size() / 2];
+  }
+  return m;
+}
+
+ObserverRun evaluate(const Trace& tr, const ObserverReportConfig& c, const std::string& name) {
+  ObserverRun r;
+  r.model = name;
+  std::vector<VecX> err(tr.t.size());
+  for (std::size_t k = 0; k < tr.t.size(); ++k) err[k] = tr.f_hat[k] - tr.f_true[k];
+  const double s0 = c.t_move - c.settle_window, s1 = c.t_move;
+  r.steady_error = window_median(tr, err, s0, s1);
+  r.steady_error_max = r.steady_error.cwiseAbs().maxCoeff();
+  // Step and lag.
+  const VecX pre_true = window_mean(tr, tr.f_true, c.t_step - 0.1, c.t_step);
+  const VecX post_true = window_mean(tr, tr.f_true, s0, s1);
+  r.step_size = post_true - pre_true;
+  r.step_size.cwiseAbs().maxCoeff(&r.lag_joint);
+  const int j = r.lag_joint;
+  r.lag_s = 1.0 / fit_lag_gain(tr, j, c.t_step, c.t_step + c.settle_window);
+  // Moving phase.
+  const double m0 = c.t_move + 0.25 * c.move_period, m1 = c.t_end;
+  r.moving_bias = window_mean(tr, err, m0, m1);
+  std::vector<VecX> e2(tr.t.size()), f2(tr.t.size());
+  for (std::size_t k = 0; k < tr.t.size(); ++k) {
+    e2[k] = err[k].cwiseAbs2();
+    f2[k] = tr.f_true[k].cwiseAbs2();
+  }
+  r.moving_rms = window_mean(tr, e2, m0, m1).cwiseSqrt();
+  // Error beyond the observer's own first-order lag: f_hat - LPF_L(f_true).
+  const std::size_t k0 = index_at(tr, m0), k1 = index_at(tr, m1);
+  r.moving_rms_beyond_lag = VecX::Zero(6);
+  for (int jj = 0; jj < 6; ++jj) {
+    const std::vector<double> y = first_order_lag(tr, tr.f_true, jj, k0, k1, c.gain_L);
+    double acc = 0.0;
+    for (std::size_t k = k0; k < k1; ++k) acc += std::pow(tr.f_hat[k][jj] - y[k - k0], 2);
+    r.moving_rms_beyond_lag[jj] = std::sqrt(acc / static_cast<double>(k1 - k0));
+  }
+  r.moving_truth_rms = window_mean(tr, f2, m0, m1).cwiseSqrt();
+  return r;
+}
+
+nlohmann::json vec_json(const VecX& v) {
+  nlohmann::json a = nlohmann::json::array();
+  for (Eigen::Index i = 0; i < v.size(); ++i) a.push_back(v[i]);
+  return a;
+}
+
+std::string row(const char* label, const VecX& v, double scale) {
+  std::string s = std::string("| ") + label;
+  char buf[32];
+  for (Eigen::Index i = 0; i < v.size(); ++i) {
+    std::snprintf(buf, sizeof(buf), " | %+.3f", v[i] * scale);
+    s += buf;
+  }
+  return s + " |\n";
+}
+
+}  // namespace
+
+ObserverReport run_observer_report(const PhantomParams& params,
+                                   const ObserverReportConfig& config) {
+  const ObserverReportConfig& c = config;
+  if (!(c.gain_L > 0.0) || !(c.model_error > -1.0) || !(c.t_step > 0.1) ||
+      !(c.t_move > c.t_step + c.settle_window) || !(c.t_end > c.t_move + c.move_period * 0.5) ||
+      !(c.move_period > 0.0) || !(c.settle_window > 0.0)) {
+    throw InputError(
+        "observer report: expected gain_L > 0, model_error > -1, t_step > 0.1, "
+        "t_move > t_step + settle_window, t_end > t_move + move_period / 2");
+  }
+  ObserverReport rep;
+  rep.config = c;
+  rep.expected_lag_s = 1.0 / c.gain_L;
+  rep.device_coulomb = c.device_friction ? VecX(params.coulomb_n_m) : VecX(VecX::Zero(6));
+  // The true model of the simulated device: without Coulomb friction when the device has none.
+  PhantomParams model_params = params;
+  if (!c.device_friction) model_params.coulomb_n_m.setZero();
+  const PhantomModel truth(model_params);
+  const ScaledDeviceModel perturbed(truth, 1.0 + c.model_error, 1.0 + c.model_error);
+  rep.runs.push_back(evaluate(simulate(params, c, truth), c, "true"));
+  rep.runs.push_back(evaluate(simulate(params, c, perturbed), c, "perturbed"));
+  return rep;
+}
+
+std::string observer_report_json(const ObserverReport& r) {
+  nlohmann::json j;
+  const ObserverReportConfig& c = r.config;
+  j["config"] = {{"gain_L_per_s", c.gain_L},
+                 {"model_error", c.model_error},
+                 {"device_friction", c.device_friction},
+                 {"t_step_s", c.t_step},
+                 {"t_move_s", c.t_move},
+                 {"t_end_s", c.t_end},
+                 {"f_step_n", {c.f_step[0], c.f_step[1], c.f_step[2]}},
+                 {"move_amplitude_m", c.move_amplitude},
+                 {"move_period_s", c.move_period}};
+  j["expected_lag_s"] = r.expected_lag_s;
+  j["device_coulomb_n_m"] = vec_json(r.device_coulomb);
+  for (const ObserverRun& run : r.runs) {
+    j["runs"].push_back({{"model", run.model},
+                         {"steady_error_n_m", vec_json(run.steady_error)},
+                         {"steady_error_max_n_m", run.steady_error_max},
+                         {"step_size_n_m", vec_json(run.step_size)},
+                         {"lag_joint", run.lag_joint + 1},
+                         {"lag_s", run.lag_s},
+                         {"moving_bias_n_m", vec_json(run.moving_bias)},
+                         {"moving_rms_n_m", vec_json(run.moving_rms)},
+                         {"moving_rms_beyond_lag_n_m", vec_json(run.moving_rms_beyond_lag)},
+                         {"moving_truth_rms_n_m", vec_json(run.moving_truth_rms)}});
+  }
+  return j.dump(2) + "\n";
+}
+
+std::string observer_report_table(const ObserverReport& r) {
+  std::string s = "Observer L = " + std::to_string(r.config.gain_L) +
+                  " 1/s (expected lag 1/L = " + std::to_string(1e3 * r.expected_lag_s) +
+                  " ms); values in mN m, joints q1..q6\n\n";
+  s += "| quantity | q1 | q2 | q3 | q4 | q5 | q6 |\n|---|---|---|---|---|---|---|\n";
+  s += row("device Coulomb f_c", r.device_coulomb, 1e3);
+  for (const ObserverRun& run : r.runs) {
+    const std::string m = run.model + " model: ";
+    s += row((m + "step in f_true").c_str(), run.step_size, 1e3);
+    s += row((m + "steady error (median)").c_str(), run.steady_error, 1e3);
+    s += row((m + "moving bias (mean)").c_str(), run.moving_bias, 1e3);
+    s += row((m + "moving RMS error").c_str(), run.moving_rms, 1e3);
+    s += row((m + "moving RMS error beyond the 1/L lag").c_str(), run.moving_rms_beyond_lag, 1e3);
+    s += row((m + "moving RMS f_true").c_str(), run.moving_truth_rms, 1e3);
+  }
+  s += "\n";
+  for (const ObserverRun& run : r.runs) {
+    char buf[160];
+    std::snprintf(
+        buf, sizeof(buf), "%s model: lag on q%d = %.1f ms, max |steady error| = %.3f mN m\n",
+        run.model.c_str(), run.lag_joint + 1, 1e3 * run.lag_s, 1e3 * run.steady_error_max);
+    s += buf;
+  }
+  return s;
+}
+
+}  // namespace dentsim
