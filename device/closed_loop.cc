@@ -23,7 +23,7 @@ const TickResult& ClosedLoop::step() {
   device_.advance();
   device_.read(next_);
   // Passivity observer: the torque held over the tick times the joint displacement.
-  energy_ += device_.applied_torque().dot(next_.q - sample_.q);
+  energy_ += (device_.applied_torque() - r.tau_gravity).dot(next_.q - sample_.q);
   const double dt = next_.t - sample_.t;
   if (dt > 0.0) T_ = dt;
   std::swap(sample_, next_);

@@ -7,10 +7,12 @@
 // advance: the loop uses the last measured tick length (t_k - t_k-1; the nominal period on the
 // first tick), which is what a real servo loop sees and what PMI's varying-T_k form allows.
 //
-// Passivity observer at the device port: E_v = sum_k tau_k^T (q_k+1 - q_k), the energy the
-// virtual side put into the device through the motors, from the torque actually applied (after
-// the device's command chain) and the measured joint angles. Exact for a torque held over the
-// tick (zero-order hold) up to encoder quantisation; E_v <= 0 means passive.
+// Passivity observer at the device port: E_v = sum_k (tau_k - tau_g,k)^T (q_k+1 - q_k), the
+// energy the virtual side put into the device through the motors, from the torque actually
+// applied (after the device's command chain) less the pipeline's gravity compensation tau_g (which
+// only cancels the arm's weight: its work is the change of the arm's potential energy, not
+// rendering), and the measured joint angles. Exact for a torque held over the tick (zero-order
+// hold) up to encoder quantisation; E_v <= 0 means passive.
 #pragma once
 
 #include "device/device.h"

@@ -161,9 +161,15 @@ const TickResult& ReferencePipeline::tick(const DeviceSample& s, double T,
   }
   clock.lap(kStageSolve);
 
-  // Device command: tau1 = J1^-T T1, scaled down uniformly (direction kept) to the limits.
+  // Device command: tau1 = J1^-T T1 + g(q), scaled down uniformly (direction kept) to the limits.
   r.T1 = r.T1_vc + r.T1_pd;
   r.tau = J1_lu.transpose().solve(r.T1);
+  if (config_.compensate_gravity) {
+    r.tau_gravity = device_.gravity(s.q);  // (2.1): gravity compensated
+    r.tau += r.tau_gravity;
+  } else {
+    r.tau_gravity = VecX::Zero(r.tau.size());
+  }
   r.saturated = false;
   if (config_.torque_limit.size() != 0) {
     double scale = 1.0;
@@ -173,6 +179,7 @@ const TickResult& ReferencePipeline::tick(const DeviceSample& s, double T,
     }
     if (scale < 1.0) {
       r.tau *= scale;
+      r.tau_gravity *= scale;
       r.saturated = true;
     }
   }

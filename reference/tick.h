@@ -6,7 +6,7 @@
 //   proxy solve: PMI (4.9) with coupling (4.5), contact (2.16)/(2.19), friction (2.21),
 //     decomposition feed-forward T2_pd (4.7)  -> V2_hat, then x2, R2 at k+1            (2.7)
 //     (or explicit Euler with the same force elements evaluated at V_k, the baseline)
-//   device command T1 = T1_vc (4.3)-(4.4) + T1_pd (4.7) -> tau1 = J1^-T T1, saturated
+//   device command T1 = T1_vc (4.3)-(4.4) + T1_pd (4.7) -> tau1 = J1^-T T1 (+ g(q)), saturated
 //
 // Methods: kExplicitVc = explicit-Euler proxy + standard coupling; kPmiVc = PMI proxy + PMI
 // coupling; kPmiPd = kPmiVc + passive decomposition + momentum observer.
@@ -52,6 +52,9 @@ struct PipelineConfig {
   ToolDynamics tool;            // desired locked dynamics (kPmiPd)
   VecX observer_gain;           // L per joint [1/s] (kPmiPd; also run for the estimate when set)
   VecX torque_limit;            // |tau_i| <= torque_limit_i [N m]; empty = no saturation
+  // Add the model's gravity torque g(q) to the command: the thesis assumes gravity compensated
+  // (2.1); the observer accounts for it either way since it sees the total torque.
+  bool compensate_gravity = true;
 };
 
 // Stages of the tick, for timing (TickResult::stage_ns).
@@ -68,6 +71,7 @@ struct TickResult {
   Vec6 T1_pd = Vec6::Zero();          // decomposition feed-forward on the device
   Vec6 T1 = Vec6::Zero();             // total device wrench before saturation
   VecX tau;                           // joint torques sent to the device (saturated)
+  VecX tau_gravity;                   // the gravity-compensation part of tau (zero when off)
   bool saturated = false;
   Vec6 V_hat = Vec6::Zero();          // proxy velocity the forces were evaluated at
   Vec6 F_contact = Vec6::Zero();      // contact + friction wrench on the proxy at V_hat

@@ -1,0 +1,210 @@
+// `dentsim run SCENE --out DIR`: the main job — the dental simulator on the embedded default
+// (simulated Phantom, voxel tooth, scripted hand). Writes DIR/report.json, DIR/timeseries.csv,
+// DIR/force_penetration.png, DIR/observer.png, DIR/tooth_before.png, DIR/tooth_after.png.
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <sstream>
+
+#include "cli/plot.h"
+#include "cli/png_writer.h"
+#include "cli/progress.h"
+#include "cli/registry.h"
+#include "device/scene.h"
+#include "device/simulator.h"
+#include "reference/core/io.h"
+#include "reference/tooth/materials.h"
+#include "reference/tooth/render_png.h"
+
+namespace dentsim::cli {
+namespace {
+
+struct RunCliOptions {
+  std::string scene;
+  std::string out = "out/run";
+  bool realtime = false;
+  double duration = 0.0;
+  bool list = false;
+  bool show = false;
+  int log_every = 1;
+};
+
+nlohmann::json report_json(const Scene& scene, const RunResult& r) {
+  nlohmann::json j;
+  j["scene"] = scene.name;
+  j["scene_origin"] = scene.origin;
+  j["method"] = method_name(scene.method.method);
+  j["device_model"] = r.device_model;
+  j["tick_hz"] = scene.tick_hz;
+  j["simulated_s"] = r.simulated_s;
+  j["wall_s"] = r.wall_s;
+  j["ticks"] = r.ticks;
+  j["contact_ticks"] = r.contact_ticks;
+  j["max_contact_force_n"] = r.max_contact_force_n;
+  j["rms_contact_force_n"] = r.rms_contact_force_n;
+  j["max_penetration_m"] = r.max_penetration_m;
+  j["rendered_stiffness_n_per_m"] = r.rendered_stiffness_n_per_m;
+  j["virtual_energy_generated_j"] = r.virtual_energy_generated_j;
+  j["hand_work_j"] = r.hand_work_j;
+  j["hand_work_min_j"] = r.hand_work_min_j;
+  // Passive toward the hand: it never got back more energy than it put in (tolerance: 1 uJ).
+  j["passive_at_hand"] = r.hand_work_min_j >= -1e-6;
+  j["passive_at_motors"] = r.virtual_energy_generated_j <= 0.0;
+  j["observer_rms_error_n"] = r.observer_rms_error_n;
+  nlohmann::json rv;
+  for (int m = 1; m < kMaterialCount; ++m) rv[material_properties(m).name] = r.removed_volume_mm3[m];
+  rv["total"] = r.removed_volume_total_mm3;
+  j["removed_volume_mm3"] = rv;
+  nlohmann::json tj;
+  for (const auto& [name, s] : r.timing) {
+    tj[name] = {{"median", s.median_us}, {"p99", s.p99_us}, {"max", s.max_us}};
+  }
+  j["timing_us"] = tj;
+  j["faults"] = r.faults;
+  return j;
+}
+
+std::string csv_of(const RunResult& r) {
+  std::ostringstream s;
+  s.precision(9);
+  s << "t_s,phase,contacts,contact_force_n,device_force_n,penetration_m,device_penetration_m,"
+       "proxy_x_m,proxy_y_m,proxy_z_m,device_x_m,device_y_m,device_z_m,"
+       "hand_fx_n,hand_fy_n,hand_fz_n,observer_fx_n,observer_fy_n,observer_fz_n,energy_virtual_j,"
+       "hand_work_j\n";
+  for (const RunSample& x : r.series) {
+    s << x.t << ',' << x.phase << ',' << x.contacts << ',' << x.contact_force_n << ','
+      << x.device_force_n << ',' << x.penetration_m << ',' << x.device_penetration_m << ','
+      << x.proxy_x.x() << ',' << x.proxy_x.y() << ',' << x.proxy_x.z() << ',' << x.device_x.x()
+      << ',' << x.device_x.y() << ',' << x.device_x.z() << ',' << x.hand_force_n.x() << ','
+      << x.hand_force_n.y() << ',' << x.hand_force_n.z() << ',' << x.observer_force_n.x() << ','
+      << x.observer_force_n.y() << ',' << x.observer_force_n.z() << ',' << x.energy_virtual_j
+      << ',' << x.hand_work_j << '\n';
+  }
+  return s.str();
+}
+
+void write_plots(const RunResult& r, const std::string& dir) {
+  std::vector<double> t, fc, fd, pen, dpen, e, wh;
+  std::vector<double> hx, hz, ox, oz;
+  for (const RunSample& x : r.series) {
+    t.push_back(x.t);
+    fc.push_back(x.contact_force_n);
+    fd.push_back(x.device_force_n);
+    pen.push_back(x.penetration_m * 1e3);
+    dpen.push_back(x.device_penetration_m * 1e3);
+    e.push_back(x.energy_virtual_j * 1e3);
+    wh.push_back(x.hand_work_j * 1e3);
+    hx.push_back(x.hand_force_n.x());
+    hz.push_back(x.hand_force_n.z());
+    ox.push_back(x.observer_force_n.x());
+    oz.push_back(x.observer_force_n.z());
+  }
+  plot::Figure force{"Contact force (proxy) and force fed back (device)", "time [s]", "force [N]",
+                     {}, false, false};
+  force.series.push_back({"contact force on proxy", t, fc, false, 0, false});
+  force.series.push_back({"force on device", t, fd, false, 1, true});
+  plot::Figure depth{"Penetration of the tooth", "time [s]", "depth [mm]", {}, false, false};
+  depth.series.push_back({"proxy tip", t, pen, false, 0, false});
+  depth.series.push_back({"device tip", t, dpen, false, 1, true});
+  plot::Figure energy{"Passivity observers: hand port W_h (>= 0: passive), motor port E_v",
+                      "time [s]", "energy [mJ]", {}, false, false};
+  energy.series.push_back({"W_h: work done by the hand", t, wh, false, 2, false});
+  energy.series.push_back({"E_v: motors, net of gravity", t, e, false, 4, true});
+  plot::write_png({force, depth, energy}, dir + "/force_penetration.png", 1, 900, 320);
+
+  plot::Figure ob{"Human force: observer estimate vs true hand force", "time [s]", "force [N]",
+                  {}, false, false};
+  ob.series.push_back({"hand f_z (true)", t, hz, false, 0, false});
+  ob.series.push_back({"observer f_z", t, oz, false, 1, true});
+  ob.series.push_back({"hand f_x (true)", t, hx, false, 2, false});
+  ob.series.push_back({"observer f_x", t, ox, false, 3, true});
+  plot::write_png({ob}, dir + "/observer.png", 1, 900, 420);
+}
+
+void run(const RunCliOptions& o) {
+  if (o.list) {
+    for (const std::string& n : builtin_scene_names()) {
+      const Scene s = load_scene(n);
+      std::printf("%-8s %s\n", n.c_str(), s.description.c_str());
+    }
+    return;
+  }
+  if (o.scene.empty()) throw InputError("run: a SCENE (built-in name or file) is required");
+  if (o.show) {
+    bool builtin = false;
+    for (const std::string& n : builtin_scene_names()) builtin = builtin || n == o.scene;
+    std::printf("%s\n", builtin ? builtin_scene_text(o.scene).c_str() : read_file(o.scene).c_str());
+    return;
+  }
+  if (o.duration < 0.0) throw InputError("--duration must be positive");
+  if (o.log_every < 1) throw InputError("--log-every must be at least 1");
+  const Scene scene = load_scene(o.scene);
+  std::error_code ec;
+  std::filesystem::create_directories(o.out, ec);
+  if (ec || !std::filesystem::is_directory(o.out)) {
+    throw InputError("--out '" + o.out + "': cannot create the directory (" + ec.message() + ")");
+  }
+
+  std::fprintf(stderr, "dentsim run: scene '%s' (%s), %.2f s at %.0f Hz, method %s\n",
+               scene.name.c_str(), scene.origin.c_str(),
+               o.duration > 0 ? o.duration : scene.duration, scene.tick_hz,
+               method_name(scene.method.method));
+  ProgressBar bar("simulating");
+  RunOptions ro;
+  ro.realtime = o.realtime;
+  ro.duration_override = o.duration;
+  ro.log_every = o.log_every;
+  ro.progress = [&bar](double f) { bar.update(f); };
+  const RunResult r = run_scene(scene, ro);
+  bar.finish();
+
+  const nlohmann::json report = report_json(scene, r);
+  write_json(o.out + "/report.json", report);
+  write_file_atomic(o.out + "/timeseries.csv", csv_of(r));
+  write_plots(r, o.out);
+  // Seen from above the occlusal surface, where the tool works.
+  RenderOptions view;
+  view.elevation_deg = 55.0;
+  write_png(o.out + "/tooth_before.png", render_voxels(r.tooth_before, view));
+  write_png(o.out + "/tooth_after.png", render_voxels(r.tooth_after, view));
+
+  std::printf("scene %s: %ld ticks (%ld in contact), %.2f s simulated in %.2f s\n",
+              scene.name.c_str(), r.ticks, r.contact_ticks, r.simulated_s, r.wall_s);
+  std::printf("  contact force max %.3f N, rms %.3f N; penetration max %.3f mm\n",
+              r.max_contact_force_n, r.rms_contact_force_n, r.max_penetration_m * 1e3);
+  std::printf("  rendered stiffness %.0f N/m; energy from the motors %.3g J; hand port min %.3g J (%s)\n",
+              r.rendered_stiffness_n_per_m, r.virtual_energy_generated_j, r.hand_work_min_j,
+              r.hand_work_min_j >= -1e-6 ? "passive toward the hand" : "ACTIVE toward the hand");
+  std::printf("  removed %.4f mm^3 (enamel %.4f, dentin %.4f, pulp %.4f)\n",
+              r.removed_volume_total_mm3, r.removed_volume_mm3[kEnamel],
+              r.removed_volume_mm3[kDentin], r.removed_volume_mm3[kPulp]);
+  for (const auto& [name, s] : r.timing) {
+    if (name == "tick") {
+      std::printf("  tick time median %.1f us, p99 %.1f us, max %.1f us\n", s.median_us, s.p99_us,
+                  s.max_us);
+    }
+  }
+  std::printf("  faults: %s\n", r.faults.empty() ? "none" : r.faults.front().c_str());
+  std::printf("  outputs in %s/: report.json timeseries.csv force_penetration.png observer.png "
+              "tooth_before.png tooth_after.png\n", o.out.c_str());
+  if (!r.faults.empty()) throw std::runtime_error("the device faulted (safe stop): " + r.faults.front());
+}
+
+void setup_run(CLI::App& app) {
+  auto o = std::make_shared<RunCliOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "run", "Run the dental simulator on a scene (built-in: probe, drill; or a scene file)");
+  sub->add_option("scene", o->scene, "Built-in scene name or scene file (JSON, docs/scenes.md)");
+  sub->add_option("--out", o->out, "Output directory")->capture_default_str();
+  sub->add_flag("--realtime", o->realtime, "Pace the loop at the tick rate (default: as fast as possible)");
+  sub->add_option("--duration", o->duration, "Override the scene's duration [s]");
+  sub->add_option("--log-every", o->log_every, "Keep every n-th tick in the time series")
+      ->capture_default_str();
+  sub->add_flag("--list", o->list, "List the built-in scenes");
+  sub->add_flag("--show", o->show, "Print the scene file (e.g. to start a new scene from a built-in one)");
+  sub->callback([o] { run(*o); });
+}
+DENTSIM_REGISTER_COMMAND(setup_run);
+
+}  // namespace
+}  // namespace dentsim::cli

@@ -1,0 +1,263 @@
+#include "device/scene.h"
+
+#include <cmath>
+#include <filesystem>
+
+#include "reference/core/io.h"
+#include "reference/core/json_reader.h"
+#include "reference/tools.h"
+
+namespace dentsim {
+namespace {
+
+// Built-in scenes. Positions in the hand script are offsets from the tooth's anchor (the top of
+// the occlusal surface near the crown axis) in mm; the tool tip starts at the device's home pose,
+// 6 mm above the anchor. Gains: the thesis's PMI + passive decomposition setting (K_vc = 700 N/m,
+// K_tooth = 3000 N/m, the average stiffness of a real tooth, §4.2). The observer gain L = 30 /s:
+// with the Phantom's quantised encoders (velocity noise ~ quantum / T) L = 100 /s drives the
+// decomposition feed-forward into a limit cycle in free space (docs/scenes.md shows the runs).
+constexpr const char* kProbeScene = R"json({
+  "dentsim_scene": 1,
+  "name": "probe",
+  "description": "Explorer probe: approach the molar, slide across the occlusal surface pressing lightly, retract.",
+  "duration_s": 5.0,
+  "tick_hz": 1000,
+  "tooth": {"source": "procedural", "resolution": 128, "k_tooth_n_per_m": 3000, "b_tooth_n_s_per_m": 5.0,
+            "anchor_offset_mm": [0, 0, -6]},
+  "tool": {"preset": "explorer", "bur_radius_mm": 0.4, "bur_speed_rpm": 0},
+  "device": {"type": "simulated-phantom", "jitter_us": 0, "quantize": true, "saturate": true},
+  "method": {"name": "pmi-pd", "k_vc_n_per_m": 700, "b_vc_n_s_per_m": 0.3, "k_vc_ang_n_m_per_rad": 0.3,
+             "b_vc_ang_n_m_s_per_rad": 0.001, "observer_gain_per_s": 30, "friction_mu": 0.2},
+  "proxy": {"mass_kg": 0.05, "inertia_kg_m2": 1e-5, "damping_n_s_per_m": 0.0, "damping_ang_n_m_s_per_rad": 0.0},
+  "hand": {"script": [
+    {"t_s": 0.0, "offset_mm": [0, 0, 6],    "force_n": [0, 0, 0],    "phase": "approach"},
+    {"t_s": 1.0, "offset_mm": [-2, 0, 0.5], "force_n": [0, 0, -0.3], "phase": "approach"},
+    {"t_s": 1.5, "offset_mm": [-2, 0, -0.5], "force_n": [0, 0, -0.8], "phase": "probe"},
+    {"t_s": 3.5, "offset_mm": [2, 0, -0.5], "force_n": [0, 0, -0.8], "phase": "probe"},
+    {"t_s": 4.0, "offset_mm": [2, 0, 6],    "force_n": [0, 0, 0],    "phase": "retract"}
+  ]}
+})json";
+
+constexpr const char* kDrillScene = R"json({
+  "dentsim_scene": 1,
+  "name": "drill",
+  "description": "High-speed handpiece: approach the molar, drill a cavity along a short occlusal path, retract.",
+  "duration_s": 6.0,
+  "tick_hz": 1000,
+  "tooth": {"source": "procedural", "resolution": 128, "k_tooth_n_per_m": 3000, "b_tooth_n_s_per_m": 5.0,
+            "anchor_offset_mm": [0, 0, -6]},
+  "tool": {"preset": "handpiece", "bur_radius_mm": 0.5, "bur_speed_rpm": 300000, "cutting_coefficient": 0.5},
+  "device": {"type": "simulated-phantom", "jitter_us": 0, "quantize": true, "saturate": true},
+  "method": {"name": "pmi-pd", "k_vc_n_per_m": 700, "b_vc_n_s_per_m": 0.3, "k_vc_ang_n_m_per_rad": 0.3,
+             "b_vc_ang_n_m_s_per_rad": 0.001, "observer_gain_per_s": 30, "friction_mu": 0.1},
+  "proxy": {"mass_kg": 0.05, "inertia_kg_m2": 1e-5, "damping_n_s_per_m": 0.0, "damping_ang_n_m_s_per_rad": 0.0},
+  "hand": {"script": [
+    {"t_s": 0.0, "offset_mm": [0, 0, 6],    "force_n": [0, 0, 0],    "phase": "approach"},
+    {"t_s": 1.0, "offset_mm": [-1, 0, 0.5], "force_n": [0, 0, -0.3], "phase": "approach"},
+    {"t_s": 1.5, "offset_mm": [-1, 0, -0.3], "force_n": [0, 0, -0.8], "phase": "drill"},
+    {"t_s": 4.5, "offset_mm": [1, 0, -0.8],  "force_n": [0, 0, -0.8], "phase": "drill"},
+    {"t_s": 5.2, "offset_mm": [1, 0, 6],    "force_n": [0, 0, 0],    "phase": "retract"}
+  ]}
+})json";
+
+}  // namespace
+
+std::vector<std::string> builtin_scene_names() { return {"probe", "drill"}; }
+
+std::string builtin_scene_text(const std::string& name) {
+  if (name == "probe") return kProbeScene;
+  if (name == "drill") return kDrillScene;
+  throw InputError("unknown built-in scene '" + name + "' (built-in: probe, drill)");
+}
+
+Scene load_scene(const std::string& name_or_path) {
+  for (const std::string& n : builtin_scene_names()) {
+    if (n == name_or_path) return parse_scene(builtin_scene_text(n), "built-in scene '" + n + "'");
+  }
+  if (!std::filesystem::exists(name_or_path)) {
+    throw InputError("scene '" + name_or_path +
+                     "' is neither a built-in scene (probe, drill) nor a readable file");
+  }
+  return parse_scene(read_file(name_or_path), name_or_path);
+}
+
+Scene parse_scene(const std::string& text, const std::string& origin) {
+  const JsonReader rd(origin);
+  const JsonReader::Json doc = rd.parse(text);
+  rd.only_keys(doc, "", {"dentsim_scene", "name", "description", "duration_s", "tick_hz", "tooth",
+                         "tool", "device", "method", "proxy", "hand"});
+  Scene s;
+  s.origin = origin;
+  s.version = static_cast<int>(rd.integer(doc, "", "dentsim_scene", -1));
+  if (s.version != 1) {
+    rd.fail("dentsim_scene", "unsupported or missing scene format version (expected 1)");
+  }
+  s.name = rd.string(doc, "", "name");
+  s.description = rd.string(doc, "", "description", "");
+  s.duration = rd.number(doc, "", "duration_s");
+  rd.positive("duration_s", s.duration);
+  if (s.duration > 3600.0) rd.fail("duration_s", "must be at most 3600 s");
+  s.tick_hz = rd.number(doc, "", "tick_hz", 1000.0);
+  if (!(s.tick_hz >= 100.0 && s.tick_hz <= 20000.0)) {
+    rd.fail("tick_hz", "must be within [100, 20000] Hz");
+  }
+
+  // Tooth.
+  const auto& t = rd.object(doc, "", "tooth");
+  rd.only_keys(t, "tooth", {"source", "mesh", "mesh_scale_m_per_unit", "size_mm", "resolution",
+                            "k_tooth_n_per_m", "b_tooth_n_s_per_m", "anchor_offset_mm"});
+  s.tooth.source = rd.string(t, "tooth", "source", "procedural");
+  if (s.tooth.source != "procedural" && s.tooth.source != "mesh") {
+    rd.fail("tooth.source", "expected \"procedural\" or \"mesh\", got \"" + s.tooth.source + "\"");
+  }
+  if (s.tooth.source == "mesh") {
+    s.tooth.mesh_path = rd.string(t, "tooth", "mesh");
+    s.tooth.mesh_scale = rd.number(t, "tooth", "mesh_scale_m_per_unit", 0.0);
+    s.tooth.size_mm = rd.number(t, "tooth", "size_mm", 0.0);
+    rd.non_negative("tooth.mesh_scale_m_per_unit", s.tooth.mesh_scale);
+    rd.non_negative("tooth.size_mm", s.tooth.size_mm);
+    if ((s.tooth.mesh_scale > 0.0) == (s.tooth.size_mm > 0.0)) {
+      rd.fail("tooth", "a mesh needs exactly one of mesh_scale_m_per_unit or size_mm (meshes are unitless)");
+    }
+    // A relative mesh path is relative to the scene file.
+    if (!std::filesystem::path(s.tooth.mesh_path).is_absolute() &&
+        std::filesystem::exists(origin)) {
+      s.tooth.mesh_path =
+          (std::filesystem::path(origin).parent_path() / s.tooth.mesh_path).string();
+    }
+  } else if (t.contains("mesh")) {
+    rd.fail("tooth.mesh", "only allowed with \"source\": \"mesh\"");
+  }
+  s.tooth.resolution = static_cast<int>(rd.integer(t, "tooth", "resolution", 128));
+  const int r = s.tooth.resolution;
+  if (r < 32 || r > 512 || (r & (r - 1)) != 0) {
+    rd.fail("tooth.resolution", "must be a power of two from 32 to 512 (got " + std::to_string(r) + ")");
+  }
+  s.tooth.k_tooth = rd.number(t, "tooth", "k_tooth_n_per_m");
+  rd.positive("tooth.k_tooth_n_per_m", s.tooth.k_tooth);
+  s.tooth.b_tooth = rd.number(t, "tooth", "b_tooth_n_s_per_m", 0.0);
+  rd.non_negative("tooth.b_tooth_n_s_per_m", s.tooth.b_tooth);
+  s.tooth.anchor_offset = 1e-3 * rd.vec3(t, "tooth", "anchor_offset_mm", Vec3(0, 0, -6));
+
+  // Tool.
+  const auto& tl = rd.object(doc, "", "tool");
+  rd.only_keys(tl, "tool", {"preset", "bur_radius_mm", "bur_speed_rpm", "cutting_coefficient"});
+  s.tool.preset = rd.string(tl, "tool", "preset");
+  try {
+    (void)tool_preset(s.tool.preset);
+  } catch (const std::exception&) {
+    std::string names;
+    for (const auto& n : tool_preset_names()) names += (names.empty() ? "" : ", ") + n;
+    rd.fail("tool.preset", "unknown tool \"" + s.tool.preset + "\" (expected one of: " + names + ")");
+  }
+  s.tool.bur_radius = 1e-3 * rd.number(tl, "tool", "bur_radius_mm");
+  rd.positive("tool.bur_radius_mm", s.tool.bur_radius);
+  s.tool.bur_speed_rpm = rd.number(tl, "tool", "bur_speed_rpm", 0.0);
+  rd.non_negative("tool.bur_speed_rpm", s.tool.bur_speed_rpm);
+  s.tool.cutting_coefficient = rd.number(tl, "tool", "cutting_coefficient", 0.5);
+  rd.non_negative("tool.cutting_coefficient", s.tool.cutting_coefficient);
+
+  // Device.
+  const auto& dv = rd.object(doc, "", "device");
+  rd.only_keys(dv, "device", {"type", "model_file", "jitter_us", "quantize", "saturate"});
+  s.device.type = rd.string(dv, "device", "type");
+  if (s.device.type != "simulated-phantom") {
+    rd.fail("device.type", "expected \"simulated-phantom\" (the only backend built here), got \"" +
+                               s.device.type + "\"");
+  }
+  s.device.model_file = rd.string(dv, "device", "model_file", "");
+  s.device.jitter_us = rd.number(dv, "device", "jitter_us", 0.0);
+  rd.non_negative("device.jitter_us", s.device.jitter_us);
+  if (s.device.jitter_us * 1e-6 >= 0.5 / s.tick_hz) {
+    rd.fail("device.jitter_us", "must be less than half the tick");
+  }
+  s.device.quantize = rd.boolean(dv, "device", "quantize", true);
+  s.device.saturate = rd.boolean(dv, "device", "saturate", true);
+
+  // Method and gains.
+  const auto& m = rd.object(doc, "", "method");
+  rd.only_keys(m, "method", {"name", "k_vc_n_per_m", "b_vc_n_s_per_m", "k_vc_ang_n_m_per_rad",
+                             "b_vc_ang_n_m_s_per_rad", "observer_gain_per_s", "friction_mu"});
+  const std::string mname = rd.string(m, "method", "name");
+  try {
+    s.method.method = parse_method(mname);
+  } catch (const std::exception& e) {
+    rd.fail("method.name", e.what());
+  }
+  auto& g = s.method.coupling;
+  g.k_lin = rd.number(m, "method", "k_vc_n_per_m");
+  rd.positive("method.k_vc_n_per_m", g.k_lin);
+  g.b_lin = rd.number(m, "method", "b_vc_n_s_per_m", 0.3);
+  rd.non_negative("method.b_vc_n_s_per_m", g.b_lin);
+  g.k_ang = rd.number(m, "method", "k_vc_ang_n_m_per_rad", 0.3);
+  rd.positive("method.k_vc_ang_n_m_per_rad", g.k_ang);
+  g.b_ang = rd.number(m, "method", "b_vc_ang_n_m_s_per_rad", 0.001);
+  rd.non_negative("method.b_vc_ang_n_m_s_per_rad", g.b_ang);
+  s.method.observer_gain = rd.number(m, "method", "observer_gain_per_s", 100.0);
+  rd.positive("method.observer_gain_per_s", s.method.observer_gain);
+  if (s.method.observer_gain * (1.0 / s.tick_hz) >= 1.0) {
+    rd.fail("method.observer_gain_per_s", "L T must be < 1 for the discrete observer to be stable");
+  }
+  s.method.friction.mu = rd.number(m, "method", "friction_mu", 0.0);
+  rd.non_negative("method.friction_mu", s.method.friction.mu);
+  s.method.friction.enabled = s.method.friction.mu > 0.0;
+
+  // Proxy.
+  const auto& p = rd.object(doc, "", "proxy");
+  rd.only_keys(p, "proxy", {"mass_kg", "inertia_kg_m2", "damping_n_s_per_m",
+                            "damping_ang_n_m_s_per_rad"});
+  s.method.proxy.mass = rd.number(p, "proxy", "mass_kg");
+  rd.positive("proxy.mass_kg", s.method.proxy.mass);
+  const double J = rd.number(p, "proxy", "inertia_kg_m2");
+  rd.positive("proxy.inertia_kg_m2", J);
+  s.method.proxy.inertia = Mat3::Identity() * J;
+  s.method.proxy.damping_lin = rd.number(p, "proxy", "damping_n_s_per_m", 0.0);
+  rd.non_negative("proxy.damping_n_s_per_m", s.method.proxy.damping_lin);
+  s.method.proxy.damping_ang = rd.number(p, "proxy", "damping_ang_n_m_s_per_rad", 0.0);
+  rd.non_negative("proxy.damping_ang_n_m_s_per_rad", s.method.proxy.damping_ang);
+
+  // Hand.
+  const auto& h = rd.object(doc, "", "hand");
+  rd.only_keys(h, "hand", {"impedance", "script"});
+  if (h.contains("impedance")) {
+    const auto& z = rd.object(h, "hand", "impedance");
+    const std::string zp = "hand.impedance";
+    rd.only_keys(z, zp, {"mass_kg", "inertia_kg_m2", "k_n_per_m", "b_n_s_per_m",
+                         "k_ang_n_m_per_rad", "b_ang_n_m_s_per_rad"});
+    s.hand.mass = rd.number(z, zp, "mass_kg", s.hand.mass);
+    s.hand.inertia = rd.number(z, zp, "inertia_kg_m2", s.hand.inertia);
+    s.hand.k_lin = rd.number(z, zp, "k_n_per_m", s.hand.k_lin);
+    s.hand.b_lin = rd.number(z, zp, "b_n_s_per_m", s.hand.b_lin);
+    s.hand.k_ang = rd.number(z, zp, "k_ang_n_m_per_rad", s.hand.k_ang);
+    s.hand.b_ang = rd.number(z, zp, "b_ang_n_m_s_per_rad", s.hand.b_ang);
+    rd.non_negative(zp + ".mass_kg", s.hand.mass);
+    rd.non_negative(zp + ".inertia_kg_m2", s.hand.inertia);
+    rd.non_negative(zp + ".k_n_per_m", s.hand.k_lin);
+    rd.non_negative(zp + ".b_n_s_per_m", s.hand.b_lin);
+    rd.non_negative(zp + ".k_ang_n_m_per_rad", s.hand.k_ang);
+    rd.non_negative(zp + ".b_ang_n_m_s_per_rad", s.hand.b_ang);
+  }
+  if (!h.contains("script") || !h.at("script").is_array() || h.at("script").empty()) {
+    rd.fail("hand.script", "expected a non-empty array of keyframes");
+  }
+  const auto& script = h.at("script");
+  for (std::size_t i = 0; i < script.size(); ++i) {
+    const std::string kp = "hand.script[" + std::to_string(i) + "]";
+    const auto& k = script[i];
+    rd.only_keys(k, kp, {"t_s", "offset_mm", "force_n", "phase"});
+    SceneHandKey key;
+    key.t = rd.number(k, kp, "t_s");
+    rd.non_negative(kp + ".t_s", key.t);
+    if (!s.script.empty() && !(key.t > s.script.back().t)) {
+      rd.fail(kp + ".t_s", "keyframe times must increase strictly");
+    }
+    key.offset = 1e-3 * rd.vec3(k, kp, "offset_mm");
+    key.force = rd.vec3(k, kp, "force_n", Vec3::Zero());
+    if (key.force.norm() > 20.0) rd.fail(kp + ".force_n", "must be at most 20 N");
+    key.phase = rd.string(k, kp, "phase", "");
+    s.script.push_back(key);
+  }
+  return s;
+}
+
+}  // namespace dentsim

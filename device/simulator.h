@@ -1,0 +1,94 @@
+// The simulator: runs a scene (device/scene.h) end to end on the embedded default — the
+// MuJoCo-simulated Phantom held by the scripted hand, the voxel tooth, the reference pipeline —
+// and measures what the report of `dentsim run` needs (issue #6; docs/scenes.md).
+//
+// Per tick: ClosedLoop::step (read -> tick -> write -> advance, device/closed_loop.h), then
+// drilling on the tick's contact set when the tool drills, then the measurements below.
+// Nothing here writes files: cli/cmd_run.cc turns a RunResult into report.json, the time series,
+// the plots and the tooth pictures.
+//
+// Measurements:
+// - contact force: the penalty + friction force on the proxy, |f| of TickResult::F_contact [N];
+// - penetration: the deepest contact of the proxy's tip [m];
+// - rendered stiffness: the least-squares slope through the origin of the force fed back to the
+//   device (|f| of T1) against the device tip's own penetration of the tooth (the tip sphere at
+//   the device pose, same collision code), over ticks where that penetration exceeds the tip's
+//   encoder resolution (0.03 mm) [N/m];
+// - E_v: the passivity observer of the motor port (ClosedLoop): the energy the motors put into
+//   the device beyond gravity compensation. <= 0 means the rendering never powered the device.
+//   With passive decomposition (pmi-pd) E_v may be positive by design: the feed-forward supplies
+//   the energy the device's own damping dissipates, so the hand feels the desired tool, not the
+//   device's damping (thesis §3.1). The passivity that matters to the user is then at the hand:
+// - W_h: the passivity observer of the hand port, W_h(t) = ∫ F_h^T v dt (the work the hand did
+//   on the device, from the simulator's true hand torques and joint motion). The rendering is
+//   passive toward the hand when W_h(t) >= 0 at all times: it never gave back more energy than
+//   the hand put in (Hannaford & Ryu's time-domain passivity observer, applied at the handle);
+// - timing: wall-clock time of every tick stage and of the whole tick (pipeline + drilling) [us];
+// - faults: the device's latched faults (a fault stops the run: the device is in safe stop).
+#pragma once
+
+#include <array>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "device/scene.h"
+#include "reference/tooth/voxel_grid.h"
+
+namespace dentsim {
+
+struct RunOptions {
+  bool realtime = false;           // pace the loop at the tick rate (sleep to absolute deadlines)
+  double duration_override = 0.0;  // > 0: run this long instead of the scene's duration [s]
+  int log_every = 1;               // keep every n-th tick in the time series
+  // Called every ~1 % of the run with the fraction done (progress bar).
+  std::function<void(double)> progress;
+};
+
+// One row of the time series.
+struct RunSample {
+  double t;
+  double contact_force_n;       // |f| on the proxy
+  double device_force_n;        // |f| of T1 (fed back to the device)
+  double penetration_m;         // proxy tip
+  double device_penetration_m;  // device tip
+  Vec3 proxy_x, device_x;
+  Vec3 hand_force_n;            // true hand force (simulator ground truth), world
+  Vec3 observer_force_n;        // observer estimate F1_hat (force part), world
+  int contacts;
+  double energy_virtual_j;
+  double hand_work_j;
+  std::string phase;
+};
+
+struct StageStats {
+  double median_us = 0.0, p99_us = 0.0, max_us = 0.0;
+};
+
+struct RunResult {
+  std::string scene;
+  long ticks = 0;
+  long contact_ticks = 0;
+  double max_contact_force_n = 0.0;
+  double rms_contact_force_n = 0.0;         // over contact ticks
+  double max_penetration_m = 0.0;
+  double rendered_stiffness_n_per_m = 0.0;
+  double virtual_energy_generated_j = 0.0;
+  double hand_work_j = 0.0;                 // W_h at the end
+  double hand_work_min_j = 0.0;             // min over the run of W_h(t) (<= 0)
+  std::array<double, 4> removed_volume_mm3{};  // per Material id (0 unused)
+  double removed_volume_total_mm3 = 0.0;
+  std::vector<std::pair<std::string, StageStats>> timing;  // stages, then "tick"
+  std::vector<std::string> faults;
+  double observer_rms_error_n = 0.0;        // |F1_hat - F_hand| (force part), RMS over the run
+  double simulated_s = 0.0;
+  double wall_s = 0.0;
+  std::vector<RunSample> series;
+  VoxelGrid tooth_before, tooth_after;      // for pictures
+  std::string device_model;                 // which device model file
+};
+
+// Runs the scene. Throws InputError for a bad scene input (e.g. an unreadable mesh).
+RunResult run_scene(const Scene& scene, const RunOptions& options = {});
+
+}  // namespace dentsim

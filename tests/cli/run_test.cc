@@ -1,0 +1,121 @@
+// End-to-end tests of `dentsim run` (issue #6): both built-in scenes in a short form, asserting on
+// the report, plus the CLI's handling of bad input.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Cmd {
+  int status;
+  std::string output;
+};
+
+Cmd run(const std::string& args) {
+  const std::string cmd = std::string(DENTSIM_BINARY) + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  char buf[4096];
+  while (p && fgets(buf, sizeof buf, p)) out += buf;
+  const int st = p ? pclose(p) : -1;
+  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
+}
+
+fs::path temp_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("dentsim_run_test_" + name);
+  fs::remove_all(d);
+  return d;
+}
+
+bool is_png(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  char sig[8] = {};
+  f.read(sig, 8);
+  return f.gcount() == 8 && std::string(sig + 1, 3) == "PNG" && fs::file_size(p) > 1000;
+}
+
+nlohmann::json run_scene(const std::string& scene, double duration) {
+  const fs::path out = temp_dir(scene);
+  const Cmd c = run("run " + scene + " --duration " + std::to_string(duration) + " --out " +
+                    out.string());
+  EXPECT_EQ(c.status, 0) << c.output;
+  for (const char* f : {"force_penetration.png", "observer.png", "tooth_before.png",
+                        "tooth_after.png"}) {
+    EXPECT_TRUE(is_png(out / f)) << f;
+  }
+  EXPECT_GT(fs::file_size(out / "timeseries.csv"), 1000u);
+  std::ifstream in(out / "report.json");
+  return nlohmann::json::parse(in);
+}
+
+// The Phantom's peak force (PHANTOM.md: 8.5 N) bounds every force the device can feed back.
+constexpr double kDeviceMaxForceN = 8.5;
+
+void check_common(const nlohmann::json& r) {
+  EXPECT_GT(r.at("ticks").get<long>(), 0);
+  EXPECT_GT(r.at("contact_ticks").get<long>(), 100) << "the tool never touched the tooth";
+  EXPECT_GT(r.at("max_contact_force_n").get<double>(), 0.05);
+  EXPECT_LE(r.at("max_contact_force_n").get<double>(), kDeviceMaxForceN);
+  EXPECT_GT(r.at("max_penetration_m").get<double>(), 0.0);
+  EXPECT_LE(r.at("virtual_energy_generated_j").get<double>(), 0.0) << "the rendering was active";
+  EXPECT_GT(r.at("rendered_stiffness_n_per_m").get<double>(), 0.0);
+  for (const char* stage : {"kinematics", "observer", "collision", "solve", "command", "tick"}) {
+    const auto& t = r.at("timing_us").at(stage);
+    EXPECT_LE(t.at("median").get<double>(), t.at("p99").get<double>());
+    EXPECT_LE(t.at("p99").get<double>(), t.at("max").get<double>());
+  }
+  EXPECT_TRUE(r.at("faults").empty());
+}
+
+TEST(RunCli, ProbeTouchesWithoutRemovingTooth) {
+  const nlohmann::json r = run_scene("probe", 2.5);
+  check_common(r);
+  EXPECT_EQ(r.at("removed_volume_mm3").at("total").get<double>(), 0.0);
+}
+
+TEST(RunCli, DrillRemovesTooth) {
+  const nlohmann::json r = run_scene("drill", 3.0);
+  check_common(r);
+  const auto& v = r.at("removed_volume_mm3");
+  EXPECT_GT(v.at("total").get<double>(), 0.0);
+  EXPECT_NEAR(v.at("total").get<double>(),
+              v.at("enamel").get<double>() + v.at("dentin").get<double>() +
+                  v.at("pulp").get<double>(),
+              1e-9);
+  // Drilling starts at the occlusal surface: enamel goes first.
+  EXPECT_GT(v.at("enamel").get<double>(), 0.0);
+}
+
+TEST(RunCli, BadInputExitsTwoWithOneLine) {
+  const Cmd unknown = run("run no-such-scene --out " + temp_dir("bad").string());
+  EXPECT_EQ(unknown.status, 2) << unknown.output;
+  EXPECT_NE(unknown.output.find("neither a built-in scene"), std::string::npos);
+  const Cmd flag = run("run probe --no-such-flag");
+  EXPECT_EQ(flag.status, 2);
+  const fs::path bad = temp_dir("badscene");
+  fs::create_directories(bad);
+  {
+    std::ofstream f(bad / "s.json");
+    f << "{\"dentsim_scene\": 1, \"name\": \"x\", \"duration_s\": -1}";
+  }
+  const Cmd field = run("run " + (bad / "s.json").string() + " --out " + (bad / "o").string());
+  EXPECT_EQ(field.status, 2);
+  EXPECT_NE(field.output.find("duration_s: must be > 0"), std::string::npos) << field.output;
+  EXPECT_FALSE(fs::exists(bad / "o" / "report.json"));
+}
+
+TEST(RunCli, ListsBuiltinScenes) {
+  const Cmd c = run("run --list");
+  EXPECT_EQ(c.status, 0);
+  EXPECT_NE(c.output.find("probe"), std::string::npos);
+  EXPECT_NE(c.output.find("drill"), std::string::npos);
+}
+
+}  // namespace

@@ -1,0 +1,96 @@
+// Tests for device/scene.h: the built-in scenes parse, and every kind of bad field is rejected
+// with a message that names the document and the field.
+#include "device/scene.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "reference/core/io.h"
+
+namespace dentsim {
+namespace {
+
+TEST(Scene, BuiltinScenesParse) {
+  for (const std::string& name : builtin_scene_names()) {
+    const Scene s = load_scene(name);
+    EXPECT_EQ(s.name, name);
+    EXPECT_GT(s.duration, 0.0);
+    EXPECT_GE(s.script.size(), 3u);
+    EXPECT_EQ(s.tooth.source, "procedural");
+  }
+  EXPECT_TRUE(load_scene("drill").tool.drills());
+  EXPECT_FALSE(load_scene("probe").tool.drills());
+  EXPECT_EQ(load_scene("drill").method.method, Method::kPmiPd);
+  EXPECT_DOUBLE_EQ(load_scene("drill").tool.bur_radius, 0.5e-3);
+}
+
+// Replaces the first occurrence of `from` in the drill scene by `to` and returns the error text.
+std::string error_of(const std::string& from, const std::string& to) {
+  std::string text = builtin_scene_text("drill");
+  const auto pos = text.find(from);
+  EXPECT_NE(pos, std::string::npos) << from;
+  text.replace(pos, from.size(), to);
+  try {
+    parse_scene(text, "bad.json");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(Scene, BadFieldsAreNamed) {
+  EXPECT_EQ(error_of("\"bur_radius_mm\": 0.5", "\"bur_radius_mm\": -1"),
+            "bad.json: tool.bur_radius_mm: must be > 0 (got -0.001)");
+  EXPECT_EQ(error_of("\"resolution\": 128", "\"resolution\": 100"),
+            "bad.json: tooth.resolution: must be a power of two from 32 to 512 (got 100)");
+  EXPECT_NE(error_of("\"preset\": \"handpiece\"", "\"preset\": \"hammer\"")
+                .find("tool.preset: unknown tool \"hammer\""),
+            std::string::npos);
+  EXPECT_NE(error_of("\"name\": \"pmi-pd\"", "\"name\": \"rk4\"").find("method.name"),
+            std::string::npos);
+  EXPECT_NE(error_of("\"k_tooth_n_per_m\": 3000", "\"k_toth_n_per_m\": 3000")
+                .find("tooth.k_toth_n_per_m: unknown field"),
+            std::string::npos);
+  EXPECT_NE(error_of("\"dentsim_scene\": 1", "\"dentsim_scene\": 7").find("dentsim_scene"),
+            std::string::npos);
+  EXPECT_NE(error_of("\"t_s\": 1.0,", "\"t_s\": 0.0,").find("hand.script[1].t_s"),
+            std::string::npos);
+  EXPECT_NE(error_of("\"offset_mm\": [0, 0, 6]", "\"offset_mm\": [0, 6]")
+                .find("hand.script[0].offset_mm: expected an array of 3 numbers"),
+            std::string::npos);
+  EXPECT_NE(error_of("\"observer_gain_per_s\": 30", "\"observer_gain_per_s\": 5000")
+                .find("method.observer_gain_per_s"),
+            std::string::npos);
+  EXPECT_NE(error_of("\"type\": \"simulated-phantom\"", "\"type\": \"omni\"").find("device.type"),
+            std::string::npos);
+  EXPECT_NE(error_of("\"duration_s\": 6.0", "\"duration_s\": \"long\"")
+                .find("duration_s: expected a number"),
+            std::string::npos);
+}
+
+TEST(Scene, MeshToothNeedsExactlyOneScale) {
+  std::string text = builtin_scene_text("probe");
+  const std::string from = "\"source\": \"procedural\"";
+  text.replace(text.find(from), from.size(), "\"source\": \"mesh\", \"mesh\": \"t.stl\"");
+  try {
+    parse_scene(text, "m.json");
+    FAIL() << "accepted a unitless mesh without scale";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("exactly one of mesh_scale_m_per_unit or size_mm"),
+              std::string::npos);
+  }
+}
+
+TEST(Scene, NotJsonAndUnknownScene) {
+  EXPECT_THROW(parse_scene("{ nope", "x.json"), InputError);
+  try {
+    load_scene("/no/such/scene.json");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("neither a built-in scene"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace dentsim
