@@ -274,9 +274,12 @@ std::string observer_report_json(const ObserverReport& r) {
 }
 
 std::string observer_report_table(const ObserverReport& r) {
-  std::string s = "Observer L = " + std::to_string(r.config.gain_L) +
-                  " 1/s (expected lag 1/L = " + std::to_string(1e3 * r.expected_lag_s) +
-                  " ms); values in mN m, joints q1..q6\n\n";
+  char head[200];
+  std::snprintf(head, sizeof(head),
+                "Observer L = %g 1/s (expected lag 1/L = %.1f ms), model error %+.0f %% in inertia "
+                "and damping; values in mN m, joints q1..q6\n\n",
+                r.config.gain_L, 1e3 * r.expected_lag_s, 100.0 * r.config.model_error);
+  std::string s = head;
   s += "| quantity | q1 | q2 | q3 | q4 | q5 | q6 |\n|---|---|---|---|---|---|---|\n";
   s += row("device Coulomb f_c", r.device_coulomb, 1e3);
   for (const ObserverRun& run : r.runs) {
