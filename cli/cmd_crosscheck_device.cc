@@ -24,12 +24,12 @@ void setup_crosscheck_device(CLI::App& app) {
   CLI::App* cc = group(app, "crosscheck", "Differential checks against independent oracles");
   auto o = std::make_shared<CrosscheckDeviceOptions>();
   CLI::App* sub = cc->add_subcommand(
-      "device", "Analytic Phantom model vs MuJoCo 2.2.2: M, C qd, g, tip pose and Jacobian on\n"
-                "random states within the joint limits, and a 1 s trajectory under random torques");
+      "device",
+      "Analytic Phantom model vs MuJoCo 2.2.2: M, C qd, g, tip pose and Jacobian on\n"
+      "random states within the joint limits, and a 1 s trajectory under random torques");
   sub->add_option("--model", o->model, "device model file (default: built-in Premium 1.5A)");
   sub->add_option("--json", o->json, "write the error report as JSON to FILE");
-  sub->add_option("--samples", o->samples, "random states (>= 1)")
-      ->check(CLI::Range(1, 100000000));
+  sub->add_option("--samples", o->samples, "random states (>= 1)")->check(CLI::Range(1, 100000000));
   sub->add_option("--seed", o->seed, "random seed");
   sub->add_option("--duration", o->duration_s, "trajectory length [s] (> 0)")
       ->check(CLI::Range(1e-6, 1e6));

@@ -20,8 +20,9 @@ void setup_device(CLI::App& app) {
 
   auto show_opts = std::make_shared<DeviceOptions>();
   CLI::App* show = device->add_subcommand(
-      "show", "Print a device model file (the built-in Premium 1.5A default when none is given),\n"
-              "validated, so a new device can start from it");
+      "show",
+      "Print a device model file (the built-in Premium 1.5A default when none is given),\n"
+      "validated, so a new device can start from it");
   show->add_option("MODEL", show_opts->model, "device model file (JSON)");
   show->callback([show_opts] {
     const std::string text = show_opts->model.empty()
@@ -32,8 +33,9 @@ void setup_device(CLI::App& app) {
 
   auto check_opts = std::make_shared<DeviceOptions>();
   CLI::App* check = device->add_subcommand(
-      "check", "Validate a device model file: every field, and M(q) positive definite over the\n"
-               "joint-limit box; exit 0 if valid, 2 with a message naming the field otherwise");
+      "check",
+      "Validate a device model file: every field, and M(q) positive definite over the\n"
+      "joint-limit box; exit 0 if valid, 2 with a message naming the field otherwise");
   check->add_option("MODEL", check_opts->model, "device model file (JSON)")->required();
   check->callback([check_opts] {
     const PhantomParams p = load_phantom_params(check_opts->model);

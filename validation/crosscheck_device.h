@@ -54,8 +54,8 @@ struct DeviceCrosscheckResult {
   QuantityError mass_matrix, bias, gravity, pose, jacobian;
   double trajectory_max_abs_rad = 0.0;
   double trajectory_final_abs_rad = 0.0;
-  double trajectory_range_rad = 0.0;       // max |q(t) - q(0)|: how far the device moved
-  double trajectory_max_closure_rad = 0.0;  // largest equality violation of MuJoCo's chain
+  double trajectory_range_rad = 0.0;            // max |q(t) - q(0)|: how far the device moved
+  double trajectory_max_closure_rad = 0.0;      // largest equality violation of MuJoCo's chain
   double trajectory_coulomb_max_abs_rad = 0.0;  // the same run with the file's Coulomb friction
   double trajectory_coulomb_range_rad = 0.0;
   double trajectory_s = 0.0;

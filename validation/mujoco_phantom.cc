@@ -78,13 +78,15 @@ void MujocoPhantom::bind_names() {
   }
   for (int i = 0; i < kPhantomTreeDof; ++i) {
     const int id = mj_name2id(m_, mjOBJ_JOINT, kPhantomMjcfJoints[i]);
-    if (id < 0) throw std::runtime_error(std::string("Phantom MJCF: no joint ") + kPhantomMjcfJoints[i]);
+    if (id < 0)
+      throw std::runtime_error(std::string("Phantom MJCF: no joint ") + kPhantomMjcfJoints[i]);
     qadr_[i] = m_->jnt_qposadr[id];
     dadr_[i] = m_->jnt_dofadr[id];
   }
   for (int j = 0; j < 6; ++j) {
     motor_[j] = mj_name2id(m_, mjOBJ_ACTUATOR, kPhantomMjcfMotors[j]);
-    if (motor_[j] < 0) throw std::runtime_error(std::string("Phantom MJCF: no motor ") + kPhantomMjcfMotors[j]);
+    if (motor_[j] < 0)
+      throw std::runtime_error(std::string("Phantom MJCF: no motor ") + kPhantomMjcfMotors[j]);
   }
   tip_site_ = mj_name2id(m_, mjOBJ_SITE, kPhantomMjcfTipSite);
   if (tip_site_ < 0) throw std::runtime_error("Phantom MJCF: no site tip");

@@ -34,17 +34,17 @@ std::string visual_geom(int body, const PhantomParams& p) {
     case kBase:
       return "<geom type=\"cylinder\" size=\"0.04 0.02\" pos=\"0 0 -0.03\"" + attrs + "/>";
     case kUpperArm:
-      return "<geom type=\"capsule\" size=\"0.006\" fromto=\"0 0 0 0 0 " + fmt_num(p.l1_m) +
-             "\"" + attrs + "/>";
+      return "<geom type=\"capsule\" size=\"0.006\" fromto=\"0 0 0 0 0 " + fmt_num(p.l1_m) + "\"" +
+             attrs + "/>";
     case kForearm:
-      return "<geom type=\"capsule\" size=\"0.005\" fromto=\"0 0 0 0 " + fmt_num(p.l2_m) +
-             " 0\"" + attrs + "/>";
+      return "<geom type=\"capsule\" size=\"0.005\" fromto=\"0 0 0 0 " + fmt_num(p.l2_m) + " 0\"" +
+             attrs + "/>";
     case kCrank:
       return "<geom type=\"capsule\" size=\"0.008\" fromto=\"0 " + fmt_num(p.crank.com_m(1)) +
              " 0 0 " + fmt_num(p.l3_m) + " 0\"" + attrs + "/>";
     case kParallelLink:
-      return "<geom type=\"capsule\" size=\"0.003\" fromto=\"0 0 0 0 0 " + fmt_num(p.l1_m) +
-             "\"" + attrs + "/>";
+      return "<geom type=\"capsule\" size=\"0.003\" fromto=\"0 0 0 0 0 " + fmt_num(p.l1_m) + "\"" +
+             attrs + "/>";
     case kGimbalRoll:
       return "<geom type=\"capsule\" size=\"0.005\" fromto=\"0 0 0 " + fmt_vec(p.tip_offset_m) +
              "\"" + attrs + "/>";
@@ -79,8 +79,8 @@ std::string phantom_mjcf(const PhantomParams& p, const PhantomMjcfOptions& o) {
       << "\" quat=\"" << fmt_quat(t.rot0[i]) << "\">\n";
     s << ind << "  <inertial pos=\"" << fmt_vec(t.com[i]) << "\" mass=\"" << fmt_num(t.mass[i])
       << "\" diaginertia=\"" << fmt_vec(t.inertia[i]) << "\"/>\n";
-    s << ind << "  <joint name=\"" << kPhantomMjcfJoints[i] << "\" type=\"hinge\" pos=\"0 0 0\" axis=\""
-      << fmt_vec(t.axis[i]) << "\"";
+    s << ind << "  <joint name=\"" << kPhantomMjcfJoints[i]
+      << "\" type=\"hinge\" pos=\"0 0 0\" axis=\"" << fmt_vec(t.axis[i]) << "\"";
     const int j = device_joint[i];
     if (j >= 0) {
       s << " armature=\"" << fmt_num(p.armature_kg_m2(j)) << "\"";
@@ -113,10 +113,10 @@ std::string phantom_mjcf(const PhantomParams& p, const PhantomMjcfOptions& o) {
   s << "      <joint joint=\"elbow\" coef=\"-1\"/>\n";
   s << "    </fixed>\n";
   s << "  </tendon>\n";
-  const std::string solref =
-      "solref=\"" + fmt_num(o.equality_timeconst_s) + " " + fmt_num(o.equality_dampratio) +
-      "\" solimp=\"" + fmt_num(o.equality_impedance) + " " + fmt_num(o.equality_impedance) +
-      " 0.001 0.5 2\"";
+  const std::string solref = "solref=\"" + fmt_num(o.equality_timeconst_s) + " " +
+                             fmt_num(o.equality_dampratio) + "\" solimp=\"" +
+                             fmt_num(o.equality_impedance) + " " + fmt_num(o.equality_impedance) +
+                             " 0.001 0.5 2\"";
   s << "  <equality>\n";
   s << "    <joint name=\"parallel_link\" joint1=\"link_c\" joint2=\"elbow\" "
        "polycoef=\"0 -1 0 0 0\" "

@@ -23,11 +23,11 @@ namespace dentsim {
 
 struct PhantomMjcfOptions {
   double timestep_s = 1e-4;
-  std::string integrator = "RK4";   // "Euler", "RK4" or "implicit"
-  bool joint_limits = true;         // range + limited="true" on the device joints
-  bool joint_damping = true;        // viscous damping from the model file
-  bool joint_friction = true;       // Coulomb friction as MuJoCo frictionloss
-  bool torque_saturation = true;    // ctrlrange = +-torque limit
+  std::string integrator = "RK4";  // "Euler", "RK4" or "implicit"
+  bool joint_limits = true;        // range + limited="true" on the device joints
+  bool joint_damping = true;       // viscous damping from the model file
+  bool joint_friction = true;      // Coulomb friction as MuJoCo frictionloss
+  bool torque_saturation = true;   // ctrlrange = +-torque limit
   // Equality-constraint reference (time constant [s], damping ratio). MuJoCo's default is
   // (0.02, 1); a stiffer closure keeps the chain closed tighter (docs/phantom.md).
   double equality_timeconst_s = 0.002;
@@ -39,10 +39,10 @@ struct PhantomMjcfOptions {
 };
 
 // MJCF names: joints per tree body (theta_0..theta_7), actuators per device joint, the tip site.
-inline constexpr std::array<const char*, 8> kPhantomMjcfJoints = {
-    "q1", "q2", "elbow", "q3", "link_c", "q4", "q5", "q6"};
-inline constexpr std::array<const char*, 6> kPhantomMjcfMotors = {
-    "tau1", "tau2", "tau3", "tau4", "tau5", "tau6"};
+inline constexpr std::array<const char*, 8> kPhantomMjcfJoints = {"q1",     "q2", "elbow", "q3",
+                                                                  "link_c", "q4", "q5",    "q6"};
+inline constexpr std::array<const char*, 6> kPhantomMjcfMotors = {"tau1", "tau2", "tau3",
+                                                                  "tau4", "tau5", "tau6"};
 inline constexpr const char* kPhantomMjcfTipSite = "tip";
 
 std::string phantom_mjcf(const PhantomParams& params, const PhantomMjcfOptions& options = {});

@@ -10,9 +10,9 @@ template class PhantomModelT<double>;
 template PhantomTreeT<double> phantom_tree<double>(const PhantomParams&);
 
 const char* phantom_tree_body_name(int body) {
-  static const char* const kNames[kPhantomTreeDof] = {
-      "base", "upper_arm", "forearm", "crank", "parallel_link", "gimbal_yaw", "gimbal_pitch",
-      "gimbal_roll"};
+  static const char* const kNames[kPhantomTreeDof] = {"base",         "upper_arm",     "forearm",
+                                                      "crank",        "parallel_link", "gimbal_yaw",
+                                                      "gimbal_pitch", "gimbal_roll"};
   if (body < 0 || body >= kPhantomTreeDof) throw std::out_of_range("phantom tree body index");
   return kNames[body];
 }
@@ -25,11 +25,13 @@ int phantom_actuated_tree_joint(int device_joint) {
 
 Eigen::Matrix<double, kPhantomTreeDof, 6> phantom_tree_map() {
   Eigen::Matrix<double, kPhantomTreeDof, 6> G = Eigen::Matrix<double, kPhantomTreeDof, 6>::Zero();
-  G(kBase, 0) = 1.0;                                         // theta_0 = q1
-  G(kUpperArm, 1) = 1.0;                                     // theta_1 = q2
-  G(kForearm, 1) = -1.0;  G(kForearm, 2) = 1.0;              // theta_2 = q3 - q2 (elbow)
-  G(kCrank, 2) = 1.0;                                        // theta_3 = q3
-  G(kParallelLink, 1) = 1.0;  G(kParallelLink, 2) = -1.0;    // theta_4 = q2 - q3
+  G(kBase, 0) = 1.0;      // theta_0 = q1
+  G(kUpperArm, 1) = 1.0;  // theta_1 = q2
+  G(kForearm, 1) = -1.0;
+  G(kForearm, 2) = 1.0;  // theta_2 = q3 - q2 (elbow)
+  G(kCrank, 2) = 1.0;    // theta_3 = q3
+  G(kParallelLink, 1) = 1.0;
+  G(kParallelLink, 2) = -1.0;  // theta_4 = q2 - q3
   G(kGimbalYaw, 3) = 1.0;
   G(kGimbalPitch, 4) = 1.0;
   G(kGimbalRoll, 5) = 1.0;
@@ -39,15 +41,14 @@ Eigen::Matrix<double, kPhantomTreeDof, 6> phantom_tree_map() {
 namespace {
 Vec6 as6(const VecX& v, const char* what) {
   if (v.size() != 6) {
-    throw std::invalid_argument(std::string("PhantomModel: ") + what + " must have 6 entries, got " +
-                                std::to_string(v.size()));
+    throw std::invalid_argument(std::string("PhantomModel: ") + what +
+                                " must have 6 entries, got " + std::to_string(v.size()));
   }
   return v;
 }
 }  // namespace
 
-PhantomModel::PhantomModel(PhantomParams params)
-    : params_(std::move(params)), model_(params_) {}
+PhantomModel::PhantomModel(PhantomParams params) : params_(std::move(params)), model_(params_) {}
 
 MatX PhantomModel::mass_matrix(const VecX& q) const { return model_.M(as6(q, "q")); }
 

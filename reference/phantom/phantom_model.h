@@ -43,13 +43,13 @@ inline constexpr int kPhantomTreeDof = 8;
 // Bodies of the kinematic tree; body i carries tree joint i.
 enum PhantomTreeBody : int {
   kBase = 0,
-  kUpperArm = 1,     // be   (theta_1 = q2)
-  kForearm = 2,      // a    (theta_2 = q3 - q2, relative elbow)
-  kCrank = 3,        // df   (theta_3 = q3)
-  kParallelLink = 4, // c    (theta_4 = q2 - q3, relative)
-  kGimbalYaw = 5,    // theta_5 = q4
-  kGimbalPitch = 6,  // theta_6 = q5
-  kGimbalRoll = 7,   // theta_7 = q6
+  kUpperArm = 1,      // be   (theta_1 = q2)
+  kForearm = 2,       // a    (theta_2 = q3 - q2, relative elbow)
+  kCrank = 3,         // df   (theta_3 = q3)
+  kParallelLink = 4,  // c    (theta_4 = q2 - q3, relative)
+  kGimbalYaw = 5,     // theta_5 = q4
+  kGimbalPitch = 6,   // theta_6 = q5
+  kGimbalRoll = 7,    // theta_7 = q6
 };
 const char* phantom_tree_body_name(int body);  // "base", "upper_arm", ... (model-file names)
 // Tree joint carrying device joint j (0-based): (0, 1, 3, 5, 6, 7).
@@ -121,8 +121,8 @@ class PhantomModelT {
   V6 forward_dynamics(const V6& q, const V6& qd, const V6& tau) const;
 
   void fk(const V6& q, V3* x1, M3* R1) const;  // tool tip x1 (world), R1
-  M6 tool_jacobian(const V6& q) const;          // J_t: [v1 (world); w1 (body)] = J_t qd
-  M6 J1(const V6& q) const;                     // (2.2): qd = J1 [v1; w1], J1 = J_t^-1
+  M6 tool_jacobian(const V6& q) const;         // J_t: [v1 (world); w1 (body)] = J_t qd
+  M6 J1(const V6& q) const;                    // (2.2): qd = J1 [v1; w1], J1 = J_t^-1
 
   T kinetic_energy(const V6& q, const V6& qd) const { return T(0.5) * qd.dot(M(q) * qd); }
   T potential_energy(const V6& q) const;  // sum_i m_i |g| z_i (zero at z = 0)
@@ -218,7 +218,7 @@ PhantomModelT<T>::PhantomModelT(const PhantomTreeT<T>& tree) : tree_(tree) {
 
 template <typename T>
 typename PhantomModelT<T>::Kinematics PhantomModelT<T>::kinematics(const V6& q,
-                                                                  const V6& qd) const {
+                                                                   const V6& qd) const {
   const Eigen::Matrix<T, kPhantomTreeDof, 6> G = phantom_tree_map().cast<T>();
   const VT th = G * q;
   const VT thd = G * qd;
@@ -346,8 +346,8 @@ typename PhantomModelT<T>::M6 PhantomModelT<T>::tool_jacobian(const V6& q) const
   Eigen::Matrix<T, 6, kPhantomTreeDof> Jt = Eigen::Matrix<T, 6, kPhantomTreeDof>::Zero();
   for (int j = 0; j < kPhantomTreeDof; ++j) {
     if (!ancestor_or_self(j, kGimbalRoll)) continue;
-    Jt.col(j).template head<3>() = k.a[j].cross(x1 - k.p[j]);                  // v1, world
-    Jt.col(j).template tail<3>() = k.R[kGimbalRoll].transpose() * k.a[j];     // w1, body
+    Jt.col(j).template head<3>() = k.a[j].cross(x1 - k.p[j]);              // v1, world
+    Jt.col(j).template tail<3>() = k.R[kGimbalRoll].transpose() * k.a[j];  // w1, body
   }
   return Jt * G;
 }

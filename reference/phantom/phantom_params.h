@@ -66,14 +66,14 @@ struct PhantomParams {
   Vec3 tip_offset_m = Vec3::Zero();  // tool tip x1 in the roll body frame [m]; R1 = R_roll
 
   // Per device joint j = 1..6 (q1 yaw, q2 upper arm, q3 forearm, q4..q6 gimbal yaw, pitch, roll).
-  Vec6 armature_kg_m2 = Vec6::Zero();           // reflected rotor inertia (+ link excess, docs)
-  Vec6 damping_n_m_s_per_rad = Vec6::Zero();    // viscous b_j
-  Vec6 coulomb_n_m = Vec6::Zero();              // Coulomb f_c,j
-  double coulomb_smoothing_rad_s = 0.0;         // f_c tanh(qd / v_s); 0 = f_c sign(qd)
+  Vec6 armature_kg_m2 = Vec6::Zero();         // reflected rotor inertia (+ link excess, docs)
+  Vec6 damping_n_m_s_per_rad = Vec6::Zero();  // viscous b_j
+  Vec6 coulomb_n_m = Vec6::Zero();            // Coulomb f_c,j
+  double coulomb_smoothing_rad_s = 0.0;       // f_c tanh(qd / v_s); 0 = f_c sign(qd)
   Vec6 q_min_rad = Vec6::Constant(-1.0);
   Vec6 q_max_rad = Vec6::Constant(1.0);
   Vec6 torque_limit_n_m = Vec6::Zero();
-  Vec6 encoder_counts_per_rev = Vec6::Zero();   // counts per joint revolution (after the capstan)
+  Vec6 encoder_counts_per_rev = Vec6::Zero();  // counts per joint revolution (after the capstan)
 
   bool gravity_on = true;
   double gravity_m_s2 = 9.81;  // |g|, acting along -z of {O}

@@ -24,7 +24,8 @@ class RandomStates {
   }
   Vec6 q() {
     Vec6 q;
-    for (int j = 0; j < 6; ++j) q(j) = p_.q_min_rad(j) + u_(rng_) * (p_.q_max_rad(j) - p_.q_min_rad(j));
+    for (int j = 0; j < 6; ++j)
+      q(j) = p_.q_min_rad(j) + u_(rng_) * (p_.q_max_rad(j) - p_.q_min_rad(j));
     return q;
   }
   Vec6 qd(double scale = 3.0) {
@@ -56,14 +57,14 @@ struct Published {
   Mat3 M(double q2, double q3) const {
     const double l1s = l1 * l1, l2s = l2 * l2, l3s = l3 * l3;
     Mat3 m = Mat3::Zero();
-    m(0, 0) = 0.125 * (4 * Iayy + 4 * Iazz + 8 * Ibase + 4 * Ibeyy + 4 * Ibezz + 4 * Icyy +
-                       4 * Iczz + 4 * Idfyy + 4 * Idfzz + 4 * l1s * ma + l2s * ma + l1s * mc +
-                       4 * l3s * mc) +
-              0.125 * (4 * Ibeyy - 4 * Ibezz + 4 * Icyy - 4 * Iczz + l1s * (4 * ma + mc)) *
-                  std::cos(2 * q2) +
-              0.125 * (4 * Iayy - 4 * Iazz + 4 * Idfyy - 4 * Idfzz - l2s * ma - 4 * l3s * mc) *
-                  std::cos(2 * q3) +
-              l1 * (l2 * ma + l3 * mc) * std::cos(q2) * std::sin(q3);
+    m(0, 0) =
+        0.125 * (4 * Iayy + 4 * Iazz + 8 * Ibase + 4 * Ibeyy + 4 * Ibezz + 4 * Icyy + 4 * Iczz +
+                 4 * Idfyy + 4 * Idfzz + 4 * l1s * ma + l2s * ma + l1s * mc + 4 * l3s * mc) +
+        0.125 * (4 * Ibeyy - 4 * Ibezz + 4 * Icyy - 4 * Iczz + l1s * (4 * ma + mc)) *
+            std::cos(2 * q2) +
+        0.125 * (4 * Iayy - 4 * Iazz + 4 * Idfyy - 4 * Idfzz - l2s * ma - 4 * l3s * mc) *
+            std::cos(2 * q3) +
+        l1 * (l2 * ma + l3 * mc) * std::cos(q2) * std::sin(q3);
     m(1, 1) = Ibexx + Icxx + l1s * ma + 0.25 * l1s * mc;
     m(2, 2) = Iaxx + Idfxx + 0.25 * l2s * ma + l3s * mc;
     m(1, 2) = m(2, 1) = -0.5 * l1 * (l2 * ma + l3 * mc) * std::sin(q2 - q3);
@@ -133,7 +134,8 @@ TEST(PhantomModel, ArmBiasMatchesChristoffelOfClosedForm) {
       b(i) -= h;
       dM[i] = (pub.M(a(1), a(2)) - pub.M(b(1), b(2))) / (2 * h);
     }
-    Mat3 C = Mat3::Zero();  // Christoffel: C_kj = sum_i 1/2 (dM_kj/dq_i + dM_ki/dq_j - dM_ij/dq_k) qd_i
+    Mat3 C =
+        Mat3::Zero();  // Christoffel: C_kj = sum_i 1/2 (dM_kj/dq_i + dM_ki/dq_j - dM_ij/dq_k) qd_i
     for (int k = 0; k < 3; ++k) {
       for (int j = 0; j < 3; ++j) {
         for (int i = 0; i < 3; ++i) {
@@ -150,7 +152,7 @@ TEST(PhantomModel, ArmBiasMatchesChristoffelOfClosedForm) {
   }
   std::printf("arm C qd vs Christoffel of the closed form: max rel %.3e; C32 formula %.3e\n", worst,
               worst_c32);
-  EXPECT_LT(worst, 1e-7);      // central differences, h = 1e-6
+  EXPECT_LT(worst, 1e-7);  // central differences, h = 1e-6
   EXPECT_LT(worst_c32, 1e-10);
 }
 
@@ -260,9 +262,9 @@ TEST(PhantomModel, DeviceModelAdapter) {
   // Friction: b qd + f_c tanh(qd / v_s).
   const PhantomParams& p = dev.params();
   for (int j = 0; j < 6; ++j) {
-    EXPECT_DOUBLE_EQ(m.friction(qd)(j), p.damping_n_m_s_per_rad(j) * qd(j) +
-                                            p.coulomb_n_m(j) *
-                                                std::tanh(qd(j) / p.coulomb_smoothing_rad_s));
+    EXPECT_DOUBLE_EQ(m.friction(qd)(j),
+                     p.damping_n_m_s_per_rad(j) * qd(j) +
+                         p.coulomb_n_m(j) * std::tanh(qd(j) / p.coulomb_smoothing_rad_s));
   }
 }
 
@@ -281,7 +283,9 @@ TEST(PhantomModel, FreeMotionConservesEnergy) {
   double drift = 0.0, swing = 0.0;
   const double u0 = model.potential_energy(q);
   for (int k = 0; k < 5000; ++k) {
-    auto f = [&](const Vec6& x, const Vec6& v) { return model.forward_dynamics(x, v, Vec6::Zero()); };
+    auto f = [&](const Vec6& x, const Vec6& v) {
+      return model.forward_dynamics(x, v, Vec6::Zero());
+    };
     const Vec6 k1x = qd, k1v = f(q, qd);
     const Vec6 k2x = qd + 0.5 * h * k1v, k2v = f(q + 0.5 * h * k1x, qd + 0.5 * h * k1v);
     const Vec6 k3x = qd + 0.5 * h * k2v, k3v = f(q + 0.5 * h * k2x, qd + 0.5 * h * k2v);

@@ -51,24 +51,26 @@ std::string replace(std::string text, const std::string& from, const std::string
 }
 
 TEST(PhantomParams, MissingFieldIsNamed) {
-  const std::string bad =
-      replace(default_phantom_model_file(), "\"forearm\": {\"mass_kg\": 0.0202, ", "\"forearm\": {");
+  const std::string bad = replace(default_phantom_model_file(),
+                                  "\"forearm\": {\"mass_kg\": 0.0202, ", "\"forearm\": {");
   EXPECT_THAT(error_of(bad), AllOf(HasSubstr("model.json"), HasSubstr("bodies.forearm.mass_kg"),
                                    HasSubstr("missing")));
 }
 
 TEST(PhantomParams, NegativeMassIsNamed) {
-  const std::string bad = replace(default_phantom_model_file(), "\"mass_kg\": 0.1906", "\"mass_kg\": -0.1906");
+  const std::string bad =
+      replace(default_phantom_model_file(), "\"mass_kg\": 0.1906", "\"mass_kg\": -0.1906");
   EXPECT_THAT(error_of(bad), AllOf(HasSubstr("bodies.crank.mass_kg"), HasSubstr("positive"),
                                    HasSubstr("-0.1906")));
 }
 
 TEST(PhantomParams, WrongTypeIsNamed) {
-  const std::string bad = replace(default_phantom_model_file(), "\"l1_m\": 0.215", "\"l1_m\": \"0.215\"");
-  EXPECT_THAT(error_of(bad), AllOf(HasSubstr("arm.l1_m"), HasSubstr("expected a number"),
-                                   HasSubstr("string")));
-  const std::string bad2 = replace(default_phantom_model_file(), "\"coulomb_n_m\": [0.008, ",
-                                   "\"coulomb_n_m\": [");
+  const std::string bad =
+      replace(default_phantom_model_file(), "\"l1_m\": 0.215", "\"l1_m\": \"0.215\"");
+  EXPECT_THAT(error_of(bad),
+              AllOf(HasSubstr("arm.l1_m"), HasSubstr("expected a number"), HasSubstr("string")));
+  const std::string bad2 =
+      replace(default_phantom_model_file(), "\"coulomb_n_m\": [0.008, ", "\"coulomb_n_m\": [");
   EXPECT_THAT(error_of(bad2), AllOf(HasSubstr("joints.coulomb_n_m"), HasSubstr("6 numbers")));
 }
 
@@ -76,8 +78,8 @@ TEST(PhantomParams, PhysicallyImpossibleInertiaIsNamed) {
   // The published be moments about the shoulder, as CoM moments, break the triangle inequality.
   const std::string bad = replace(default_phantom_model_file(), "\"inertia_kg_m2\": [0.000745,",
                                   "\"inertia_kg_m2\": [0.000789534784,");
-  EXPECT_THAT(error_of(bad), AllOf(HasSubstr("bodies.upper_arm.inertia_kg_m2"),
-                                   HasSubstr("triangle inequality")));
+  EXPECT_THAT(error_of(bad),
+              AllOf(HasSubstr("bodies.upper_arm.inertia_kg_m2"), HasSubstr("triangle inequality")));
 }
 
 TEST(PhantomParams, NonPositiveDefiniteMassMatrixIsNamed) {
@@ -155,8 +157,8 @@ TEST(DeviceCli, CheckAcceptsGoodAndRejectsBadNamingTheField) {
   const std::string good = temp_path("good.json");
   const std::string bad = temp_path("bad.json");
   write_file_atomic(good, default_phantom_model_file());
-  write_file_atomic(bad, replace(default_phantom_model_file(), "\"mass_kg\": 0.0249",
-                                 "\"mass_kg\": -1"));
+  write_file_atomic(
+      bad, replace(default_phantom_model_file(), "\"mass_kg\": 0.0249", "\"mass_kg\": -1"));
   const RunResult ok = run("device check " + good + " 2>&1");
   EXPECT_EQ(ok.status, 0);
   EXPECT_THAT(ok.out, HasSubstr("valid"));

@@ -112,8 +112,8 @@ TEST(CrosscheckDeviceCli, WritesTheContractJson) {
   EXPECT_EQ(j["samples"].get<int>(), 1000);
   std::filesystem::remove(path);
   // Bad model file: exit status 2.
-  const std::string bad = std::string(DENTSIM_BINARY) +
-                          " crosscheck device --model /nonexistent.json 2>/dev/null";
+  const std::string bad =
+      std::string(DENTSIM_BINARY) + " crosscheck device --model /nonexistent.json 2>/dev/null";
   const int st = std::system(bad.c_str());
   EXPECT_EQ(WEXITSTATUS(st), 2);
 }
