@@ -13,6 +13,7 @@ namespace {
 
 struct DeviceOptions {
   std::string model;
+  int workspace_samples = 256;
 };
 
 void setup_device(CLI::App& app) {
@@ -37,8 +38,15 @@ void setup_device(CLI::App& app) {
       "Validate a device model file: every field, and M(q) positive definite over the\n"
       "joint-limit box; exit 0 if valid, 2 with a message naming the field otherwise");
   check->add_option("MODEL", check_opts->model, "device model file (JSON)")->required();
+  check
+      ->add_option("--workspace-samples", check_opts->workspace_samples,
+                   "random joint-limit-box points (besides its centre and 64 corners) at which\n"
+                   "M(q) must be positive definite")
+      ->check(CLI::Range(0, 100000000));
   check->callback([check_opts] {
-    const PhantomParams p = load_phantom_params(check_opts->model);
+    const PhantomParams p = load_phantom_params(check_opts->model);  // validates with 256 points
+    validate_phantom_params(p, "device model file '" + check_opts->model + "'",
+                            check_opts->workspace_samples);
     std::printf("%s: valid device model \"%s\"\n", check_opts->model.c_str(), p.name.c_str());
   });
 }

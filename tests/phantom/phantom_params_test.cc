@@ -162,6 +162,8 @@ TEST(DeviceCli, CheckAcceptsGoodAndRejectsBadNamingTheField) {
   const RunResult ok = run("device check " + good + " 2>&1");
   EXPECT_EQ(ok.status, 0);
   EXPECT_THAT(ok.out, HasSubstr("valid"));
+  EXPECT_EQ(run("device check " + good + " --workspace-samples 5000 2>&1").status, 0);
+  EXPECT_EQ(run("device check " + good + " --workspace-samples -3 2>&1").status, 2);
   const RunResult ko = run("device check " + bad + " 2>&1");
   EXPECT_EQ(ko.status, 2);
   EXPECT_THAT(ko.out, AllOf(HasSubstr(bad), HasSubstr("bodies.parallel_link.mass_kg")));
