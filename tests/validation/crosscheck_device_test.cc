@@ -104,6 +104,7 @@ TEST(CrosscheckDeviceStress, RandomDeviceModelsAgreeToRoundOff) {
 
 TEST(PhantomMjcf, GeneratedFromTheModelFile) {
   PhantomParams p = default_phantom_params();
+  p.name = "unit <7> -- & --> test";  // must not break the XML comment it is written into
   p.forearm.mass_kg = 0.031;
   p.damping_n_m_s_per_rad(2) = 0.0042;
   p.armature_kg_m2(0) = 0.00021;
