@@ -1,0 +1,157 @@
+// Fast checks of the Z-width experiment (validation/zwidth.h) on the 1-DoF axis testbed
+// (validation/zwidth_1dof.h): the same ClosedLoop, pipeline and voxel-slab contact as the
+// simulated-Phantom sweep, one axis. The runs are deterministic (no jitter: seed 1 is printed
+// for the record); every run holds >= 5 s of contact.
+#include "validation/zwidth.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "reference/core/io.h"
+
+namespace dentsim {
+namespace {
+
+ZwidthScenario axis_scenario() {
+  ZwidthScenario sc;
+  sc.testbed = ZwidthTestbed::kAxis;
+  std::printf("[zwidth] axis testbed: m_d %.3f kg, b_d %.4f N s/m, quantum %.3g m, seed %llu\n",
+              sc.axis.mass, sc.axis.damping, sc.axis.quantum,
+              static_cast<unsigned long long>(sc.seed));
+  return sc;
+}
+
+TEST(ZwidthAxisDevice, FreeMassDampingAndQuantisation) {
+  // Constant force u on the free device (no hand): v(t) = (u/b)(1 - exp(-b t/m)), exact
+  // solution of m v' = u - b v. RK4 with 8 substeps per 1 ms tick matches it to 1e-9.
+  AxisDeviceParams p;
+  p.quantum = 1e-5;
+  AxisDevice dev(p, Vec3(0, 0, 0.01));
+  VecX tau = VecX::Zero(6);
+  tau(2) = 0.5;
+  tau(0) = 3.0;  // a constrained coordinate: ignored
+  for (int k = 0; k < 200; ++k) {
+    dev.write(tau);
+    dev.advance();
+  }
+  const double t = dev.time();
+  const double v = (0.5 / p.damping) * (1.0 - std::exp(-p.damping * t / p.mass));
+  const double z = 0.01 + (0.5 / p.damping) * (t - (p.mass / p.damping) *
+                                                       (1.0 - std::exp(-p.damping * t / p.mass)));
+  EXPECT_NEAR(dev.true_vz(), v, 1e-9);
+  EXPECT_NEAR(dev.true_z(), z, 1e-9);
+  DeviceSample s = dev.make_sample();
+  dev.read(s);
+  EXPECT_DOUBLE_EQ(s.q(2), p.quantum * std::floor(dev.true_z() / p.quantum));
+  EXPECT_EQ(s.q(0), 0.0);
+  EXPECT_EQ(dev.applied_torque()(0), 0.0);
+  // Saturation at the force limit.
+  tau(2) = 20.0;
+  dev.write(tau);
+  EXPECT_DOUBLE_EQ(dev.applied_torque()(2), p.force_limit);
+}
+
+TEST(ZwidthAxisDevice, RejectsBadParameters) {
+  AxisDeviceParams p;
+  p.mass = -1.0;
+  try {
+    AxisDevice dev(p, Vec3::Zero());
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("AxisDeviceParams.mass"), std::string::npos);
+  }
+  EXPECT_THROW(parse_operator("push"), InputError);
+  EXPECT_THROW(parse_testbed("hapticmaster"), InputError);
+}
+
+TEST(ZwidthBounds, ClosedForms) {
+  // Colgate-Schenkel K < 2 (b - B) / T; thesis §3.1 k_vc <= (b_d - b_vc (1 + T_k/T_k-1)) / T_k.
+  EXPECT_DOUBLE_EQ(colgate_schenkel_max_stiffness(0.5, 0.1, 1e-3), 800.0);
+  EXPECT_DOUBLE_EQ(colgate_schenkel_max_stiffness(0.1, 0.5, 1e-3), 0.0);
+  EXPECT_DOUBLE_EQ(pmi_coupling_max_stiffness(0.5, 0.1, 1e-3, 1e-3), 300.0);
+  EXPECT_DOUBLE_EQ(pmi_coupling_max_stiffness(0.5, 0.1, 1e-3, 0.5e-3), 200.0);
+}
+
+// Each method: a clearly stable, passive point (VC: the thesis's explicit gains with the coupling
+// damping the explicit proxy needs; PD: its sweep optimum's neighbourhood, K_tooth = 3000 N/m as
+// in the thesis) and a clearly unstable one (stiff coupling and wall with almost no coupling
+// damping).
+TEST(ZwidthVerdicts, StableAndUnstablePointPerMethod) {
+  const ZwidthScenario sc = axis_scenario();
+  const ZwidthGains bad{3200.0, 0.1, 12000.0};
+  for (Method m : {Method::kExplicitVc, Method::kPmiVc, Method::kPmiPd}) {
+    const ZwidthGains good =
+        m == Method::kPmiPd ? ZwidthGains{1600.0, 2.0, 3000.0} : ZwidthGains{400.0, 2.0, 1500.0};
+    const ZwidthRun a = run_zwidth_once(m, ZwidthOperator::kForce, good, sc);
+    const ZwidthRun b = run_zwidth_once(m, ZwidthOperator::kForce, bad, sc);
+    std::printf(
+        "[zwidth] %-8s good: stable %d passive %d lambda %.3f/s A %.3g m E_max %.3g J "
+        "(tol %.3g) Z %.1f N/m | bad: stable %d passive %d lambda %.3f/s A %.3g m "
+        "E_max %.3g J (tol %.3g)\n",
+        method_name(m), a.stable, a.passive, a.growth_rate_per_s, a.last_amplitude_m,
+        a.energy_max_j, a.energy_tol_j, a.z_width_n_per_m, b.stable, b.passive, b.growth_rate_per_s,
+        b.last_amplitude_m, b.energy_max_j, b.energy_tol_j);
+    EXPECT_TRUE(a.stable) << method_name(m);
+    EXPECT_TRUE(a.passive) << method_name(m);
+    EXPECT_GE(a.contact_time_s, sc.hold_s - 2 * sc.tick);
+    // At rest the force fed back balances the push: the static stiffness is the series
+    // coupling-wall stiffness (PD: the wall's) within 10 %.
+    const double series = good.k_vc * good.k_tooth / (good.k_vc + good.k_tooth);
+    if (m != Method::kPmiPd) {
+      EXPECT_NEAR(a.static_stiffness_n_per_m, series, 0.1 * series) << method_name(m);
+    }
+    EXPECT_FALSE(b.stable) << method_name(m);
+  }
+}
+
+// The trend of the thesis (Fig. 4.11): the largest stable, passive Z-width under the force
+// operator grows explicit < pmi < pmi-pd on a small grid.
+TEST(ZwidthTrend, OrderingOnSmallGrid) {
+  const ZwidthScenario sc = axis_scenario();
+  ZwidthGrid g;
+  g.k_vc = {400.0, 1600.0, 3200.0};
+  g.b_vc = {2.0};
+  g.k_tooth = {1500.0, 3000.0, 12000.0};
+  const auto sw = run_zwidth_sweep({Method::kExplicitVc, Method::kPmiVc, Method::kPmiPd},
+                                   {ZwidthOperator::kForce}, g, sc, 2);
+  ASSERT_EQ(sw.size(), 3u);
+  for (const ZwidthSweep& s : sw) {
+    ASSERT_GE(s.best, 0) << method_name(s.method);
+    const ZwidthGains& b = s.points[s.best].gains;
+    std::printf("[zwidth] %-8s Z-width %.1f N/m at K_vc %.0f b_vc %.1f K_tooth %.0f\n",
+                method_name(s.method), s.z_width_n_per_m(), b.k_vc, b.b_vc, b.k_tooth);
+  }
+  EXPECT_LT(sw[0].z_width_n_per_m(), sw[1].z_width_n_per_m());
+  EXPECT_LT(sw[1].z_width_n_per_m(), sw[2].z_width_n_per_m());
+  EXPECT_GE(sw[2].z_width_n_per_m(), 3000.0);
+}
+
+// Colgate-Schenkel on the explicit baseline where its assumptions hold: the proxy held by a very
+// stiff, damped wall (K_tooth = 50000 N/m, B_tooth = 60 N s/m: the explicit proxy is stable since
+// (K_vc + K_tooth) T < B_tooth + b_2 and B_tooth T / m_2 < 2), so the device sees a sampled spring
+// K ~ K_vc to an almost fixed point; no coupling damping (B = 0); device damping b_d = 0.5 N s/m:
+// passivity needs K < 2 b_d / T = 1000 N/m. Points at half and twice the bound fall on the
+// predicted sides.
+TEST(ZwidthColgateSchenkel, SeparatesExplicitPoints) {
+  ZwidthScenario sc = axis_scenario();
+  sc.axis.damping = 0.5;
+  sc.b_tooth = 60.0;
+  const double k_max = colgate_schenkel_max_stiffness(sc.axis.damping, 0.0, sc.tick);
+  EXPECT_DOUBLE_EQ(k_max, 1000.0);
+  for (double k_vc : {0.5 * k_max, 2.0 * k_max}) {
+    const ZwidthRun r =
+        run_zwidth_once(Method::kExplicitVc, ZwidthOperator::kForce, {k_vc, 0.0, 50000.0}, sc);
+    std::printf(
+        "[zwidth] CS: K_vc %.0f (bound %.0f): stable %d passive %d lambda %.3f/s A %.3g m "
+        "E_max %.3g J\n",
+        k_vc, k_max, r.stable, r.passive, r.growth_rate_per_s, r.last_amplitude_m, r.energy_max_j);
+    const bool predicted = k_vc < k_max;
+    EXPECT_EQ(r.stable && r.passive, predicted) << "K_vc " << k_vc;
+  }
+}
+
+}  // namespace
+}  // namespace dentsim

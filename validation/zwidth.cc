@@ -1,0 +1,512 @@
+#include "validation/zwidth.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <exception>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "device/closed_loop.h"
+#include "device/mujoco_plant.h"
+#include "device/simulated_phantom.h"
+#include "reference/core/io.h"
+#include "reference/phantom/phantom_model.h"
+#include "reference/rigid_body_device.h"
+#include "reference/tick.h"
+#include "reference/tools.h"
+#include "reference/tooth/collision.h"
+#include "reference/tooth/tooth_contacts.h"
+#include "validation/phantom_mjcf.h"
+
+namespace dentsim {
+
+const char* operator_name(ZwidthOperator op) {
+  switch (op) {
+    case ZwidthOperator::kGrip:
+      return "grip";
+    case ZwidthOperator::kForce:
+      return "force";
+    case ZwidthOperator::kTap:
+      return "tap";
+    case ZwidthOperator::kRelease:
+      return "release";
+  }
+  return "unknown";
+}
+
+ZwidthOperator parse_operator(const std::string& s) {
+  if (s == "grip") return ZwidthOperator::kGrip;
+  if (s == "force") return ZwidthOperator::kForce;
+  if (s == "tap") return ZwidthOperator::kTap;
+  if (s == "release") return ZwidthOperator::kRelease;
+  throw InputError("operator: expected one of grip, force, tap, release, got '" + s + "'");
+}
+
+const char* testbed_name(ZwidthTestbed t) { return t == ZwidthTestbed::kAxis ? "axis" : "phantom"; }
+
+ZwidthTestbed parse_testbed(const std::string& s) {
+  if (s == "axis") return ZwidthTestbed::kAxis;
+  if (s == "phantom") return ZwidthTestbed::kPhantom;
+  throw InputError("testbed: expected axis or phantom, got '" + s + "'");
+}
+
+ZwidthGains ZwidthGrid::at(std::size_t i) const {
+  const std::size_t nt = k_tooth.size(), nk = k_vc.size();
+  ZwidthGains g;
+  g.k_tooth = k_tooth[i % nt];
+  g.k_vc = k_vc[(i / nt) % nk];
+  g.b_vc = b_vc[i / (nt * nk)];
+  return g;
+}
+
+double colgate_schenkel_max_stiffness(double b_device, double b_virtual, double T) {
+  return std::max(0.0, 2.0 * (b_device - b_virtual) / T);  // b > K T / 2 + B
+}
+
+double pmi_coupling_max_stiffness(double b_device, double b_vc, double T_k, double T_km1) {
+  return std::max(0.0, (b_device - b_vc * (1.0 + T_k / T_km1)) / T_k);  // thesis §3.1
+}
+
+namespace {
+
+// The Z-width testbed of one job: a device, the pipeline's (possibly wrong) model of it and
+// access to the ground truth the metrics need.
+class Rig {
+ public:
+  virtual ~Rig() = default;
+  virtual Device& device() = 0;
+  virtual const SixDofDeviceModel& model() const = 0;
+  virtual void set_hand(const ScriptedHand* hand) = 0;
+  virtual Pose true_tip() const = 0;
+};
+
+class AxisRig : public Rig {
+ public:
+  explicit AxisRig(const ZwidthScenario& sc)
+      : dev_(axis_params(sc), Vec3::Zero()),
+        model_(axis_device_model_params(sc.axis.mass * sc.model_mass_scale,
+                                        sc.axis.damping * sc.model_damping_scale)) {}
+  Device& device() override { return dev_; }
+  const SixDofDeviceModel& model() const override { return model_; }
+  void set_hand(const ScriptedHand* hand) override { dev_.set_hand(hand); }
+  Pose true_tip() const override { return dev_.tip_pose(); }
+
+  static AxisDeviceParams axis_params(const ZwidthScenario& sc) {
+    AxisDeviceParams p = sc.axis;
+    p.period = sc.tick;
+    p.jitter_half_width = sc.jitter_half_width;
+    p.seed = sc.seed;
+    return p;
+  }
+
+ private:
+  AxisDevice dev_;
+  RigidBodyDevice model_;
+};
+
+PhantomParams phantom_truth(const ZwidthScenario& sc) {
+  PhantomParams p = default_phantom_params();
+  p.gravity_on = false;  // a gravity-compensated device, as the thesis assumes (2.1)
+  if (sc.phantom_damping.minCoeff() >= 0.0) p.damping_n_m_s_per_rad = sc.phantom_damping;
+  return p;
+}
+
+// What the pipeline believes: every inertia (masses, body inertias, armature) and the damping
+// scaled; the geometry (kinematics) exact.
+PhantomParams phantom_belief(const ZwidthScenario& sc) {
+  PhantomParams p = phantom_truth(sc);
+  const double s = sc.model_mass_scale;
+  for (PhantomBody* b : {&p.base, &p.upper_arm, &p.forearm, &p.crank, &p.parallel_link,
+                         &p.gimbal_yaw, &p.gimbal_pitch, &p.gimbal_roll}) {
+    b->mass_kg *= s;
+    b->inertia_kg_m2 *= s;
+  }
+  p.armature_kg_m2 *= s;
+  p.damping_n_m_s_per_rad *= sc.model_damping_scale;
+  return p;
+}
+
+// The MuJoCo plant of the Phantom (validation/phantom_mjcf.h): MuJoCo numbers the dofs of the
+// generated MJCF in depth-first body order, so tree joint i is dof order[i].
+MujocoPlant phantom_plant(const PhantomParams& p) {
+  MujocoPlant plant;
+  PhantomMjcfOptions o;
+  o.joint_damping = true;
+  o.joint_friction = true;
+  plant.mjcf = phantom_mjcf(p, o);
+  plant.tip_body = phantom_tree_body_name(kGimbalRoll);
+  plant.tip_offset = p.tip_offset_m;
+  const PhantomTreeT<double> tree = phantom_tree<double>(p);
+  std::vector<int> dof_of(kPhantomTreeDof, -1);
+  int next = 0;
+  std::function<void(int)> visit = [&](int i) {
+    dof_of[i] = next++;
+    for (int c = 0; c < kPhantomTreeDof; ++c) {
+      if (tree.parent[c] == i) visit(c);
+    }
+  };
+  for (int i = 0; i < kPhantomTreeDof; ++i) {
+    if (tree.parent[i] < 0) visit(i);
+  }
+  const Eigen::Matrix<double, kPhantomTreeDof, 6> G_tree = phantom_tree_map();
+  plant.G = MatX::Zero(kPhantomTreeDof, 6);
+  for (int i = 0; i < kPhantomTreeDof; ++i) plant.G.row(dof_of[i]) = G_tree.row(i);
+  for (int j = 0; j < 6; ++j) plant.device_dof.push_back(dof_of[phantom_actuated_tree_joint(j)]);
+  return plant;
+}
+
+class PhantomRig : public Rig {
+ public:
+  explicit PhantomRig(const ZwidthScenario& sc)
+      : truth_(phantom_truth(sc)), model_(phantom_belief(sc)) {
+    SimulatedDeviceConfig cfg;
+    cfg.gravity = false;
+    if (sc.jitter_half_width > 0.0) {
+      cfg.jitter.kind = TickJitterKind::kUniform;
+      cfg.jitter.half_width = sc.jitter_half_width;
+    }
+    cfg.jitter.period = sc.tick;
+    cfg.jitter.seed = sc.seed;
+    dev_ = std::make_unique<SimulatedPhantom>(phantom_plant(truth_), cfg, VecX(sc.phantom_q0));
+  }
+  Device& device() override { return *dev_; }
+  const SixDofDeviceModel& model() const override { return model_; }
+  void set_hand(const ScriptedHand* hand) override { dev_->set_hand(hand); }
+  Pose true_tip() const override { return dev_->tip_pose(); }
+
+ private:
+  PhantomParams truth_;
+  PhantomModel model_;
+  std::unique_ptr<SimulatedPhantom> dev_;
+};
+
+std::unique_ptr<Rig> make_rig(const ZwidthScenario& sc) {
+  if (sc.testbed == ZwidthTestbed::kAxis) return std::make_unique<AxisRig>(sc);
+  return std::make_unique<PhantomRig>(sc);
+}
+
+// A slab of enamel voxels, 64^3 grid of voxel size h centred laterally on `centre`, top face
+// (normal +z) at height z_surface, solid below it for half the grid.
+VoxelTooth enamel_slab(const Vec3& centre, double z_surface, double h) {
+  const int n = 64;
+  VoxelGrid g(n, Vec3(centre.x() - 0.5 * n * h, centre.y() - 0.5 * n * h, z_surface - 0.5 * n * h),
+              h);
+  for (int k = 0; k < n / 2; ++k) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) g.set(i, j, k, kEnamel);
+    }
+  }
+  return VoxelTooth(std::move(g));
+}
+
+// Tip-space damping along z and encoder quantum along z of a testbed at its start pose.
+struct TipProperties {
+  double damping = 0.0;  // (J1^T B J1)_zz [N s/m]
+  double mass = 0.0;     // (J1^T M J1)_zz [kg]
+  double quantum = 0.0;  // sum_i |dz/dq_i| Delta_i [m]
+};
+
+TipProperties tip_properties(const ZwidthScenario& sc) {
+  TipProperties tp;
+  if (sc.testbed == ZwidthTestbed::kAxis) {
+    tp.damping = sc.axis.damping;
+    tp.mass = sc.axis.mass;
+    tp.quantum = sc.axis.quantum;
+    return tp;
+  }
+  const PhantomParams p = phantom_truth(sc);
+  const PhantomModel m(p);
+  const VecX q0 = sc.phantom_q0;
+  const Mat6 J1 = m.twist_to_joint(q0);
+  const Mat6 B = p.damping_n_m_s_per_rad.asDiagonal();
+  tp.damping = (J1.transpose() * B * J1)(2, 2);
+  tp.mass = (J1.transpose() * m.mass_matrix(q0) * J1)(2, 2);
+  const Mat6 Jt = m.model().tool_jacobian(q0);
+  const VecX quantum = encoder_quantum(1024, 4, phantom_drive_ratios());
+  for (int i = 0; i < 6; ++i) tp.quantum += std::abs(Jt(2, i)) * quantum(i);
+  return tp;
+}
+
+// Least-squares slope of y against x (0 for fewer than two points).
+double ls_slope(const std::vector<double>& x, const std::vector<double>& y) {
+  const std::size_t n = x.size();
+  if (n < 2) return 0.0;
+  double mx = 0, my = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    mx += x[i];
+    my += y[i];
+  }
+  mx /= n;
+  my /= n;
+  double sxy = 0, sxx = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    sxy += (x[i] - mx) * (y[i] - my);
+    sxx += (x[i] - mx) * (x[i] - mx);
+  }
+  return sxx > 0 ? sxy / sxx : 0.0;
+}
+
+}  // namespace
+
+double testbed_tip_damping(const ZwidthScenario& sc) { return tip_properties(sc).damping; }
+double testbed_tip_quantum(const ZwidthScenario& sc) { return tip_properties(sc).quantum; }
+
+ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& gains,
+                          const ZwidthScenario& sc, double approach_speed, ZwidthTrace* trace) {
+  if (!(sc.hold_s > sc.settle_s + 2.0 * sc.window_s) || !(sc.window_s > 0.0)) {
+    throw InputError("zwidth scenario: hold_s must exceed settle_s + 2 window_s");
+  }
+  if (!(gains.k_vc > 0.0) || !(gains.k_tooth > 0.0) || gains.b_vc < 0.0) {
+    throw InputError("zwidth gains: expected k_vc > 0, k_tooth > 0, b_vc >= 0");
+  }
+  const TipProperties tp = tip_properties(sc);
+  std::unique_ptr<Rig> rig = make_rig(sc);
+  Device& dev = rig->device();
+  const SixDofDeviceModel& model = rig->model();
+
+  // The wall below the start tip: surface approach_gap below the tip sphere.
+  const Pose tip0 = rig->true_tip();
+  const double rho = sc.tip_radius_m;
+  const double z_s = tip0.x.z() - rho - sc.approach_gap_m;
+  const VoxelTooth slab = enamel_slab(tip0.x, z_s, sc.voxel_size_m);
+  ToothContactProvider wall(slab, ToolTip{rho, Vec3::Zero()}, gains.k_tooth, sc.b_tooth);
+
+  // The operator.
+  std::vector<HandKeyframe> frames;
+  HandImpedance z = sc.hand;
+  const double speed = op == ZwidthOperator::kTap ? approach_speed : sc.grip_speed_m_s;
+  if (op == ZwidthOperator::kForce) {
+    z = HandImpedance{0, 0, 0, 0, 0, 0};
+    HandKeyframe a, b;
+    a.t = 0.0;
+    a.x_ref = tip0.x;
+    b.t = sc.force_ramp_s;
+    b.x_ref = tip0.x;
+    b.wrench_ff(2) = -sc.push_force_n;
+    frames = {a, b};
+  } else {
+    if (!(speed > 0.0) || !(z.k_lin > 0.0)) {
+      throw InputError("zwidth operator " + std::string(operator_name(op)) +
+                       ": expected approach speed > 0 and hand stiffness > 0");
+    }
+    const double z_target = z_s + rho - sc.push_force_n / z.k_lin;
+    HandKeyframe a, b;
+    a.t = 0.0;
+    a.x_ref = tip0.x;
+    b.t = (tip0.x.z() - z_target) / speed;
+    b.x_ref = Vec3(tip0.x.x(), tip0.x.y(), z_target);
+    frames = {a, b};
+  }
+  const ScriptedHand hand(z, frames, tip0.R);
+  rig->set_hand(&hand);
+
+  // The pipeline.
+  PipelineConfig pc;
+  pc.method = method;
+  pc.proxy = sc.proxy;
+  if (sc.proxy_damping_rule) {
+    pc.proxy.damping_lin = std::max(pc.proxy.damping_lin, 0.5 * gains.k_vc * sc.tick);
+  }
+  pc.coupling = CouplingGains{gains.k_vc, sc.k_vc_ang, gains.b_vc, sc.b_vc_ang};
+  pc.torque_limit = dev.limits().tau_max;
+  DeviceSample s0 = dev.make_sample();
+  dev.read(s0);
+  if (method == Method::kPmiPd) {
+    pc.observer_gain = VecX::Constant(6, sc.observer_gain);
+    const Mat6 J1 = model.twist_to_joint(s0.q);
+    const Mat6 M1 = J1.transpose() * model.mass_matrix(s0.q) * J1;  // (2.2)
+    pc.tool = tool_preset(sc.tool, M1 + sc.proxy.M());              // floor M_L at the start
+  }
+  ReferencePipeline pipeline(model, pc);
+  ClosedLoop loop(dev, pipeline, wall);
+  loop.start();
+
+  ZwidthRun run;
+  run.approach_speed_m_s = op == ZwidthOperator::kTap ? approach_speed : 0.0;
+  run.amplitude_bound_m = sc.amplitude_bound_quanta * tp.quantum;
+  const int n = dev.dof();
+  const VecX quantum = dev.capabilities().encoder_quantum;
+  VecX tau_max = VecX::Zero(n), tau_var = VecX::Zero(n), tau_prev = VecX::Zero(n);
+
+  double t_first = -1.0;
+  bool released = false;
+  const double cap = 2.0 + sc.hold_s + (tip0.x.z() - z_s) / std::max(speed, 1e-3);
+  std::vector<double> ts, ps;  // penetration after first contact + settle
+  double sum_f = 0, sum_p = 0;
+  long n_tail = 0;
+  DeviceSample prev = loop.sample();
+  for (;;) {
+    const TickResult& r = loop.step();
+    const DeviceSample& s = loop.sample();
+    const double t = s.t;
+    const Pose tip = rig->true_tip();
+    if (!tip.x.allFinite() || !pipeline.proxy().pose.x.allFinite() || !r.tau.allFinite()) {
+      run.finite = false;
+      break;
+    }
+    run.faults |= dev.faults();
+    if (run.faults != kFaultNone) break;
+    run.saturated = run.saturated || r.saturated;
+    const VecX& tau = dev.applied_torque();
+    for (int i = 0; i < n; ++i) {
+      tau_max(i) = std::max(tau_max(i), std::abs(tau(i)));
+      tau_var(i) += std::abs(tau(i) - tau_prev(i));
+    }
+    tau_prev = tau;
+    const Mat6 J1 = model.twist_to_joint(prev.q);
+    // The force fed back: the motors' wrench T1 = J1^T tau along the wall normal n = +z.
+    const double force = std::max(0.0, Vec6(J1.transpose() * tau)(2));
+    const double p = rho - (tip.x.z() - z_s);
+    const double E = loop.energy_virtual_j();
+    run.energy_max_j = std::max(run.energy_max_j, E);
+    if (t_first < 0.0 && !r.contacts.empty()) t_first = t;
+    if (t_first >= 0.0) {
+      run.contact = true;
+      run.max_force_n = std::max(run.max_force_n, force);
+      run.max_penetration_m = std::max(run.max_penetration_m, p);
+      if (t >= t_first + sc.settle_s) {
+        ts.push_back(t);
+        ps.push_back(p);
+      }
+      if (t >= t_first + sc.hold_s - 1.0) {
+        sum_f += force;
+        sum_p += p;
+        ++n_tail;
+      }
+      if (op == ZwidthOperator::kRelease && !released && t >= t_first + sc.release_after_s) {
+        rig->set_hand(nullptr);
+        released = true;
+      }
+    }
+    if (trace) {
+      trace->t.push_back(t);
+      trace->penetration_m.push_back(p);
+      trace->force_n.push_back(force);
+      trace->energy_j.push_back(E);
+    }
+    prev = s;
+    if (t_first >= 0.0 && t >= t_first + sc.hold_s) break;
+    if (t >= cap) break;
+  }
+  rig->set_hand(nullptr);
+  run.energy_final_j = loop.energy_virtual_j();
+  run.energy_tol_j = 1e-9;
+  for (int i = 0; i < n; ++i) run.energy_tol_j += quantum(i) * (2.0 * tau_max(i) + tau_var(i));
+  run.contact_time_s = t_first >= 0.0 ? loop.sample().t - t_first : 0.0;
+  if (run.max_penetration_m > 0.0) {
+    run.z_width_n_per_m = run.max_force_n / run.max_penetration_m;
+  }
+  if (n_tail > 0 && sum_p > 0.0) run.static_stiffness_n_per_m = sum_f / sum_p;
+
+  // Envelope: peak-to-peak per window, growth rate of ln(A + Delta_n).
+  std::vector<double> wc, wl;
+  if (!ts.empty()) {
+    std::size_t i = 0;
+    while (i < ts.size()) {
+      const double w0 = ts[i];
+      double lo = ps[i], hi = ps[i];
+      std::size_t j = i;
+      while (j < ts.size() && ts[j] < w0 + sc.window_s) {
+        lo = std::min(lo, ps[j]);
+        hi = std::max(hi, ps[j]);
+        ++j;
+      }
+      if (ts[j - 1] - w0 >= 0.9 * sc.window_s - 1e-12) {  // full windows only
+        wc.push_back(w0 + 0.5 * sc.window_s);
+        wl.push_back(std::log(hi - lo + tp.quantum + 1e-12));
+        run.last_amplitude_m = hi - lo;
+      }
+      i = j;
+    }
+  }
+  run.growth_rate_per_s = ls_slope(wc, wl);
+  run.growth_limit_per_s = std::log(2.0) / (sc.hold_s - sc.settle_s);
+  const bool held =
+      run.contact && run.contact_time_s >= sc.hold_s - 2.0 * sc.tick && wc.size() >= 2;
+  run.stable = run.finite && run.faults == kFaultNone && held &&
+               run.growth_rate_per_s <= run.growth_limit_per_s &&
+               run.last_amplitude_m <= run.amplitude_bound_m;
+  run.passive = run.finite && run.faults == kFaultNone && run.energy_max_j <= run.energy_tol_j;
+  return run;
+}
+
+ZwidthPoint run_zwidth_point(Method method, ZwidthOperator op, const ZwidthGains& gains,
+                             const ZwidthScenario& sc) {
+  ZwidthPoint pt;
+  pt.gains = gains;
+  if (op == ZwidthOperator::kTap) {
+    for (double v : sc.tap_speeds_m_s) pt.runs.push_back(run_zwidth_once(method, op, gains, sc, v));
+  } else {
+    pt.runs.push_back(run_zwidth_once(method, op, gains, sc));
+  }
+  pt.stable = !pt.runs.empty();
+  pt.passive = !pt.runs.empty();
+  pt.z_width_n_per_m = pt.runs.empty() ? 0.0 : pt.runs.front().z_width_n_per_m;
+  for (const ZwidthRun& r : pt.runs) {
+    pt.stable = pt.stable && r.stable;
+    pt.passive = pt.passive && r.passive;
+    pt.z_width_n_per_m = std::min(pt.z_width_n_per_m, r.z_width_n_per_m);
+  }
+  return pt;
+}
+
+std::vector<ZwidthSweep> run_zwidth_sweep(const std::vector<Method>& methods,
+                                          const std::vector<ZwidthOperator>& ops,
+                                          const ZwidthGrid& grid, const ZwidthScenario& sc,
+                                          int threads,
+                                          const std::function<void(int, int)>& progress) {
+  std::vector<ZwidthSweep> out;
+  for (Method m : methods) {
+    for (ZwidthOperator op : ops) {
+      ZwidthSweep s;
+      s.method = m;
+      s.op = op;
+      s.points.resize(grid.size());
+      out.push_back(std::move(s));
+    }
+  }
+  const int total = static_cast<int>(out.size() * grid.size());
+  std::atomic<int> next{0};
+  std::mutex mu;
+  int done = 0;
+  std::exception_ptr error;
+  auto worker = [&] {
+    for (;;) {
+      const int job = next.fetch_add(1);
+      if (job >= total) return;
+      ZwidthSweep& sw = out[job / grid.size()];
+      const std::size_t i = job % grid.size();
+      try {
+        sw.points[i] = run_zwidth_point(sw.method, sw.op, grid.at(i), sc);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mu);
+        if (!error) error = std::current_exception();
+        next.store(total);
+        return;
+      }
+      std::lock_guard<std::mutex> lock(mu);
+      ++done;
+      if (progress) progress(done, total);
+    }
+  };
+  const int nt = std::max(1, threads);
+  std::vector<std::thread> pool;
+  for (int i = 0; i < nt; ++i) pool.emplace_back(worker);
+  for (std::thread& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+  for (ZwidthSweep& sw : out) {
+    for (std::size_t i = 0; i < sw.points.size(); ++i) {
+      const ZwidthPoint& p = sw.points[i];
+      if (p.stable && p.passive &&
+          (sw.best < 0 || p.z_width_n_per_m > sw.points[sw.best].z_width_n_per_m)) {
+        sw.best = static_cast<int>(i);
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace dentsim
