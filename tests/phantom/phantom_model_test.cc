@@ -6,6 +6,7 @@
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
 
+#include <Eigen/SVD>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -222,6 +223,28 @@ TEST(PhantomModel, JacobianMatchesFiniteDifferencesOfFk) {
   std::printf("J_t vs fd %.3e, |J1 J_t - I| %.3e\n", worst, worst_inv);
   EXPECT_LT(worst, 1e-8);
   EXPECT_LT(worst_inv, 1e-10);
+}
+
+// The default joint-limit box keeps J1 regular (docs/phantom.md): the smallest singular value of
+// J_t (mixed units: m/rad and rad/rad; measured 0.0199) stays away from 0 at 2000 random states
+// and the 64 box corners; it vanishes at a stretched elbow or gimbal lock.
+TEST(PhantomModel, DefaultWorkspaceIsFreeOfSingularities) {
+  const PhantomParams p = default_phantom_params();
+  const PhantomModelD model(p);
+  RandomStates rs(p);
+  double smin = 1e300;
+  auto check = [&](const Vec6& q) {
+    Eigen::JacobiSVD<Mat6> svd(model.tool_jacobian(q));
+    smin = std::min(smin, svd.singularValues()(5));
+  };
+  for (int s = 0; s < 2000; ++s) check(rs.q());
+  for (int mask = 0; mask < 64; ++mask) {
+    Vec6 q;
+    for (int j = 0; j < 6; ++j) q(j) = (mask >> j) & 1 ? p.q_max_rad(j) : p.q_min_rad(j);
+    check(q);
+  }
+  std::printf("smallest singular value of J_t over the box: %.4f\n", smin);
+  EXPECT_GT(smin, 0.01);
 }
 
 // Known pose: at q = 0 the gimbal centre is at (l1, 0, -l2) (PHANTOM.md fk) and the arm fk
