@@ -34,6 +34,7 @@ struct ZwidthOptions {
   double tick_ms = 1.0;
   double push_n = 1.5;
   bool sensitivity = false;
+  std::vector<double> k_vc, b_vc, k_tooth;  // grid overrides (every operator)
 };
 
 bool show_progress() { return isatty(2) && std::getenv("CI") == nullptr; }
@@ -242,8 +243,19 @@ void run_zwidth(const ZwidthOptions& o) {
   const int threads = o.threads > 0
                           ? o.threads
                           : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  const ZwidthGrid grid = o.quick ? quick_grid() : full_grid();
-  const ZwidthGrid small = o.quick ? quick_grid() : other_grid();
+  ZwidthGrid grid = o.quick ? quick_grid() : full_grid();
+  ZwidthGrid small = o.quick ? quick_grid() : other_grid();
+  for (const auto* v : {&o.k_vc, &o.b_vc, &o.k_tooth}) {
+    for (double x : *v) {
+      if (!(x >= 0.0) || !std::isfinite(x)) {
+        throw InputError("--k-vc/--b-vc/--k-tooth: expected finite values >= 0, got " +
+                         std::to_string(x));
+      }
+    }
+  }
+  if (!o.k_vc.empty()) grid.k_vc = small.k_vc = o.k_vc;
+  if (!o.b_vc.empty()) grid.b_vc = small.b_vc = o.b_vc;
+  if (!o.k_tooth.empty()) grid.k_tooth = small.k_tooth = o.k_tooth;
   const double b_d = testbed_tip_damping(sc);
   const double delta = testbed_tip_quantum(sc);
 
@@ -417,6 +429,9 @@ void setup_zwidth(CLI::App& app) {
   sub->add_option("--hold", o->hold_s, "Contact time per run [s] (>= 5)")->capture_default_str();
   sub->add_option("--tick-ms", o->tick_ms, "Servo tick [ms]")->capture_default_str();
   sub->add_option("--push", o->push_n, "Operator force [N]")->capture_default_str();
+  sub->add_option("--k-vc", o->k_vc, "Override the grid's K_vc values [N/m]");
+  sub->add_option("--b-vc", o->b_vc, "Override the grid's b_vc values [N s/m]");
+  sub->add_option("--k-tooth", o->k_tooth, "Override the grid's K_tooth values [N/m]");
   sub->add_flag("--sensitivity", o->sensitivity,
                 "Re-run each method's best point with hand impedance low/high, tick jitter, "
                 "observer gain L, +-20 % model error and 4 kHz");
