@@ -23,7 +23,9 @@
 //   - lag: on the joint with the largest step in f_true, 1/L_fit, L_fit the gain of the
 //     first-order lag of f_true that best fits f_hat over [t_step, t_step + settle_window)
 //     (least squares; the ideal observer L/(s+L) gives 1/L whatever shape f_true has);
-//   - moving: mean signed error (bias) and RMS error per joint over [t_move + 1/4 period, t_end).
+//   - moving, over [t_move + 1/4 period, t_end): RMS error f_hat - f_true per joint, and the
+//     error beyond the observer's own lag, f_hat - LPF_L(f_true) (LPF_L the sampled first-order
+//     lag an ideal observer would produce): its mean (the bias a model error causes) and RMS.
 // Unmodelled by the observer by construction: the joint stiction (MuJoCo frictionloss holds the
 // joints at rest with any torque up to f_c, which no model can predict) and the hand's own mass
 // (it moves with the tool, so during acceleration the hand's spring-damper wrench differs from its
@@ -87,11 +89,14 @@ struct ObserverRun {
   double steady_error_max = 0.0;  // max |steady_error| [N m]
   int lag_joint = 0;              // joint (0-based) the lag is measured on
   double lag_s = 0.0;             // measured lag [s]
-  VecX moving_bias;               // mean f_hat - f_true per joint, moving phase [N m]
-  VecX moving_rms;                // RMS error per joint, moving phase [N m]
-  VecX moving_rms_beyond_lag;     // RMS of f_hat - (first-order lag L of f_true), moving [N m]
-  VecX moving_truth_rms;          // RMS of f_true per joint, moving phase [N m] (signal size)
-  VecX step_size;                 // f_true(after) - f_true(before) per joint [N m]
+  VecX moving_bias;  // mean of f_hat - (first-order lag L of f_true) per joint, moving [N m]
+  // mean of sign(qd_j) (f_hat - LPF_L(f_true))_j: a damping error dB biases by +dB qd, i.e.
+  // along the motion, which a symmetric motion averages out of the plain mean [N m]
+  VecX moving_bias_along_motion;
+  VecX moving_rms;             // RMS error per joint, moving phase [N m]
+  VecX moving_rms_beyond_lag;  // RMS of f_hat - (first-order lag L of f_true), moving [N m]
+  VecX moving_truth_rms;       // RMS of f_true per joint, moving phase [N m] (signal size)
+  VecX step_size;              // f_true(after) - f_true(before) per joint [N m]
 };
 
 struct ObserverReport {

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 
 #include "reference/core/io.h"
@@ -39,6 +40,12 @@ TEST(ObserverReport, IdealSensingTrueModelIsExactAtRestAndLagsOneOverL) {
   EXPECT_LT(t.moving_rms_beyond_lag.maxCoeff(), 0.05 * t.moving_truth_rms.maxCoeff());
   // A 20 % error in inertia and damping is visible: several times the true model's error.
   EXPECT_GT(p.moving_rms_beyond_lag.maxCoeff(), 3.0 * t.moving_rms_beyond_lag.maxCoeff());
+  // Its bias goes along the motion (a damping error dB biases by +dB qd): positive on the moving
+  // arm joints, and an order of magnitude above the true model's.
+  for (int j : {1, 2}) {
+    EXPECT_GT(p.moving_bias_along_motion[j], 1e-5) << "joint " << j + 1;
+    EXPECT_GT(p.moving_bias_along_motion[j], 10.0 * std::abs(t.moving_bias_along_motion[j]));
+  }
   // ... but not at rest, where inertia and damping do not enter (3.7).
   EXPECT_LT(p.steady_error_max, 1e-3 * step);
 }
@@ -55,6 +62,15 @@ TEST(ObserverReport, RealSensingWithStictionSteadyErrorBelowCoulombBound) {
       EXPECT_LE(std::abs(run.steady_error[j]), params.coulomb_n_m[j] + 2e-4)
           << run.model << " model, joint " << j + 1;
     }
+  }
+  // With stiction on, the model's friction includes Coulomb f_c: the 20 % error then biases the
+  // estimate along the motion by about 0.2 f_c on the moving arm joints (measured, within 40 %).
+  const ObserverRun& p = r.runs[1];
+  for (int j : {1, 2}) {
+    std::printf("joint %d: bias along motion %.3f mN m, 0.2 f_c = %.3f mN m\n", j + 1,
+                1e3 * p.moving_bias_along_motion[j], 1e3 * 0.2 * params.coulomb_n_m[j]);
+    EXPECT_NEAR(p.moving_bias_along_motion[j], 0.2 * params.coulomb_n_m[j],
+                0.4 * 0.2 * params.coulomb_n_m[j]);
   }
   // The lag stays of the order of 1/L (velocity estimation and the hand's mass distort it).
   EXPECT_GT(r.runs[0].lag_s, 0.3 * r.expected_lag_s);
