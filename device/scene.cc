@@ -19,7 +19,7 @@ namespace {
 constexpr const char* kProbeScene = R"json({
   "dentsim_scene": 1,
   "name": "probe",
-  "description": "Explorer probe: approach the molar, slide across the occlusal surface pressing lightly, retract.",
+  "description": "Explorer probe: approach the molar, slide along the lingual cusp ridge pressing lightly, retract.",
   "duration_s": 5.0,
   "tick_hz": 1000,
   "tooth": {"source": "procedural", "resolution": 128, "k_tooth_n_per_m": 3000, "b_tooth_n_s_per_m": 5.0,
@@ -30,11 +30,11 @@ constexpr const char* kProbeScene = R"json({
              "b_vc_ang_n_m_s_per_rad": 0.001, "observer_gain_per_s": 30, "friction_mu": 0.2},
   "proxy": {"mass_kg": 0.05, "inertia_kg_m2": 1e-5, "damping_n_s_per_m": 0.0, "damping_ang_n_m_s_per_rad": 0.0},
   "hand": {"script": [
-    {"t_s": 0.0, "offset_mm": [0, 0, 6],    "force_n": [0, 0, 0],    "phase": "approach"},
-    {"t_s": 1.0, "offset_mm": [-2, 0, 0.5], "force_n": [0, 0, -0.3], "phase": "approach"},
-    {"t_s": 1.5, "offset_mm": [-2, 0, -0.5], "force_n": [0, 0, -0.8], "phase": "probe"},
-    {"t_s": 3.5, "offset_mm": [2, 0, -0.5], "force_n": [0, 0, -0.8], "phase": "probe"},
-    {"t_s": 4.0, "offset_mm": [2, 0, 6],    "force_n": [0, 0, 0],    "phase": "retract"}
+    {"t_s": 0.0, "offset_mm": [0, 0, 6],     "force_n": [0, 0, 0],    "phase": "approach"},
+    {"t_s": 1.0, "offset_mm": [-2, 2.5, 2],  "force_n": [0, 0, -0.3], "phase": "approach"},
+    {"t_s": 1.5, "offset_mm": [-2, 2.5, 1],  "force_n": [0, 0, -0.5], "phase": "probe"},
+    {"t_s": 3.5, "offset_mm": [2, 2.5, 1],   "force_n": [0, 0, -0.5], "phase": "probe"},
+    {"t_s": 4.0, "offset_mm": [2, 2.5, 6],   "force_n": [0, 0, 0],    "phase": "retract"}
   ]}
 })json";
 
@@ -42,7 +42,7 @@ constexpr const char* kDrillScene = R"json({
   "dentsim_scene": 1,
   "name": "drill",
   "description": "High-speed handpiece: approach the molar, drill a cavity along a short occlusal path, retract.",
-  "duration_s": 6.0,
+  "duration_s": 5.0,
   "tick_hz": 1000,
   "tooth": {"source": "procedural", "resolution": 128, "k_tooth_n_per_m": 3000, "b_tooth_n_s_per_m": 5.0,
             "anchor_offset_mm": [0, 0, -6]},
@@ -54,9 +54,9 @@ constexpr const char* kDrillScene = R"json({
   "hand": {"script": [
     {"t_s": 0.0, "offset_mm": [0, 0, 6],    "force_n": [0, 0, 0],    "phase": "approach"},
     {"t_s": 1.0, "offset_mm": [-1, 0, 0.5], "force_n": [0, 0, -0.3], "phase": "approach"},
-    {"t_s": 1.5, "offset_mm": [-1, 0, -0.3], "force_n": [0, 0, -0.8], "phase": "drill"},
-    {"t_s": 4.5, "offset_mm": [1, 0, -0.8],  "force_n": [0, 0, -0.8], "phase": "drill"},
-    {"t_s": 5.2, "offset_mm": [1, 0, 6],    "force_n": [0, 0, 0],    "phase": "retract"}
+    {"t_s": 1.5, "offset_mm": [-1, 0, -0.3], "force_n": [0, 0, -0.4], "phase": "drill"},
+    {"t_s": 3.5, "offset_mm": [1, 0, -0.6],  "force_n": [0, 0, -0.4], "phase": "drill"},
+    {"t_s": 4.2, "offset_mm": [1, 0, 6],     "force_n": [0, 0, 0],    "phase": "retract"}
   ]}
 })json";
 

@@ -23,7 +23,8 @@
 //   on the device, from the simulator's true hand torques and joint motion). The rendering is
 //   passive toward the hand when W_h(t) >= 0 at all times: it never gave back more energy than
 //   the hand put in (Hannaford & Ryu's time-domain passivity observer, applied at the handle);
-// - timing: wall-clock time of every tick stage and of the whole tick (pipeline + drilling) [us];
+// - timing: wall-clock time of every tick stage, of the whole servo tick (the pipeline's stages
+//   + drilling) and, apart, of the simulated device's physics per tick [us];
 // - faults: the device's latched faults (a fault stops the run: the device is in safe stop).
 #pragma once
 
@@ -78,7 +79,7 @@ struct RunResult {
   double hand_work_min_j = 0.0;             // min over the run of W_h(t) (<= 0)
   std::array<double, 4> removed_volume_mm3{};  // per Material id (0 unused)
   double removed_volume_total_mm3 = 0.0;
-  std::vector<std::pair<std::string, StageStats>> timing;  // stages, then "tick"
+  std::vector<std::pair<std::string, StageStats>> timing;  // stages, "tick", "device_simulation"
   std::vector<std::string> faults;
   double observer_rms_error_n = 0.0;        // |F1_hat - F_hand| (force part), RMS over the run
   double simulated_s = 0.0;
