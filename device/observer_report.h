@@ -12,9 +12,12 @@
 //   - from t_move to t_end the hand's reference moves back and forth along x (triangle wave,
 //     amplitude move_amplitude, period move_period): the joints move, so inertia and damping
 //     matter.
-// Ground truth: the hand's joint torques G^T J^T F_hand, averaged over each tick (the simulated
-// device's hand_joint_torque()). The observer's f_hat_k (after the sample at t_k) is compared with
-// the truth averaged over the tick that ended at t_k.
+// Ground truth: the joint torques of the hand-tool contact wrench (spring-damper wrench minus
+// the hand's own inertial reaction, its mass riding on the tip), averaged over each tick: the
+// simulated device's hand_joint_torque(). The observer's f_hat_k (after the sample at t_k) is
+// compared with the truth averaged over the tick that ended at t_k. The true model is the
+// analytic PhantomModel of the same model file (without Coulomb friction when the simulated
+// device has none).
 // Measures per model:
 //   - steady: median signed error f_hat - f_true per joint over [t_move - settle_window, t_move)
 //     (median: with quantised encoders the hold settles into a limit cycle one quantum wide whose
@@ -26,10 +29,11 @@
 //   - moving, over [t_move + 1/4 period, t_end): RMS error f_hat - f_true per joint, and the
 //     error beyond the observer's own lag, f_hat - LPF_L(f_true) (LPF_L the sampled first-order
 //     lag an ideal observer would produce): its mean (the bias a model error causes) and RMS.
-// Unmodelled by the observer by construction: the joint stiction (MuJoCo frictionloss holds the
-// joints at rest with any torque up to f_c, which no model can predict) and the hand's own mass
-// (it moves with the tool, so during acceleration the hand's spring-damper wrench differs from its
-// net wrench by m_h a).
+//     A damping error dB biases by +dB qd, i.e. along the motion: the mean of
+//     sign(qd) (f_hat - LPF_L(f_true)) measures it where a symmetric motion averages the plain
+//     mean out.
+// Invisible to any model: the joint stiction (MuJoCo frictionloss holds a joint at rest with any
+// torque up to f_c), which bounds the steady error when the device has friction.
 #pragma once
 
 #include <string>

@@ -12,11 +12,13 @@
 // the plant, not of F. Together: Z_h(s) = m_h s + B_h + K_h / s about the reference.
 //
 // Defaults (docs/simulated_device.md): translational m_h = 0.554 kg, B_h = 6.45 N s/m,
-// K_h = 135 N/m, the mass-damper-spring fit of a human arm holding a haptic handle reported in
-// van Beek, Bergmann Tiest, Kappers et al. (Sci. Rep. 5:18004, 2015, Fig. 3 caption); the
-// rotational values are an assumption of ours (no published pen-grasp value at hand), chosen
-// so that the rotational corner frequency sqrt(k_hw/J_h) is comparable to the translational one.
-// Stylus-grasp models of the same order: Fu & Cavusoglu, IEEE Trans. SMC-B (Phantom 1.5A).
+// K_h = 135 N/m, the mass-damper-spring fit of a human arm holding a haptic device reported in
+// "Haptic perception of force magnitude and its relation to postural arm dynamics in 3D",
+// Sci. Rep. 5:18004 (2015), Fig. 3 caption (the example trial). The rotational values are an
+// assumption of ours (no published pen-grasp value at hand), chosen so that the rotational corner
+// frequency sqrt(k_hw/J_h) = 50 rad/s is comparable to the translational one. Stylus-grasp
+// models on a Phantom Premium 1.5A: Fu & Cavusoglu, "Human arm-and-hand dynamics model with
+// variability analyses for a stylus-based haptic interface", IEEE Trans. SMC-B.
 #pragma once
 
 #include <vector>

@@ -51,7 +51,7 @@ TEST(ScriptedHand, SpringForceIsKTimesOffsetAtRest) {
   const Vec6 F = hand.wrench(tip, Vec6::Zero(), 1.0);
   EXPECT_LT((F.head<3>() - z.k_lin * (p.x - tip.x)).norm(), 1e-15);
   EXPECT_EQ(F.tail<3>(), Vec3::Zero());
-  // Literature defaults (van Beek et al. 2015): 135 N/m, 6.45 N s/m, 0.554 kg.
+  // Literature defaults (Sci. Rep. 5:18004, 2015, Fig. 3): 135 N/m, 6.45 N s/m, 0.554 kg.
   EXPECT_EQ(z.k_lin, 135.0);
   EXPECT_EQ(z.b_lin, 6.45);
   EXPECT_EQ(z.mass, 0.554);
