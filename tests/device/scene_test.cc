@@ -64,7 +64,7 @@ TEST(Scene, BadFieldsAreNamed) {
             std::string::npos);
   EXPECT_NE(error_of("\"type\": \"simulated-phantom\"", "\"type\": \"omni\"").find("device.type"),
             std::string::npos);
-  EXPECT_NE(error_of("\"duration_s\": 6.0", "\"duration_s\": \"long\"")
+  EXPECT_NE(error_of("\"duration_s\": 5.0", "\"duration_s\": \"long\"")
                 .find("duration_s: expected a number"),
             std::string::npos);
 }
