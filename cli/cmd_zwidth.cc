@@ -75,6 +75,7 @@ nlohmann::json run_json(const ZwidthRun& r) {
           {"z_width_n_per_m", r.z_width_n_per_m},
           {"static_stiffness_n_per_m", r.static_stiffness_n_per_m},
           {"contact_time_s", r.contact_time_s},
+          {"proxy_tunnelled", r.proxy_tunnelled},
           {"stable", r.stable},
           {"passive", r.passive}};
 }

@@ -361,6 +361,7 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
     const double force = std::max(0.0, Vec6(J1.transpose() * tau)(2));
     const double p = rho - (tip.x.z() - z_s);
     const double E = loop.energy_virtual_j();
+    if (rho - (pipeline.proxy().pose.x.z() - z_s) >= 2.0 * rho) run.proxy_tunnelled = true;
     run.energy_max_j = std::max(run.energy_max_j, E);
     if (t_first < 0.0 && !r.contacts.empty()) t_first = t;
     if (t_first >= 0.0) {

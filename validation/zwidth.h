@@ -141,6 +141,10 @@ struct ZwidthRun {
   double z_width_n_per_m = 0.0;           // max f / max p
   double static_stiffness_n_per_m = 0.0;  // mean f / mean p over the last second (0 if no contact)
   double contact_time_s = 0.0;
+  // The proxy went deeper than 2 rho into the slab at some tick: past the depth the voxel contact
+  // can render (reference/tooth/collision.h), it falls through (diagnostic; such a run is
+  // unstable).
+  bool proxy_tunnelled = false;
   bool stable = false;
   bool passive = false;
 };

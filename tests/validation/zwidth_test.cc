@@ -90,10 +90,10 @@ TEST(ZwidthVerdicts, StableAndUnstablePointPerMethod) {
     std::printf(
         "[zwidth] %-8s good: stable %d passive %d lambda %.3f/s A %.3g m E_max %.3g J "
         "(tol %.3g) Z %.1f N/m | bad: stable %d passive %d lambda %.3f/s A %.3g m "
-        "E_max %.3g J (tol %.3g)\n",
+        "E_max %.3g J (tol %.3g) tunnelled %d\n",
         method_name(m), a.stable, a.passive, a.growth_rate_per_s, a.last_amplitude_m,
         a.energy_max_j, a.energy_tol_j, a.z_width_n_per_m, b.stable, b.passive, b.growth_rate_per_s,
-        b.last_amplitude_m, b.energy_max_j, b.energy_tol_j);
+        b.last_amplitude_m, b.energy_max_j, b.energy_tol_j, static_cast<int>(b.proxy_tunnelled));
     EXPECT_TRUE(a.stable) << method_name(m);
     EXPECT_TRUE(a.passive) << method_name(m);
     EXPECT_GE(a.contact_time_s, sc.hold_s - 2 * sc.tick);
