@@ -68,19 +68,20 @@ TEST(SimulatedPhantomStress, DeviceIsPassiveUnderRandomTorques) {
     EXPECT_LE(d.worst_excess, 1e-9);
     EXPECT_GT(d.total_dissipated, 0.01 * d.total_work);
     // + Coulomb friction (MuJoCo frictionloss, a soft constraint solved per step): dissipative
-    // overall, but a tick can give back up to ~2e-7 J (measured) of the constraint's regularised
-    // response, so the per-tick bound is looser.
+    // overall, but a tick can give back up to ~2e-7 J (short form) / 1.3e-6 J (long form,
+    // measured) of the constraint's regularised response, so the per-tick bound is looser.
     const Balance f = run(true, true, seed, ticks);
     std::printf(
         "seed %u, damping+friction: max(dE - W) = %.3e J, dissipated %.4e J of |W| %.4e J\n", seed,
         f.worst_excess, f.total_dissipated, f.total_work);
-    EXPECT_LE(f.worst_excess, 1e-6);
+    EXPECT_LE(f.worst_excess, 5e-6);
     EXPECT_GT(f.total_dissipated, d.total_dissipated * 0.5);
-    // Lossless: the motors' work is the energy change (RK4 error only).
+    // Lossless: the motors' work is the energy change up to RK4's error, which grows with the
+    // speed the undamped arm spins up to (long form: 3e-5 of the work, measured).
     const Balance n = run(false, false, seed, ticks);
     std::printf("seed %u, lossless: max(dE - W) = %.3e J, sum(W - dE) = %.3e J of |W| %.4e J\n",
                 seed, n.worst_excess, n.total_dissipated, n.total_work);
-    EXPECT_LT(std::abs(n.total_dissipated), 1e-6 * n.total_work + 1e-9);
+    EXPECT_LT(std::abs(n.total_dissipated), 1e-4 * n.total_work);
   }
 }
 
