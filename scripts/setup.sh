@@ -5,7 +5,7 @@ set -euo pipefail
 
 PACKAGES=(
   build-essential cmake ccache pkg-config
-  libmujoco-dev libeigen3-dev libceres-dev libgtest-dev libgmock-dev libbenchmark-dev
+  libmujoco-dev libqhull-dev libeigen3-dev libceres-dev libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev libfmt-dev libpng-dev libcairo2-dev
 )
 
