@@ -69,13 +69,16 @@ std::string csv_of(const RunResult& r) {
   s.precision(9);
   s << "t_s,phase,contacts,contact_force_n,device_force_n,penetration_m,device_penetration_m,"
        "proxy_x_m,proxy_y_m,proxy_z_m,device_x_m,device_y_m,device_z_m,"
+       "proxy_rx_rad,proxy_ry_rad,proxy_rz_rad,device_rx_rad,device_ry_rad,device_rz_rad,"
        "hand_fx_n,hand_fy_n,hand_fz_n,observer_fx_n,observer_fy_n,observer_fz_n,energy_virtual_j,"
        "hand_work_j\n";
   for (const RunSample& x : r.series) {
     s << x.t << ',' << x.phase << ',' << x.contacts << ',' << x.contact_force_n << ','
       << x.device_force_n << ',' << x.penetration_m << ',' << x.device_penetration_m << ','
       << x.proxy_x.x() << ',' << x.proxy_x.y() << ',' << x.proxy_x.z() << ',' << x.device_x.x()
-      << ',' << x.device_x.y() << ',' << x.device_x.z() << ',' << x.hand_force_n.x() << ','
+      << ',' << x.device_x.y() << ',' << x.device_x.z() << ',' << x.proxy_rotvec.x() << ','
+      << x.proxy_rotvec.y() << ',' << x.proxy_rotvec.z() << ',' << x.device_rotvec.x() << ','
+      << x.device_rotvec.y() << ',' << x.device_rotvec.z() << ',' << x.hand_force_n.x() << ','
       << x.hand_force_n.y() << ',' << x.hand_force_n.z() << ',' << x.observer_force_n.x() << ','
       << x.observer_force_n.y() << ',' << x.observer_force_n.z() << ',' << x.energy_virtual_j
       << ',' << x.hand_work_j << '\n';

@@ -11,6 +11,7 @@
 #include "device/phantom_device.h"
 #include "device/simulated_phantom.h"
 #include "reference/core/io.h"
+#include "reference/core/so3.h"
 #include "reference/phantom/phantom_model.h"
 #include "reference/phantom/phantom_params.h"
 #include "reference/tick.h"
@@ -239,6 +240,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       smp.device_penetration_m = d_dev;
       smp.proxy_x = pipeline.proxy().pose.x;
       smp.device_x = r.device.x;
+      smp.proxy_rotvec = log_so3(pipeline.proxy().pose.R);
+      smp.device_rotvec = log_so3(r.device.R);
       smp.hand_force_n = f_hand;
       smp.observer_force_n = f_obs;
       smp.contacts = static_cast<int>(r.contacts.size());

@@ -54,6 +54,7 @@ struct RunSample {
   double penetration_m;         // proxy tip
   double device_penetration_m;  // device tip
   Vec3 proxy_x, device_x;
+  Vec3 proxy_rotvec, device_rotvec;  // orientations as rotation vectors log(R) [rad]
   Vec3 hand_force_n;            // true hand force (simulator ground truth), world
   Vec3 observer_force_n;        // observer estimate F1_hat (force part), world
   int contacts;

@@ -2,6 +2,7 @@
 // the report, plus the CLI's handling of bad input.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -52,6 +53,20 @@ nlohmann::json run_scene(const std::string& scene, double duration) {
     EXPECT_TRUE(is_png(out / f)) << f;
   }
   EXPECT_GT(fs::file_size(out / "timeseries.csv"), 1000u);
+  {
+    // Every row of the time series has the header's columns; one row per tick.
+    std::ifstream csv(out / "timeseries.csv");
+    std::string line;
+    std::getline(csv, line);
+    const auto columns = std::count(line.begin(), line.end(), ',') + 1;
+    EXPECT_EQ(columns, 29) << line;
+    long rows = 0;
+    while (std::getline(csv, line)) {
+      EXPECT_EQ(std::count(line.begin(), line.end(), ',') + 1, columns);
+      ++rows;
+    }
+    EXPECT_EQ(rows, static_cast<long>(std::llround(duration * 1000.0)));
+  }
   std::ifstream in(out / "report.json");
   return nlohmann::json::parse(in);
 }
