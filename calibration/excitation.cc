@@ -1,0 +1,167 @@
+#include "calibration/excitation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <string>
+
+#include "reference/core/io.h"
+#include "reference/phantom/phantom_model.h"
+
+namespace dentsim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Raised-cosine fade-in s(t) and its first two derivatives.
+void window(double t, double Tr, double* s, double* ds, double* dds) {
+  if (Tr <= 0.0 || t >= Tr) {
+    *s = 1.0;
+    *ds = *dds = 0.0;
+    return;
+  }
+  const double w = kPi / Tr;
+  *s = 0.5 * (1.0 - std::cos(w * t));
+  *ds = 0.5 * w * std::sin(w * t);
+  *dds = 0.5 * w * w * std::cos(w * t);
+}
+
+}  // namespace
+
+Excitation::Excitation(const PhantomParams& p, const Vec6& q0, const ExcitationParams& e)
+    : e_(e), q0_(q0) {
+  if (e.harmonics < 1 || !(e.base_frequency_hz > 0.0) || e.ramp_s < 0.0) {
+    throw InputError("excitation: harmonics >= 1, base_frequency_hz > 0 and ramp_s >= 0 expected");
+  }
+  for (int j = 0; j < 6; ++j) {
+    if (!(q0(j) > p.q_min_rad(j) + e.limit_margin_rad && q0(j) < p.q_max_rad(j) - e.limit_margin_rad)) {
+      throw InputError("excitation: home pose q" + std::to_string(j + 1) +
+                       " is not inside the joint limits minus the margin");
+    }
+  }
+  std::mt19937_64 rng(e.seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  a_.resize(6, e.harmonics);
+  b_.resize(6, e.harmonics);
+  for (int j = 0; j < 6; ++j) {
+    for (int l = 0; l < e.harmonics; ++l) {
+      a_(j, l) = u(rng) / (l + 1);  // 1/l roll-off keeps accelerations moderate
+      b_(j, l) = u(rng) / (l + 1);
+    }
+  }
+  // Position and velocity bounds over one period after the ramp (the window only shrinks d).
+  const double horizon = e.ramp_s + 1.0 / e.base_frequency_hz;
+  const int n = 4000;
+  Vec6 d_hi = Vec6::Constant(1e-12), d_lo = Vec6::Constant(-1e-12), v_max = Vec6::Constant(1e-12);
+  for (int k = 0; k <= n; ++k) {
+    Vec6 d, dd, ddd;
+    eval_unscaled(horizon * k / n, &d, &dd, &ddd);
+    d_hi = d_hi.cwiseMax(d);
+    d_lo = d_lo.cwiseMin(d);
+    v_max = v_max.cwiseMax(dd.cwiseAbs());
+  }
+  for (int j = 0; j < 6; ++j) {
+    const double room_hi = p.q_max_rad(j) - e.limit_margin_rad - q0(j);
+    const double room_lo = q0(j) - (p.q_min_rad(j) + e.limit_margin_rad);
+    scale_(j) = std::min({room_hi / d_hi(j), room_lo / -d_lo(j), e.qd_max_rad_s(j) / v_max(j)});
+  }
+  // Torque: shrink all amplitudes until the model's inverse dynamics fits the limit.
+  const PhantomModelD model(p);
+  for (int iter = 0;; ++iter) {
+    bool ok = true;
+    for (int k = 0; k <= n / 4 && ok; ++k) {
+      Vec6 q, qd, qdd;
+      eval(horizon * k / (n / 4), &q, &qd, &qdd);
+      const Vec6 tau = model.M(q) * qdd + model.bias(q, qd) + model.g(q) + model.friction(qd);
+      for (int j = 0; j < 6; ++j) {
+        if (std::abs(tau(j)) > e.torque_fraction * p.torque_limit_n_m(j)) ok = false;
+      }
+    }
+    if (ok) break;
+    if (iter == 40) {
+      throw InputError("excitation: no amplitude keeps the model torque within " +
+                       std::to_string(e.torque_fraction) + " tau_max (gravity alone exceeds it?)");
+    }
+    scale_ *= 0.85;
+  }
+}
+
+void Excitation::eval_unscaled(double t, Vec6* d, Vec6* dd, Vec6* ddd) const {
+  const double wf = 2.0 * kPi * e_.base_frequency_hz;
+  d->setZero();
+  dd->setZero();
+  ddd->setZero();
+  for (int l = 0; l < e_.harmonics; ++l) {
+    const double w = wf * (l + 1);
+    const double s = std::sin(w * t), c = std::cos(w * t);
+    *d += a_.col(l) * s + b_.col(l) * (c - 1.0);
+    *dd += (a_.col(l) * c - b_.col(l) * s) * w;
+    *ddd += (-a_.col(l) * s - b_.col(l) * c) * (w * w);
+  }
+}
+
+void Excitation::eval(double t, Vec6* q, Vec6* qd, Vec6* qdd) const {
+  Vec6 d, dd, ddd;
+  eval_unscaled(t, &d, &dd, &ddd);
+  d = d.cwiseProduct(scale_);
+  dd = dd.cwiseProduct(scale_);
+  ddd = ddd.cwiseProduct(scale_);
+  double s, ds, dds;
+  window(t, e_.ramp_s, &s, &ds, &dds);
+  *q = q0_ + s * d;
+  *qd = ds * d + s * dd;
+  *qdd = dds * d + 2.0 * ds * dd + s * ddd;
+}
+
+CalibrationLog run_excitation(Device& device, const PhantomParams& p, const Excitation& exc,
+                              double duration, const TrackingParams& tracking) {
+  if (device.dof() != 6) throw InputError("excite: the device must have 6 joints");
+  const PhantomModelD model(p);
+  const Mat6 M0 = model.M(exc.q0());
+  const Vec6 kp = M0.diagonal() * tracking.bandwidth_rad_s * tracking.bandwidth_rad_s;
+  const Vec6 kd = M0.diagonal() * 2.0 * tracking.bandwidth_rad_s;
+  CalibrationLog log;
+  DeviceSample s = device.make_sample();
+  device.read(s);
+  const double t0 = s.t;
+  VecX tau(6);
+  while (true) {
+    device.read(s);
+    const double t = s.t - t0;
+    if (t > duration) break;
+    Vec6 qr, qdr, qddr;
+    exc.eval(t, &qr, &qdr, &qddr);
+    const Vec6 q = s.q, qd = s.qd;
+    tau = model.M(q) * qddr + model.g(q) + kp.cwiseProduct(qr - q) + kd.cwiseProduct(qdr - qd);
+    device.write(tau);
+    if (device.faults() != kFaultNone) {
+      throw InputError("excite: device fault " + fault_string(device.faults()) + " at t = " +
+                       std::to_string(t) + " s");
+    }
+    log.t.push_back(t);
+    log.q.push_back(q);
+    log.qd.push_back(qd);
+    log.tau.push_back(device.applied_torque());
+    device.advance();
+  }
+  return log;
+}
+
+CalibrationLog synthesize_log(const PhantomParams& truth, const Excitation& exc, double duration,
+                              double dt) {
+  const PhantomModelD model(truth);
+  CalibrationLog log;
+  const int n = static_cast<int>(std::floor(duration / dt + 1e-9));
+  for (int k = 0; k <= n; ++k) {
+    const double t = k * dt;
+    Vec6 q, qd, qdd;
+    exc.eval(t, &q, &qd, &qdd);
+    log.t.push_back(t);
+    log.q.push_back(q);
+    log.qd.push_back(qd);
+    log.tau.push_back(model.M(q) * qdd + model.bias(q, qd) + model.g(q) + model.friction(qd));
+  }
+  return log;
+}
+
+}  // namespace dentsim

@@ -1,0 +1,77 @@
+// Excitation trajectories for calibration (issue #5) and running them on a device.
+//
+// Trajectory: per joint j a finite Fourier series with base frequency w_f = 2 pi f_base [rad/s]
+// and L harmonics (Swevers et al. 1997), faded in by a raised-cosine window so that it starts at
+// rest at the home pose q0:
+//     d_j(t) = sum_{l=1..L} a_jl sin(l w_f t) + b_jl cos(l w_f t) - b_jl       (d_j(0) = 0)
+//     s(t)   = (1 - cos(pi t / T_r)) / 2 for t < T_r, 1 afterwards
+//     q_j(t) = q0_j + s(t) d_j(t)
+// q, qd, qdd are analytic (product rule). Coefficients a, b are drawn uniform in [-1, 1]
+// (std::mt19937_64, seeded) and scaled per joint by one factor so that, over a fine time grid,
+// q stays in [q_min + margin, q_max - margin], |qd| <= qd_max, and the model's inverse-dynamics
+// torque M qdd + C qd + g + tau_f stays within torque_fraction * tau_max (reduced until it does).
+//
+// Running (run_excitation): joint-space PD tracking with model feed-forward on a Device,
+//     tau = M(q) qdd_ref + g(q) + K_p (q_ref - q) + K_d (qd_ref - qd)
+// with K_p = M_jj(q0) w_c^2, K_d = 2 M_jj(q0) w_c (critically damped per joint, w_c [rad/s]).
+// The log records, per tick, the sample (t, q, qd as the driver reports them) and the torque the
+// device applied over that tick (after saturation). Units SI, device joint order (device.h).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "calibration/log.h"
+#include "device/device.h"
+#include "reference/phantom/phantom_params.h"
+
+namespace dentsim {
+
+struct ExcitationParams {
+  double base_frequency_hz = 0.2;  // f_base
+  int harmonics = 5;               // L
+  double ramp_s = 1.0;             // T_r
+  double limit_margin_rad = 0.05;  // distance kept from each joint limit
+  Vec6 qd_max_rad_s = Vec6::Constant(2.0);
+  double torque_fraction = 0.7;  // of the model's torque limit
+  std::uint64_t seed = 1;
+};
+
+class Excitation {
+ public:
+  // Draws and scales the coefficients for the model `p` around `q0`. Throws InputError if the
+  // home pose is outside the limits or no scale satisfies the torque limit.
+  Excitation(const PhantomParams& p, const Vec6& q0, const ExcitationParams& e);
+
+  void eval(double t, Vec6* q, Vec6* qd, Vec6* qdd) const;
+  const Vec6& q0() const { return q0_; }
+  const ExcitationParams& params() const { return e_; }
+  // Per-joint amplitude scale applied to the unit coefficients.
+  const Vec6& scale() const { return scale_; }
+
+ private:
+  void eval_unscaled(double t, Vec6* d, Vec6* dd, Vec6* ddd) const;
+
+  ExcitationParams e_;
+  Vec6 q0_;
+  Eigen::Matrix<double, 6, Eigen::Dynamic> a_, b_;
+  Vec6 scale_ = Vec6::Ones();
+};
+
+struct TrackingParams {
+  double bandwidth_rad_s = 2.0 * 3.14159265358979323846 * 5.0;  // w_c
+};
+
+// Runs `exc` for `duration` [s] on `device` (already at rest near exc.q0()), with the model `p`
+// for the feed-forward. Throws InputError if the device faults (the log up to the fault would be
+// misleading).
+CalibrationLog run_excitation(Device& device, const PhantomParams& p, const Excitation& exc,
+                              double duration, const TrackingParams& tracking = {});
+
+// Noise-free data by inverse dynamics of the model `truth` along the reference trajectory:
+// q, qd exact, tau = M qdd + C qd + g + tau_f, sampled every `dt` [s] (no tracking error, no
+// quantisation; the test oracle for the fit).
+CalibrationLog synthesize_log(const PhantomParams& truth, const Excitation& exc, double duration,
+                              double dt);
+
+}  // namespace dentsim

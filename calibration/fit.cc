@@ -1,0 +1,248 @@
+#include "calibration/fit.h"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include "reference/core/io.h"
+#include "reference/phantom/phantom_model.h"
+
+namespace dentsim {
+namespace {
+
+constexpr int kBodies = kPhantomTreeDof;  // 8 bodies x (mass, Ix, Iy, Iz), then 3 x 6 per joint
+constexpr int kArmature = 4 * kBodies;
+constexpr int kDamping = kArmature + 6;
+constexpr int kCoulomb = kDamping + 6;
+static_assert(kCoulomb + 6 == kCalibParams);
+
+PhantomBody& body(PhantomParams& p, int i) {
+  PhantomBody* b[kBodies] = {&p.base,          &p.upper_arm,  &p.forearm,      &p.crank,
+                             &p.parallel_link, &p.gimbal_yaw, &p.gimbal_pitch, &p.gimbal_roll};
+  return *b[i];
+}
+
+// Residual r_k = A_k x - tau_k (A_k = Y_k diag(s)): linear, Jacobian A_k.
+class TorqueResidual : public ceres::SizedCostFunction<6, kCalibParams> {
+ public:
+  TorqueResidual(const Regressor& A, const Vec6& tau) : A_(A), tau_(tau) {}
+  bool Evaluate(double const* const* x, double* r, double** J) const override {
+    const Eigen::Map<const CalibVec> xv(x[0]);
+    Eigen::Map<Vec6> rv(r);
+    rv = A_ * xv - tau_;
+    if (J && J[0]) {
+      Eigen::Map<Eigen::Matrix<double, 6, kCalibParams, Eigen::RowMajor>> Jm(J[0]);
+      Jm = A_;
+    }
+    return true;
+  }
+
+ private:
+  Regressor A_;
+  Vec6 tau_;
+};
+
+// Weak prior r = w (x - x0).
+class PriorResidual : public ceres::SizedCostFunction<kCalibParams, kCalibParams> {
+ public:
+  PriorResidual(const CalibVec& x0, double w) : x0_(x0), w_(w) {}
+  bool Evaluate(double const* const* x, double* r, double** J) const override {
+    Eigen::Map<CalibVec> rv(r);
+    rv = w_ * (Eigen::Map<const CalibVec>(x[0]) - x0_);
+    if (J && J[0]) {
+      Eigen::Map<Eigen::Matrix<double, kCalibParams, kCalibParams, Eigen::RowMajor>> Jm(J[0]);
+      Jm.setIdentity();
+      Jm *= w_;
+    }
+    return true;
+  }
+
+ private:
+  CalibVec x0_;
+  double w_;
+};
+
+// Zero-phase first-order low-pass (forward then backward pass) of a sequence.
+void zero_phase_lowpass(std::vector<Vec6>& y, double dt, double fc) {
+  if (fc <= 0.0 || y.size() < 2) return;
+  const double rc = 1.0 / (2.0 * 3.14159265358979323846 * fc);
+  const double a = dt / (rc + dt);
+  for (std::size_t k = 1; k < y.size(); ++k) y[k] = y[k - 1] + a * (y[k] - y[k - 1]);
+  for (std::size_t k = y.size() - 1; k-- > 0;) y[k] = y[k + 1] + a * (y[k] - y[k + 1]);
+}
+
+}  // namespace
+
+std::vector<std::string> calib_param_names() {
+  std::vector<std::string> n;
+  for (int i = 0; i < kBodies; ++i) {
+    const std::string b = phantom_tree_body_name(i);
+    n.push_back(b + ".mass_kg");
+    n.push_back(b + ".inertia_x_kg_m2");
+    n.push_back(b + ".inertia_y_kg_m2");
+    n.push_back(b + ".inertia_z_kg_m2");
+  }
+  for (int j = 1; j <= 6; ++j) n.push_back("armature_kg_m2." + std::to_string(j));
+  for (int j = 1; j <= 6; ++j) n.push_back("damping_n_m_s_per_rad." + std::to_string(j));
+  for (int j = 1; j <= 6; ++j) n.push_back("coulomb_n_m." + std::to_string(j));
+  return n;
+}
+
+CalibVec pack_calib_params(const PhantomParams& p) {
+  PhantomParams c = p;
+  CalibVec x;
+  for (int i = 0; i < kBodies; ++i) {
+    x(4 * i) = body(c, i).mass_kg;
+    x.segment<3>(4 * i + 1) = body(c, i).inertia_kg_m2;
+  }
+  x.segment<6>(kArmature) = p.armature_kg_m2;
+  x.segment<6>(kDamping) = p.damping_n_m_s_per_rad;
+  x.segment<6>(kCoulomb) = p.coulomb_n_m;
+  return x;
+}
+
+PhantomParams unpack_calib_params(const PhantomParams& prior, const CalibVec& x) {
+  PhantomParams p = prior;
+  for (int i = 0; i < kBodies; ++i) {
+    body(p, i).mass_kg = x(4 * i);
+    body(p, i).inertia_kg_m2 = x.segment<3>(4 * i + 1);
+  }
+  p.armature_kg_m2 = x.segment<6>(kArmature);
+  p.damping_n_m_s_per_rad = x.segment<6>(kDamping);
+  p.coulomb_n_m = x.segment<6>(kCoulomb);
+  return p;
+}
+
+Regressor calib_regressor(const PhantomParams& prior, const Vec6& q, const Vec6& qd,
+                          const Vec6& qdd) {
+  using J = ceres::Jet<double, kCalibParams>;
+  using V6J = Eigen::Matrix<J, 6, 1>;
+  PhantomTreeT<J> tree = phantom_tree<J>(prior);
+  const CalibVec x0 = pack_calib_params(prior);
+  for (int i = 0; i < kBodies; ++i) {
+    tree.mass[i] = J(x0(4 * i), 4 * i);
+    for (int a = 0; a < 3; ++a) tree.inertia[i](a) = J(x0(4 * i + 1 + a), 4 * i + 1 + a);
+  }
+  for (int j = 0; j < 6; ++j) {
+    tree.armature(j) = J(x0(kArmature + j), kArmature + j);
+    tree.damping(j) = J(x0(kDamping + j), kDamping + j);
+    tree.coulomb(j) = J(x0(kCoulomb + j), kCoulomb + j);
+  }
+  const PhantomModelT<J> model(tree);
+  const V6J qj = q.cast<J>(), qdj = qd.cast<J>(), qddj = qdd.cast<J>();
+  const V6J tau = model.M(qj) * qddj + model.bias(qj, qdj) + model.g(qj) + model.friction(qdj);
+  Regressor Y;
+  for (int j = 0; j < 6; ++j) Y.row(j) = tau(j).v.transpose();  // tau = Y p (linear in p)
+  return Y;
+}
+
+FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
+                          const FitOptions& opt) {
+  const int n = log.size();
+  if (n < 3) throw InputError("calibrate: log too short (fewer than 3 samples)");
+  const double dt = (log.t.back() - log.t.front()) / (n - 1);
+  std::vector<Vec6> qd = log.qd, tau = log.tau;
+  zero_phase_lowpass(qd, dt, opt.lowpass_hz);
+  zero_phase_lowpass(tau, dt, opt.lowpass_hz);
+  const int stride = std::max(1, (n - 2) / std::max(1, opt.max_samples));
+
+  const CalibVec p0 = pack_calib_params(prior);
+  CalibVec s;
+  for (int i = 0; i < kCalibParams; ++i) s(i) = p0(i) != 0.0 ? std::abs(p0(i)) : 1e-6;
+  CalibVec x = p0.cwiseQuotient(s);
+  const CalibVec x0 = x;
+
+  FitResult res;
+  std::vector<Regressor> A;
+  std::vector<Vec6> b;
+  for (int k = 1; k + 1 < n; k += stride) {
+    const Vec6 qdd = (qd[k + 1] - qd[k - 1]) / (log.t[k + 1] - log.t[k - 1]);
+    A.push_back(calib_regressor(prior, log.q[k], qd[k], qdd) * s.asDiagonal());
+    b.push_back(tau[k]);
+    res.t.push_back(log.t[k]);
+  }
+  const int m = static_cast<int>(A.size());
+
+  ceres::Problem problem;
+  for (int k = 0; k < m; ++k) {
+    problem.AddResidualBlock(new TorqueResidual(A[k], b[k]),
+                             opt.huber_n_m > 0 ? new ceres::HuberLoss(opt.huber_n_m) : nullptr,
+                             x.data());
+  }
+  problem.AddResidualBlock(new PriorResidual(x0, opt.prior_weight), nullptr, x.data());
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.max_num_iterations = opt.max_iterations;
+  so.function_tolerance = 1e-12;
+  so.gradient_tolerance = 1e-14;
+  so.parameter_tolerance = 1e-12;
+  so.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+  res.converged = summary.termination_type == ceres::CONVERGENCE && summary.IsSolutionUsable();
+  res.report = summary.BriefReport();
+  res.iterations = static_cast<int>(summary.iterations.size());
+
+  // Residuals and the stacked Jacobian at the solution.
+  Eigen::MatrixXd Js(6 * m, kCalibParams);
+  double rss = 0.0;
+  for (int k = 0; k < m; ++k) {
+    Js.middleRows<6>(6 * k) = A[k];
+    const Vec6 pred = A[k] * x;
+    const Vec6 r = pred - b[k];
+    rss += r.squaredNorm();
+    res.residual_rms_joint += r.cwiseAbs2();
+    res.tau_measured.push_back(b[k]);
+    res.tau_predicted.push_back(pred);
+  }
+  res.samples = m;
+  res.residual_rms = std::sqrt(rss / (6.0 * m));
+  res.residual_rms_joint = (res.residual_rms_joint / m).cwiseSqrt();
+
+  // Identifiability: near-null space of the column-normalised Jacobian.
+  CalibVec cn;
+  for (int i = 0; i < kCalibParams; ++i) cn(i) = Js.col(i).norm();
+  Eigen::MatrixXd Jn = Js;
+  for (int i = 0; i < kCalibParams; ++i) Jn.col(i) /= cn(i) > 0 ? cn(i) : 1.0;
+  Eigen::BDCSVD<Eigen::MatrixXd> svd(Jn, Eigen::ComputeThinV);
+  const Eigen::VectorXd sv = svd.singularValues();
+  const double smax = sv(0);
+  int kept = 0;
+  while (kept < sv.size() && sv(kept) >= opt.null_tol * smax) ++kept;
+  res.condition_number = kept > 0 ? smax / sv(kept - 1) : 0.0;
+  const Eigen::MatrixXd Vnull = svd.matrixV().rightCols(kCalibParams - kept);
+
+  // Covariance of x (prior included, so the information matrix is regular).
+  Eigen::Matrix<double, kCalibParams, kCalibParams, Eigen::RowMajor> cov;
+  cov.setConstant(std::numeric_limits<double>::quiet_NaN());
+  ceres::Covariance::Options co;
+  co.algorithm_type = ceres::DENSE_SVD;
+  co.null_space_rank = -1;
+  ceres::Covariance covariance(co);
+  std::vector<std::pair<const double*, const double*>> blocks{{x.data(), x.data()}};
+  if (covariance.Compute(blocks, &problem)) covariance.GetCovarianceBlock(x.data(), x.data(), cov.data());
+
+  const CalibVec p = x.cwiseProduct(s);
+  res.fitted = unpack_calib_params(prior, p);
+  const auto names = calib_param_names();
+  for (int i = 0; i < kCalibParams; ++i) {
+    FitParameter fp;
+    fp.name = names[i];
+    fp.prior = p0(i);
+    fp.value = p(i);
+    fp.identifiable = cn(i) > 0 && Vnull.row(i).norm() < opt.null_component;
+    res.identifiable += fp.identifiable;
+    res.params.push_back(fp);
+  }
+  const double dof = std::max(1, 6 * m - res.identifiable);
+  const double sigma2 = rss / dof;
+  for (int i = 0; i < kCalibParams; ++i) {
+    res.params[i].std = s(i) * std::sqrt(std::max(0.0, cov(i, i)) * sigma2);
+  }
+  return res;
+}
+
+}  // namespace dentsim

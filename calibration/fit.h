@@ -1,0 +1,86 @@
+// Ceres fit of the Phantom's inertial and friction parameters from a calibration log (issue #5).
+//
+// Model (thesis (2.1), reference/phantom/phantom_model.h), per sample k and device joint j:
+//     tau_k = M(q_k; p) qdd_k + C(q_k, qd_k; p) qd_k + g(q_k; p) + b qd_k + f_c tanh(qd_k / v_s)
+// Parameters p (kCalibParams = 50, SI units, in this order):
+//     for each of the 8 tree bodies (base, upper_arm, forearm, crank, parallel_link, gimbal_yaw,
+//     gimbal_pitch, gimbal_roll): mass [kg], principal inertias x, y, z [kg m^2];
+//     armature_j [kg m^2], viscous damping b_j [N m s/rad], Coulomb f_c,j [N m] for j = 1..6.
+// Geometry (lengths, CoM positions, axes) and v_s stay at the prior model file's values. With the
+// CoM fixed, tau is linear in p: tau_k = Y_k p. Y_k (6 x 50) is obtained by differentiating the
+// templated model with ceres::Jet at the prior (exact for a linear map; tested against the double
+// inverse dynamics). The Ceres problem is then, in relative units x_i = p_i / s_i
+// (s_i = |prior_i|, 1e-6 if the prior is 0):
+//     min sum_k rho(|Y_k S x - tau_k|^2) + sum_i (w (x_i - x0_i))^2,
+// rho the Huber loss (delta = huber_n_m), w the weak prior weight [N m per unit relative change].
+// qdd_k: central difference of qd over (t_k-1, t_k+1), after an optional zero-phase low-pass
+// (forward-backward first order, cutoff lowpass_hz) applied alike to qd and tau (docs/calibration.md
+// says why this and not the integral form).
+// Identifiability: SVD of the column-normalised stacked Jacobian J diag(1/|J_i|) at the solution;
+// right singular vectors with sigma < null_tol sigma_max span the near-null space; parameter i is
+// identifiable when its unit vector has a component below null_component in that space (else it
+// is "not identifiable": only the prior fixes it along the null directions). The condition number
+// reported is sigma_max / sigma_min over the singular values kept. Standard deviations: Ceres
+// covariance of x (DENSE_SVD), scaled by the residual variance RSS / (m - n_identifiable).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "calibration/log.h"
+#include "reference/phantom/phantom_params.h"
+
+namespace dentsim {
+
+inline constexpr int kCalibParams = 50;
+using CalibVec = Eigen::Matrix<double, kCalibParams, 1>;
+using Regressor = Eigen::Matrix<double, 6, kCalibParams>;
+
+// Names ("upper_arm.mass_kg", "armature_kg_m2.3", ...), packing and unpacking.
+std::vector<std::string> calib_param_names();
+CalibVec pack_calib_params(const PhantomParams& p);
+// `prior` with the 50 parameters replaced by `x`.
+PhantomParams unpack_calib_params(const PhantomParams& prior, const CalibVec& x);
+
+// Y(q, qd, qdd) at the geometry of `prior` (autodiff through PhantomModelT<ceres::Jet>).
+Regressor calib_regressor(const PhantomParams& prior, const Vec6& q, const Vec6& qd,
+                          const Vec6& qdd);
+
+struct FitOptions {
+  double lowpass_hz = 0.0;     // zero-phase low-pass of qd and tau; 0 = off
+  int max_samples = 3000;      // samples used (evenly strided over the log)
+  double huber_n_m = 0.02;     // Huber delta [N m]
+  double prior_weight = 1e-6;  // w [N m per unit relative deviation]
+  double null_tol = 1e-6;      // relative singular-value threshold of the near-null space
+  double null_component = 1e-3;
+  int max_iterations = 100;
+};
+
+struct FitParameter {
+  std::string name;
+  double prior = 0.0, value = 0.0, std = 0.0;
+  bool identifiable = false;
+};
+
+struct FitResult {
+  bool converged = false;
+  std::string report;  // Ceres brief report
+  int iterations = 0;
+  PhantomParams fitted;
+  std::vector<FitParameter> params;
+  double residual_rms = 0.0;  // [N m] over all joints and samples used
+  Vec6 residual_rms_joint = Vec6::Zero();
+  double condition_number = 0.0;
+  int samples = 0;
+  int identifiable = 0;
+  // The samples used: time, measured (filtered) and predicted torque.
+  std::vector<double> t;
+  std::vector<Vec6> tau_measured, tau_predicted;
+};
+
+// Fits `log` starting from (and regularised towards) `prior`. Throws InputError if the log is
+// too short for the options. A non-converged solve is reported in FitResult::converged.
+FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
+                          const FitOptions& options = {});
+
+}  // namespace dentsim
