@@ -85,6 +85,29 @@ struct Range {
   }
 };
 
+// An RGB image surface and its drawing context, released on scope exit.
+class Canvas {
+ public:
+  Canvas(int width, int height, double grey)
+      : surface_(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height)),
+        cr_(cairo_create(surface_)) {
+    cairo_set_source_rgb(cr_, grey, grey, grey);
+    cairo_paint(cr_);
+  }
+  ~Canvas() {
+    cairo_destroy(cr_);
+    cairo_surface_destroy(surface_);
+  }
+  Canvas(const Canvas&) = delete;
+  Canvas& operator=(const Canvas&) = delete;
+  cairo_t* cr() const { return cr_; }
+  void save(const std::string& path);
+
+ private:
+  cairo_surface_t* surface_;
+  cairo_t* cr_;
+};
+
 void write_surface(cairo_surface_t* surface, const std::string& path) {
   const std::string tmp = path + ".tmp." + std::to_string(::getpid()) + ".png";
   const cairo_status_t st = cairo_surface_write_to_png(surface, tmp.c_str());
@@ -207,6 +230,11 @@ void draw_figure(cairo_t* cr, const Figure& f, double x0, double y0, double w, d
   }
 }
 
+void Canvas::save(const std::string& path) {
+  cairo_surface_flush(surface_);
+  write_surface(surface_, path);
+}
+
 }  // namespace
 
 void write_png(const std::vector<Figure>& panels, const std::string& path, int columns,
@@ -214,30 +242,18 @@ void write_png(const std::vector<Figure>& panels, const std::string& path, int c
   if (panels.empty()) throw std::invalid_argument("plot: no panels for '" + path + "'");
   columns = std::max(1, columns);
   const int rows = static_cast<int>((panels.size() + columns - 1) / columns);
-  cairo_surface_t* surface = cairo_image_surface_create(
-      CAIRO_FORMAT_RGB24, columns * panel_width, rows * panel_height);
-  cairo_t* cr = cairo_create(surface);
-  cairo_set_source_rgb(cr, 0.97, 0.97, 0.97);
-  cairo_paint(cr);
+  Canvas canvas(columns * panel_width, rows * panel_height, 0.97);
+  cairo_t* cr = canvas.cr();
   for (std::size_t i = 0; i < panels.size(); ++i) {
     const int r = static_cast<int>(i) / columns, c = static_cast<int>(i) % columns;
     draw_figure(cr, panels[i], c * panel_width, r * panel_height, panel_width, panel_height);
   }
-  cairo_destroy(cr);
-  try {
-    write_surface(surface, path);
-  } catch (...) {
-    cairo_surface_destroy(surface);
-    throw;
-  }
-  cairo_surface_destroy(surface);
+  canvas.save(path);
 }
 
 void write_png(const BarChart& chart, const std::string& path, int width, int height) {
-  cairo_surface_t* surface = cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height);
-  cairo_t* cr = cairo_create(surface);
-  cairo_set_source_rgb(cr, 1, 1, 1);
-  cairo_paint(cr);
+  Canvas canvas(width, height, 1.0);
+  cairo_t* cr = canvas.cr();
   const double ml = 80, mr = 20, mt = 40, mb = 60;
   const double px = ml, py = mt, pw = width - ml - mr, ph = height - mt - mb;
   double hi = 0.0;
@@ -291,14 +307,7 @@ void write_png(const BarChart& chart, const std::string& path, int width, int he
     text(cr, lx + 18, py + 12, chart.set_names[s], 11, 0.0, 0.5);
     lx += 30 + 7.0 * chart.set_names[s].size();
   }
-  cairo_destroy(cr);
-  try {
-    write_surface(surface, path);
-  } catch (...) {
-    cairo_surface_destroy(surface);
-    throw;
-  }
-  cairo_surface_destroy(surface);
+  canvas.save(path);
 }
 
 void write_png(const std::vector<CategoryMap>& maps, const std::string& path, int columns,
@@ -306,11 +315,8 @@ void write_png(const std::vector<CategoryMap>& maps, const std::string& path, in
   if (maps.empty()) throw std::invalid_argument("plot: no maps for '" + path + "'");
   columns = std::max(1, columns);
   const int rows = static_cast<int>((maps.size() + columns - 1) / columns);
-  cairo_surface_t* surface = cairo_image_surface_create(
-      CAIRO_FORMAT_RGB24, columns * panel_width, rows * panel_height);
-  cairo_t* cr = cairo_create(surface);
-  cairo_set_source_rgb(cr, 1, 1, 1);
-  cairo_paint(cr);
+  Canvas canvas(columns * panel_width, rows * panel_height, 1.0);
+  cairo_t* cr = canvas.cr();
   for (std::size_t m = 0; m < maps.size(); ++m) {
     const CategoryMap& map = maps[m];
     const double x0 = (m % columns) * panel_width, y0 = (m / columns) * panel_height;
@@ -356,14 +362,7 @@ void write_png(const std::vector<CategoryMap>& maps, const std::string& path, in
       ly += 14;
     }
   }
-  cairo_destroy(cr);
-  try {
-    write_surface(surface, path);
-  } catch (...) {
-    cairo_surface_destroy(surface);
-    throw;
-  }
-  cairo_surface_destroy(surface);
+  canvas.save(path);
 }
 
 }  // namespace dentsim::plot

@@ -25,6 +25,7 @@
 
 #include "reference/core/io.h"
 #include "reference/core/so3.h"
+#include "tests/support/random.h"
 #include "reference/pmi.h"
 
 namespace dentsim {
@@ -32,10 +33,7 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-Vec3 random_unit(std::mt19937& rng) {
-  std::normal_distribution<double> n(0.0, 1.0);
-  return Vec3(n(rng), n(rng), n(rng)).normalized();
-}
+using testing::random_unit;
 
 Mat3 random_rotation(std::mt19937& rng) {
   std::uniform_real_distribution<double> a(0.0, kPi);

@@ -1,5 +1,6 @@
 // Tests for reference/core/so3.h (part 1 of the reference pipeline).
 #include "reference/core/so3.h"
+#include "tests/support/random.h"
 
 #include <gtest/gtest.h>
 
@@ -14,10 +15,7 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-Vec3 random_unit(std::mt19937& rng) {
-  std::normal_distribution<double> n(0.0, 1.0);
-  return Vec3(n(rng), n(rng), n(rng)).normalized();
-}
+using testing::random_unit;
 
 TEST(So3, SkewIsCrossProductAndVeeInvertsIt) {
   const Vec3 a(0.3, -1.2, 2.5), b(-0.7, 0.4, 1.1);
