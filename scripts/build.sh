@@ -7,6 +7,8 @@ cd "$(dirname "$0")/.."
 flavour=${1:-release}
 shift || true
 jobs=$(nproc 2>/dev/null || echo 2)
+# ccache (when installed) keys on paths relative to the checkout, so clones share the cache.
+export CCACHE_BASEDIR="$PWD"
 case "$flavour" in
   release) extra=(-DCMAKE_BUILD_TYPE=Release) ;;
   # -O1 keeps the sanitizer build quick to compile (CI builds both flavours); asserts stay on.
