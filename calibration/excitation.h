@@ -7,12 +7,13 @@
 //     s(t)   = (1 - cos(pi t / T_r)) / 2 for t < T_r, 1 afterwards
 //     q_j(t) = q0_j + s(t) d_j(t)
 // q, qd, qdd are analytic (product rule). Coefficients a, b are drawn uniform in [-1, 1]
-// (std::mt19937_64, seeded) and scaled per joint by one factor so that, over a fine time grid,
+// (std::mt19937_64, seeded), divided by l, and scaled per joint by one factor so that, over a
+// fine time grid (ramp + one period, 0.5 ms; 2 % margin),
 // q stays in [q_min + margin, q_max - margin], |qd| <= qd_max, and the model's inverse-dynamics
 // torque M qdd + C qd + g + tau_f stays within torque_fraction * tau_max (reduced until it does).
 //
 // Running (run_excitation): joint-space PD tracking with model feed-forward on a Device,
-//     tau = M(q) qdd_ref + g(q) + K_p (q_ref - q) + K_d (qd_ref - qd)
+//     tau = M(q) qdd_ref + C(q, qd) qd + g(q) + tau_f(qd_ref) + K_p (q_ref - q) + K_d (qd_ref - qd)
 // with K_p = M_jj(q0) w_c^2, K_d = 2 M_jj(q0) w_c (critically damped per joint, w_c [rad/s]).
 // The log records, per tick, the sample (t, q, qd as the driver reports them) and the torque the
 // device applied over that tick (after saturation). Units SI, device joint order (device.h).

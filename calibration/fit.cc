@@ -76,14 +76,18 @@ void zero_phase_lowpass(std::vector<Vec6>& y, double dt, double fc) {
 
 }  // namespace
 
+Vec3 second_moments(const Vec3& I) {
+  return 0.5 * Vec3(I(1) + I(2) - I(0), I(0) + I(2) - I(1), I(0) + I(1) - I(2));
+}
+
 std::vector<std::string> calib_param_names() {
   std::vector<std::string> n;
   for (int i = 0; i < kBodies; ++i) {
     const std::string b = phantom_tree_body_name(i);
     n.push_back(b + ".mass_kg");
-    n.push_back(b + ".inertia_x_kg_m2");
-    n.push_back(b + ".inertia_y_kg_m2");
-    n.push_back(b + ".inertia_z_kg_m2");
+    n.push_back(b + ".second_moment_x_kg_m2");
+    n.push_back(b + ".second_moment_y_kg_m2");
+    n.push_back(b + ".second_moment_z_kg_m2");
   }
   for (int j = 1; j <= 6; ++j) n.push_back("armature_kg_m2." + std::to_string(j));
   for (int j = 1; j <= 6; ++j) n.push_back("damping_n_m_s_per_rad." + std::to_string(j));
@@ -96,7 +100,7 @@ CalibVec pack_calib_params(const PhantomParams& p) {
   CalibVec x;
   for (int i = 0; i < kBodies; ++i) {
     x(4 * i) = body(c, i).mass_kg;
-    x.segment<3>(4 * i + 1) = body(c, i).inertia_kg_m2;
+    x.segment<3>(4 * i + 1) = second_moments(body(c, i).inertia_kg_m2);
   }
   x.segment<6>(kArmature) = p.armature_kg_m2;
   x.segment<6>(kDamping) = p.damping_n_m_s_per_rad;
@@ -108,7 +112,7 @@ PhantomParams unpack_calib_params(const PhantomParams& prior, const CalibVec& x)
   PhantomParams p = prior;
   for (int i = 0; i < kBodies; ++i) {
     body(p, i).mass_kg = x(4 * i);
-    body(p, i).inertia_kg_m2 = x.segment<3>(4 * i + 1);
+    body(p, i).inertia_kg_m2 = principal_inertia(x.segment<3>(4 * i + 1));
   }
   p.armature_kg_m2 = x.segment<6>(kArmature);
   p.damping_n_m_s_per_rad = x.segment<6>(kDamping);
@@ -124,7 +128,9 @@ Regressor calib_regressor(const PhantomParams& prior, const Vec6& q, const Vec6&
   const CalibVec x0 = pack_calib_params(prior);
   for (int i = 0; i < kBodies; ++i) {
     tree.mass[i] = J(x0(4 * i), 4 * i);
-    for (int a = 0; a < 3; ++a) tree.inertia[i](a) = J(x0(4 * i + 1 + a), 4 * i + 1 + a);
+    Eigen::Matrix<J, 3, 1> d;
+    for (int a = 0; a < 3; ++a) d(a) = J(x0(4 * i + 1 + a), 4 * i + 1 + a);
+    tree.inertia[i] = principal_inertia(d);
   }
   for (int j = 0; j < 6; ++j) {
     tree.armature(j) = J(x0(kArmature + j), kArmature + j);
@@ -147,11 +153,28 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
   std::vector<Vec6> qd = log.qd, tau = log.tau;
   zero_phase_lowpass(qd, dt, opt.lowpass_hz);
   zero_phase_lowpass(tau, dt, opt.lowpass_hz);
+  // Parallel filtering of the Coulomb regressor column: the filter of tanh(qd / v_s) taken on the
+  // raw qd, not tanh of the filtered qd (they differ around every velocity reversal, and the
+  // difference would be absorbed by the viscous damping).
+  std::vector<Vec6> coulomb_col(n);
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < 6; ++j) {
+      const double v = log.qd[k](j), vs = prior.coulomb_smoothing_rad_s;
+      coulomb_col[k](j) = vs > 0.0 ? std::tanh(v / vs) : (v > 0.0) - (v < 0.0);
+    }
+  }
+  zero_phase_lowpass(coulomb_col, dt, opt.lowpass_hz);
   const int stride = std::max(1, (n - 2) / std::max(1, opt.max_samples));
 
   const CalibVec p0 = pack_calib_params(prior);
   CalibVec s;
-  for (int i = 0; i < kCalibParams; ++i) s(i) = p0(i) != 0.0 ? std::abs(p0(i)) : 1e-6;
+  for (int i = 0; i < kCalibParams; ++i) {
+    if (p0(i) < 0.0) {
+      throw InputError("calibrate: prior parameter " + calib_param_names()[i] +
+                       " is negative: expected a physically consistent prior model");
+    }
+    s(i) = p0(i) > 0.0 ? p0(i) : 1e-9;
+  }
   CalibVec x = p0.cwiseQuotient(s);
   const CalibVec x0 = x;
 
@@ -160,7 +183,9 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
   std::vector<Vec6> b;
   for (int k = 1; k + 1 < n; k += stride) {
     const Vec6 qdd = (qd[k + 1] - qd[k - 1]) / (log.t[k + 1] - log.t[k - 1]);
-    A.push_back(calib_regressor(prior, log.q[k], qd[k], qdd) * s.asDiagonal());
+    Regressor Y = calib_regressor(prior, log.q[k], qd[k], qdd);
+    for (int j = 0; j < 6; ++j) Y(j, kCoulomb + j) = coulomb_col[k](j);
+    A.push_back(Y * s.asDiagonal());
     b.push_back(tau[k]);
     res.t.push_back(log.t[k]);
   }
@@ -173,6 +198,12 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
                              x.data());
   }
   problem.AddResidualBlock(new PriorResidual(x0, opt.prior_weight), nullptr, x.data());
+  // Physical consistency: every parameter at least min_fraction of its prior (masses, second
+  // moments, armature, damping and Coulomb friction are non-negative; the model file wants them
+  // positive).
+  for (int i = 0; i < kCalibParams; ++i) {
+    problem.SetParameterLowerBound(x.data(), i, p0(i) > 0.0 ? opt.min_fraction : 0.0);
+  }
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::DENSE_QR;
   so.max_num_iterations = opt.max_iterations;

@@ -4,7 +4,10 @@
 //     tau_k = M(q_k; p) qdd_k + C(q_k, qd_k; p) qd_k + g(q_k; p) + b qd_k + f_c tanh(qd_k / v_s)
 // Parameters p (kCalibParams = 50, SI units, in this order):
 //     for each of the 8 tree bodies (base, upper_arm, forearm, crank, parallel_link, gimbal_yaw,
-//     gimbal_pitch, gimbal_roll): mass [kg], principal inertias x, y, z [kg m^2];
+//     gimbal_pitch, gimbal_roll): mass [kg] and the second moments of its mass distribution about
+//     the CoM along its principal axes, d = (int x^2 dm, int y^2 dm, int z^2 dm) [kg m^2], so that
+//     I = (d_y + d_z, d_x + d_z, d_x + d_y): d >= 0 is exactly the physical (triangle-inequality)
+//     set of principal inertias, and I is linear in d;
 //     armature_j [kg m^2], viscous damping b_j [N m s/rad], Coulomb f_c,j [N m] for j = 1..6.
 // Geometry (lengths, CoM positions, axes) and v_s stay at the prior model file's values. With the
 // CoM fixed, tau is linear in p: tau_k = Y_k p. Y_k (6 x 50) is obtained by differentiating the
@@ -12,10 +15,12 @@
 // inverse dynamics). The Ceres problem is then, in relative units x_i = p_i / s_i
 // (s_i = |prior_i|, 1e-6 if the prior is 0):
 //     min sum_k rho(|Y_k S x - tau_k|^2) + sum_i (w (x_i - x0_i))^2,
-// rho the Huber loss (delta = huber_n_m), w the weak prior weight [N m per unit relative change].
+// rho the Huber loss (delta = huber_n_m), w the weak prior weight [N m per unit relative change],
+// subject to x_i >= min_fraction (every parameter stays positive: the fitted file loads).
 // qdd_k: central difference of qd over (t_k-1, t_k+1), after an optional zero-phase low-pass
-// (forward-backward first order, cutoff lowpass_hz) applied alike to qd and tau (docs/calibration.md
-// says why this and not the integral form).
+// (forward-backward first order, cutoff lowpass_hz) applied alike to qd, tau and the Coulomb
+// column tanh(qd_raw / v_s) ("parallel filtering"; docs/calibration.md says why this and not the
+// integral form).
 // Identifiability: SVD of the column-normalised stacked Jacobian J diag(1/|J_i|) at the solution;
 // right singular vectors with sigma < null_tol sigma_max span the near-null space; parameter i is
 // identifiable when its unit vector has a component below null_component in that space (else it
@@ -36,6 +41,15 @@ inline constexpr int kCalibParams = 50;
 using CalibVec = Eigen::Matrix<double, kCalibParams, 1>;
 using Regressor = Eigen::Matrix<double, 6, kCalibParams>;
 
+// Second moments d of principal inertias I (inverse of I = (d_y + d_z, d_x + d_z, d_x + d_y)).
+Vec3 second_moments(const Vec3& I);
+template <typename Derived>
+Eigen::Matrix<typename Derived::Scalar, 3, 1> principal_inertia(const Eigen::MatrixBase<Derived>& d) {
+  Eigen::Matrix<typename Derived::Scalar, 3, 1> I;
+  I << d(1) + d(2), d(0) + d(2), d(0) + d(1);
+  return I;
+}
+
 // Names ("upper_arm.mass_kg", "armature_kg_m2.3", ...), packing and unpacking.
 std::vector<std::string> calib_param_names();
 CalibVec pack_calib_params(const PhantomParams& p);
@@ -54,6 +68,7 @@ struct FitOptions {
   double null_tol = 1e-6;      // relative singular-value threshold of the near-null space
   double null_component = 1e-3;
   int max_iterations = 100;
+  double min_fraction = 1e-3;  // lower bound of every parameter, relative to its prior
 };
 
 struct FitParameter {

@@ -1,0 +1,197 @@
+// `dentsim excite` and `dentsim calibrate` (issue #5, docs/calibration.md).
+//
+//   dentsim excite [--device MODEL] -o LOG [--duration S] [--seed N]
+//     runs a seeded Fourier excitation (calibration/excitation.h) under joint-space PD tracking on
+//     the simulated Phantom built from MODEL (default: the built-in Premium 1.5A model) and
+//     writes the calibration log (calibration/log.h).
+//   dentsim calibrate LOG --json FILE -o MODEL [--prior MODEL] [--truth MODEL] [--plots DIR]
+//     fits the inertial and friction parameters (calibration/fit.h), writes the fitted device
+//     model file and the report; with --truth adds each identifiable parameter's true value and
+//     max_rel_error. A fit that did not converge writes the JSON (converged: false), no model file,
+//     and exits with status 1.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "calibration/excitation.h"
+#include "calibration/fit.h"
+#include "calibration/log.h"
+#include "cli/plot.h"
+#include "cli/registry.h"
+#include "device/phantom_device.h"
+#include "device/simulated_phantom.h"
+#include "reference/core/io.h"
+#include "reference/phantom/phantom_params.h"
+
+namespace dentsim::cli {
+namespace {
+
+struct ExciteOptions {
+  std::string device, out;
+  double duration = 30.0;
+  std::uint64_t seed = 1;
+};
+
+void setup_excite(CLI::App& app) {
+  auto opt = std::make_shared<ExciteOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "excite",
+      "Run a safe excitation trajectory (seeded Fourier series within the joint, velocity and\n"
+      "torque limits) under joint-space PD tracking on the simulated Phantom and log t, q, qd\n"
+      "(driver estimate) and the applied torque to a CSV calibration log");
+  sub->add_option("--device", opt->device,
+                  "device model file of the simulated Phantom (default: built-in Premium 1.5A)");
+  sub->add_option("-o,--output", opt->out, "calibration log to write (CSV)")->required();
+  sub->add_option("--duration", opt->duration, "length of the run [s] (default 30)");
+  sub->add_option("--seed", opt->seed, "seed of the Fourier coefficients (default 1)");
+  sub->callback([opt] {
+    if (!(std::isfinite(opt->duration) && opt->duration >= 1.0 && opt->duration <= 3600.0)) {
+      throw InputError("--duration: expected 1 <= S <= 3600 s, got " +
+                       std::to_string(opt->duration));
+    }
+    const PhantomParams p =
+        opt->device.empty() ? default_phantom_params() : load_phantom_params(opt->device);
+    const VecX home = phantom_home_q(p);
+    const Vec6 q0 = home;
+    ExcitationParams ep;
+    ep.seed = opt->seed;
+    const Excitation exc(p, q0, ep);
+    SimulatedPhantom dev(phantom_plant(p), phantom_device_config(p), home);
+    CalibrationLog log = run_excitation(dev, p, exc, opt->duration);
+    log.comments.push_back(" device: " + p.name + (opt->device.empty() ? "" : " (" + opt->device + ")"));
+    log.comments.push_back(" excitation: Fourier f_base " + std::to_string(ep.base_frequency_hz) +
+                           " Hz, " + std::to_string(ep.harmonics) + " harmonics, seed " +
+                           std::to_string(opt->seed));
+    write_calibration_log(opt->out, log);
+    std::printf("excite: %d samples over %.3f s -> %s\n", log.size(), log.t.back(),
+                opt->out.c_str());
+  });
+}
+DENTSIM_REGISTER_COMMAND(setup_excite);
+
+struct CalibrateOptions {
+  std::string log, json, out, prior, truth, plots;
+  double lowpass_hz = 10.0;
+  int max_samples = 3000;
+};
+
+void write_plots(const FitResult& r, const std::string& dir) {
+  std::filesystem::create_directories(dir);
+  std::vector<plot::Figure> panels;
+  std::vector<double> all_res;
+  for (int j = 0; j < 6; ++j) {
+    plot::Figure f{"joint " + std::to_string(j + 1), "time [s]", "torque [N m]", {}};
+    plot::Series meas{"measured", r.t, {}}, pred{"predicted", r.t, {}};
+    for (int k = 0; k < r.samples; ++k) {
+      meas.y.push_back(r.tau_measured[k](j));
+      pred.y.push_back(r.tau_predicted[k](j));
+      all_res.push_back(r.tau_predicted[k](j) - r.tau_measured[k](j));
+    }
+    pred.dashed = true;
+    f.series.push_back(meas);
+    f.series.push_back(pred);
+    panels.push_back(f);
+  }
+  plot::write_png(panels, dir + "/torque_fit.png", 2);
+  // Residual histogram: 41 bins over +-4 RMS, drawn as points joined by a line.
+  const double h = std::max(4.0 * r.residual_rms, 1e-12);
+  const int bins = 41;
+  std::vector<double> x(bins), y(bins, 0.0);
+  for (int b = 0; b < bins; ++b) x[b] = -h + (2.0 * h) * (b + 0.5) / bins;
+  for (double e : all_res) {
+    const int b = static_cast<int>(std::floor((e + h) / (2.0 * h) * bins));
+    if (b >= 0 && b < bins) y[b] += 1.0;
+  }
+  plot::Figure hist{"residual histogram (all joints)", "predicted - measured [N m]", "count", {}};
+  plot::Series s{"residuals", x, y};
+  s.points = true;
+  hist.series.push_back(s);
+  plot::write_png({hist}, dir + "/residual_histogram.png");
+}
+
+void setup_calibrate(CLI::App& app) {
+  auto opt = std::make_shared<CalibrateOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "calibrate",
+      "Fit the device's inertial parameters, viscous and Coulomb friction to a calibration log\n"
+      "with Ceres; write the fitted device model file and a JSON report (values, std, residual\n"
+      "RMS, condition number, parameters not identifiable and left at their prior)");
+  sub->add_option("log", opt->log, "calibration log (CSV, from `dentsim excite`)")->required();
+  sub->add_option("--json", opt->json, "report to write (JSON)")->required();
+  sub->add_option("-o,--output", opt->out, "fitted device model file to write")->required();
+  sub->add_option("--prior", opt->prior, "prior device model (default: built-in Premium 1.5A)");
+  sub->add_option("--truth", opt->truth,
+                  "true device model (simulated data): adds true values and max_rel_error");
+  sub->add_option("--plots", opt->plots, "directory for PNG plots (torque fit, residuals)");
+  sub->add_option("--lowpass", opt->lowpass_hz,
+                  "zero-phase low-pass of qd and tau before differentiating [Hz], 0 = off "
+                  "(default 10)");
+  sub->add_option("--max-samples", opt->max_samples, "samples used (default 3000)");
+  sub->callback([opt] {
+    if (!(opt->lowpass_hz >= 0.0)) throw InputError("--lowpass: expected >= 0 Hz");
+    if (opt->max_samples < 100) throw InputError("--max-samples: expected >= 100");
+    const CalibrationLog log = read_calibration_log(opt->log);
+    const PhantomParams prior =
+        opt->prior.empty() ? default_phantom_params() : load_phantom_params(opt->prior);
+    std::unique_ptr<PhantomParams> truth;
+    if (!opt->truth.empty()) truth = std::make_unique<PhantomParams>(load_phantom_params(opt->truth));
+    FitOptions fo;
+    fo.lowpass_hz = opt->lowpass_hz;
+    fo.max_samples = opt->max_samples;
+    const FitResult r = fit_calibration(log, prior, fo);
+
+    nlohmann::json j;
+    j["log"] = opt->log;
+    j["converged"] = r.converged;
+    j["solver_report"] = r.report;
+    j["iterations"] = r.iterations;
+    j["samples"] = r.samples;
+    j["lowpass_hz"] = opt->lowpass_hz;
+    j["residual_rms_n_m"] = r.residual_rms;
+    j["residual_rms_joint_n_m"] = std::vector<double>(r.residual_rms_joint.data(),
+                                                      r.residual_rms_joint.data() + 6);
+    j["condition_number"] = r.condition_number;
+    j["identifiable_count"] = r.identifiable;
+    nlohmann::json params = nlohmann::json::array(), not_id = nlohmann::json::array();
+    const CalibVec xt = truth ? pack_calib_params(*truth) : CalibVec::Zero();
+    double max_rel = 0.0;
+    for (int i = 0; i < kCalibParams; ++i) {
+      const FitParameter& fp = r.params[i];
+      nlohmann::json e{{"name", fp.name},   {"prior", fp.prior},
+                       {"value", fp.value}, {"std", fp.std},
+                       {"identifiable", fp.identifiable}};
+      if (!fp.identifiable) not_id.push_back(fp.name);
+      if (truth && fp.identifiable) {
+        const double rel = std::abs(fp.value - xt(i)) / std::max(std::abs(xt(i)), 1e-300);
+        e["truth"] = xt(i);
+        e["rel_error"] = rel;
+        max_rel = std::max(max_rel, rel);
+      }
+      params.push_back(e);
+    }
+    j["parameters"] = params;
+    j["not_identifiable_left_at_prior"] = not_id;
+    if (truth) j["max_rel_error"] = max_rel;
+    write_json(opt->json, j);
+    if (!opt->plots.empty()) write_plots(r, opt->plots);
+    std::printf("calibrate: %d samples, %d of %d parameters identifiable, condition number %.3g,\n"
+                "  residual RMS %.3g N m%s\n",
+                r.samples, r.identifiable, kCalibParams, r.condition_number, r.residual_rms,
+                truth ? (", max_rel_error " + std::to_string(max_rel)).c_str() : "");
+    if (!r.converged) {
+      throw std::runtime_error("calibrate: the fit did not converge (" + r.report +
+                               "); no model file written, see " + opt->json);
+    }
+    validate_phantom_params(r.fitted, "fitted model for " + opt->out);
+    write_file_atomic(opt->out, phantom_params_to_text(r.fitted));
+    std::printf("  fitted model -> %s, report -> %s\n", opt->out.c_str(), opt->json.c_str());
+  });
+}
+DENTSIM_REGISTER_COMMAND(setup_calibrate);
+
+}  // namespace
+}  // namespace dentsim::cli
