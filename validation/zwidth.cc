@@ -311,7 +311,7 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
     pc.proxy.damping_lin = std::max(pc.proxy.damping_lin, 0.5 * gains.k_vc * sc.tick);
   }
   pc.coupling = CouplingGains{gains.k_vc, sc.k_vc_ang, gains.b_vc, sc.b_vc_ang};
-  pc.torque_limit = dev.limits().tau_max;
+  if (sc.pipeline_saturation) pc.torque_limit = dev.limits().tau_max;
   DeviceSample s0 = dev.make_sample();
   dev.read(s0);
   if (method == Method::kPmiPd) {
@@ -425,8 +425,12 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
   }
   run.growth_rate_per_s = ls_slope(wc, wl);
   run.growth_limit_per_s = std::log(2.0) / (sc.hold_s - sc.settle_s);
-  const bool held =
-      run.contact && run.contact_time_s >= sc.hold_s - 2.0 * sc.tick && wc.size() >= 2;
+  // Held by the wall: >= hold of contact, the proxy never fell through the slab and the device
+  // never went deeper than the slab is thick (32 voxels).
+  const double slab_thickness = 32.0 * sc.voxel_size_m;
+  const bool held = run.contact && run.contact_time_s >= sc.hold_s - 2.0 * sc.tick &&
+                    wc.size() >= 2 && !run.proxy_tunnelled &&
+                    run.max_penetration_m <= slab_thickness;
   run.stable = run.finite && run.faults == kFaultNone && held &&
                run.growth_rate_per_s <= run.growth_limit_per_s &&
                run.last_amplitude_m <= run.amplitude_bound_m;

@@ -27,8 +27,10 @@
 // - envelope growth rate lambda [1/s]: p is cut into windows of window_s from first contact
 //   + settle_s; A_i = max p - min p in window i; lambda = least-squares slope of
 //   ln(A_i + Delta_n) against the window centres (Delta_n = encoder quantum at the tip along n);
-// - stable  <=> finite, no device fault, lambda <= ln 2 / (hold_s - settle_s) (the envelope does
-//   not double over the hold) and A_last <= amplitude_bound_quanta * Delta_n;
+// - stable  <=> finite, no device fault, held by the wall (hold_s of contact, the proxy never
+//   deeper than 2 rho, the device never deeper than the slab's 32 voxels), lambda <=
+//   ln 2 / (hold_s - settle_s) (the envelope does not double over the hold) and
+//   A_last <= amplitude_bound_quanta * Delta_n;
 // - passive <=> max_t E_v(t) <= E_tol, E_v the ClosedLoop's passivity observer (energy the
 //   virtual side put into the device; E_v <= 0 = passive, the virtual side starts empty) and
 //   E_tol = sum_i Delta_i (2 max_k |tau_i,k| + sum_k |tau_i,k - tau_i,k-1|), the largest error
@@ -95,6 +97,9 @@ struct ZwidthScenario {
   double k_vc_ang = 0.3;          // k_vc,w [N m/rad]
   double b_vc_ang = 0.002;        // b_vc,w [N m s/rad]
   double observer_gain = 500.0;   // L [1/s], every joint (pmi-pd)
+  // true: the pipeline scales tau uniformly into the torque limits (direction kept, reference/
+  // tick.h); false: the device clips each joint (the command chain, as OpenHaptics does).
+  bool pipeline_saturation = true;
   std::string tool = "explorer";  // tool preset on the locked-inertia floor (pmi-pd)
 
   // Operator.
