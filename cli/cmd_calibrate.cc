@@ -77,6 +77,7 @@ struct CalibrateOptions {
   std::string log, json, out, prior, truth, plots;
   double lowpass_hz = 10.0;
   int max_samples = 3000;
+  int max_iterations = 100;
 };
 
 void write_plots(const FitResult& r, const std::string& dir) {
@@ -131,6 +132,8 @@ void setup_calibrate(CLI::App& app) {
                   "zero-phase low-pass of qd and tau before differentiating [Hz], 0 = off "
                   "(default 10)");
   sub->add_option("--max-samples", opt->max_samples, "samples used (default 3000)");
+  sub->add_option("--max-iterations", opt->max_iterations,
+                  "Ceres iteration limit (default 100); a fit that hits it did not converge");
   sub->callback([opt] {
     if (!(opt->lowpass_hz >= 0.0)) throw InputError("--lowpass: expected >= 0 Hz");
     if (opt->max_samples < 100) throw InputError("--max-samples: expected >= 100");
@@ -142,6 +145,8 @@ void setup_calibrate(CLI::App& app) {
     FitOptions fo;
     fo.lowpass_hz = opt->lowpass_hz;
     fo.max_samples = opt->max_samples;
+    if (opt->max_iterations < 1) throw InputError("--max-iterations: expected >= 1");
+    fo.max_iterations = opt->max_iterations;
     const FitResult r = fit_calibration(log, prior, fo);
 
     nlohmann::json j;
