@@ -34,7 +34,8 @@ Excitation::Excitation(const PhantomParams& p, const Vec6& q0, const ExcitationP
     throw InputError("excitation: harmonics >= 1, base_frequency_hz > 0 and ramp_s >= 0 expected");
   }
   for (int j = 0; j < 6; ++j) {
-    if (!(q0(j) > p.q_min_rad(j) + e.limit_margin_rad && q0(j) < p.q_max_rad(j) - e.limit_margin_rad)) {
+    if (!(q0(j) > p.q_min_rad(j) + e.limit_margin_rad &&
+          q0(j) < p.q_max_rad(j) - e.limit_margin_rad)) {
       throw InputError("excitation: home pose q" + std::to_string(j + 1) +
                        " is not inside the joint limits minus the margin");
     }
@@ -142,8 +143,8 @@ CalibrationLog run_excitation(Device& device, const PhantomParams& p, const Exci
           kp.cwiseProduct(qr - q) + kd.cwiseProduct(qdr - qd);
     device.write(tau);
     if (device.faults() != kFaultNone) {
-      throw InputError("excite: device fault " + fault_string(device.faults()) + " at t = " +
-                       std::to_string(t) + " s");
+      throw InputError("excite: device fault " + fault_string(device.faults()) +
+                       " at t = " + std::to_string(t) + " s");
     }
     log.t.push_back(t);
     log.q.push_back(q);

@@ -254,7 +254,8 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
   co.null_space_rank = -1;
   ceres::Covariance covariance(co);
   std::vector<std::pair<const double*, const double*>> blocks{{x.data(), x.data()}};
-  if (covariance.Compute(blocks, &problem)) covariance.GetCovarianceBlock(x.data(), x.data(), cov.data());
+  if (covariance.Compute(blocks, &problem))
+    covariance.GetCovarianceBlock(x.data(), x.data(), cov.data());
 
   const CalibVec p = x.cwiseProduct(s);
   res.fitted = unpack_calib_params(prior, p);
@@ -271,7 +272,13 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
   const double dof = std::max(1, 6 * m - res.identifiable);
   const double sigma2 = rss / dof;
   for (int i = 0; i < kCalibParams; ++i) {
-    res.params[i].std = s(i) * std::sqrt(std::max(0.0, cov(i, i)) * sigma2);
+    FitParameter& fp = res.params[i];
+    fp.std = s(i) * std::sqrt(std::max(0.0, cov(i, i)) * sigma2);
+    // Practically identifiable: the data pin it to better than max_rel_std of its prior.
+    if (fp.identifiable && !(fp.std <= opt.max_rel_std * s(i))) {
+      fp.identifiable = false;
+      --res.identifiable;
+    }
   }
   return res;
 }

@@ -24,7 +24,9 @@
 // Identifiability: SVD of the column-normalised stacked Jacobian J diag(1/|J_i|) at the solution;
 // right singular vectors with sigma < null_tol sigma_max span the near-null space; parameter i is
 // identifiable when its unit vector has a component below null_component in that space (else it
-// is "not identifiable": only the prior fixes it along the null directions). The condition number
+// is "not identifiable": only the prior fixes it along the null directions); a structurally
+// identifiable parameter whose standard deviation exceeds max_rel_std |prior| is not identifiable
+// in practice (below the noise floor) and reported as such too. The condition number
 // reported is sigma_max / sigma_min over the singular values kept. Standard deviations: Ceres
 // covariance of x (DENSE_SVD), scaled by the residual variance RSS / (m - n_identifiable).
 #pragma once
@@ -44,7 +46,8 @@ using Regressor = Eigen::Matrix<double, 6, kCalibParams>;
 // Second moments d of principal inertias I (inverse of I = (d_y + d_z, d_x + d_z, d_x + d_y)).
 Vec3 second_moments(const Vec3& I);
 template <typename Derived>
-Eigen::Matrix<typename Derived::Scalar, 3, 1> principal_inertia(const Eigen::MatrixBase<Derived>& d) {
+Eigen::Matrix<typename Derived::Scalar, 3, 1> principal_inertia(
+    const Eigen::MatrixBase<Derived>& d) {
   Eigen::Matrix<typename Derived::Scalar, 3, 1> I;
   I << d(1) + d(2), d(0) + d(2), d(0) + d(1);
   return I;
@@ -69,6 +72,7 @@ struct FitOptions {
   double null_component = 1e-3;
   int max_iterations = 100;
   double min_fraction = 1e-3;  // lower bound of every parameter, relative to its prior
+  double max_rel_std = 0.1;    // std / |prior| above which a parameter counts as not identifiable
 };
 
 struct FitParameter {

@@ -136,8 +136,8 @@ CalibrationLog parse_calibration_log(const std::string& text, const std::string&
     }
     if (!log.t.empty() && !(v[0] > log.t.back())) {
       throw InputError(origin + ": line " + std::to_string(line_no) +
-                       ": column t_s: time must increase strictly, got " + fmt(v[0]) +
-                       " after " + fmt(log.t.back()));
+                       ": column t_s: time must increase strictly, got " + fmt(v[0]) + " after " +
+                       fmt(log.t.back()));
     }
     log.t.push_back(v[0]);
     Vec6 q, qd, tau;
@@ -162,10 +162,10 @@ CalibrationLog parse_calibration_log(const std::string& text, const std::string&
       hi = std::max(hi, q(j));
     }
     if (hi - lo < kMinJointRange) {
-      throw InputError(origin + ": column q" + std::to_string(j + 1) +
-                       "_rad: joint " + std::to_string(j + 1) +
-                       " never moves (range " + fmt(hi - lo) + " rad, expected at least " +
-                       fmt(kMinJointRange) + " rad): its parameters cannot be identified");
+      throw InputError(origin + ": column q" + std::to_string(j + 1) + "_rad: joint " +
+                       std::to_string(j + 1) + " never moves (range " + fmt(hi - lo) +
+                       " rad, expected at least " + fmt(kMinJointRange) +
+                       " rad): its parameters cannot be identified");
     }
   }
   return log;

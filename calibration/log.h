@@ -27,10 +27,10 @@ inline constexpr int kMinLogSamples = 200;
 inline constexpr double kMinJointRange = 1e-3;  // [rad]
 
 struct CalibrationLog {
-  std::vector<double> t;  // [s]
-  std::vector<Vec6> q;    // [rad]
-  std::vector<Vec6> qd;   // [rad/s]
-  std::vector<Vec6> tau;  // [N m]
+  std::vector<double> t;              // [s]
+  std::vector<Vec6> q;                // [rad]
+  std::vector<Vec6> qd;               // [rad/s]
+  std::vector<Vec6> tau;              // [N m]
   std::vector<std::string> comments;  // without the leading '#'
 
   int size() const { return static_cast<int>(t.size()); }

@@ -62,7 +62,8 @@ void setup_excite(CLI::App& app) {
     const Excitation exc(p, q0, ep);
     SimulatedPhantom dev(phantom_plant(p), phantom_device_config(p), home);
     CalibrationLog log = run_excitation(dev, p, exc, opt->duration);
-    log.comments.push_back(" device: " + p.name + (opt->device.empty() ? "" : " (" + opt->device + ")"));
+    log.comments.push_back(" device: " + p.name +
+                           (opt->device.empty() ? "" : " (" + opt->device + ")"));
     log.comments.push_back(" excitation: Fourier f_base " + std::to_string(ep.base_frequency_hz) +
                            " Hz, " + std::to_string(ep.harmonics) + " harmonics, seed " +
                            std::to_string(opt->seed));
@@ -141,7 +142,8 @@ void setup_calibrate(CLI::App& app) {
     const PhantomParams prior =
         opt->prior.empty() ? default_phantom_params() : load_phantom_params(opt->prior);
     std::unique_ptr<PhantomParams> truth;
-    if (!opt->truth.empty()) truth = std::make_unique<PhantomParams>(load_phantom_params(opt->truth));
+    if (!opt->truth.empty())
+      truth = std::make_unique<PhantomParams>(load_phantom_params(opt->truth));
     FitOptions fo;
     fo.lowpass_hz = opt->lowpass_hz;
     fo.max_samples = opt->max_samples;
@@ -157,8 +159,8 @@ void setup_calibrate(CLI::App& app) {
     j["samples"] = r.samples;
     j["lowpass_hz"] = opt->lowpass_hz;
     j["residual_rms_n_m"] = r.residual_rms;
-    j["residual_rms_joint_n_m"] = std::vector<double>(r.residual_rms_joint.data(),
-                                                      r.residual_rms_joint.data() + 6);
+    j["residual_rms_joint_n_m"] =
+        std::vector<double>(r.residual_rms_joint.data(), r.residual_rms_joint.data() + 6);
     j["condition_number"] = r.condition_number;
     j["identifiable_count"] = r.identifiable;
     nlohmann::json params = nlohmann::json::array(), not_id = nlohmann::json::array();
@@ -166,8 +168,10 @@ void setup_calibrate(CLI::App& app) {
     double max_rel = 0.0;
     for (int i = 0; i < kCalibParams; ++i) {
       const FitParameter& fp = r.params[i];
-      nlohmann::json e{{"name", fp.name},   {"prior", fp.prior},
-                       {"value", fp.value}, {"std", fp.std},
+      nlohmann::json e{{"name", fp.name},
+                       {"prior", fp.prior},
+                       {"value", fp.value},
+                       {"std", fp.std},
                        {"identifiable", fp.identifiable}};
       if (!fp.identifiable) not_id.push_back(fp.name);
       if (truth && fp.identifiable) {
@@ -183,10 +187,11 @@ void setup_calibrate(CLI::App& app) {
     if (truth) j["max_rel_error"] = max_rel;
     write_json(opt->json, j);
     if (!opt->plots.empty()) write_plots(r, opt->plots);
-    std::printf("calibrate: %d samples, %d of %d parameters identifiable, condition number %.3g,\n"
-                "  residual RMS %.3g N m%s\n",
-                r.samples, r.identifiable, kCalibParams, r.condition_number, r.residual_rms,
-                truth ? (", max_rel_error " + std::to_string(max_rel)).c_str() : "");
+    std::printf(
+        "calibrate: %d samples, %d of %d parameters identifiable, condition number %.3g,\n"
+        "  residual RMS %.3g N m%s\n",
+        r.samples, r.identifiable, kCalibParams, r.condition_number, r.residual_rms,
+        truth ? (", max_rel_error " + std::to_string(max_rel)).c_str() : "");
     if (!r.converged) {
       throw std::runtime_error("calibrate: the fit did not converge (" + r.report +
                                "); no model file written, see " + opt->json);

@@ -63,20 +63,26 @@ TEST(CalibrateCli, ExciteThenCalibrateOnTheSimulatedPhantom) {
   const Cmd ex = run("excite --device " + (d / "truth.json").string() + " -o " +
                      (d / "log.csv").string() + " --duration 20 --seed 2");
   ASSERT_EQ(ex.status, 0) << ex.output;
-  const Cmd cal = run("calibrate " + (d / "log.csv").string() + " --json " +
-                      (d / "fit.json").string() + " -o " + (d / "fitted.json").string() +
-                      " --truth " + (d / "truth.json").string() + " --plots " +
-                      (d / "plots").string() + " --max-samples 1500");
+  const Cmd cal =
+      run("calibrate " + (d / "log.csv").string() + " --json " + (d / "fit.json").string() +
+          " -o " + (d / "fitted.json").string() + " --truth " + (d / "truth.json").string() +
+          " --plots " + (d / "plots").string() + " --max-samples 1500");
   ASSERT_EQ(cal.status, 0) << cal.output;
   std::printf("%s", cal.output.c_str());
   std::ifstream f(d / "fit.json");
   const nlohmann::json j = nlohmann::json::parse(f);
   EXPECT_TRUE(j.at("converged").get<bool>());
   ASSERT_EQ(j.at("parameters").size(), static_cast<std::size_t>(kCalibParams));
-  EXPECT_TRUE(j.contains("max_rel_error"));
+  ASSERT_TRUE(j.contains("max_rel_error"));
+  // Identifiable in practice on this quantised, sampled-data run: arm Coulomb friction, the
+  // base-yaw damping, gimbal masses (through gravity). Their worst error (measured 0.114, the
+  // gimbal-yaw mass, ~3 sigma) stays below 15 %.
+  EXPECT_GE(j.at("identifiable_count").get<int>(), 4);
+  EXPECT_LT(j.at("max_rel_error").get<double>(), 0.15);
   EXPECT_GT(j.at("condition_number").get<double>(), 1.0);
-  EXPECT_EQ(j.at("not_identifiable_left_at_prior").size() + j.at("identifiable_count").get<size_t>(),
-            static_cast<std::size_t>(kCalibParams));
+  EXPECT_EQ(
+      j.at("not_identifiable_left_at_prior").size() + j.at("identifiable_count").get<size_t>(),
+      static_cast<std::size_t>(kCalibParams));
   // Arm Coulomb friction: the largest friction torques, well above the noise floor.
   for (const auto& e : j.at("parameters")) {
     const std::string name = e.at("name");
@@ -105,8 +111,10 @@ TEST(CalibrateCli, ExciteThenCalibrateOnTheSimulatedPhantom) {
     gf = std::max(gf, (mf.g(q) - mt.g(q)).norm() / mt.g(q).norm());
     g0 = std::max(g0, (m0.g(q) - mt.g(q)).norm() / mt.g(q).norm());
   }
-  std::printf("arm M(q) relative error: fitted %.4f, defaults %.4f; g(q): fitted %.4f, "
-              "defaults %.4f\n", ef, e0, gf, g0);
+  std::printf(
+      "arm M(q) relative error: fitted %.4f, defaults %.4f; g(q): fitted %.4f, "
+      "defaults %.4f\n",
+      ef, e0, gf, g0);
   EXPECT_LT(ef, 0.05);
   EXPECT_LT(gf, 0.5 * g0);
   EXPECT_TRUE(fs::file_size(d / "plots" / "torque_fit.png") > 1000);
@@ -127,9 +135,9 @@ TEST(CalibrateCli, BadLogIsAnInputErrorAndWritesNothing) {
 TEST(CalibrateCli, FitThatDoesNotConvergeSaysSoAndExitsNonZero) {
   const fs::path d = temp_dir("noconv");
   ASSERT_EQ(run("excite -o " + (d / "log.csv").string() + " --duration 6").status, 0);
-  const Cmd c = run("calibrate " + (d / "log.csv").string() + " --json " +
-                    (d / "fit.json").string() + " -o " + (d / "m.json").string() +
-                    " --max-iterations 1 --max-samples 300");
+  const Cmd c =
+      run("calibrate " + (d / "log.csv").string() + " --json " + (d / "fit.json").string() +
+          " -o " + (d / "m.json").string() + " --max-iterations 1 --max-samples 300");
   EXPECT_EQ(c.status, 1) << c.output;
   EXPECT_THAT(c.output, HasSubstr("did not converge"));
   EXPECT_FALSE(fs::exists(d / "m.json"));

@@ -54,7 +54,8 @@ TEST(Excitation, StaysWithinJointVelocityAndTorqueLimits) {
       range_lo = range_lo.cwiseMin(q);
       range_hi = range_hi.cwiseMax(q);
       const Vec6 tau = model.M(q) * qdd + model.bias(q, qd) + model.g(q) + model.friction(qd);
-      torque_ratio = std::max(torque_ratio, tau.cwiseQuotient(p.torque_limit_n_m).cwiseAbs().maxCoeff());
+      torque_ratio =
+          std::max(torque_ratio, tau.cwiseQuotient(p.torque_limit_n_m).cwiseAbs().maxCoeff());
       vel_ratio = std::max(vel_ratio, qd.cwiseQuotient(ep.qd_max_rad_s).cwiseAbs().maxCoeff());
     }
     std::printf("seed %llu: max |tau|/tau_max %.3f, max |qd|/qd_max %.3f, min range %.3f rad\n",
@@ -93,9 +94,10 @@ TEST(Excitation, PdTrackingOnTheSimulatedPhantomLogsAppliedTorque) {
       ASSERT_NEAR(log.t[k] - log.t[k - 1], 1e-3, 1e-12);
     }
   }
-  std::printf("max tracking error %.4f rad (per joint %.4f %.4f %.4f %.4f %.4f %.4f), "
-              "max |tau|/tau_max %.3f\n",
-              err, err_j(0), err_j(1), err_j(2), err_j(3), err_j(4), err_j(5), sat);
+  std::printf(
+      "max tracking error %.4f rad (per joint %.4f %.4f %.4f %.4f %.4f %.4f), "
+      "max |tau|/tau_max %.3f\n",
+      err, err_j(0), err_j(1), err_j(2), err_j(3), err_j(4), err_j(5), sat);
   EXPECT_LT(err, 0.05);  // the fit does not need tracking, but the run must stay near the plan
   EXPECT_LE(sat, 1.0 + 1e-12);
   // The log round-trips through the file format and passes its checks.
