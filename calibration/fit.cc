@@ -151,6 +151,16 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
   if (n < 3) throw InputError("calibrate: log too short (fewer than 3 samples)");
   const double dt = (log.t.back() - log.t.front()) / (n - 1);
   std::vector<Vec6> qd = log.qd, tau = log.tau;
+  if (opt.torque_shift_samples != 0.0) {
+    // tau_eff[k] = tau at fractional index k - shift (linear interpolation, clamped at the ends).
+    const double sh = opt.torque_shift_samples;
+    for (int k = 0; k < n; ++k) {
+      const double u = std::clamp(k - sh, 0.0, n - 1.0);
+      const int i0 = std::min(static_cast<int>(std::floor(u)), n - 2);
+      const double a = u - i0;
+      tau[k] = (1.0 - a) * log.tau[i0] + a * log.tau[i0 + 1];
+    }
+  }
   zero_phase_lowpass(qd, dt, opt.lowpass_hz);
   zero_phase_lowpass(tau, dt, opt.lowpass_hz);
   // Parallel filtering of the Coulomb regressor column: the filter of tanh(qd / v_s) taken on the

@@ -72,7 +72,12 @@ struct FitOptions {
   double null_component = 1e-3;
   int max_iterations = 100;
   double min_fraction = 1e-3;  // lower bound of every parameter, relative to its prior
-  double max_rel_std = 0.1;    // std / |prior| above which a parameter counts as not identifiable
+  // Aligns the held torque with the sampled state: the torque used with sample k is the logged
+  // torque at fractional index k - torque_shift_samples (linear interpolation). A torque held
+  // over [t_k, t_k+1] is centred at t_k + T/2, and a driver velocity with lag L [s] describes
+  // t_k - L, so shift = L / T + 1/2 (docs/calibration.md). 0 = no shift.
+  double torque_shift_samples = 0.0;
+  double max_rel_std = 0.1;  // std / |prior| above which a parameter counts as not identifiable
 };
 
 struct FitParameter {

@@ -79,6 +79,7 @@ struct CalibrateOptions {
   double lowpass_hz = 10.0;
   int max_samples = 3000;
   int max_iterations = 100;
+  double torque_shift = 0.0;
 };
 
 void write_plots(const FitResult& r, const std::string& dir) {
@@ -133,6 +134,9 @@ void setup_calibrate(CLI::App& app) {
                   "zero-phase low-pass of qd and tau before differentiating [Hz], 0 = off "
                   "(default 10)");
   sub->add_option("--max-samples", opt->max_samples, "samples used (default 3000)");
+  sub->add_option("--torque-shift", opt->torque_shift,
+                  "use the torque logged this many ticks earlier with each sample (fractional; "
+                  "default 0): aligns the held torque with a lagging velocity estimate");
   sub->add_option("--max-iterations", opt->max_iterations,
                   "Ceres iteration limit (default 100); a fit that hits it did not converge");
   sub->callback([opt] {
@@ -149,6 +153,9 @@ void setup_calibrate(CLI::App& app) {
     fo.max_samples = opt->max_samples;
     if (opt->max_iterations < 1) throw InputError("--max-iterations: expected >= 1");
     fo.max_iterations = opt->max_iterations;
+    if (!(std::abs(opt->torque_shift) <= 100.0))
+      throw InputError("--torque-shift: expected |s| <= 100");
+    fo.torque_shift_samples = opt->torque_shift;
     const FitResult r = fit_calibration(log, prior, fo);
 
     nlohmann::json j;
@@ -158,6 +165,7 @@ void setup_calibrate(CLI::App& app) {
     j["iterations"] = r.iterations;
     j["samples"] = r.samples;
     j["lowpass_hz"] = opt->lowpass_hz;
+    j["torque_shift_samples"] = opt->torque_shift;
     j["residual_rms_n_m"] = r.residual_rms;
     j["residual_rms_joint_n_m"] =
         std::vector<double>(r.residual_rms_joint.data(), r.residual_rms_joint.data() + 6);
