@@ -11,6 +11,7 @@
 
 #include "device/closed_loop.h"
 #include "device/mujoco_plant.h"
+#include "device/phantom_device.h"
 #include "device/simulated_phantom.h"
 #include "reference/core/io.h"
 #include "reference/phantom/phantom_model.h"
@@ -127,35 +128,6 @@ PhantomParams phantom_belief(const ZwidthScenario& sc) {
   p.armature_kg_m2 *= s;
   p.damping_n_m_s_per_rad *= sc.model_damping_scale;
   return p;
-}
-
-// The MuJoCo plant of the Phantom (validation/phantom_mjcf.h): MuJoCo numbers the dofs of the
-// generated MJCF in depth-first body order, so tree joint i is dof order[i].
-MujocoPlant phantom_plant(const PhantomParams& p) {
-  MujocoPlant plant;
-  PhantomMjcfOptions o;
-  o.joint_damping = true;
-  o.joint_friction = true;
-  plant.mjcf = phantom_mjcf(p, o);
-  plant.tip_body = phantom_tree_body_name(kGimbalRoll);
-  plant.tip_offset = p.tip_offset_m;
-  const PhantomTreeT<double> tree = phantom_tree<double>(p);
-  std::vector<int> dof_of(kPhantomTreeDof, -1);
-  int next = 0;
-  std::function<void(int)> visit = [&](int i) {
-    dof_of[i] = next++;
-    for (int c = 0; c < kPhantomTreeDof; ++c) {
-      if (tree.parent[c] == i) visit(c);
-    }
-  };
-  for (int i = 0; i < kPhantomTreeDof; ++i) {
-    if (tree.parent[i] < 0) visit(i);
-  }
-  const Eigen::Matrix<double, kPhantomTreeDof, 6> G_tree = phantom_tree_map();
-  plant.G = MatX::Zero(kPhantomTreeDof, 6);
-  for (int i = 0; i < kPhantomTreeDof; ++i) plant.G.row(dof_of[i]) = G_tree.row(i);
-  for (int j = 0; j < 6; ++j) plant.device_dof.push_back(dof_of[phantom_actuated_tree_joint(j)]);
-  return plant;
 }
 
 class PhantomRig : public Rig {
