@@ -17,8 +17,14 @@ for f in "${flavours[@]}"; do
   echo "== build ($f) took $(( $(date +%s) - start )) s"
   echo "== tests ($f)"
   start=$(date +%s)
+  # Under the sanitizers the calibration suites are left out: Debian ships Ceres only as a
+  # static library built without ASan, and its Eigen instantiations collide with ours at link
+  # time (a bad-free inside ceres::Covariance's dense SVD). They run in the Release pass.
+  exclude=()
+  [ "$f" = asan ] && exclude=(-LE calibration)
   (cd "build/$f" && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
+     LSAN_OPTIONS="suppressions=$PWD/scripts/lsan.supp" \
      UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-     ctest --output-on-failure -j"$jobs" --timeout 900)
+     ctest --output-on-failure -j"$jobs" --timeout 900 "${exclude[@]}")
   echo "== tests ($f) took $(( $(date +%s) - start )) s"
 done
