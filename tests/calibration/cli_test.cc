@@ -4,6 +4,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "tests/support/cli.h"
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -21,20 +23,8 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-struct Cmd {
-  int status;
-  std::string output;
-};
-
-Cmd run(const std::string& args) {
-  const std::string cmd = std::string(DENTSIM_BINARY) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  char buf[4096];
-  while (p && fgets(buf, sizeof buf, p)) out += buf;
-  const int st = p ? pclose(p) : -1;
-  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
-}
+using Cmd = dentsim::testing::CliRun;
+inline Cmd run(const std::string& args) { return dentsim::testing::run_dentsim(args); }
 
 fs::path temp_dir(const std::string& name) {
   const fs::path d = fs::temp_directory_path() / ("dentsim_calib_cli_test_" + name);
