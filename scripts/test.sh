@@ -6,6 +6,7 @@
 #        scripts/test.sh release    (one flavour)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+root=$PWD
 scripts/setup.sh
 jobs=$(nproc 2>/dev/null || echo 2)
 flavours=("$@")
@@ -23,7 +24,7 @@ for f in "${flavours[@]}"; do
   exclude=()
   [ "$f" = asan ] && exclude=(-LE calibration)
   (cd "build/$f" && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
-     LSAN_OPTIONS="suppressions=$PWD/scripts/lsan.supp" \
+     LSAN_OPTIONS="suppressions=$root/scripts/lsan.supp" \
      UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
      ctest --output-on-failure -j"$jobs" --timeout 900 "${exclude[@]}")
   echo "== tests ($f) took $(( $(date +%s) - start )) s"
