@@ -150,7 +150,7 @@ const TickResult& ReferencePipeline::tick(const DeviceSample& s, double T,
           solve_with_friction(sys, r.contacts, proxy_.pose, contact, config_.friction);
       r.V_hat = fs.V;
       r.friction_sliding = fs.sliding;
-      friction_wrench = sys.A * fs.V - sys.b;  // what the multipliers added to the balance
+      friction_wrench = fs.F;  // (4.10)
     } else {
       r.V_hat = pmi_solve(sys);
     }

@@ -113,8 +113,6 @@ WallLoopResult run_wall_loop(const WallLoopConfig& cfg,
 
   double t = 0.0;
   pipeline.reset(sample_of(s, t));
-  NoContacts none;
-  (void)none;
   for (long k = 0; k < n_ticks; ++k) {
     const TickResult& r = pipeline.tick(sample_of(s, t), cfg.tick, wall);
     const VecX tau = r.tau;
