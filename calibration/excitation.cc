@@ -121,7 +121,11 @@ void Excitation::eval(double t, Vec6* q, Vec6* qd, Vec6* qdd) const {
 }
 
 CalibrationLog run_excitation(Device& device, const PhantomParams& p, const Excitation& exc,
-                              double duration, const TrackingParams& tracking) {
+                              double duration, const TrackingParams& tracking,
+                              ExactState exact_state) {
+  if ((exact_state.q == nullptr) != (exact_state.qd == nullptr)) {
+    throw InputError("excite: exact state needs both q and qd");
+  }
   if (device.dof() != 6) throw InputError("excite: the device must have 6 joints");
   const PhantomModelD model(p);
   const Mat6 M0 = model.M(exc.q0());
@@ -138,7 +142,8 @@ CalibrationLog run_excitation(Device& device, const PhantomParams& p, const Exci
     if (t > duration) break;
     Vec6 qr, qdr, qddr;
     exc.eval(t, &qr, &qdr, &qddr);
-    const Vec6 q = s.q, qd = s.qd;
+    const Vec6 q = exact_state.q ? Vec6(*exact_state.q) : Vec6(s.q);
+    const Vec6 qd = exact_state.qd ? Vec6(*exact_state.qd) : Vec6(s.qd);
     tau = model.M(q) * qddr + model.bias(q, qd) + model.g(q) + model.friction(qdr) +
           kp.cwiseProduct(qr - q) + kd.cwiseProduct(qdr - qd);
     device.write(tau);

@@ -65,9 +65,16 @@ struct TrackingParams {
 
 // Runs `exc` for `duration` [s] on `device` (already at rest near exc.q0()), with the model `p`
 // for the feed-forward. Throws InputError if the device faults (the log up to the fault would be
-// misleading).
+// misleading). With `exact_state` (a simulated device's ground truth, e.g. SimulatedPhantom's
+// true_q / true_qd) the tracking and the log use it instead of the driver's q and qd: the
+// "ideal sensing" harness that isolates the plant from quantisation and velocity estimation.
+struct ExactState {
+  const VecX* q = nullptr;
+  const VecX* qd = nullptr;
+};
 CalibrationLog run_excitation(Device& device, const PhantomParams& p, const Excitation& exc,
-                              double duration, const TrackingParams& tracking = {});
+                              double duration, const TrackingParams& tracking = {},
+                              ExactState exact_state = {});
 
 // Noise-free data by inverse dynamics of the model `truth` along the reference trajectory:
 // q, qd exact, tau = M qdd + C qd + g + tau_f, sampled every `dt` [s] (no tracking error, no

@@ -66,16 +66,60 @@ class PriorResidual : public ceres::SizedCostFunction<kCalibParams, kCalibParams
   double w_;
 };
 
-// Zero-phase first-order low-pass (forward then backward pass) of a sequence.
-void zero_phase_lowpass(std::vector<Vec6>& y, double dt, double fc) {
+// Zero-phase low-pass (forward then backward pass) of a sequence, each pass started in the steady
+// state of the sequence's end value. order 1: first order, magnitude 1 / (1 + (f/fc)^2);
+// order 2: second-order Butterworth (bilinear transform, cut-off prewarped), magnitude
+// 1 / (1 + (f/fc)^4): flat in the excitation band (1e-4 at f = fc/10 instead of 1e-2).
+void zero_phase_lowpass(std::vector<Vec6>& y, double dt, double fc, int order) {
   if (fc <= 0.0 || y.size() < 2) return;
-  const double rc = 1.0 / (2.0 * 3.14159265358979323846 * fc);
-  const double a = dt / (rc + dt);
-  for (std::size_t k = 1; k < y.size(); ++k) y[k] = y[k - 1] + a * (y[k] - y[k - 1]);
-  for (std::size_t k = y.size() - 1; k-- > 0;) y[k] = y[k + 1] + a * (y[k] - y[k + 1]);
+  const double pi = 3.14159265358979323846;
+  if (order == 1) {
+    const double rc = 1.0 / (2.0 * pi * fc);
+    const double a = dt / (rc + dt);
+    for (std::size_t k = 1; k < y.size(); ++k) y[k] = y[k - 1] + a * (y[k] - y[k - 1]);
+    for (std::size_t k = y.size() - 1; k-- > 0;) y[k] = y[k + 1] + a * (y[k] - y[k + 1]);
+    return;
+  }
+  const double K = std::tan(pi * fc * dt), r2 = std::sqrt(2.0);
+  const double norm = 1.0 / (1.0 + r2 * K + K * K);
+  const double b0 = K * K * norm, b1 = 2.0 * b0, b2 = b0;
+  const double a1 = 2.0 * (K * K - 1.0) * norm, a2 = (1.0 - r2 * K + K * K) * norm;
+  const auto pass = [&](auto begin, auto end) {
+    Vec6 x1 = *begin, x2 = *begin, y1 = *begin, y2 = *begin;
+    for (auto it = begin; it != end; ++it) {
+      const Vec6 x = *it;
+      const Vec6 out = b0 * x + b1 * x1 + b2 * x2 - a1 * y1 - a2 * y2;
+      x2 = x1;
+      x1 = x;
+      y2 = y1;
+      y1 = out;
+      *it = out;
+    }
+  };
+  pass(y.begin(), y.end());
+  pass(y.rbegin(), y.rend());
+}
+
+// x at fractional index k - shift (linear interpolation, clamped at the ends).
+std::vector<Vec6> shifted(const std::vector<Vec6>& x, double shift) {
+  const int n = static_cast<int>(x.size());
+  std::vector<Vec6> y(x.size());
+  for (int k = 0; k < n; ++k) {
+    const double u = std::clamp(k - shift, 0.0, n - 1.0);
+    const int i0 = std::min(static_cast<int>(std::floor(u)), n - 2);
+    const double a = u - i0;
+    y[k] = (1.0 - a) * x[i0] + a * x[i0 + 1];
+  }
+  return y;
 }
 
 }  // namespace
+
+double driver_velocity_lag_ticks(bool lowpass, double cutoff_hz, double T) {
+  if (!lowpass) return 0.5;
+  const double a = 1.0 - std::exp(-2.0 * 3.14159265358979323846 * cutoff_hz * T);
+  return 0.5 + (1.0 - a) / a;
+}
 
 Vec3 second_moments(const Vec3& I) {
   return 0.5 * Vec3(I(1) + I(2) - I(0), I(0) + I(2) - I(1), I(0) + I(1) - I(2));
@@ -146,36 +190,42 @@ Regressor calib_regressor(const PhantomParams& prior, const Vec6& q, const Vec6&
   return Y;
 }
 
+Regressor calib_regressor_by_columns(const PhantomParams& prior, const Vec6& q, const Vec6& qd,
+                                     const Vec6& qdd) {
+  Regressor Y;
+  for (int i = 0; i < kCalibParams; ++i) {
+    const PhantomModelD model(unpack_calib_params(prior, CalibVec::Unit(i)));
+    Y.col(i) = model.M(q) * qdd + model.bias(q, qd) + model.g(q) + model.friction(qd);
+  }
+  return Y;
+}
+
 FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
                           const FitOptions& opt) {
   const int n = log.size();
   if (n < 3) throw InputError("calibrate: log too short (fewer than 3 samples)");
   const double dt = (log.t.back() - log.t.front()) / (n - 1);
-  std::vector<Vec6> qd = log.qd, tau = log.tau;
-  if (opt.torque_shift_samples != 0.0) {
-    // tau_eff[k] = tau at fractional index k - shift (linear interpolation, clamped at the ends).
-    const double sh = opt.torque_shift_samples;
-    for (int k = 0; k < n; ++k) {
-      const double u = std::clamp(k - sh, 0.0, n - 1.0);
-      const int i0 = std::min(static_cast<int>(std::floor(u)), n - 2);
-      const double a = u - i0;
-      tau[k] = (1.0 - a) * log.tau[i0] + a * log.tau[i0 + 1];
-    }
-  }
-  zero_phase_lowpass(qd, dt, opt.lowpass_hz);
-  zero_phase_lowpass(tau, dt, opt.lowpass_hz);
-  // Parallel filtering of the Coulomb regressor column: the filter of tanh(qd / v_s) taken on the
-  // raw qd, not tanh of the filtered qd (they differ around every velocity reversal, and the
-  // difference would be absorbed by the viscous damping).
+  std::vector<Vec6> qd = log.qd;
+  std::vector<Vec6> tau =
+      opt.torque_shift_samples != 0.0 ? shifted(log.tau, opt.torque_shift_samples) : log.tau;
+  const std::vector<Vec6> q =
+      opt.position_shift_samples != 0.0 ? shifted(log.q, opt.position_shift_samples) : log.q;
+  zero_phase_lowpass(qd, dt, opt.lowpass_hz, opt.lowpass_order);
+  zero_phase_lowpass(tau, dt, opt.lowpass_hz, opt.lowpass_order);
+  // Parallel filtering of the Coulomb regressor column: the filter of tanh(v / v_s), not tanh of
+  // the filtered velocity (they differ around every velocity reversal, and the difference would
+  // be absorbed by the viscous damping); v the low-passed qd by default (its sign is right where
+  // the logged qd's noise flips it, options.coulomb_from_filtered_velocity).
   std::vector<Vec6> coulomb_col(n);
   for (int k = 0; k < n; ++k) {
     for (int j = 0; j < 6; ++j) {
-      const double v = log.qd[k](j), vs = prior.coulomb_smoothing_rad_s;
+      const double v = opt.coulomb_from_filtered_velocity ? qd[k](j) : log.qd[k](j);
+      const double vs = prior.coulomb_smoothing_rad_s;
       coulomb_col[k](j) = vs > 0.0 ? std::tanh(v / vs) : (v > 0.0) - (v < 0.0);
     }
   }
-  zero_phase_lowpass(coulomb_col, dt, opt.lowpass_hz);
-  const int stride = std::max(1, (n - 2) / std::max(1, opt.max_samples));
+  zero_phase_lowpass(coulomb_col, dt, opt.lowpass_hz, opt.lowpass_order);
+  const int stride = std::max(1, (n - 2) / std::max(1, opt.max_samples));  // before trimming
 
   const CalibVec p0 = pack_calib_params(prior);
   CalibVec s;
@@ -192,9 +242,14 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
   FitResult res;
   std::vector<Regressor> A;
   std::vector<Vec6> b;
-  for (int k = 1; k + 1 < n; k += stride) {
+  // The filters' start and end transients: samples within one cut-off period of either end of
+  // the log are not used.
+  const int trim = opt.lowpass_hz > 0.0
+                       ? std::min(n / 4, static_cast<int>(std::ceil(1.0 / (opt.lowpass_hz * dt))))
+                       : 0;
+  for (int k = std::max(1, trim); k + 1 < n - trim; k += stride) {
     const Vec6 qdd = (qd[k + 1] - qd[k - 1]) / (log.t[k + 1] - log.t[k - 1]);
-    Regressor Y = calib_regressor(prior, log.q[k], qd[k], qdd);
+    Regressor Y = calib_regressor(prior, q[k], qd[k], qdd);
     for (int j = 0; j < 6; ++j) Y(j, kCoulomb + j) = coulomb_col[k](j);
     A.push_back(Y * s.asDiagonal());
     b.push_back(tau[k]);
@@ -280,11 +335,38 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
     res.identifiable += fp.identifiable;
     res.params.push_back(fp);
   }
+  // Standard deviations. The textbook estimate C sigma^2 (C = (J^T J)^-1 from Ceres, sigma^2 =
+  // RSS / dof) assumes independent residuals; after the zero-phase low-pass, and with encoder
+  // quantisation (a slowly varying error), neighbouring samples' residuals are correlated and it
+  // is too small. Reported instead: the heteroscedasticity- and autocorrelation-consistent
+  // (Newey-West) sandwich C S C, S = sum_{|l| <= L} w_l sum_k g_k g_{k+l}^T with g_k = A_k^T r_k
+  // (the per-sample score) and Bartlett weights w_l = 1 - |l| / (L + 1); L covers three cut-off
+  // periods of the low-pass (in used samples) and at least the usual 4 (m/100)^(2/9).
   const double dof = std::max(1, 6 * m - res.identifiable);
   const double sigma2 = rss / dof;
+  const double corr_s = opt.lowpass_hz > 0.0 ? 3.0 / opt.lowpass_hz : 0.0;
+  const double used_dt = m > 1 ? (res.t.back() - res.t.front()) / (m - 1) : dt;
+  res.hac_lags =
+      std::min(m - 1, std::max(static_cast<int>(std::ceil(corr_s / used_dt)),
+                               static_cast<int>(std::floor(4.0 * std::pow(m / 100.0, 2.0 / 9.0)))));
+  std::vector<CalibVec> g(m);
+  for (int k = 0; k < m; ++k) g[k] = A[k].transpose() * (A[k] * x - b[k]);
+  Eigen::Matrix<double, kCalibParams, kCalibParams> S =
+      Eigen::Matrix<double, kCalibParams, kCalibParams>::Zero();
+  for (int k = 0; k < m; ++k) S.noalias() += g[k] * g[k].transpose();
+  for (int l = 1; l <= res.hac_lags; ++l) {
+    const double w = 1.0 - static_cast<double>(l) / (res.hac_lags + 1);
+    Eigen::Matrix<double, kCalibParams, kCalibParams> Sl =
+        Eigen::Matrix<double, kCalibParams, kCalibParams>::Zero();
+    for (int k = 0; k + l < m; ++k) Sl.noalias() += g[k] * g[k + l].transpose();
+    S += w * (Sl + Sl.transpose());
+  }
+  const Eigen::Matrix<double, kCalibParams, kCalibParams> C = cov;
+  const Eigen::Matrix<double, kCalibParams, kCalibParams> cov_hac = (6.0 * m / dof) * (C * S * C);
   for (int i = 0; i < kCalibParams; ++i) {
     FitParameter& fp = res.params[i];
-    fp.std = s(i) * std::sqrt(std::max(0.0, cov(i, i)) * sigma2);
+    fp.std_white = s(i) * std::sqrt(std::max(0.0, cov(i, i)) * sigma2);
+    fp.std = s(i) * std::sqrt(std::max(0.0, cov_hac(i, i)));
     // Practically identifiable: the data pin it to better than max_rel_std of its prior.
     if (fp.identifiable && !(fp.std <= opt.max_rel_std * s(i))) {
       fp.identifiable = false;

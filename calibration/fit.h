@@ -28,7 +28,9 @@
 // identifiable parameter whose standard deviation exceeds max_rel_std |prior| is not identifiable
 // in practice (below the noise floor) and reported as such too. The condition number
 // reported is sigma_max / sigma_min over the singular values kept. Standard deviations: Ceres
-// covariance of x (DENSE_SVD), scaled by the residual variance RSS / (m - n_identifiable).
+// covariance C of x (DENSE_SVD, prior included) in the Newey-West sandwich C S C, S the
+// autocorrelation-consistent covariance of the score over L lags (fit.cc says why and how L is
+// chosen); std_white = sqrt(C RSS / (m - n_identifiable)) is the textbook value for comparison.
 #pragma once
 
 #include <string>
@@ -62,9 +64,22 @@ PhantomParams unpack_calib_params(const PhantomParams& prior, const CalibVec& x)
 // Y(q, qd, qdd) at the geometry of `prior` (autodiff through PhantomModelT<ceres::Jet>).
 Regressor calib_regressor(const PhantomParams& prior, const Vec6& q, const Vec6& qd,
                           const Vec6& qdd);
+// The same Y built independently of the derivative path: tau is linear and homogeneous in p at
+// fixed geometry, so column i is the double inverse dynamics M qdd + C qd + g + tau_f of the
+// model whose 50 parameters are the unit vector e_i (the test oracle of calib_regressor).
+Regressor calib_regressor_by_columns(const PhantomParams& prior, const Vec6& q, const Vec6& qd,
+                                     const Vec6& qdd);
+
+// Lag [ticks] of a driver velocity estimate (device/velocity_estimator.h) behind the sampled
+// angle, at low frequency, for tick length T [s]: the backward difference (q_k - q_k-1) / T
+// describes t_k - T/2 (1/2 tick); the first-order low-pass qd_k = qd_k-1 + a (raw_k - qd_k-1),
+// a = 1 - exp(-2 pi f_c T), adds its DC group delay (1 - a) / a ticks. Phantom defaults
+// (200 Hz, 1 kHz): 0.5 + 0.398 = 0.898 ticks.
+double driver_velocity_lag_ticks(bool lowpass, double cutoff_hz, double T);
 
 struct FitOptions {
   double lowpass_hz = 0.0;     // zero-phase low-pass of qd and tau; 0 = off
+  int lowpass_order = 2;       // 1: first order; 2: second-order Butterworth (both zero-phase)
   int max_samples = 3000;      // samples used (evenly strided over the log)
   double huber_n_m = 0.02;     // Huber delta [N m]
   double prior_weight = 1e-6;  // w [N m per unit relative deviation]
@@ -77,12 +92,24 @@ struct FitOptions {
   // over [t_k, t_k+1] is centred at t_k + T/2, and a driver velocity with lag L [s] describes
   // t_k - L, so shift = L / T + 1/2 (docs/calibration.md). 0 = no shift.
   double torque_shift_samples = 0.0;
+  // The same for the angle: the q used with sample k is q at fractional index
+  // k - position_shift_samples. With a driver velocity lagging by d ticks
+  // (driver_velocity_lag_ticks) and a torque held over the tick, position shift d and torque
+  // shift d + 1/2 put q, qd and tau on the velocity's time line.
+  double position_shift_samples = 0.0;
+  // The velocity whose tanh(v / v_s) forms the Coulomb column (the column is then low-passed like
+  // tau): the low-passed qd (true) or the logged qd (false). A noisy logged velocity flips sign
+  // at random near every reversal, which shrinks the column there and biases f_c upwards
+  // (errors in variables; docs/calibration.md has the numbers).
+  bool coulomb_from_filtered_velocity = true;
   double max_rel_std = 0.1;  // std / |prior| above which a parameter counts as not identifiable
 };
 
 struct FitParameter {
   std::string name;
-  double prior = 0.0, value = 0.0, std = 0.0;
+  double prior = 0.0, value = 0.0;
+  double std = 0.0;        // Newey-West (autocorrelation-consistent) standard deviation
+  double std_white = 0.0;  // textbook std, residuals assumed independent (for comparison)
   bool identifiable = false;
 };
 
@@ -97,6 +124,7 @@ struct FitResult {
   double condition_number = 0.0;
   int samples = 0;
   int identifiable = 0;
+  int hac_lags = 0;  // L of the Newey-West standard deviations (in used samples)
   // The samples used: time, measured (filtered) and predicted torque.
   std::vector<double> t;
   std::vector<Vec6> tau_measured, tau_predicted;

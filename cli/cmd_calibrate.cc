@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <random>
 #include <stdexcept>
 #include <string>
 
@@ -25,6 +26,7 @@
 #include "device/phantom_device.h"
 #include "device/simulated_phantom.h"
 #include "reference/core/io.h"
+#include "reference/phantom/phantom_model.h"
 #include "reference/phantom/phantom_params.h"
 
 namespace dentsim::cli {
@@ -34,6 +36,7 @@ struct ExciteOptions {
   std::string device, out;
   double duration = 30.0;
   std::uint64_t seed = 1;
+  bool no_friction = false, ideal_sensing = false;
 };
 
 void setup_excite(CLI::App& app) {
@@ -48,6 +51,11 @@ void setup_excite(CLI::App& app) {
   sub->add_option("-o,--output", opt->out, "calibration log to write (CSV)")->required();
   sub->add_option("--duration", opt->duration, "length of the run [s] (default 30)");
   sub->add_option("--seed", opt->seed, "seed of the Fourier coefficients (default 1)");
+  sub->add_flag("--no-friction", opt->no_friction,
+                "simulate the device without Coulomb friction (MuJoCo frictionloss off)");
+  sub->add_flag("--ideal-sensing", opt->ideal_sensing,
+                "track and log the exact joint angles and velocities (no quantisation, no\n"
+                "velocity estimator): a harness for separating sensing from the plant");
   sub->callback([opt] {
     if (!(std::isfinite(opt->duration) && opt->duration >= 1.0 && opt->duration <= 3600.0)) {
       throw InputError("--duration: expected 1 <= S <= 3600 s, got " +
@@ -60,8 +68,15 @@ void setup_excite(CLI::App& app) {
     ExcitationParams ep;
     ep.seed = opt->seed;
     const Excitation exc(p, q0, ep);
-    SimulatedPhantom dev(phantom_plant(p), phantom_device_config(p), home);
-    CalibrationLog log = run_excitation(dev, p, exc, opt->duration);
+    SimulatedDeviceConfig dc = phantom_device_config(p);
+    dc.friction_on = !opt->no_friction;
+    if (opt->ideal_sensing) dc.quantize = false;
+    SimulatedPhantom dev(phantom_plant(p), dc, home);
+    ExactState exact;
+    if (opt->ideal_sensing) exact = {&dev.true_q(), &dev.true_qd()};
+    CalibrationLog log = run_excitation(dev, p, exc, opt->duration, TrackingParams{}, exact);
+    if (opt->no_friction) log.comments.push_back(" device friction (frictionloss) off");
+    if (opt->ideal_sensing) log.comments.push_back(" ideal sensing: exact q and qd logged");
     log.comments.push_back(" device: " + p.name +
                            (opt->device.empty() ? "" : " (" + opt->device + ")"));
     log.comments.push_back(" excitation: Fourier f_base " + std::to_string(ep.base_frequency_hz) +
@@ -80,6 +95,9 @@ struct CalibrateOptions {
   int max_samples = 3000;
   int max_iterations = 100;
   double torque_shift = 0.0;
+  std::string velocity_lag = "auto";
+  int lowpass_order = 2;
+  std::string coulomb_velocity = "filtered";
 };
 
 void write_plots(const FitResult& r, const std::string& dir) {
@@ -137,6 +155,19 @@ void setup_calibrate(CLI::App& app) {
   sub->add_option("--torque-shift", opt->torque_shift,
                   "use the torque logged this many ticks earlier with each sample (fractional; "
                   "default 0): aligns the held torque with a lagging velocity estimate");
+  sub->add_option(
+      "--velocity-lag", opt->velocity_lag,
+      "lag d [ticks] of the logged velocity behind the logged angle, or 'auto' (the\n"
+      "simulated Phantom's driver: backward difference + 200 Hz low-pass, 0.898 ticks at\n"
+      "1 kHz): q is taken d ticks and tau d + 1/2 + --torque-shift ticks earlier (the\n"
+      "torque is held over the tick); 0 = no alignment (exact logged velocities);\n"
+      "default auto");
+  sub->add_option("--lowpass-order", opt->lowpass_order,
+                  "1: first-order zero-phase low-pass, 2: second-order Butterworth (zero-phase)\n"
+                  "(default 2)");
+  sub->add_option("--coulomb-velocity", opt->coulomb_velocity,
+                  "velocity of the Coulomb column tanh(v / v_s): 'filtered' (the low-passed qd,\n"
+                  "default) or 'raw' (the logged qd)");
   sub->add_option("--max-iterations", opt->max_iterations,
                   "Ceres iteration limit (default 100); a fit that hits it did not converge");
   sub->callback([opt] {
@@ -156,6 +187,38 @@ void setup_calibrate(CLI::App& app) {
     if (!(std::abs(opt->torque_shift) <= 100.0))
       throw InputError("--torque-shift: expected |s| <= 100");
     fo.torque_shift_samples = opt->torque_shift;
+    if (opt->lowpass_order != 1 && opt->lowpass_order != 2)
+      throw InputError("--lowpass-order: expected 1 or 2, got " +
+                       std::to_string(opt->lowpass_order));
+    fo.lowpass_order = opt->lowpass_order;
+    if (opt->coulomb_velocity != "filtered" && opt->coulomb_velocity != "raw") {
+      throw InputError("--coulomb-velocity: expected 'filtered' or 'raw', got '" +
+                       opt->coulomb_velocity + "'");
+    }
+    fo.coulomb_from_filtered_velocity = opt->coulomb_velocity == "filtered";
+    double velocity_lag = 0.0;
+    if (opt->velocity_lag == "auto") {
+      const double T = (log.t.back() - log.t.front()) / (log.size() - 1);
+      // The simulated device's driver (the estimator `dentsim excite` runs).
+      const VelocityEstimatorParams vp = phantom_device_config(prior).velocity;
+      velocity_lag = driver_velocity_lag_ticks(vp.filter == VelocityFilter::kFirstOrderLowPass,
+                                               vp.cutoff_hz, T);
+    } else {
+      std::size_t used = 0;
+      try {
+        velocity_lag = std::stod(opt->velocity_lag, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used != opt->velocity_lag.size() || !(velocity_lag >= 0.0 && velocity_lag <= 100.0)) {
+        throw InputError("--velocity-lag: expected 'auto' or 0 <= TICKS <= 100, got '" +
+                         opt->velocity_lag + "'");
+      }
+    }
+    if (velocity_lag > 0.0) {
+      fo.position_shift_samples = velocity_lag;
+      fo.torque_shift_samples += velocity_lag + 0.5;
+    }
     const FitResult r = fit_calibration(log, prior, fo);
 
     nlohmann::json j;
@@ -165,22 +228,25 @@ void setup_calibrate(CLI::App& app) {
     j["iterations"] = r.iterations;
     j["samples"] = r.samples;
     j["lowpass_hz"] = opt->lowpass_hz;
-    j["torque_shift_samples"] = opt->torque_shift;
+    j["lowpass_order"] = fo.lowpass_order;
+    j["velocity_lag_ticks"] = velocity_lag;
+    j["coulomb_velocity"] = opt->coulomb_velocity;
+    j["position_shift_samples"] = fo.position_shift_samples;
+    j["torque_shift_samples"] = fo.torque_shift_samples;
     j["residual_rms_n_m"] = r.residual_rms;
     j["residual_rms_joint_n_m"] =
         std::vector<double>(r.residual_rms_joint.data(), r.residual_rms_joint.data() + 6);
     j["condition_number"] = r.condition_number;
     j["identifiable_count"] = r.identifiable;
+    j["std_newey_west_lags"] = r.hac_lags;
     nlohmann::json params = nlohmann::json::array(), not_id = nlohmann::json::array();
     const CalibVec xt = truth ? pack_calib_params(*truth) : CalibVec::Zero();
     double max_rel = 0.0;
     for (int i = 0; i < kCalibParams; ++i) {
       const FitParameter& fp = r.params[i];
-      nlohmann::json e{{"name", fp.name},
-                       {"prior", fp.prior},
-                       {"value", fp.value},
-                       {"std", fp.std},
-                       {"identifiable", fp.identifiable}};
+      nlohmann::json e{{"name", fp.name},           {"prior", fp.prior},
+                       {"value", fp.value},         {"std", fp.std},
+                       {"std_white", fp.std_white}, {"identifiable", fp.identifiable}};
       if (!fp.identifiable) not_id.push_back(fp.name);
       if (truth && fp.identifiable) {
         const double rel = std::abs(fp.value - xt(i)) / std::max(std::abs(xt(i)), 1e-300);
@@ -192,7 +258,36 @@ void setup_calibrate(CLI::App& app) {
     }
     j["parameters"] = params;
     j["not_identifiable_left_at_prior"] = not_id;
-    if (truth) j["max_rel_error"] = max_rel;
+    if (truth) {
+      j["max_rel_error"] = max_rel;
+      // The base parameters (what the observer uses): M(q) and g(q) of the fitted model and of
+      // the prior against the truth, max relative error (Frobenius / Euclidean) over 200 poses
+      // drawn uniformly in the joint-limit box (seeded); the arm's 3x3 block of M separately.
+      const PhantomModelD mt(*truth), mf(r.fitted), m0(prior);
+      std::mt19937_64 rng(1);
+      std::uniform_real_distribution<double> u(0.0, 1.0);
+      double e[2][3] = {{0, 0, 0}, {0, 0, 0}};
+      for (int k = 0; k < 200; ++k) {
+        Vec6 q;
+        for (int i = 0; i < 6; ++i)
+          q(i) = truth->q_min_rad(i) + u(rng) * (truth->q_max_rad(i) - truth->q_min_rad(i));
+        const Mat6 Mt = mt.M(q);
+        const Vec6 gt = mt.g(q);
+        const PhantomModelD* m[2] = {&mf, &m0};
+        for (int w = 0; w < 2; ++w) {
+          const Mat6 M = m[w]->M(q);
+          e[w][0] = std::max(e[w][0], (M - Mt).norm() / Mt.norm());
+          e[w][1] = std::max(e[w][1], (M.topLeftCorner<3, 3>() - Mt.topLeftCorner<3, 3>()).norm() /
+                                          Mt.topLeftCorner<3, 3>().norm());
+          e[w][2] = std::max(e[w][2], (m[w]->g(q) - gt).norm() / gt.norm());
+        }
+      }
+      j["truth_model_error"] = {
+          {"fitted",
+           {{"mass_matrix", e[0][0]}, {"arm_mass_matrix", e[0][1]}, {"gravity", e[0][2]}}},
+          {"prior",
+           {{"mass_matrix", e[1][0]}, {"arm_mass_matrix", e[1][1]}, {"gravity", e[1][2]}}}};
+    }
     write_json(opt->json, j);
     if (!opt->plots.empty()) write_plots(r, opt->plots);
     std::printf(

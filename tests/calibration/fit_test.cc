@@ -10,7 +10,10 @@
 
 #include "calibration/excitation.h"
 #include "device/phantom_device.h"
+#include "device/simulated_phantom.h"
+#include "device/velocity_estimator.h"
 #include "reference/phantom/phantom_model.h"
+#include "tests/support/stress.h"
 
 namespace dentsim {
 namespace {
@@ -57,6 +60,55 @@ TEST(CalibRegressor, EqualsInverseDynamicsOfTheDoubleModel) {
   }
   std::printf("max relative |Y p - tau| = %.3g\n", worst);
   EXPECT_LT(worst, 1e-12);
+}
+
+TEST(CalibRegressor, AutodiffEqualsTheColumnsOfUnitParameterInverseDynamics) {
+  // Two independent constructions of Y: derivatives through PhantomModelT<ceres::Jet> and columns
+  // of the double inverse dynamics at the unit parameter vectors e_i.
+  const std::uint64_t seed = 8;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  const PhantomParams prior = perturbed(default_phantom_params(), seed);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  double worst = 0.0;
+  for (int trial = 0; trial < 20; ++trial) {
+    Vec6 q, qd, qdd;
+    for (int j = 0; j < 6; ++j) {
+      q(j) = prior.q_min_rad(j) + 0.5 * (u(rng) + 1.0) * (prior.q_max_rad(j) - prior.q_min_rad(j));
+      qd(j) = 2.0 * u(rng);
+      qdd(j) = 20.0 * u(rng);
+    }
+    const Regressor Ya = calib_regressor(prior, q, qd, qdd);
+    const Regressor Yc = calib_regressor_by_columns(prior, q, qd, qdd);
+    // Entry-wise, relative to the largest entry of its row (rows differ by orders of magnitude).
+    for (int j = 0; j < 6; ++j) {
+      const double scale = Yc.row(j).cwiseAbs().maxCoeff();
+      ASSERT_GT(scale, 0.0) << "row " << j;
+      worst = std::max(worst, (Ya.row(j) - Yc.row(j)).cwiseAbs().maxCoeff() / scale);
+    }
+  }
+  std::printf("max relative |Y_autodiff - Y_columns| = %.3g\n", worst);
+  EXPECT_LT(worst, 1e-12);
+}
+
+TEST(CalibRegressor, DriverVelocityLag) {
+  // Backward difference: half a tick. Low-pass 200 Hz at 1 kHz: a = 1 - exp(-0.4 pi),
+  // (1 - a) / a = 0.3978 ticks more.
+  EXPECT_DOUBLE_EQ(driver_velocity_lag_ticks(false, 200.0, 1e-3), 0.5);
+  const double a = 1.0 - std::exp(-0.4 * 3.14159265358979323846);
+  EXPECT_NEAR(driver_velocity_lag_ticks(true, 200.0, 1e-3), 0.5 + (1.0 - a) / a, 1e-15);
+  EXPECT_NEAR(driver_velocity_lag_ticks(true, 200.0, 1e-3), 0.8978, 1e-4);
+  // Measured on a ramp: the estimate of a constant velocity v equals v, and on q = c t^2 / 2 it
+  // equals c (t - lag T) once the start-up transient has decayed.
+  VelocityEstimator est(1, VelocityEstimatorParams{});
+  const double c = 3.0, T = 1e-3;
+  est.reset(VecX::Zero(1), 0.0, VecX::Zero(1));
+  double qd = 0.0, t = 0.0;
+  for (int k = 1; k <= 200; ++k) {
+    t = k * T;
+    qd = est.update(VecX::Constant(1, 0.5 * c * t * t), t)(0);
+  }
+  EXPECT_NEAR(t - qd / c, driver_velocity_lag_ticks(true, 200.0, T) * T, 1e-12);
 }
 
 TEST(CalibFit, RecoversIdentifiableParametersNoiseFree) {
@@ -188,6 +240,103 @@ TEST(CalibFit, NoisyTorqueErrorsWithinThreeReportedSigma) {
   EXPECT_LE(outside, 1) << "of " << checked;  // ~0.3 % expected per parameter at 3 sigma
   // ... and the reported std is not inflated (a std 5x too large would give RMS z ~ 0.2).
   EXPECT_GT(rms_z, 0.3);
+}
+
+// What a driver reports along the synthesized (exact) log: angles quantised by the Phantom's
+// encoders (Delta = 2 pi / (4 x 1024 x ratio): 1.15e-4 rad on the arm, 1.5e-3 rad on the
+// gimbal), the velocity estimated from them by the simulated device's estimator (backward
+// difference + first-order 200 Hz low-pass) and the torque with Gaussian noise of sigma 0.2 %
+// of each joint's torque limit.
+CalibrationLog sensed(const CalibrationLog& exact, const PhantomParams& p, std::uint64_t seed) {
+  CalibrationLog log = exact;
+  const VecX quantum = encoder_quantum(1024, 4, phantom_drive_ratios());
+  VelocityEstimator est(6, phantom_device_config(p).velocity);
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> nd(0.0, 1.0);
+  for (int k = 0; k < log.size(); ++k) {
+    VecX q(6);
+    for (int j = 0; j < 6; ++j) q(j) = quantum(j) * std::floor(exact.q[k](j) / quantum(j));
+    if (k == 0) est.reset(q, log.t[0], VecX::Zero(6));
+    log.q[k] = q;
+    log.qd[k] = k == 0 ? Vec6::Zero() : Vec6(est.update(q, log.t[k]));
+    for (int j = 0; j < 6; ++j) log.tau[k](j) += 0.002 * p.torque_limit_n_m(j) * nd(rng);
+  }
+  return log;
+}
+
+struct Coverage {
+  int checked = 0, outside = 0;
+  double sum_z2 = 0.0, worst = 0.0, sum_z2_white = 0.0;
+};
+
+// Fits the sensed log of a random perturbation and adds each identifiable parameter's error in
+// units of its reported std to `cov`.
+void noisy_fit(std::uint64_t seed, Coverage* cov) {
+  const PhantomParams prior = default_phantom_params();
+  const PhantomParams truth = perturbed(prior, seed);
+  ExcitationParams ep;
+  ep.seed = seed;
+  const Excitation exc(truth, phantom_home_q(prior), ep);
+  const CalibrationLog log = sensed(synthesize_log(truth, exc, 11.0, 1e-3), prior, seed);
+  FitOptions fo;
+  fo.max_samples = 1000;
+  fo.lowpass_hz = 10.0;
+  // q and the (instantaneous, not held) torque put on the estimated velocity's time line.
+  const double lag = driver_velocity_lag_ticks(true, 200.0, 1e-3);
+  fo.position_shift_samples = lag;
+  fo.torque_shift_samples = lag;
+  const FitResult r = fit_calibration(log, prior, fo);
+  ASSERT_TRUE(r.converged) << r.report;
+  const CalibVec xt = pack_calib_params(truth);
+  double worst = 0.0;
+  for (int i = 0; i < kCalibParams; ++i) {
+    const FitParameter& fp = r.params[i];
+    if (!fp.identifiable) continue;
+    const double z = std::abs(fp.value - xt(i)) / fp.std;
+    const double zw = std::abs(fp.value - xt(i)) / fp.std_white;
+    worst = std::max(worst, z);
+    cov->sum_z2 += z * z;
+    cov->sum_z2_white += zw * zw;
+    ++cov->checked;
+    if (z > 3.0) {
+      ++cov->outside;
+      std::printf("  %s: error %.3g = %.2f sigma (rel %.3g)\n", fp.name.c_str(), fp.value - xt(i),
+                  z, fp.value / xt(i) - 1.0);
+    }
+  }
+  cov->worst = std::max(cov->worst, worst);
+  std::printf("seed %llu: %d identifiable, rms %.3g N m, L %d, worst |error|/std %.2f\n",
+              static_cast<unsigned long long>(seed), r.identifiable, r.residual_rms, r.hac_lags,
+              worst);
+}
+
+void expect_coverage(const Coverage& c, int min_checked) {
+  const double rms_z = std::sqrt(c.sum_z2 / std::max(1, c.checked));
+  std::printf(
+      "%d parameter errors checked, %d beyond 3 sigma, worst %.2f, RMS error/std %.2f "
+      "(with the textbook std %.2f)\n",
+      c.checked, c.outside, c.worst, rms_z, std::sqrt(c.sum_z2_white / std::max(1, c.checked)));
+  EXPECT_GE(c.checked, min_checked);
+  // Gaussian errors: P(|z| > 3) = 0.27 %; allow 1 % of the checked parameters (at least 1).
+  EXPECT_LE(c.outside, std::max(1, c.checked / 100)) << "of " << c.checked;
+  // ... and the std is not inflated: a std 3x too large gives an RMS z of ~0.33.
+  EXPECT_GT(rms_z, 0.4);
+}
+
+TEST(CalibFit, QuantisedEstimatedVelocityNoisyTorqueErrorsWithinThreeReportedSigma) {
+  Coverage c;
+  for (std::uint64_t seed = 41; seed < 49; ++seed) noisy_fit(seed, &c);
+  expect_coverage(c, 8 * 5);
+}
+
+TEST(CalibFitStress, QuantisedEstimatedVelocityNoisyTorqueManyPerturbations) {
+  // Short form: 4 more seeds; DENTSIM_STRESS=full: 40.
+  Coverage c;
+  const long n = dentsim::testing::stress_count(4, 40);
+  for (std::uint64_t seed = 100; seed < 100 + static_cast<std::uint64_t>(n); ++seed) {
+    noisy_fit(seed, &c);
+  }
+  expect_coverage(c, static_cast<int>(5 * n));
 }
 
 }  // namespace
