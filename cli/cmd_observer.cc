@@ -1,15 +1,20 @@
 // `dentsim observer-report`: how well the momentum observer (thesis (3.7)-(3.8)) estimates the
 // scripted hand's joint torques on the simulated Phantom, with the true device model and with a
 // model whose inertia and damping are off by --model-error (device/observer_report.h,
-// docs/simulated_device.md). Prints a table; --json writes the numbers.
+// docs/simulated_device.md). With --observer-model NAME=FILE (repeatable) the true model is
+// compared with the named model files instead (e.g. a calibrated and an uncalibrated model,
+// docs/calibration.md). Prints a table; --json writes the numbers.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "cli/registry.h"
 #include "device/observer_report.h"
 #include "reference/core/io.h"
+#include "reference/phantom/phantom_model.h"
 #include "reference/phantom/phantom_params.h"
 
 namespace dentsim::cli {
@@ -22,6 +27,7 @@ struct ObserverOptions {
   double gain = 100.0;
   bool no_friction = false;
   bool ideal_sensing = false;
+  std::vector<std::string> observer_models;  // NAME=FILE
 };
 
 void setup_observer(CLI::App& app) {
@@ -32,8 +38,13 @@ void setup_observer(CLI::App& app) {
       "then motion) and report its steady-state error and lag with the true device model and\n"
       "with inertia and damping off by --model-error");
   sub->add_option("--json", opt->json, "write the numbers to this JSON file");
-  sub->add_option("--model", opt->model,
-                  "device model file (default: the built-in Premium 1.5A model)");
+  sub->add_option("--model,--device", opt->model,
+                  "device model file of the simulated Phantom, also the true observer model\n"
+                  "(default: the built-in Premium 1.5A model)");
+  sub->add_option("--observer-model", opt->observer_models,
+                  "NAME=FILE (repeatable): run the observer (and gravity compensation) with the\n"
+                  "model file FILE under NAME, after the true model, instead of the scaled model;\n"
+                  "FILE 'builtin' is the built-in Premium 1.5A model");
   sub->add_option("--model-error", opt->model_error,
                   "relative error of the perturbed model's inertia and damping (default 0.2)");
   sub->add_option("--gain", opt->gain, "observer gain L [1/s] on every joint (default 100)");
@@ -57,7 +68,32 @@ void setup_observer(CLI::App& app) {
     c.gain_L = opt->gain;
     c.device_friction = !opt->no_friction;
     c.ideal_sensing = opt->ideal_sensing;
-    const ObserverReport r = run_observer_report(params, c);
+    // Named observer models: parse and load them all before running anything.
+    std::vector<std::string> names;
+    std::vector<PhantomModel> models;  // reserved: the run list points into it
+    models.reserve(opt->observer_models.size());
+    for (const std::string& spec : opt->observer_models) {
+      const std::size_t eq = spec.find('=');
+      if (eq == std::string::npos || eq == 0 || eq + 1 == spec.size()) {
+        throw InputError("--observer-model: expected NAME=FILE, got '" + spec + "'");
+      }
+      const std::string name = spec.substr(0, eq), file = spec.substr(eq + 1);
+      if (name == "true" || std::find(names.begin(), names.end(), name) != names.end()) {
+        throw InputError("--observer-model: name '" + name + "' is used twice ('true' is the " +
+                         "true model's)");
+      }
+      names.push_back(name);
+      models.emplace_back(file == "builtin" ? default_phantom_params() : load_phantom_params(file));
+    }
+    ObserverReport r;
+    if (models.empty()) {
+      r = run_observer_report(params, c);
+    } else {
+      const PhantomModel truth(observer_true_params(params, c));
+      std::vector<NamedObserverModel> list{{"true", &truth}};
+      for (std::size_t i = 0; i < models.size(); ++i) list.push_back({names[i], &models[i]});
+      r = run_observer_models(params, c, list);
+    }
     std::fputs(observer_report_table(r).c_str(), stdout);
     if (!opt->json.empty()) write_file_atomic(opt->json, observer_report_json(r));
   });

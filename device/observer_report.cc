@@ -229,11 +229,7 @@ std::string row(const char* label, const VecX& v, double scale) {
   return s + " |\n";
 }
 
-}  // namespace
-
-ObserverReport run_observer_report(const PhantomParams& params,
-                                   const ObserverReportConfig& config) {
-  const ObserverReportConfig& c = config;
+void check_config(const ObserverReportConfig& c) {
   if (!(c.gain_L > 0.0) || !(c.model_error > -1.0) || !(c.t_step > 0.1) ||
       !(c.t_move > c.t_step + c.settle_window) || !(c.t_end > c.t_move + c.move_period * 0.5) ||
       !(c.move_period > 0.0) || !(c.settle_window > 0.0)) {
@@ -241,17 +237,51 @@ ObserverReport run_observer_report(const PhantomParams& params,
         "observer report: expected gain_L > 0, model_error > -1, t_step > 0.1, "
         "t_move > t_step + settle_window, t_end > t_move + move_period / 2");
   }
+}
+
+}  // namespace
+
+PhantomParams observer_true_params(const PhantomParams& params,
+                                   const ObserverReportConfig& config) {
+  PhantomParams p = params;
+  if (!config.device_friction) p.coulomb_n_m.setZero();
+  return p;
+}
+
+ObserverReport run_observer_models(const PhantomParams& params, const ObserverReportConfig& config,
+                                   const std::vector<NamedObserverModel>& models) {
+  check_config(config);
+  if (models.empty()) throw InputError("observer report: no observer model given");
+  for (std::size_t i = 0; i < models.size(); ++i) {
+    const NamedObserverModel& m = models[i];
+    if (m.name.empty()) throw InputError("observer report: observer model with an empty name");
+    if (m.model == nullptr || m.model->dof() != 6) {
+      throw InputError("observer report: observer model '" + m.name + "' is not a 6-DoF model");
+    }
+    for (std::size_t k = 0; k < i; ++k) {
+      if (models[k].name == m.name) {
+        throw InputError("observer report: observer model name '" + m.name + "' given twice");
+      }
+    }
+  }
   ObserverReport rep;
-  rep.config = c;
-  rep.expected_lag_s = 1.0 / c.gain_L;
-  rep.device_coulomb = c.device_friction ? VecX(params.coulomb_n_m) : VecX(VecX::Zero(6));
-  // The true model of the simulated device: without Coulomb friction when the device has none.
-  PhantomParams model_params = params;
-  if (!c.device_friction) model_params.coulomb_n_m.setZero();
-  const PhantomModel truth(model_params);
-  const ScaledDeviceModel perturbed(truth, 1.0 + c.model_error, 1.0 + c.model_error);
-  rep.runs.push_back(evaluate(simulate(params, c, truth), c, "true"));
-  rep.runs.push_back(evaluate(simulate(params, c, perturbed), c, "perturbed"));
+  rep.config = config;
+  rep.expected_lag_s = 1.0 / config.gain_L;
+  rep.device_coulomb = config.device_friction ? VecX(params.coulomb_n_m) : VecX(VecX::Zero(6));
+  for (const NamedObserverModel& m : models) {
+    rep.runs.push_back(evaluate(simulate(params, config, *m.model), config, m.name));
+  }
+  return rep;
+}
+
+ObserverReport run_observer_report(const PhantomParams& params,
+                                   const ObserverReportConfig& config) {
+  check_config(config);
+  const PhantomModel truth(observer_true_params(params, config));
+  const ScaledDeviceModel perturbed(truth, 1.0 + config.model_error, 1.0 + config.model_error);
+  ObserverReport rep =
+      run_observer_models(params, config, {{"true", &truth}, {"perturbed", &perturbed}});
+  rep.scaled_model_run = true;
   return rep;
 }
 
@@ -259,14 +289,15 @@ std::string observer_report_json(const ObserverReport& r) {
   nlohmann::json j;
   const ObserverReportConfig& c = r.config;
   j["config"] = {{"gain_L_per_s", c.gain_L},
-                 {"model_error", c.model_error},
                  {"device_friction", c.device_friction},
+                 {"ideal_sensing", c.ideal_sensing},
                  {"t_step_s", c.t_step},
                  {"t_move_s", c.t_move},
                  {"t_end_s", c.t_end},
                  {"f_step_n", {c.f_step[0], c.f_step[1], c.f_step[2]}},
                  {"move_amplitude_m", c.move_amplitude},
                  {"move_period_s", c.move_period}};
+  if (r.scaled_model_run) j["config"]["model_error"] = c.model_error;
   j["expected_lag_s"] = r.expected_lag_s;
   j["device_coulomb_n_m"] = vec_json(r.device_coulomb);
   for (const ObserverRun& run : r.runs) {
@@ -287,11 +318,18 @@ std::string observer_report_json(const ObserverReport& r) {
 
 std::string observer_report_table(const ObserverReport& r) {
   char head[200];
-  std::snprintf(head, sizeof(head),
-                "Observer L = %g 1/s (expected lag 1/L = %.1f ms), model error %+.0f %% in inertia "
-                "and damping; values in mN m, joints q1..q6\n\n",
-                r.config.gain_L, 1e3 * r.expected_lag_s, 100.0 * r.config.model_error);
+  std::snprintf(head, sizeof(head), "Observer L = %g 1/s (expected lag 1/L = %.1f ms), ",
+                r.config.gain_L, 1e3 * r.expected_lag_s);
   std::string s = head;
+  if (r.scaled_model_run) {
+    std::snprintf(head, sizeof(head), "model error %+.0f %% in inertia and damping",
+                  100.0 * r.config.model_error);
+    s += head;
+  } else {
+    s += "models:";
+    for (const ObserverRun& run : r.runs) s += " " + run.model;
+  }
+  s += "; values in mN m, joints q1..q6\n\n";
   s += "| quantity | q1 | q2 | q3 | q4 | q5 | q6 |\n|---|---|---|---|---|---|---|\n";
   s += row("device Coulomb f_c", r.device_coulomb, 1e3);
   for (const ObserverRun& run : r.runs) {

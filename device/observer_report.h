@@ -34,6 +34,9 @@
 //     mean out.
 // Invisible to any model: the joint stiction (MuJoCo frictionloss holds a joint at rest with any
 // torque up to f_c), which bounds the steady error when the device has friction.
+// Any set of named observer models can be compared on the same simulated device
+// (run_observer_models): each model both compensates gravity in the motors and runs the observer,
+// as a user's model would (the calibration's end-to-end check, docs/calibration.md).
 #pragma once
 
 #include <string>
@@ -88,7 +91,7 @@ struct ObserverReportConfig {
 };
 
 struct ObserverRun {
-  std::string model;              // "true" or "perturbed"
+  std::string model;              // "true", "perturbed" or the name given to run_observer_models
   VecX steady_error;              // median f_hat - f_true per joint, hold phase [N m]
   double steady_error_max = 0.0;  // max |steady_error| [N m]
   int lag_joint = 0;              // joint (0-based) the lag is measured on
@@ -107,12 +110,30 @@ struct ObserverReport {
   ObserverReportConfig config;
   double expected_lag_s = 0.0;    // 1/L
   VecX device_coulomb;            // f_c per joint of the simulated device [N m] (0 if off)
-  std::vector<ObserverRun> runs;  // true model, then the perturbed model
+  std::vector<ObserverRun> runs;  // true model, then the perturbed model (or the named models)
+  bool scaled_model_run = false;  // runs[1] is the true model scaled by 1 + config.model_error
 };
+
+// An observer model under a name (the model must outlive the call).
+struct NamedObserverModel {
+  std::string name;
+  const DeviceModel* model = nullptr;
+};
+
+// The true model of the simulated device of `params` (the analytic PhantomModel's parameters):
+// without Coulomb friction when config.device_friction is off.
+PhantomParams observer_true_params(const PhantomParams& params, const ObserverReportConfig& config);
 
 // Runs the experiment on the simulated Phantom of `params` (the true model is the analytic
 // PhantomModel of the same params). Deterministic (the jitter is seeded).
 ObserverReport run_observer_report(const PhantomParams& params, const ObserverReportConfig& config);
+
+// The same experiment on the simulated Phantom of `params` with each of `models` in turn (gravity
+// compensation and observer), in the order given; config.model_error is not used. Throws
+// InputError on a bad config, an empty list, an empty or repeated name, a null model or a model
+// that is not 6-DoF.
+ObserverReport run_observer_models(const PhantomParams& params, const ObserverReportConfig& config,
+                                   const std::vector<NamedObserverModel>& models);
 
 // The report as JSON text and as a Markdown table (docs/simulated_device.md).
 std::string observer_report_json(const ObserverReport& r);
