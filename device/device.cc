@@ -75,4 +75,12 @@ std::uint32_t check_sample(const VecX& q_prev, double t_prev, const VecX& q, dou
   return faults;
 }
 
+ObserverInput matched_observer_input(const DeviceCapabilities& caps) {
+  ObserverInput in;
+  if (caps.measures_velocity) return in;
+  in.match_backward_difference = true;
+  in.lowpass_hz = caps.velocity_lowpass_hz;
+  return in;
+}
+
 }  // namespace dentsim

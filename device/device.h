@@ -22,6 +22,7 @@
 
 #include "reference/core/device_model.h"
 #include "reference/core/types.h"
+#include "reference/observer.h"
 
 namespace dentsim {
 
@@ -56,7 +57,16 @@ struct DeviceCapabilities {
   bool simulated = false;
   double nominal_period = 1e-3;  // nominal servo tick [s]
   VecX encoder_quantum;          // joint-angle resolution [rad] (0 = not quantised)
+  // When measures_velocity is false: the driver's qd is the backward difference of the angles,
+  // low-passed (first order) at this cut-off [Hz]; 0 = no low-pass (device/velocity_estimator.h).
+  double velocity_lowpass_hz = 0.0;
 };
+
+// The momentum observer's input matched to this device's velocity estimate
+// (reference/observer.h "Input matched to the velocity estimate"): a backward difference pairs
+// with the torque averaged over the two ticks it spans, and the driver's low-pass is applied to
+// the torque as well. A device that measures velocity gets the unmatched (thesis) input.
+ObserverInput matched_observer_input(const DeviceCapabilities& caps);
 
 class Device {
  public:

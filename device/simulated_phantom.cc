@@ -148,6 +148,9 @@ SimulatedPhantom::SimulatedPhantom(const MujocoPlant& plant, SimulatedDeviceConf
   caps_.has_force_sensor = false;
   caps_.simulated = true;
   caps_.nominal_period = cfg_.jitter.period;
+  caps_.velocity_lowpass_hz = cfg_.velocity.filter == VelocityFilter::kFirstOrderLowPass
+                                  ? cfg_.velocity.cutoff_hz
+                                  : 0.0;
 
   // Limits.
   limits_.tau_max =

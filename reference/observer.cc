@@ -1,6 +1,7 @@
 #include "reference/observer.h"
 
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -18,8 +19,8 @@ void require_size(const VecX& v, int n, const char* what) {
 
 }  // namespace
 
-MomentumObserver::MomentumObserver(const DeviceModel& model, VecX gain_L)
-    : model_(model), L_(std::move(gain_L)) {
+MomentumObserver::MomentumObserver(const DeviceModel& model, VecX gain_L, ObserverInput input)
+    : model_(model), L_(std::move(gain_L)), input_(input) {
   require_size(L_, model_.dof(), "gain_L");
   for (int i = 0; i < L_.size(); ++i) {
     if (!(L_(i) > 0.0) || !std::isfinite(L_(i))) {
@@ -27,6 +28,10 @@ MomentumObserver::MomentumObserver(const DeviceModel& model, VecX gain_L)
                                   "] must be a finite positive gain [1/s], got " +
                                   std::to_string(L_(i)));
     }
+  }
+  if (!(input_.lowpass_hz >= 0.0) || !std::isfinite(input_.lowpass_hz)) {
+    throw std::invalid_argument("MomentumObserver: input lowpass_hz must be finite and >= 0, got " +
+                                std::to_string(input_.lowpass_hz));
   }
   f_hat_ = VecX::Zero(L_.size());
 }
@@ -43,6 +48,8 @@ void MomentumObserver::reset(const VecX& q, const VecX& qd) {
   p_hat_ = model_.mass_matrix(q) * qd;  // p = M(q) qd
   f_hat_ = VecX::Zero(model_.dof());
   beta_prev_ = beta(q, qd);
+  tau_prev_ = -beta_prev_;
+  u_f_ = VecX::Zero(model_.dof());
   ready_ = true;
 }
 
@@ -56,8 +63,21 @@ const VecX& MomentumObserver::update(const VecX& q, const VecX& qd, const VecX& 
                                 std::to_string(T));
   }
   const VecX beta_next = beta(q, qd);
-  // p_hat_k+1 = p_hat_k + T ((beta_k + beta_k+1)/2 + tau_k + f_hat_k)              (3.8), §4.1.1
-  p_hat_ += T * (0.5 * (beta_prev_ + beta_next) + tau + f_hat_);
+  // u_k: thesis form (beta_k + beta_k+1)/2 + tau_k; matched to a backward difference,
+  // beta_k + (tau_k-1 + tau_k)/2 (the triangle of the two ticks the difference spans, centred at
+  // t_k). reset() sets tau_k-1 = -beta_0: the device was at rest in equilibrium before the start.
+  VecX u = input_.match_backward_difference ? VecX(beta_prev_ + 0.5 * (tau_prev_ + tau))
+                                             : VecX(0.5 * (beta_prev_ + beta_next) + tau);
+  if (input_.lowpass_hz > 0.0) {
+    // The velocity estimator's low-pass, applied to u; it starts settled at rest (u_f = 0), as
+    // the estimator starts from qd = 0.
+    const double a = 1.0 - std::exp(-2.0 * std::numbers::pi * input_.lowpass_hz * T);
+    u_f_ += a * (u - u_f_);
+    u = u_f_;
+  }
+  tau_prev_ = tau;
+  // p_hat_k+1 = p_hat_k + T (u_k + f_hat_k)                                        (3.8), §4.1.1
+  p_hat_ += T * (u + f_hat_);
   // f_hat_k+1 = L (M(q_k+1) qd_k+1 - p_hat_k+1)                                          §4.1.1
   f_hat_ = L_.asDiagonal() * (model_.mass_matrix(q) * qd - p_hat_);
   beta_prev_ = beta_next;

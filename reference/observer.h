@@ -16,6 +16,27 @@
 // Step response: f_hat_k = f (1 - (1 - L T)^k), the sampled first-order lag; stable for
 // 0 < L T < 2, monotone for L T <= 1. A model damping off by dB (model B_d + dB) biases the
 // steady estimate by +dB qd. Derivation: docs/derivations/decomposition_and_observer.md.
+//
+// Input matched to the velocity estimate (ObserverInput; off by default = the thesis's form).
+// A driver without a tachometer reports qd_k as a backward difference of the angles, often
+// low-passed (device/velocity_estimator.h): qd_k = H(z) (q_k - q_k-1) / T_k. The momentum
+// M qd_k then lags the true momentum while tau_k enters p_hat without that lag, so
+//     f_hat = L / (s + L) (H f + (H - 1) u),   u = tau + beta,
+// and when the command contains -f_hat (the passive decomposition's feed-forward (4.7)) the
+// (H - 1) term closes a loop f_hat -> tau -> f_hat whose phase lag makes it unstable for
+// L tau_H of order one (tau_H the delay of H: a few ms). Matching the input removes the loop.
+// For a constant M and tick T, the mean velocity over a tick obeys exactly
+//     M ((q_k+1 - q_k) - (q_k - q_k-1)) / T = T ((tau_k-1 + tau_k)/2 + f)   (ZOH tau, f constant)
+// so the backward difference pairs with the torque averaged over the two ticks it spans, and a
+// low-pass applied to qd must be applied to u as well (a linear filter commutes with the
+// difference). With
+//     u_k = beta_k + (tau_k-1 + tau_k)/2                     (match_backward_difference)
+//     u_f,k = u_f,k-1 + a_k (u_k - u_f,k-1),  a_k = 1 - exp(-2 pi f_c T_k)   (lowpass_hz = f_c)
+//     p_hat_k+1 = p_hat_k + T_k (u_f,k + f_hat_k)
+// the estimate becomes f_hat = L / (s + L) H f: the human force seen through the same filter as
+// the velocity, with no path from tau back to f_hat (exact for a constant M with beta = 0; beta
+// is taken at t_k, the centre of the two ticks the difference spans). The observer starts as the
+// estimator does, at rest: tau_-1 = -beta_0 (equilibrium before the start) and u_f = 0.
 #pragma once
 
 #include "reference/core/device_model.h"
@@ -23,11 +44,19 @@
 
 namespace dentsim {
 
+// How the observer's known input u = tau + beta is matched to the velocity estimate (above).
+// The default (both off) is the thesis's discretisation.
+struct ObserverInput {
+  bool match_backward_difference = false;  // u uses (tau_k-1 + tau_k)/2
+  double lowpass_hz = 0.0;                 // > 0: u low-passed like qd (first order, f_c [Hz])
+};
+
 class MomentumObserver {
  public:
   // gain_L: the diagonal of L, one positive gain per joint [1/s]. The model must outlive the
-  // observer. Throws std::invalid_argument for a wrong size or a non-positive gain.
-  MomentumObserver(const DeviceModel& model, VecX gain_L);
+  // observer. Throws std::invalid_argument for a wrong size, a non-positive gain or a negative
+  // or non-finite lowpass_hz.
+  MomentumObserver(const DeviceModel& model, VecX gain_L, ObserverInput input = {});
 
   // Starts at rest on the current sample: p_hat = M(q) qd, f_hat = 0.
   void reset(const VecX& q, const VecX& qd);
@@ -38,6 +67,7 @@ class MomentumObserver {
   // The current joint-space estimate f_hat.
   const VecX& estimate() const { return f_hat_; }
   const VecX& gain() const { return L_; }
+  const ObserverInput& input() const { return input_; }
 
   // beta(q, qd) = C^T qd - g - tau_f of (3.7).
   VecX beta(const VecX& q, const VecX& qd) const;
@@ -48,6 +78,9 @@ class MomentumObserver {
   VecX p_hat_;
   VecX f_hat_;
   VecX beta_prev_;
+  ObserverInput input_;
+  VecX tau_prev_;  // tau_k-1 (match_backward_difference)
+  VecX u_f_;       // low-passed input (lowpass_hz > 0)
   bool ready_ = false;
 };
 

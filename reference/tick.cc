@@ -50,7 +50,8 @@ ReferencePipeline::ReferencePipeline(const SixDofDeviceModel& device, PipelineCo
                                   std::to_string(config_.observer_gain.size()) +
                                   " entries; the device has " + std::to_string(n) + " joints");
     }
-    observer_ = std::make_unique<MomentumObserver>(device_, config_.observer_gain);
+    observer_ = std::make_unique<MomentumObserver>(device_, config_.observer_gain,
+                                                   config_.observer_input);
   } else if (config_.method == Method::kPmiPd) {
     throw std::invalid_argument("method pmi-pd needs the observer gain L (one per joint)");
   }

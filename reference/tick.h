@@ -25,10 +25,9 @@
 #include "reference/core/affine_wrench.h"
 #include "reference/core/device_model.h"
 #include "reference/core/params.h"
+#include "reference/observer.h"
 
 namespace dentsim {
-
-class MomentumObserver;
 
 // The collision stage as seen by the tick: fills `out` (cleared first) with the contacts of the
 // proxy at `proxy` (the tool tip). Implementations: the voxel tooth's octree, analytic walls.
@@ -51,6 +50,7 @@ struct PipelineConfig {
   FrictionParams friction;
   ToolDynamics tool;            // desired locked dynamics (kPmiPd)
   VecX observer_gain;           // L per joint [1/s] (kPmiPd; also run for the estimate when set)
+  ObserverInput observer_input;  // input matched to the driver's velocity estimate (observer.h)
   VecX torque_limit;            // |tau_i| <= torque_limit_i [N m]; empty = no saturation
   // Add the model's gravity torque g(q) to the command: the thesis assumes gravity compensated
   // (2.1); the observer accounts for it either way since it sees the total torque.

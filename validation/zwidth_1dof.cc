@@ -38,6 +38,8 @@ AxisDevice::AxisDevice(AxisDeviceParams params, const Vec3& start)
   caps_.has_force_sensor = false;
   caps_.simulated = true;
   caps_.nominal_period = p_.period;
+  caps_.velocity_lowpass_hz =
+      p_.velocity.filter == VelocityFilter::kFirstOrderLowPass ? p_.velocity.cutoff_hz : 0.0;
   caps_.encoder_quantum = VecX::Zero(6);
   caps_.encoder_quantum(2) = p_.quantum;
   limits_.tau_max = VecX::Constant(6, p_.force_limit);
