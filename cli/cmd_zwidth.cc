@@ -35,6 +35,8 @@ struct ZwidthOptions {
   double push_n = 1.5;
   bool sensitivity = false;
   std::vector<double> k_vc, b_vc, k_tooth;  // grid overrides (every operator)
+  double observer_gain = ZwidthScenario{}.observer_gain;
+  bool observer_unmatched = false;
 };
 
 bool show_progress() { return isatty(2) && std::getenv("CI") == nullptr; }
@@ -241,6 +243,12 @@ void run_zwidth(const ZwidthOptions& o) {
   sc.tick = o.tick_ms * 1e-3;
   sc.hold_s = o.hold_s;
   sc.push_force_n = o.push_n;
+  if (!(o.observer_gain > 0.0) || !(o.observer_gain * sc.tick < 1.0)) {
+    throw InputError("--observer-gain: expected L > 0 with L T < 1 (T = " +
+                     std::to_string(sc.tick) + " s), got " + std::to_string(o.observer_gain));
+  }
+  sc.observer_gain = o.observer_gain;
+  sc.observer_input_matched = !o.observer_unmatched;
   const int threads = o.threads > 0
                           ? o.threads
                           : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -366,8 +374,12 @@ void run_zwidth(const ZwidthOptions& o) {
          [](ZwidthScenario& s) { s.jitter_half_width = 0.2 * s.tick; }},
         {"observer L = 100/s", ZwidthOperator::kForce,
          [](ZwidthScenario& s) { s.observer_gain = 100.0; }},
+        {"observer L = 500/s", ZwidthOperator::kForce,
+         [](ZwidthScenario& s) { s.observer_gain = 500.0; }},
         {"observer L = 900/s", ZwidthOperator::kForce,
          [](ZwidthScenario& s) { s.observer_gain = 900.0; }},
+        {"observer input unmatched (thesis)", ZwidthOperator::kForce,
+         [](ZwidthScenario& s) { s.observer_input_matched = false; }},
         {"model -20 %", ZwidthOperator::kForce,
          [](ZwidthScenario& s) {
            s.model_mass_scale = 0.8;
@@ -433,6 +445,11 @@ void setup_zwidth(CLI::App& app) {
   sub->add_option("--k-vc", o->k_vc, "Override the grid's K_vc values [N/m]");
   sub->add_option("--b-vc", o->b_vc, "Override the grid's b_vc values [N s/m]");
   sub->add_option("--k-tooth", o->k_tooth, "Override the grid's K_tooth values [N/m]");
+  sub->add_option("--observer-gain", o->observer_gain, "Observer gain L [1/s] (pmi-pd)")
+      ->capture_default_str();
+  sub->add_flag("--observer-unmatched", o->observer_unmatched,
+                "Observer input as the thesis discretises it, not matched to the driver's "
+                "velocity estimate (pmi-pd)");
   sub->add_flag("--sensitivity", o->sensitivity,
                 "Re-run each method's best point with hand impedance low/high, tick jitter, "
                 "observer gain L, +-20 % model error and 4 kHz");

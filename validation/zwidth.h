@@ -28,7 +28,7 @@
 //   + settle_s; A_i = max p - min p in window i; lambda = least-squares slope of
 //   ln(A_i + Delta_n) against the window centres (Delta_n = encoder quantum at the tip along n);
 // - stable  <=> finite, no device fault, held by the wall (hold_s of contact, the proxy never
-//   deeper than 2 rho, the device never deeper than the slab's 32 voxels), lambda <=
+//   deeper than 2 rho; the device may sink F / K_vc below it), lambda <=
 //   ln 2 / (hold_s - settle_s) (the envelope does not double over the hold) and
 //   A_last <= amplitude_bound_quanta * Delta_n;
 // - passive <=> max_t E_v(t) <= E_tol, E_v the ClosedLoop's passivity observer (energy the
@@ -96,7 +96,10 @@ struct ZwidthScenario {
   bool proxy_damping_rule = true;
   double k_vc_ang = 0.3;          // k_vc,w [N m/rad]
   double b_vc_ang = 0.002;        // b_vc,w [N m s/rad]
-  double observer_gain = 500.0;   // L [1/s], every joint (pmi-pd)
+  double observer_gain = 200.0;   // L [1/s], every joint (pmi-pd; docs/zwidth_protocol.md)
+  // The observer's input matched to the device's velocity estimate (reference/observer.h,
+  // device/device.h matched_observer_input); false = the thesis's discretisation.
+  bool observer_input_matched = true;
   // true: the pipeline scales tau uniformly into the torque limits (direction kept, reference/
   // tick.h); false: the device clips each joint (the command chain, as OpenHaptics does).
   bool pipeline_saturation = true;

@@ -76,15 +76,15 @@ TEST(ZwidthBounds, ClosedForms) {
 }
 
 // Each method: a clearly stable, passive point (VC: the thesis's explicit gains with the coupling
-// damping the explicit proxy needs; PD: its sweep optimum's neighbourhood, K_tooth = 3000 N/m as
-// in the thesis) and a clearly unstable one (stiff coupling and wall with almost no coupling
+// damping the explicit proxy needs; PD: K_tooth = 3000 N/m as in the thesis, with the stiff
+// coupling that keeps the device on the proxy) and a clearly unstable one (stiff coupling and wall with almost no coupling
 // damping).
 TEST(ZwidthVerdicts, StableAndUnstablePointPerMethod) {
   const ZwidthScenario sc = axis_scenario();
   const ZwidthGains bad{3200.0, 0.1, 12000.0};
   for (Method m : {Method::kExplicitVc, Method::kPmiVc, Method::kPmiPd}) {
     const ZwidthGains good =
-        m == Method::kPmiPd ? ZwidthGains{1600.0, 2.0, 3000.0} : ZwidthGains{400.0, 2.0, 1500.0};
+        m == Method::kPmiPd ? ZwidthGains{3200.0, 2.0, 3000.0} : ZwidthGains{400.0, 2.0, 1500.0};
     const ZwidthRun a = run_zwidth_once(m, ZwidthOperator::kForce, good, sc);
     const ZwidthRun b = run_zwidth_once(m, ZwidthOperator::kForce, bad, sc);
     std::printf(
