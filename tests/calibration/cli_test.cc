@@ -46,6 +46,13 @@ PhantomParams truth_model() {
   return p;
 }
 
+TEST(CalibrateCli, TheDocumentedTruthFileIsThisTestsTruthModel) {
+  // docs/calibration.md runs the CLI on tests/calibration/data/perturbed_phantom.json.
+  const PhantomParams f = load_phantom_params(std::string(DENTSIM_SOURCE_DIR) +
+                                              "/tests/calibration/data/perturbed_phantom.json");
+  EXPECT_EQ(phantom_params_to_text(f), phantom_params_to_text(truth_model()));
+}
+
 TEST(CalibrateCli, ExciteThenCalibrateOnTheSimulatedPhantom) {
   const fs::path d = temp_dir("e2e");
   const PhantomParams truth = truth_model();
