@@ -37,6 +37,7 @@ struct ExciteOptions {
   double duration = 30.0;
   std::uint64_t seed = 1;
   bool no_friction = false, ideal_sensing = false;
+  std::string friction_law = "frictionloss";
 };
 
 void setup_excite(CLI::App& app) {
@@ -53,6 +54,10 @@ void setup_excite(CLI::App& app) {
   sub->add_option("--seed", opt->seed, "seed of the Fourier coefficients (default 1)");
   sub->add_flag("--no-friction", opt->no_friction,
                 "simulate the device without Coulomb friction (MuJoCo frictionloss off)");
+  sub->add_option(
+      "--friction-law", opt->friction_law,
+      "how the simulated device's Coulomb friction acts: 'frictionloss' (MuJoCo's soft\n"
+      "constraint, default) or 'tanh' (the model's f_c tanh(qd / v_s) as a torque)");
   sub->add_flag("--ideal-sensing", opt->ideal_sensing,
                 "track and log the exact joint angles and velocities (no quantisation, no\n"
                 "velocity estimator): a harness for separating sensing from the plant");
@@ -70,12 +75,20 @@ void setup_excite(CLI::App& app) {
     const Excitation exc(p, q0, ep);
     SimulatedDeviceConfig dc = phantom_device_config(p);
     dc.friction_on = !opt->no_friction;
+    if (opt->friction_law == "tanh") {
+      dc.friction_law = SimulatedDeviceConfig::FrictionLaw::kTanh;
+      dc.coulomb_velocity = p.coulomb_smoothing_rad_s;
+    } else if (opt->friction_law != "frictionloss") {
+      throw InputError("--friction-law: expected 'frictionloss' or 'tanh', got '" +
+                       opt->friction_law + "'");
+    }
     if (opt->ideal_sensing) dc.quantize = false;
     SimulatedPhantom dev(phantom_plant(p), dc, home);
     ExactState exact;
     if (opt->ideal_sensing) exact = {&dev.true_q(), &dev.true_qd()};
     CalibrationLog log = run_excitation(dev, p, exc, opt->duration, TrackingParams{}, exact);
     if (opt->no_friction) log.comments.push_back(" device friction (frictionloss) off");
+    if (opt->friction_law == "tanh") log.comments.push_back(" device friction law: tanh");
     if (opt->ideal_sensing) log.comments.push_back(" ideal sensing: exact q and qd logged");
     log.comments.push_back(" device: " + p.name +
                            (opt->device.empty() ? "" : " (" + opt->device + ")"));

@@ -132,6 +132,17 @@ SimulatedPhantom::SimulatedPhantom(const MujocoPlant& plant, SimulatedDeviceConf
     if (!cfg_.damping_on) m->dof_damping[j] = 0.0;
     if (!cfg_.friction_on) m->dof_frictionloss[j] = 0.0;
   }
+  if (cfg_.friction_law == SimulatedDeviceConfig::FrictionLaw::kTanh) {
+    if (!(std::isfinite(cfg_.coulomb_velocity) && cfg_.coulomb_velocity > 0.0)) {
+      throw InputError("simulated device: config.coulomb_velocity must be finite and > 0");
+    }
+    coulomb_tanh_ = VecX::Zero(n);
+    for (int i = 0; i < n; ++i) {
+      const int dof = plant_.device_dof[i];
+      coulomb_tanh_[i] = m->dof_frictionloss[dof];
+      m->dof_frictionloss[dof] = 0.0;
+    }
+  }
 
   // Encoders.
   if (!cfg_.quantize) {
@@ -313,6 +324,13 @@ void SimulatedPhantom::advance() {
         if (s > 0) subtract_hand_inertia(T);
         tau_hand_avg_ += (h / T) * tau_hand_sub_;
         save_hand_substep();
+      }
+      if (coulomb_tanh_.size() == n) {
+        for (int i = 0; i < n; ++i) {
+          const int dof = plant_.device_dof[i];
+          d->qfrc_applied[dof] =
+              tau_applied_[i] - coulomb_tanh_[i] * std::tanh(d->qvel[dof] / cfg_.coulomb_velocity);
+        }
       }
       mj_step(m, d);
       if (hook_) hook_(d->time, m, d);

@@ -78,6 +78,14 @@ struct SimulatedDeviceConfig {
   bool friction_on = true;
   VecX damping;       // [N m s/rad] (empty: the MJCF's dof_damping)
   VecX frictionloss;  // [N m] (empty: the MJCF's dof_frictionloss)
+  // How the device dofs' Coulomb friction f_c acts. kFrictionloss (default): MuJoCo's
+  // dof_frictionloss, a soft constraint solved with the dynamics (it holds a joint at rest with
+  // any torque up to f_c). kTanh: the device model's law -f_c tanh(qd / coulomb_velocity) as an
+  // applied torque, evaluated at the start of every substep (explicit; calibration harness:
+  // docs/calibration.md). Either way friction_on = false removes it.
+  enum class FrictionLaw { kFrictionloss, kTanh };
+  FrictionLaw friction_law = FrictionLaw::kFrictionloss;
+  double coulomb_velocity = 0.01;  // v_s [rad/s] of kTanh
   // Servo clock.
   TickJitter jitter;
 };
@@ -169,7 +177,8 @@ class SimulatedPhantom : public Device {
 
   VecX q_true_, qd_true_, q_meas_, q_meas_prev_, tau_applied_, tau_hand_avg_, tau_hand_sub_;
   VecX tau_hand_inertia_;
-  VecX Q_tree_;  // nv scratch
+  VecX coulomb_tanh_;  // f_c per device dof of FrictionLaw::kTanh (else empty)
+  VecX Q_tree_;        // nv scratch
   double t_sample_ = 0.0, t_prev_sample_ = 0.0, T_last_ = 0.0;
   int n_sub_last_ = 0;
   std::uint32_t faults_ = kFaultNone;

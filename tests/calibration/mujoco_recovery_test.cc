@@ -1,0 +1,78 @@
+// Noise-free recovery on the MuJoCo plant (issue #5, docs/calibration.md "Which effect biases the
+// fit"): the simulated Phantom of the perturbed test device with exact sensing and its Coulomb
+// friction acting by the device model's own law (SimulatedDeviceConfig::FrictionLaw::kTanh), so
+// that the plant differs from the model only by MuJoCo's integration and the parallelogram's
+// soft equality constraint. The fit must then recover every identifiable parameter within 2 %.
+// (With MuJoCo's frictionloss instead the arm M(q) comes out ~3 % off: a friction-law mismatch,
+// measured in the docs.)
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <string>
+
+#include "calibration/excitation.h"
+#include "calibration/fit.h"
+#include "device/phantom_device.h"
+#include "device/simulated_phantom.h"
+#include "reference/phantom/phantom_model.h"
+#include "reference/phantom/phantom_params.h"
+
+namespace dentsim {
+namespace {
+
+TEST(CalibrationMujocoRecovery, TanhFrictionExactSensingRecoversWithinTwoPercent) {
+  const PhantomParams truth = load_phantom_params(std::string(DENTSIM_SOURCE_DIR) +
+                                                  "/tests/calibration/data/perturbed_phantom.json");
+  const PhantomParams prior = default_phantom_params();
+  ExcitationParams ep;
+  ep.seed = 2;
+  const VecX home = phantom_home_q(truth);
+  const Excitation exc(truth, Vec6(home), ep);
+  SimulatedDeviceConfig dc = phantom_device_config(truth);
+  dc.quantize = false;
+  dc.friction_law = SimulatedDeviceConfig::FrictionLaw::kTanh;
+  dc.coulomb_velocity = truth.coulomb_smoothing_rad_s;
+  SimulatedPhantom dev(phantom_plant(truth), dc, home);
+  const CalibrationLog log =
+      run_excitation(dev, truth, exc, 20.0, TrackingParams{}, {&dev.true_q(), &dev.true_qd()});
+  FitOptions fo;
+  fo.lowpass_hz = 10.0;
+  fo.max_samples = 1500;
+  fo.torque_shift_samples = 0.5;  // exact state at t_k, torque held over [t_k, t_k+1]
+  const FitResult r = fit_calibration(log, prior, fo);
+  ASSERT_TRUE(r.converged) << r.report;
+  const CalibVec xt = pack_calib_params(truth);
+  double max_rel = 0.0;
+  std::string worst;
+  for (int i = 0; i < kCalibParams; ++i) {
+    if (!r.params[i].identifiable) continue;
+    const double rel = std::abs(r.params[i].value / xt(i) - 1.0);
+    if (rel > max_rel) max_rel = rel, worst = r.params[i].name;
+  }
+  // The base parameters the observer uses: M(q), g(q) over random poses in the joint box.
+  const PhantomModelD mt(truth), mf(r.fitted);
+  std::mt19937_64 rng(1);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  double m_err = 0.0, g_err = 0.0;
+  for (int k = 0; k < 100; ++k) {
+    Vec6 q;
+    for (int j = 0; j < 6; ++j)
+      q(j) = truth.q_min_rad(j) + u(rng) * (truth.q_max_rad(j) - truth.q_min_rad(j));
+    m_err = std::max(m_err, (mf.M(q) - mt.M(q)).norm() / mt.M(q).norm());
+    g_err = std::max(g_err, (mf.g(q) - mt.g(q)).norm() / mt.g(q).norm());
+  }
+  std::printf(
+      "%d identifiable, residual %.3g N m, max rel. error %.4f (%s), M(q) %.2e, g(q) %.2e\n",
+      r.identifiable, r.residual_rms, max_rel, worst.c_str(), m_err, g_err);
+  // Measured 16 identifiable, 1.8 % (armature 4 at 0.2 sigma), M 0.10 %, g 0.003 %.
+  EXPECT_GE(r.identifiable, 14);
+  EXPECT_LT(max_rel, 0.02) << worst;
+  // Bound 0.5 %: 5x the measured M(q) error, 5x below the ~3 % the frictionloss law causes.
+  EXPECT_LT(m_err, 0.005);
+  EXPECT_LT(g_err, 0.001);
+}
+
+}  // namespace
+}  // namespace dentsim
