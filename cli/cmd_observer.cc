@@ -44,7 +44,8 @@ void setup_observer(CLI::App& app) {
   sub->add_option("--observer-model", opt->observer_models,
                   "NAME=FILE (repeatable): run the observer (and gravity compensation) with the\n"
                   "model file FILE under NAME, after the true model, instead of the scaled model;\n"
-                  "FILE 'builtin' is the built-in Premium 1.5A model");
+                  "FILE 'builtin' is the built-in Premium 1.5A model (used as given: with\n"
+                  "--no-friction only the true model drops its Coulomb friction)");
   sub->add_option("--model-error", opt->model_error,
                   "relative error of the perturbed model's inertia and damping (default 0.2)");
   sub->add_option("--gain", opt->gain, "observer gain L [1/s] on every joint (default 100)");
