@@ -166,8 +166,8 @@ void setup_calibrate(CLI::App& app) {
                   "(default 10)");
   sub->add_option("--max-samples", opt->max_samples, "samples used (default 3000)");
   sub->add_option("--torque-shift", opt->torque_shift,
-                  "use the torque logged this many ticks earlier with each sample (fractional; "
-                  "default 0): aligns the held torque with a lagging velocity estimate");
+                  "use the torque logged this many more ticks earlier with each sample\n"
+                  "(fractional, added to the shift --velocity-lag sets; default 0)");
   sub->add_option(
       "--velocity-lag", opt->velocity_lag,
       "lag d [ticks] of the logged velocity behind the logged angle, or 'auto' (the\n"

@@ -174,6 +174,25 @@ TEST(CalibrateCli, BadLogIsAnInputErrorAndWritesNothing) {
   EXPECT_FALSE(fs::exists(d / "fit.json"));
 }
 
+TEST(CalibrateCli, BadFitAndExciteFlagsExitTwoAndWriteNothing) {
+  const fs::path d = temp_dir("badflags");
+  ASSERT_EQ(run("excite -o " + (d / "log.csv").string() + " --duration 1").status, 0);
+  const std::string base = "calibrate " + (d / "log.csv").string() + " --json " +
+                           (d / "fit.json").string() + " -o " + (d / "m.json").string();
+  for (const std::string bad : {"--velocity-lag abc", "--velocity-lag -1", "--lowpass-order 3",
+                                "--coulomb-velocity sideways"}) {
+    const Cmd c = run(base + " " + bad);
+    EXPECT_EQ(c.status, 2) << bad << ": " << c.output;
+    EXPECT_THAT(c.output, HasSubstr(bad.substr(0, bad.find(' ')))) << bad;
+    EXPECT_FALSE(fs::exists(d / "fit.json")) << bad;
+    EXPECT_FALSE(fs::exists(d / "m.json")) << bad;
+  }
+  const Cmd e = run("excite -o " + (d / "e.csv").string() + " --duration 1 --friction-law foo");
+  EXPECT_EQ(e.status, 2) << e.output;
+  EXPECT_THAT(e.output, HasSubstr("--friction-law"));
+  EXPECT_FALSE(fs::exists(d / "e.csv"));
+}
+
 TEST(CalibrateCli, FitThatDoesNotConvergeSaysSoAndExitsNonZero) {
   const fs::path d = temp_dir("noconv");
   ASSERT_EQ(run("excite -o " + (d / "log.csv").string() + " --duration 6").status, 0);
