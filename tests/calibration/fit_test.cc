@@ -330,6 +330,12 @@ TEST(CalibFit, QuantisedEstimatedVelocityNoisyTorqueErrorsWithinThreeReportedSig
 }
 
 TEST(CalibFitStress, QuantisedEstimatedVelocityNoisyTorqueManyPerturbations) {
+#if defined(__SANITIZE_ADDRESS__)
+  // scripts/test.sh leaves the calibration suites out of the sanitizer pass by their label
+  // (Debian's static Ceres collides with our Eigen under ASan); a *Stress suite carries the
+  // label `stress` instead, so it skips itself there.
+  GTEST_SKIP() << "Ceres under AddressSanitizer (scripts/test.sh)";
+#endif
   // Short form: 4 more seeds; DENTSIM_STRESS=full: 40.
   Coverage c;
   const long n = dentsim::testing::stress_count(4, 40);
