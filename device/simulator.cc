@@ -151,6 +151,9 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     pc.tool = tool_preset(scene.tool.preset, M1 + scene.method.proxy.M());
   }
   pc.observer_gain = VecX::Constant(6, scene.method.observer_gain);
+  // The observer's input matched to the driver's velocity estimate (reference/observer.h): without
+  // it the decomposition's feed-forward closes a loop through the velocity filter's lag.
+  pc.observer_input = matched_observer_input(device.capabilities());
   pc.torque_limit = params.torque_limit_n_m;
   ReferencePipeline pipeline(model, pc);
   ClosedLoop loop(device, pipeline, contacts);
