@@ -37,21 +37,26 @@ PhantomParams perturbed(const PhantomParams& p0, std::uint64_t seed) {
   return unpack_calib_params(p0, x);
 }
 
+// A random state within the joint limits: |qd| < 2 rad/s, |qdd| < 20 rad/s^2.
+void random_state(const PhantomParams& p, std::mt19937_64& rng, Vec6& q, Vec6& qd, Vec6& qdd) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int j = 0; j < 6; ++j) {
+    q(j) = p.q_min_rad(j) + 0.5 * (u(rng) + 1.0) * (p.q_max_rad(j) - p.q_min_rad(j));
+    qd(j) = 2.0 * u(rng);
+    qdd(j) = 20.0 * u(rng);
+  }
+}
+
 TEST(CalibRegressor, EqualsInverseDynamicsOfTheDoubleModel) {
   const std::uint64_t seed = 7;
   std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
   const PhantomParams p = perturbed(default_phantom_params(), seed);
   const PhantomModelD model(p);
   std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
   double worst = 0.0;
   for (int trial = 0; trial < 20; ++trial) {
     Vec6 q, qd, qdd;
-    for (int j = 0; j < 6; ++j) {
-      q(j) = p.q_min_rad(j) + 0.5 * (u(rng) + 1.0) * (p.q_max_rad(j) - p.q_min_rad(j));
-      qd(j) = 2.0 * u(rng);
-      qdd(j) = 20.0 * u(rng);
-    }
+    random_state(p, rng, q, qd, qdd);
     const Vec6 tau = model.M(q) * qdd + model.bias(q, qd) + model.g(q) + model.friction(qd);
     // The regressor is taken at the default geometry-identical prior: linear in p.
     const Regressor Y = calib_regressor(default_phantom_params(), q, qd, qdd);
@@ -69,15 +74,10 @@ TEST(CalibRegressor, AutodiffEqualsTheColumnsOfUnitParameterInverseDynamics) {
   std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
   const PhantomParams prior = perturbed(default_phantom_params(), seed);
   std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
   double worst = 0.0;
   for (int trial = 0; trial < 20; ++trial) {
     Vec6 q, qd, qdd;
-    for (int j = 0; j < 6; ++j) {
-      q(j) = prior.q_min_rad(j) + 0.5 * (u(rng) + 1.0) * (prior.q_max_rad(j) - prior.q_min_rad(j));
-      qd(j) = 2.0 * u(rng);
-      qdd(j) = 20.0 * u(rng);
-    }
+    random_state(prior, rng, q, qd, qdd);
     const Regressor Ya = calib_regressor(prior, q, qd, qdd);
     const Regressor Yc = calib_regressor_by_columns(prior, q, qd, qdd);
     // Entry-wise, relative to the largest entry of its row (rows differ by orders of magnitude).

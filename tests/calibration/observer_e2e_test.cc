@@ -18,23 +18,13 @@
 #include "device/simulated_phantom.h"
 #include "reference/phantom/phantom_model.h"
 #include "reference/phantom/phantom_params.h"
+#include "tests/calibration/truth_model.h"
 
 namespace dentsim {
 namespace {
 
-// The device of tests/calibration/cli_test.cc: arm masses/inertias +-20 %, damping x3, Coulomb
-// x1.5 (the defaults are then wrong in gravity by ~28 %, in damping by x3).
-PhantomParams truth_model() {
-  PhantomParams p = default_phantom_params();
-  p.name = "perturbed test device";
-  p.upper_arm.mass_kg *= 1.2;
-  p.upper_arm.inertia_kg_m2 *= 1.2;
-  p.forearm.mass_kg *= 0.8;
-  p.forearm.inertia_kg_m2 *= 0.8;
-  p.damping_n_m_s_per_rad *= 3.0;
-  p.coulomb_n_m *= 1.5;
-  return p;
-}
+// The perturbed device of tests/calibration/truth_model.h.
+PhantomParams truth_model() { return testing::calibration_truth_model(); }
 
 const ObserverRun& find_run(const ObserverReport& r, const std::string& name) {
   for (const ObserverRun& run : r.runs) {
