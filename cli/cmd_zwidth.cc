@@ -37,6 +37,7 @@ struct ZwidthOptions {
   std::vector<double> k_vc, b_vc, k_tooth;  // grid overrides (every operator)
   double observer_gain = ZwidthScenario{}.observer_gain;
   bool observer_unmatched = false;
+  double grasp_mass = 0.0;
 };
 
 bool show_progress() { return isatty(2) && std::getenv("CI") == nullptr; }
@@ -249,6 +250,11 @@ void run_zwidth(const ZwidthOptions& o) {
   }
   sc.observer_gain = o.observer_gain;
   sc.observer_input_matched = !o.observer_unmatched;
+  if (!(o.grasp_mass >= 0.0) || !std::isfinite(o.grasp_mass)) {
+    throw InputError("--grasp-mass: expected a finite scale >= 0, got " +
+                     std::to_string(o.grasp_mass));
+  }
+  sc.grasp_mass_scale = o.grasp_mass;
   const int threads = o.threads > 0
                           ? o.threads
                           : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -284,6 +290,9 @@ void run_zwidth(const ZwidthOptions& o) {
   out["tick_s"] = sc.tick;
   out["hold_s"] = sc.hold_s;
   out["push_force_n"] = sc.push_force_n;
+  out["observer_gain_per_s"] = sc.observer_gain;
+  out["observer_input_matched"] = sc.observer_input_matched;
+  out["grasp_mass_scale"] = sc.grasp_mass_scale;
   out["tip_radius_m"] = sc.tip_radius_m;
   out["voxel_size_m"] = sc.voxel_size_m;
   out["device_tip_damping_n_s_per_m"] = b_d;
@@ -446,6 +455,10 @@ void setup_zwidth(CLI::App& app) {
   sub->add_option("--b-vc", o->b_vc, "Override the grid's b_vc values [N s/m]");
   sub->add_option("--k-tooth", o->k_tooth, "Override the grid's K_tooth values [N/m]");
   sub->add_option("--observer-gain", o->observer_gain, "Observer gain L [1/s] (pmi-pd)")
+      ->capture_default_str();
+  sub->add_option("--grasp-mass", o->grasp_mass,
+                  "The pipeline's model carries SCALE x the hand's mass and inertia at the tip "
+                  "(hand operators; 0 = off)")
       ->capture_default_str();
   sub->add_flag("--observer-unmatched", o->observer_unmatched,
                 "Observer input as the thesis discretises it, not matched to the driver's "

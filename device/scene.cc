@@ -177,7 +177,8 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   // Method and gains.
   const auto& m = rd.object(doc, "", "method");
   rd.only_keys(m, "method", {"name", "k_vc_n_per_m", "b_vc_n_s_per_m", "k_vc_ang_n_m_per_rad",
-                             "b_vc_ang_n_m_s_per_rad", "observer_gain_per_s", "friction_mu"});
+                             "b_vc_ang_n_m_s_per_rad", "observer_gain_per_s", "friction_mu",
+                             "grasp_mass_scale"});
   const std::string mname = rd.string(m, "method", "name");
   try {
     s.method.method = parse_method(mname);
@@ -198,6 +199,8 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   if (s.method.observer_gain * (1.0 / s.tick_hz) >= 1.0) {
     rd.fail("method.observer_gain_per_s", "L T must be < 1 for the discrete observer to be stable");
   }
+  s.method.grasp_mass_scale = rd.number(m, "method", "grasp_mass_scale", 0.0);
+  rd.non_negative("method.grasp_mass_scale", s.method.grasp_mass_scale);
   s.method.friction.mu = rd.number(m, "method", "friction_mu", 0.0);
   rd.non_negative("method.friction_mu", s.method.friction.mu);
   s.method.friction.enabled = s.method.friction.mu > 0.0;

@@ -53,6 +53,9 @@ struct SceneMethod {
   Method method = Method::kPmiPd;
   CouplingGains coupling;
   double observer_gain = 100.0;        // L [1/s], all joints
+  // > 0: the pipeline's device model carries this fraction of the hand's mass and inertia at the
+  // tip while it grips (reference/grasp_mass_model.h); 0 = the device alone.
+  double grasp_mass_scale = 0.0;
   FrictionParams friction;
   ProxyParams proxy;
 };

@@ -12,6 +12,7 @@
 #include "device/simulated_phantom.h"
 #include "reference/core/io.h"
 #include "reference/core/so3.h"
+#include "reference/grasp_mass_model.h"
 #include "reference/phantom/phantom_model.h"
 #include "reference/phantom/phantom_params.h"
 #include "reference/tick.h"
@@ -136,6 +137,15 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   const ScriptedHand hand(scene.hand, keys, home.R);
   device.set_hand(&hand);
 
+  // The pipeline's device model: the model file's, plus the gripping hand's nominal mass at the
+  // tip when the scene asks for it (reference/grasp_mass_model.h).
+  std::unique_ptr<GraspMassModel> grasp;
+  if (scene.method.grasp_mass_scale > 0.0) {
+    grasp = std::make_unique<GraspMassModel>(model, scene.method.grasp_mass_scale * scene.hand.mass,
+                                             scene.method.grasp_mass_scale * scene.hand.inertia);
+  }
+  const SixDofDeviceModel& belief = grasp ? *grasp : static_cast<const SixDofDeviceModel&>(model);
+
   // Pipeline.
   PipelineConfig pc;
   pc.method = scene.method.method;
@@ -146,8 +156,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   // (thesis §3.1.2: M_d at least the device's own inertia, or the feed-forward makes the tool
   // feel lighter than the device by injecting energy).
   {
-    const Mat6 J1 = model.twist_to_joint(q_home);
-    const Mat6 M1 = J1.transpose() * model.mass_matrix(q_home) * J1;
+    const Mat6 J1 = belief.twist_to_joint(q_home);
+    const Mat6 M1 = J1.transpose() * belief.mass_matrix(q_home) * J1;
     pc.tool = tool_preset(scene.tool.preset, M1 + scene.method.proxy.M());
   }
   pc.observer_gain = VecX::Constant(6, scene.method.observer_gain);
@@ -155,7 +165,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   // it the decomposition's feed-forward closes a loop through the velocity filter's lag.
   pc.observer_input = matched_observer_input(device.capabilities());
   pc.torque_limit = params.torque_limit_n_m;
-  ReferencePipeline pipeline(model, pc);
+  ReferencePipeline pipeline(belief, pc);
   ClosedLoop loop(device, pipeline, contacts);
 
   DrillParams drill;

@@ -14,6 +14,7 @@
 #include "device/phantom_device.h"
 #include "device/simulated_phantom.h"
 #include "reference/core/io.h"
+#include "reference/grasp_mass_model.h"
 #include "reference/phantom/phantom_model.h"
 #include "reference/rigid_body_device.h"
 #include "reference/tick.h"
@@ -237,7 +238,6 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
   const TipProperties tp = tip_properties(sc);
   std::unique_ptr<Rig> rig = make_rig(sc);
   Device& dev = rig->device();
-  const SixDofDeviceModel& model = rig->model();
 
   // The wall below the start tip: surface approach_gap below the tip sphere.
   const Pose tip0 = rig->true_tip();
@@ -274,6 +274,16 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
   }
   const ScriptedHand hand(z, frames, tip0.R);
   rig->set_hand(&hand);
+
+  // What the pipeline believes about the device: the rig's model, plus (grasp_mass_scale > 0)
+  // the nominal mass of the hand gripping the tool (reference/grasp_mass_model.h). The `force`
+  // operator has no hand mass, so nothing is added there.
+  std::unique_ptr<GraspMassModel> grasp;
+  if (sc.grasp_mass_scale > 0.0 && z.mass > 0.0) {
+    grasp = std::make_unique<GraspMassModel>(rig->model(), sc.grasp_mass_scale * z.mass,
+                                             sc.grasp_mass_scale * z.inertia);
+  }
+  const SixDofDeviceModel& model = grasp ? *grasp : rig->model();
 
   // The pipeline.
   PipelineConfig pc;

@@ -100,6 +100,10 @@ struct ZwidthScenario {
   // The observer's input matched to the device's velocity estimate (reference/observer.h,
   // device/device.h matched_observer_input); false = the thesis's discretisation.
   bool observer_input_matched = true;
+  // > 0: the pipeline's model carries this fraction of the operator's hand mass and inertia at
+  // the tip (reference/grasp_mass_model.h); 0 = the device alone (the hand's inertia then enters
+  // the observer's estimate as human force). No effect under `force` (no hand mass).
+  double grasp_mass_scale = 0.0;
   // true: the pipeline scales tau uniformly into the torque limits (direction kept, reference/
   // tick.h); false: the device clips each joint (the command chain, as OpenHaptics does).
   bool pipeline_saturation = true;

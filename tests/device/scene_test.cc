@@ -62,6 +62,10 @@ TEST(Scene, BadFieldsAreNamed) {
   EXPECT_NE(error_of("\"observer_gain_per_s\": 30", "\"observer_gain_per_s\": 5000")
                 .find("method.observer_gain_per_s"),
             std::string::npos);
+  EXPECT_NE(error_of("\"observer_gain_per_s\": 30", "\"observer_gain_per_s\": 30, "
+                    "\"grasp_mass_scale\": -1")
+                .find("method.grasp_mass_scale"),
+            std::string::npos);
   EXPECT_NE(error_of("\"type\": \"simulated-phantom\"", "\"type\": \"omni\"").find("device.type"),
             std::string::npos);
   EXPECT_NE(error_of("\"duration_s\": 5.0", "\"duration_s\": \"long\"")

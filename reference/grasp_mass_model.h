@@ -1,0 +1,49 @@
+// A device model with the grasping hand's nominal mass riding on the tool tip (the hand's inertia
+// moves rigidly with the handle while it grips; device/scripted_hand.h merges it into the plant the
+// same way). Docs: docs/derivations/decomposition_and_observer.md §8.
+//
+// Why: the momentum observer (reference/observer.h) attributes everything its model lacks to the
+// human force. A hand of mass m_h on the tool therefore appears in f_hat as -m_h a, seen through
+// the estimate's lag, and the decomposition's feed-forward (4.7) re-applies it scaled by
+// (1 - M1 M_d^-1): a negative damping of up to (1 - M1/M_d) m_h L that grows with the observer
+// gain L. Putting a nominal m_h into the model removes that term (to the error of the nominal).
+//
+// Model: a point mass m at the tip and an isotropic rotational inertia J about it, i.e. in the
+// maximal coordinates V = [v (world); w (body)] of (2.2) the constant inertia Mt = diag(m I, J I),
+// with no gyroscopic term (isotropic J). With qd = J1 V (J1 = twist_to_joint):
+//     M'(q)     = M(q) + J1^-T Mt J1^-1
+//     C'(q, qd) = C(q, qd) + J1^-T Mt dJ1^-1/dt,   dJ1^-1/dt along qd (central difference, h = 1e-6)
+// which keeps dM'/dt = C' + C'^T. Gravity and friction are the base model's: the hand carries its
+// own weight.
+#pragma once
+
+#include "reference/core/device_model.h"
+
+namespace dentsim {
+
+class GraspMassModel : public SixDofDeviceModel {
+ public:
+  // `base` must outlive this model. Throws std::invalid_argument for a negative or non-finite
+  // mass [kg] or inertia [kg m^2].
+  GraspMassModel(const SixDofDeviceModel& base, double mass_kg, double inertia_kg_m2);
+
+  MatX mass_matrix(const VecX& q) const override;
+  MatX coriolis_matrix(const VecX& q, const VecX& qd) const override;
+  VecX gravity(const VecX& q) const override { return base_.gravity(q); }
+  VecX friction_torque(const VecX& q, const VecX& qd) const override {
+    return base_.friction_torque(q, qd);
+  }
+  Pose forward_kinematics(const VecX& q) const override { return base_.forward_kinematics(q); }
+  Mat6 twist_to_joint(const VecX& q) const override { return base_.twist_to_joint(q); }
+
+  double mass() const { return m_; }
+  double inertia() const { return J_; }
+
+ private:
+  Mat6 joint_to_twist(const VecX& q) const;  // J1^-1
+  const SixDofDeviceModel& base_;
+  double m_, J_;
+  Mat6 Mt_;
+};
+
+}  // namespace dentsim
