@@ -38,6 +38,7 @@ struct ZwidthOptions {
   double observer_gain = ZwidthScenario{}.observer_gain;
   bool observer_unmatched = false;
   double grasp_mass = 0.0;
+  double proxy_damping = -1.0;  // < 0: the rule b_2 = k_vc T / 2
 };
 
 bool show_progress() { return isatty(2) && std::getenv("CI") == nullptr; }
@@ -255,6 +256,11 @@ void run_zwidth(const ZwidthOptions& o) {
                      std::to_string(o.grasp_mass));
   }
   sc.grasp_mass_scale = o.grasp_mass;
+  if (o.proxy_damping >= 0.0) {
+    if (!std::isfinite(o.proxy_damping)) throw InputError("--proxy-damping: expected a finite value");
+    sc.proxy_damping_rule = false;
+    sc.proxy.damping_lin = o.proxy_damping;
+  }
   const int threads = o.threads > 0
                           ? o.threads
                           : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -293,6 +299,8 @@ void run_zwidth(const ZwidthOptions& o) {
   out["observer_gain_per_s"] = sc.observer_gain;
   out["observer_input_matched"] = sc.observer_input_matched;
   out["grasp_mass_scale"] = sc.grasp_mass_scale;
+  out["proxy_damping_rule"] = sc.proxy_damping_rule;
+  out["proxy_damping_n_s_per_m"] = sc.proxy.damping_lin;
   out["tip_radius_m"] = sc.tip_radius_m;
   out["voxel_size_m"] = sc.voxel_size_m;
   out["device_tip_damping_n_s_per_m"] = b_d;
@@ -460,6 +468,9 @@ void setup_zwidth(CLI::App& app) {
                   "The pipeline's model carries SCALE x the hand's mass and inertia at the tip "
                   "(hand operators; 0 = off)")
       ->capture_default_str();
+  sub->add_option("--proxy-damping", o->proxy_damping,
+                  "A fixed proxy damping b_2 [N s/m] for every method instead of the rule "
+                  "b_2 = K_vc T / 2");
   sub->add_flag("--observer-unmatched", o->observer_unmatched,
                 "Observer input as the thesis discretises it, not matched to the driver's "
                 "velocity estimate (pmi-pd)");
