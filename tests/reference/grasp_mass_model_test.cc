@@ -32,16 +32,22 @@ VecX random_q(const PhantomParams& p, std::mt19937& rng) {
   return q;
 }
 
+// A random joint state: q in the inner joint ranges, |qd_j| < 2 rad/s.
+void random_state(std::mt19937& rng, VecX& q, VecX& qd) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  q = random_q(default_phantom_params(), rng);
+  qd.resize(6);
+  for (int j = 0; j < 6; ++j) qd(j) = 2.0 * u(rng);
+}
+
 TEST(GraspMassModel, AddsTheTipMassKineticEnergy) {
   const PhantomModel base(default_phantom_params());
   const GraspMassModel model(base, kMass, kInertia);
   std::mt19937 rng(3);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
   double worst = 0.0;
   for (int i = 0; i < 200; ++i) {
-    const VecX q = random_q(default_phantom_params(), rng);
-    VecX qd(6);
-    for (int j = 0; j < 6; ++j) qd(j) = 2.0 * u(rng);
+    VecX q, qd;
+    random_state(rng, q, qd);
     const Vec6 V = base.twist_to_joint(q).partialPivLu().solve(Vec6(qd));
     const double expected = 0.5 * (kMass * V.head<3>().squaredNorm() +
                                    kInertia * V.tail<3>().squaredNorm());
@@ -56,12 +62,10 @@ TEST(GraspMassModel, ChristoffelIdentityHolds) {
   const PhantomModel base(default_phantom_params());
   const GraspMassModel model(base, kMass, kInertia);
   std::mt19937 rng(4);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
   double worst = 0.0;
   for (int i = 0; i < 100; ++i) {
-    const VecX q = random_q(default_phantom_params(), rng);
-    VecX qd(6);
-    for (int j = 0; j < 6; ++j) qd(j) = 2.0 * u(rng);
+    VecX q, qd;
+    random_state(rng, q, qd);
     const double h = 1e-5;
     const MatX dM = (model.mass_matrix(q + h * qd) - model.mass_matrix(q - h * qd)) / (2.0 * h);
     const MatX C = model.coriolis_matrix(q, qd);
