@@ -38,6 +38,7 @@ class GraspMassModel : public SixDofDeviceModel {
 
   double mass() const { return m_; }
   double inertia() const { return J_; }
+  const SixDofDeviceModel& base() const { return base_; }
 
  private:
   Mat6 joint_to_twist(const VecX& q) const;  // J1^-1

@@ -50,8 +50,17 @@ ReferencePipeline::ReferencePipeline(const SixDofDeviceModel& device, PipelineCo
                                   std::to_string(config_.observer_gain.size()) +
                                   " entries; the device has " + std::to_string(n) + " joints");
     }
-    observer_ = std::make_unique<MomentumObserver>(device_, config_.observer_gain,
-                                                   config_.observer_input);
+    if (config_.grasp_model) {
+      if (&config_.grasp_model->base() != &device_) {
+        throw std::invalid_argument(
+            "grasp_model: its base model must be the pipeline's device model");
+      }
+      grip_ = std::make_unique<GripDetector>(*config_.grasp_model, config_.observer_gain,
+                                             config_.observer_input, config_.grip_detector);
+    } else {
+      observer_ = std::make_unique<MomentumObserver>(device_, config_.observer_gain,
+                                                     config_.observer_input);
+    }
   } else if (config_.method == Method::kPmiPd) {
     throw std::invalid_argument("method pmi-pd needs the observer gain L (one per joint)");
   }
@@ -71,6 +80,7 @@ void ReferencePipeline::reset(const DeviceSample& s) {
   proxy_.pose = device_.forward_kinematics(s.q);
   tau_prev_.setZero();
   if (observer_) observer_->reset(s.q, s.qd);
+  if (grip_) grip_->reset(s.q, s.qd);
   t_prev_ = s.t;
   have_prev_ = false;
   result_ = TickResult{};
@@ -104,6 +114,12 @@ const TickResult& ReferencePipeline::tick(const DeviceSample& s, double T,
     const VecX& f1_hat = observer_->update(s.q, s.qd, tau_prev_, T_last);
     r.F1_hat = J1.transpose() * f1_hat;  // F1 = J1^T f1
   }
+  r.grip_state = -1;
+  if (grip_) {
+    r.grip_state = grip_->update(s.q, s.qd, tau_prev_, T_last, J1) ? 1 : 0;
+    r.grip_statistic = grip_->statistic();
+    r.F1_hat = grip_->estimate();
+  }
   clock.lap(kStageObserver);
 
   // Collision.
@@ -120,7 +136,8 @@ const TickResult& ReferencePipeline::tick(const DeviceSample& s, double T,
   const AffineWrench contact = contact_wrench(r.contacts, proxy_.pose, T, scheme);
   AffineWrench pd_T1, pd_T2;
   if (method == Method::kPmiPd) {
-    const Mat6 M1 = J1.transpose() * device_.mass_matrix(s.q) * J1;  // (2.2)
+    const SixDofDeviceModel& model = grip_ ? grip_->model() : device_;
+    const Mat6 M1 = J1.transpose() * model.mass_matrix(s.q) * J1;  // (2.2)
     const Decomposition d = decompose(M1, config_.proxy.M(), r.device.R, proxy_.pose.R);
     const PdFeedforward pd = pd_feedforward(d, config_.tool, r.V1, r.F1_hat, contact);
     pd_T1 = pd.T1;

@@ -25,6 +25,7 @@
 #include "reference/core/affine_wrench.h"
 #include "reference/core/device_model.h"
 #include "reference/core/params.h"
+#include "reference/grip_detector.h"
 #include "reference/observer.h"
 
 namespace dentsim {
@@ -55,6 +56,12 @@ struct PipelineConfig {
   // Add the model's gravity torque g(q) to the command: the thesis assumes gravity compensated
   // (2.1); the observer accounts for it either way since it sees the total torque.
   bool compensate_gravity = true;
+  // kPmiPd with a hand on the tool: the device model plus the hand's nominal mass (must outlive
+  // the pipeline; its base() must be the pipeline's device model). Set, the pipeline runs a
+  // GripDetector (reference/grip_detector.h) in place of the single observer and uses, tick by
+  // tick, the estimate and the mass matrix of the hypothesis it judges true.
+  const GraspMassModel* grasp_model = nullptr;
+  GripDetectorParams grip_detector;
 };
 
 // Stages of the tick, for timing (TickResult::stage_ns).
@@ -79,6 +86,8 @@ struct TickResult {
   std::vector<Contact> contacts;      // the contact set of this tick
   double max_depth = 0.0;             // deepest penetration in the set [m]
   bool friction_sliding = false;
+  int grip_state = -1;                // grip detector: 1 gripped, 0 released, -1 no detector
+  double grip_statistic = 0.0;        // its statistic s [N^2/kg] (GripDetector::statistic)
   long stage_ns[kStageCount] = {};    // wall-clock time of each stage [ns] (steady_clock)
 };
 
@@ -110,6 +119,7 @@ class ReferencePipeline : public Pipeline {
   PipelineConfig config_;
   ProxyState proxy_;
   std::unique_ptr<MomentumObserver> observer_;
+  std::unique_ptr<GripDetector> grip_;
   VecX tau_prev_;           // torque applied during the previous tick (observer input)
   double t_prev_ = 0.0;     // time of the previous sample
   bool have_prev_ = false;
