@@ -38,6 +38,7 @@ struct ZwidthOptions {
   double observer_gain = ZwidthScenario{}.observer_gain;
   bool observer_unmatched = false;
   double grasp_mass = 0.0;
+  bool grip_detector = false;
   double proxy_damping = -1.0;  // < 0: the rule b_2 = k_vc T / 2
 };
 
@@ -80,6 +81,9 @@ nlohmann::json run_json(const ZwidthRun& r) {
           {"static_stiffness_n_per_m", r.static_stiffness_n_per_m},
           {"contact_time_s", r.contact_time_s},
           {"proxy_tunnelled", r.proxy_tunnelled},
+          {"grip_switches", r.grip_switches},
+          {"grip_agreement", r.grip_agreement},
+          {"release_detected_after_s", r.release_detected_after_s},
           {"stable", r.stable},
           {"passive", r.passive}};
 }
@@ -256,6 +260,10 @@ void run_zwidth(const ZwidthOptions& o) {
                      std::to_string(o.grasp_mass));
   }
   sc.grasp_mass_scale = o.grasp_mass;
+  if (o.grip_detector && !(o.grasp_mass > 0.0)) {
+    throw InputError("--grip-detector: needs --grasp-mass > 0 (the mass it switches)");
+  }
+  sc.grip_detector = o.grip_detector;
   if (o.proxy_damping >= 0.0) {
     if (!std::isfinite(o.proxy_damping)) throw InputError("--proxy-damping: expected a finite value");
     sc.proxy_damping_rule = false;
@@ -299,6 +307,7 @@ void run_zwidth(const ZwidthOptions& o) {
   out["observer_gain_per_s"] = sc.observer_gain;
   out["observer_input_matched"] = sc.observer_input_matched;
   out["grasp_mass_scale"] = sc.grasp_mass_scale;
+  out["grip_detector"] = sc.grip_detector;
   out["proxy_damping_rule"] = sc.proxy_damping_rule;
   out["proxy_damping_n_s_per_m"] = sc.proxy.damping_lin;
   out["tip_radius_m"] = sc.tip_radius_m;
@@ -468,6 +477,9 @@ void setup_zwidth(CLI::App& app) {
                   "The pipeline's model carries SCALE x the hand's mass and inertia at the tip "
                   "(hand operators; 0 = off)")
       ->capture_default_str();
+  sub->add_flag("--grip-detector", o->grip_detector,
+                "With --grasp-mass: judge tick by tick whether the hand is on the tool and use "
+                "its mass only then (reference/grip_detector.h)");
   sub->add_option("--proxy-damping", o->proxy_damping,
                   "A fixed proxy damping b_2 [N s/m] for every method instead of the rule "
                   "b_2 = K_vc T / 2");

@@ -283,7 +283,9 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
     grasp = std::make_unique<GraspMassModel>(rig->model(), sc.grasp_mass_scale * z.mass,
                                              sc.grasp_mass_scale * z.inertia);
   }
-  const SixDofDeviceModel& model = grasp ? *grasp : rig->model();
+  const bool detect = grasp && sc.grip_detector;
+  // With the detector the pipeline's model is the device alone; the detector picks the mass.
+  const SixDofDeviceModel& model = grasp && !detect ? *grasp : rig->model();
 
   // The pipeline.
   PipelineConfig pc;
@@ -294,13 +296,20 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
   }
   pc.coupling = CouplingGains{gains.k_vc, sc.k_vc_ang, gains.b_vc, sc.b_vc_ang};
   if (sc.pipeline_saturation) pc.torque_limit = dev.limits().tau_max;
+  if (detect) {
+    pc.grasp_model = grasp.get();
+    pc.grip_detector = sc.grip_detector_params;
+  }
   DeviceSample s0 = dev.make_sample();
   dev.read(s0);
   if (method == Method::kPmiPd) {
     pc.observer_gain = VecX::Constant(6, sc.observer_gain);
     if (sc.observer_input_matched) pc.observer_input = matched_observer_input(dev.capabilities());
-    const Mat6 J1 = model.twist_to_joint(s0.q);
-    const Mat6 M1 = J1.transpose() * model.mass_matrix(s0.q) * J1;  // (2.2)
+    // The locked inertia is floored on the heaviest model the pipeline may use (with the
+    // detector: the gripped one), so the desired dynamics do not change when it switches.
+    const SixDofDeviceModel& heaviest = grasp ? *grasp : rig->model();
+    const Mat6 J1 = heaviest.twist_to_joint(s0.q);
+    const Mat6 M1 = J1.transpose() * heaviest.mass_matrix(s0.q) * J1;  // (2.2)
     pc.tool = tool_preset(sc.tool, M1 + sc.proxy.M());              // floor M_L at the start
   }
   ReferencePipeline pipeline(model, pc);
@@ -316,6 +325,9 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
 
   double t_first = -1.0;
   bool released = false;
+  double t_released = -1.0;
+  int last_grip = -1;
+  long n_grip_ticks = 0, n_grip_agree = 0;
   const double cap = 2.0 + sc.hold_s + (tip0.x.z() - z_s) / std::max(speed, 1e-3);
   std::vector<double> ts, ps;  // penetration after first contact + settle
   double sum_f = 0, sum_p = 0;
@@ -360,16 +372,28 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
         sum_p += p;
         ++n_tail;
       }
+      if (r.grip_state >= 0) {
+        ++n_grip_ticks;
+        if ((r.grip_state == 1) == !released) ++n_grip_agree;
+        if (released && r.grip_state == 0 && run.release_detected_after_s < 0.0) {
+          run.release_detected_after_s = t - t_released;
+        }
+      }
       if (op == ZwidthOperator::kRelease && !released && t >= t_first + sc.release_after_s) {
         rig->set_hand(nullptr);
         released = true;
+        t_released = t;
       }
     }
+    if (r.grip_state >= 0 && last_grip >= 0 && r.grip_state != last_grip) ++run.grip_switches;
+    last_grip = r.grip_state;
     if (trace) {
       trace->t.push_back(t);
       trace->penetration_m.push_back(p);
       trace->force_n.push_back(force);
       trace->energy_j.push_back(E);
+      trace->grip_state.push_back(r.grip_state);
+      trace->grip_statistic.push_back(r.grip_statistic);
     }
     prev = s;
     if (t_first >= 0.0 && t >= t_first + sc.hold_s) break;
@@ -380,6 +404,7 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
   run.energy_tol_j = 1e-9;
   for (int i = 0; i < n; ++i) run.energy_tol_j += quantum(i) * (2.0 * tau_max(i) + tau_var(i));
   run.contact_time_s = t_first >= 0.0 ? loop.sample().t - t_first : 0.0;
+  if (n_grip_ticks > 0) run.grip_agreement = double(n_grip_agree) / double(n_grip_ticks);
   if (run.max_penetration_m > 0.0) {
     run.z_width_n_per_m = run.max_force_n / run.max_penetration_m;
   }

@@ -50,6 +50,7 @@
 
 #include "device/scripted_hand.h"
 #include "reference/core/params.h"
+#include "reference/grip_detector.h"
 #include "validation/zwidth_1dof.h"
 
 namespace dentsim {
@@ -104,6 +105,10 @@ struct ZwidthScenario {
   // the tip (reference/grasp_mass_model.h); 0 = the device alone (the hand's inertia then enters
   // the observer's estimate as human force). No effect under `force` (no hand mass).
   double grasp_mass_scale = 0.0;
+  // With grasp_mass_scale > 0: judge tick by tick whether the hand is on the tool
+  // (reference/grip_detector.h) and use the hand's mass only while it is; false = always.
+  bool grip_detector = false;
+  GripDetectorParams grip_detector_params;
   // true: the pipeline scales tau uniformly into the torque limits (direction kept, reference/
   // tick.h); false: the device clips each joint (the command chain, as OpenHaptics does).
   bool pipeline_saturation = true;
@@ -132,6 +137,8 @@ struct ZwidthScenario {
 
 struct ZwidthTrace {
   std::vector<double> t, penetration_m, force_n, energy_j;
+  std::vector<int> grip_state;        // TickResult::grip_state
+  std::vector<double> grip_statistic;  // TickResult::grip_statistic [N^2/kg]
 };
 
 // One closed-loop run.
@@ -157,6 +164,12 @@ struct ZwidthRun {
   // can render (reference/tooth/collision.h), it falls through (diagnostic; such a run is
   // unstable).
   bool proxy_tunnelled = false;
+  // Grip detector (scenario grip_detector): switches of its state, the fraction of contact ticks
+  // it judged the hand on the tool while it was, and (release) the time from letting go to its
+  // first "released" (-1: never, or no detector).
+  int grip_switches = 0;
+  double grip_agreement = -1.0;
+  double release_detected_after_s = -1.0;
   bool stable = false;
   bool passive = false;
 };

@@ -185,3 +185,54 @@ TEST(ZwidthGraspMass, HandMassInTheModelStabilisesPmiPdUnderGrip) {
 
 }  // namespace
 }  // namespace dentsim
+
+namespace dentsim {
+namespace {
+
+// The grip detector (reference/grip_detector.h, docs/derivations/decomposition_and_observer.md
+// §9): with the hand's mass in the model, letting go leaves the model a mass that is not there
+// and PMI + PD loses the wall; the detector drops the mass within tens of ms and keeps it while
+// the hand grips; started "released" on a gripping hand, it finds the grip.
+TEST(ZwidthGripDetector, DropsTheHandMassOnReleaseAndKeepsItUnderGrip) {
+  ZwidthScenario sc;
+  sc.testbed = ZwidthTestbed::kPhantom;
+  sc.push_force_n = 1.0;
+  sc.grasp_mass_scale = 1.0;
+  const ZwidthGains g{3200.0, 2.0, 12000.0};
+  const ZwidthRun fixed = run_zwidth_once(Method::kPmiPd, ZwidthOperator::kRelease, g, sc);
+  sc.grip_detector = true;
+  const ZwidthRun release = run_zwidth_once(Method::kPmiPd, ZwidthOperator::kRelease, g, sc);
+  const ZwidthRun grip = run_zwidth_once(Method::kPmiPd, ZwidthOperator::kGrip, g, sc);
+  sc.grip_detector_params.start_gripped = false;
+  const ZwidthRun found = run_zwidth_once(Method::kPmiPd, ZwidthOperator::kGrip, g, sc);
+  std::printf("[zwidth] pmi-pd (3200, 2, 12000), grasp mass 1: release without detector stable %d "
+              "| with: stable %d passive %d detected after %.3f s, switches %d | grip: stable %d "
+              "passive %d switches %d static %.0f N/m | grip from 'released': stable %d switches "
+              "%d agreement %.3f\n",
+              fixed.stable, release.stable, release.passive, release.release_detected_after_s,
+              release.grip_switches, grip.stable, grip.passive, grip.grip_switches,
+              grip.static_stiffness_n_per_m, found.stable, found.grip_switches,
+              found.grip_agreement);
+  EXPECT_FALSE(fixed.stable);
+  EXPECT_EQ(fixed.grip_switches, 0);
+  EXPECT_LT(fixed.release_detected_after_s, 0.0);  // no detector: never reported
+
+  EXPECT_TRUE(release.stable);
+  EXPECT_TRUE(release.passive);
+  EXPECT_EQ(release.grip_switches, 1);
+  EXPECT_GT(release.release_detected_after_s, 0.0);
+  EXPECT_LT(release.release_detected_after_s, 0.05);  // measured 0.010 s
+
+  EXPECT_TRUE(grip.stable);
+  EXPECT_TRUE(grip.passive);
+  EXPECT_EQ(grip.grip_switches, 0);
+  EXPECT_DOUBLE_EQ(grip.grip_agreement, 1.0);
+  EXPECT_GT(grip.static_stiffness_n_per_m, 3000.0);
+
+  EXPECT_TRUE(found.stable);
+  EXPECT_GE(found.grip_switches, 1);
+  EXPECT_GT(found.grip_agreement, 0.5);
+}
+
+}  // namespace
+}  // namespace dentsim
