@@ -41,6 +41,10 @@ TEST(ZwidthCli, JsonCarriesTheContractKeys) {
   EXPECT_TRUE(j.contains("ratio_pmipd_over_explicit"));
   EXPECT_EQ(j["observer_gain_per_s"].get<double>(), 200.0);
   EXPECT_TRUE(j["observer_input_matched"].get<bool>());
+  EXPECT_FALSE(j["grip_detector"].get<bool>());
+  const auto& run0 = j["methods"]["pmi"]["operators"]["force"]["points"][0]["runs"][0];
+  EXPECT_EQ(run0["grip_switches"].get<int>(), 0);
+  EXPECT_EQ(run0["release_detected_after_s"].get<double>(), -1.0);  // no detector
   // At this point (stiff coupling, thesis wall) PMI + PD renders the wall: its Z-width is above
   // the series value PMI can reach, K_vc K_tooth / (K_vc + K_tooth) = 1548 N/m.
   EXPECT_GT(j["methods"]["pmi-pd"]["z_width_n_per_m"].get<double>(), 1548.0);
@@ -58,6 +62,9 @@ TEST(ZwidthCli, BadFlagsExitTwoWithTheFlagNamed) {
   const auto c = run_dentsim("zwidth --testbed axis --operators push");
   EXPECT_EQ(c.status, 2);
   EXPECT_NE(c.output.find("operator"), std::string::npos) << c.output;
+  const auto d = run_dentsim("zwidth --testbed axis --grip-detector");
+  EXPECT_EQ(d.status, 2);
+  EXPECT_NE(d.output.find("--grip-detector"), std::string::npos) << d.output;
 }
 
 }  // namespace
