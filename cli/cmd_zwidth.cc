@@ -39,6 +39,7 @@ struct ZwidthOptions {
   bool observer_unmatched = false;
   double grasp_mass = 0.0;
   bool grip_detector = false;
+  std::vector<double> tap_speeds;
   double proxy_damping = -1.0;  // < 0: the rule b_2 = k_vc T / 2
 };
 
@@ -84,6 +85,9 @@ nlohmann::json run_json(const ZwidthRun& r) {
           {"grip_switches", r.grip_switches},
           {"grip_agreement", r.grip_agreement},
           {"release_detected_after_s", r.release_detected_after_s},
+          {"grip_statistic_max_on", r.grip_statistic_max_on},
+          {"grip_statistic_min_on", r.grip_statistic_min_on},
+          {"grip_statistic_max_off", r.grip_statistic_max_off},
           {"stable", r.stable},
           {"passive", r.passive}};
 }
@@ -248,6 +252,15 @@ void run_zwidth(const ZwidthOptions& o) {
   sc.testbed = parse_testbed(o.testbed);
   sc.tick = o.tick_ms * 1e-3;
   sc.hold_s = o.hold_s;
+  if (!o.tap_speeds.empty()) {
+    for (double v : o.tap_speeds) {
+      if (!(v > 0.0) || !std::isfinite(v) || v > 2.0) {
+        throw InputError("--tap-speeds: expected approach speeds in (0, 2] m/s, got " +
+                         std::to_string(v));
+      }
+    }
+    sc.tap_speeds_m_s = o.tap_speeds;
+  }
   sc.push_force_n = o.push_n;
   if (!(o.observer_gain > 0.0) || !(o.observer_gain * sc.tick < 1.0)) {
     throw InputError("--observer-gain: expected L > 0 with L T < 1 (T = " +
@@ -303,6 +316,7 @@ void run_zwidth(const ZwidthOptions& o) {
   out["testbed"] = testbed_name(sc.testbed);
   out["tick_s"] = sc.tick;
   out["hold_s"] = sc.hold_s;
+  out["tap_speeds_m_s"] = sc.tap_speeds_m_s;
   out["push_force_n"] = sc.push_force_n;
   out["observer_gain_per_s"] = sc.observer_gain;
   out["observer_input_matched"] = sc.observer_input_matched;
@@ -477,6 +491,8 @@ void setup_zwidth(CLI::App& app) {
                   "The pipeline's model carries SCALE x the hand's mass and inertia at the tip "
                   "(hand operators; 0 = off)")
       ->capture_default_str();
+  sub->add_option("--tap-speeds", o->tap_speeds,
+                  "Approach speeds of the tap operator [m/s] (default 0.05 0.15 0.3)");
   sub->add_flag("--grip-detector", o->grip_detector,
                 "With --grasp-mass: judge tick by tick whether the hand is on the tool and use "
                 "its mass only then (reference/grip_detector.h)");

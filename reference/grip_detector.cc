@@ -1,5 +1,6 @@
 #include "reference/grip_detector.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -44,6 +45,7 @@ GripDetector::GripDetector(const GraspMassModel& grasp, const VecX& gain_L, Obse
   require_positive(params_.power_time_constant_s, "power_time_constant_s");
   require_non_negative(params_.release_threshold, "release_threshold");
   require_non_negative(params_.grip_threshold, "grip_threshold");
+  require_positive(params_.evidence, "evidence");
   w_ << Vec3::Constant(1.0 / grasp.mass()), Vec3::Zero();
 }
 
@@ -61,6 +63,7 @@ void GripDetector::reset(const VecX& q, const VecX& qd) {
   lp0_.setZero();
   lp1_.setZero();
   p0_ = p1_ = 0.0;
+  g_release_ = g_grip_ = 0.0;
   gripped_ = params_.start_gripped;
 }
 
@@ -82,8 +85,19 @@ bool GripDetector::update(const VecX& q, const VecX& qd, const VecX& tau, double
   p0_ += a_p * (e0.cwiseProduct(w_).dot(e0) - p0_);
   p1_ += a_p * (e1.cwiseProduct(w_).dot(e1) - p1_);
   const double s = p1_ - p0_;
-  if (gripped_ && s > params_.release_threshold) gripped_ = false;
-  if (!gripped_ && s < -params_.grip_threshold) gripped_ = true;
+  if (gripped_) {
+    g_release_ = std::max(0.0, g_release_ + T * (s - params_.release_threshold));
+    if (g_release_ > params_.evidence) {
+      gripped_ = false;
+      g_release_ = g_grip_ = 0.0;
+    }
+  } else {
+    g_grip_ = std::max(0.0, g_grip_ + T * (-s - params_.grip_threshold));
+    if (g_grip_ > params_.evidence) {
+      gripped_ = true;
+      g_release_ = g_grip_ = 0.0;
+    }
+  }
   return gripped_;
 }
 

@@ -15,9 +15,12 @@
 // the same to the device); it can be told from the prior that a human's own force is slow: the
 // right hypothesis leaves the smaller high-frequency force. The statistic is
 //     s = P1 - P0,   P_i = lowpass_tau( |highpass(h_i)|^2 in the norm Mt^-1 )   [N^2/kg]
-// with the high-pass replaced by a band-pass (4-20 Hz by default, two first-order stages), and
-// the state switches to released when s > release_threshold and to gripped when
-// s < -grip_threshold (hysteresis). Only the linear force enters (the norm's rotational part is
+// with the high-pass replaced by a band-pass (4-20 Hz by default, two first-order stages). The
+// state changes on accumulated evidence (Page's CUSUM), so that a brief human force transient
+// does not flip it:
+//     g_r = max(0, g_r + T (s - release_threshold))    while gripped:  released when g_r > G
+//     g_g = max(0, g_g + T (-s - grip_threshold))      while released: gripped  when g_g > G
+// with G = evidence [N^2 s/kg]; both sums restart at a switch. Only the linear force enters (the norm's rotational part is
 // dropped: the gimbal's encoder noise swamps the hand's small rotational inertia).
 // For a hand of stiffness K_h oscillating at w on the tool, P0 - P1 = m_h w^2 |x|^2 (m_h w^2 -
 // 2 K_h): a cycle faster than sqrt(2 K_h / m_h) (3.5 Hz for the literature hand) is explained
@@ -38,7 +41,8 @@ struct GripDetectorParams {
   double lowpass_hz = 20.0;              // and first-order low-pass [Hz] on h0, h1
   double power_time_constant_s = 0.05;   // first-order low-pass on the band powers [s]
   double release_threshold = 0.4;        // switch to released when s > this [N^2/kg]
-  double grip_threshold = 0.05;          // switch to gripped when s < -this [N^2/kg]
+  double grip_threshold = 0.02;          // switch to gripped when s < -this [N^2/kg]
+  double evidence = 0.02;                // G: the CUSUM's decision level [N^2 s/kg]
   bool start_gripped = true;
 };
 
@@ -74,6 +78,7 @@ class GripDetector {
   Vec6 b0_ = Vec6::Zero(), b1_ = Vec6::Zero();    // h_i low-passed at lowpass_hz
   Vec6 lp0_ = Vec6::Zero(), lp1_ = Vec6::Zero();  // b_i low-passed at highpass_hz (band = b - lp)
   double p0_ = 0.0, p1_ = 0.0;
+  double g_release_ = 0.0, g_grip_ = 0.0;  // CUSUM sums [N^2 s/kg]
   bool gripped_ = true;
 };
 

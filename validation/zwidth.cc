@@ -386,6 +386,12 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
       }
     }
     if (r.grip_state >= 0 && last_grip >= 0 && r.grip_state != last_grip) ++run.grip_switches;
+    if (r.grip_state >= 0 && !released) {
+      run.grip_statistic_max_on = std::max(run.grip_statistic_max_on, r.grip_statistic);
+      run.grip_statistic_min_on = std::min(run.grip_statistic_min_on, r.grip_statistic);
+    } else if (r.grip_state >= 0) {
+      run.grip_statistic_max_off = std::max(run.grip_statistic_max_off, r.grip_statistic);
+    }
     last_grip = r.grip_state;
     if (trace) {
       trace->t.push_back(t);

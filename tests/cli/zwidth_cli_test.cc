@@ -45,6 +45,8 @@ TEST(ZwidthCli, JsonCarriesTheContractKeys) {
   const auto& run0 = j["methods"]["pmi"]["operators"]["force"]["points"][0]["runs"][0];
   EXPECT_EQ(run0["grip_switches"].get<int>(), 0);
   EXPECT_EQ(run0["release_detected_after_s"].get<double>(), -1.0);  // no detector
+  EXPECT_EQ(run0["grip_statistic_max_on"].get<double>(), 0.0);
+  EXPECT_EQ(j["tap_speeds_m_s"].size(), 3u);
   // At this point (stiff coupling, thesis wall) PMI + PD renders the wall: its Z-width is above
   // the series value PMI can reach, K_vc K_tooth / (K_vc + K_tooth) = 1548 N/m.
   EXPECT_GT(j["methods"]["pmi-pd"]["z_width_n_per_m"].get<double>(), 1548.0);
@@ -62,6 +64,9 @@ TEST(ZwidthCli, BadFlagsExitTwoWithTheFlagNamed) {
   const auto c = run_dentsim("zwidth --testbed axis --operators push");
   EXPECT_EQ(c.status, 2);
   EXPECT_NE(c.output.find("operator"), std::string::npos) << c.output;
+  const auto e = run_dentsim("zwidth --testbed axis --tap-speeds 0.1 0");
+  EXPECT_EQ(e.status, 2);
+  EXPECT_NE(e.output.find("--tap-speeds"), std::string::npos) << e.output;
   const auto d = run_dentsim("zwidth --testbed axis --grip-detector");
   EXPECT_EQ(d.status, 2);
   EXPECT_NE(d.output.find("--grip-detector"), std::string::npos) << d.output;
