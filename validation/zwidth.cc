@@ -277,11 +277,13 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
 
   // What the pipeline believes about the device: the rig's model, plus (grasp_mass_scale > 0)
   // the nominal mass of the hand gripping the tool (reference/grasp_mass_model.h). The `force`
-  // operator has no hand mass, so nothing is added there.
+  // operator has no hand mass, so a fixed mass is not added there.
+  // With the grip detector the model's hand is there under `force` too (starting "gripped"):
+  // the detector has to find that no hand is on the tool.
   std::unique_ptr<GraspMassModel> grasp;
-  if (sc.grasp_mass_scale > 0.0 && z.mass > 0.0) {
-    grasp = std::make_unique<GraspMassModel>(rig->model(), sc.grasp_mass_scale * z.mass,
-                                             sc.grasp_mass_scale * z.inertia);
+  if (sc.grasp_mass_scale > 0.0 && (z.mass > 0.0 || sc.grip_detector)) {
+    grasp = std::make_unique<GraspMassModel>(rig->model(), sc.grasp_mass_scale * sc.hand.mass,
+                                             sc.grasp_mass_scale * sc.hand.inertia);
   }
   const bool detect = grasp && sc.grip_detector;
   // With the detector the pipeline's model is the device alone; the detector picks the mass.

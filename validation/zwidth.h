@@ -103,7 +103,8 @@ struct ZwidthScenario {
   bool observer_input_matched = true;
   // > 0: the pipeline's model carries this fraction of the operator's hand mass and inertia at
   // the tip (reference/grasp_mass_model.h); 0 = the device alone (the hand's inertia then enters
-  // the observer's estimate as human force). No effect under `force` (no hand mass).
+  // the observer's estimate as human force). No effect under `force` (no hand mass) unless
+  // grip_detector is set, which then has to find that no hand is on the tool.
   double grasp_mass_scale = 0.0;
   // With grasp_mass_scale > 0: judge tick by tick whether the hand is on the tool
   // (reference/grip_detector.h) and use the hand's mass only while it is; false = always.
