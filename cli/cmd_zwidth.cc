@@ -108,6 +108,15 @@ nlohmann::json sweep_json(const ZwidthSweep& s) {
     pts.push_back(pj);
   }
   j["points"] = pts;
+  // The same maximum under the literal growth criterion, lambda <= 0 for every run (the
+  // protocol allows lambda <= ln 2 / (hold - settle): docs/zwidth_protocol.md).
+  double strict = 0.0;
+  for (const ZwidthPoint& p : s.points) {
+    bool ok = p.stable && p.passive;
+    for (const ZwidthRun& r : p.runs) ok = ok && r.growth_rate_per_s <= 0.0;
+    if (ok) strict = std::max(strict, p.z_width_n_per_m);
+  }
+  j["z_width_strict_growth_n_per_m"] = strict;
   return j;
 }
 
