@@ -376,7 +376,8 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
       }
       if (r.grip_state >= 0) {
         ++n_grip_ticks;
-        if ((r.grip_state == 1) == !released) ++n_grip_agree;
+        const bool hand_on = op != ZwidthOperator::kForce && !released;
+        if ((r.grip_state == 1) == hand_on) ++n_grip_agree;
         if (released && r.grip_state == 0 && run.release_detected_after_s < 0.0) {
           run.release_detected_after_s = t - t_released;
         }

@@ -166,8 +166,8 @@ struct ZwidthRun {
   // unstable).
   bool proxy_tunnelled = false;
   // Grip detector (scenario grip_detector): switches of its state, the fraction of contact ticks
-  // it judged the hand on the tool while it was, and (release) the time from letting go to its
-  // first "released" (-1: never, or no detector).
+  // its judgement (hand on or off) was right (under `force` no hand is ever on), and (release)
+  // the time from letting go to its first "released" (-1: never, or no detector).
   int grip_switches = 0;
   double grip_agreement = -1.0;
   double release_detected_after_s = -1.0;
