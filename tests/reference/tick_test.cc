@@ -5,9 +5,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "reference/core/so3.h"
+#include "reference/grasp_mass_model.h"
 #include "reference/rigid_body_device.h"
 #include "reference/tools.h"
 #include "validation/wall_loop.h"
@@ -158,6 +160,64 @@ TEST(Tick, PmiPdWithoutObserverGainIsRejected) {
   EXPECT_THROW(ReferencePipeline(dev, cfg), std::invalid_argument);
   cfg.observer_gain = VecX::Constant(3, 50.0);
   EXPECT_THROW(ReferencePipeline(dev, cfg), std::invalid_argument);
+}
+
+// The pipeline with a grip detector (reference/grip_detector.h) whose state never changes is the
+// pipeline on the model of that state: stuck "gripped" it is the pipeline on the grasp model,
+// stuck "released" the one on the device alone (same commanded torques, tick by tick, on a
+// moving device pressed into a wall).
+TEST(Tick, GripDetectorStuckInOneStateIsThePipelineOnThatModel) {
+  const RigidBodyDevice dev;
+  const GraspMassModel grasp(dev, 0.3, 1e-4);
+  PipelineConfig base;
+  base.method = Method::kPmiPd;
+  base.proxy.mass = 0.02;
+  base.proxy.inertia = Mat3::Identity() * 2e-6;
+  base.coupling = CouplingGains{800.0, 0.3, 0.2, 1e-4};
+  base.observer_gain = VecX::Constant(6, 100.0);
+  base.tool = tool_preset("handpiece");
+  for (const bool gripped : {true, false}) {
+    PipelineConfig with = base;
+    with.grasp_model = &grasp;
+    with.grip_detector.start_gripped = gripped;
+    with.grip_detector.release_threshold = 1e30;  // never switches
+    with.grip_detector.grip_threshold = 1e30;
+    ReferencePipeline detected(dev, with);
+    ReferencePipeline fixed(gripped ? static_cast<const SixDofDeviceModel&>(grasp) : dev, base);
+    HalfSpaceWall wall_a(Vec3::Zero(), Vec3::UnitZ(), 1e-3, 3000.0, 0.0);
+    HalfSpaceWall wall_b(Vec3::Zero(), Vec3::UnitZ(), 1e-3, 3000.0, 0.0);
+    Pose pose;
+    pose.x = Vec3(0.0, 0.0, 1e-3);
+    DeviceSample s;
+    s.q = dev.joint_position(pose);
+    s.qd = VecX::Zero(6);
+    detected.reset(s);
+    fixed.reset(s);
+    double worst = 0.0, largest = 0.0;
+    for (int k = 1; k <= 400; ++k) {
+      const double t = 1e-3 * k;
+      pose.x = Vec3(2e-3 * std::sin(7.0 * t), 1e-3 * std::cos(5.0 * t), 1e-3 - 4e-3 * t);
+      pose.R = exp_so3(Vec3(0.1 * std::sin(3.0 * t), 0.05 * t, 0.0));
+      const VecX q = dev.joint_position(pose);
+      s.qd = (q - s.q) / 1e-3;
+      s.q = q;
+      s.t = t;
+      const TickResult& a = detected.tick(s, 1e-3, wall_a);
+      const TickResult& b = fixed.tick(s, 1e-3, wall_b);
+      ASSERT_EQ(a.grip_state, gripped ? 1 : 0);
+      ASSERT_EQ(b.grip_state, -1);
+      worst = std::max(worst, (a.tau - b.tau).cwiseAbs().maxCoeff());
+      largest = std::max(largest, b.tau.cwiseAbs().maxCoeff());
+    }
+    EXPECT_GT(largest, 0.5) << "the wall must load the device";
+    EXPECT_LT(worst, 1e-12 * std::max(1.0, largest)) << (gripped ? "gripped" : "released");
+  }
+  // The detector's grasp model must be built on the pipeline's device model.
+  const RigidBodyDevice other;
+  const GraspMassModel foreign(other, 0.3, 1e-4);
+  PipelineConfig bad = base;
+  bad.grasp_model = &foreign;
+  EXPECT_THROW(ReferencePipeline(dev, bad), std::invalid_argument);
 }
 
 TEST(Tick, RejectsNonPositiveTick) {
