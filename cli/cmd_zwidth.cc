@@ -154,6 +154,43 @@ int category(const ZwidthPoint& p) {
   return 3;
 }
 
+// The grip detector at work (docs/derivations/decomposition_and_observer.md §9): one `release`
+// run of PMI + PD at `g` with the hand's mass fixed in the model and one with the detector; the
+// penetration of both, and the detector's statistic and state.
+void write_grip_detector_plot(const std::string& dir, const ZwidthScenario& sc,
+                              const ZwidthGains& g) {
+  std::filesystem::create_directories(dir);
+  ZwidthScenario fixed = sc;
+  fixed.grip_detector = false;
+  ZwidthTrace tf, td;
+  run_zwidth_once(Method::kPmiPd, ZwidthOperator::kRelease, g, fixed, 0.0, &tf);
+  run_zwidth_once(Method::kPmiPd, ZwidthOperator::kRelease, g, sc, 0.0, &td);
+  auto mm = [](const std::vector<double>& v) {
+    std::vector<double> o;
+    for (double x : v) o.push_back(x * 1e3);
+    return o;
+  };
+  char gains[96];
+  std::snprintf(gains, sizeof gains, "(K_vc %g, b_vc %g, K_tooth %g), model hand mass x%g", g.k_vc,
+                g.b_vc, g.k_tooth, sc.grasp_mass_scale);
+  plot::Figure pen{std::string("pmi-pd, release: device penetration ") + gains, "time [s]",
+                   "penetration [mm]", {}, false, false};
+  pen.series.push_back({"hand mass fixed in the model", tf.t, mm(tf.penetration_m)});
+  pen.series.push_back({"with the grip detector", td.t, mm(td.penetration_m)});
+  plot::Figure st{"grip detector: statistic s = P1 - P0 and state (1 = gripped)", "time [s]",
+                  "s [N^2/kg] / state", {}, false, false};
+  std::vector<double> state;
+  for (int v : td.grip_state) state.push_back(v);
+  st.series.push_back({"s", td.t, td.grip_statistic});
+  st.series.push_back({"state", td.t, state});
+  const double t_end = td.t.empty() ? 1.0 : td.t.back();
+  st.series.push_back({"release threshold", {0.0, t_end},
+                       {sc.grip_detector_params.release_threshold,
+                        sc.grip_detector_params.release_threshold},
+                       false, -1, true});
+  plot::write_png({pen, st}, dir + "/grip_detector.png", 1, 900, 320);
+}
+
 void write_plots(const std::string& dir, const std::vector<ZwidthSweep>& force_sweeps,
                  const ZwidthGrid& grid, const ZwidthScenario& sc,
                  const std::vector<std::vector<double>>& op_values,
@@ -467,6 +504,18 @@ void run_zwidth(const ZwidthOptions& o) {
     for (ZwidthOperator op : ops) names.push_back(operator_name(op));
     write_plots(o.out, force_sweeps.empty() ? per_op[0] : force_sweeps,
                 force_sweeps.empty() ? small : grid, sc, op_values, names);
+  }
+  if (!o.out.empty() && sc.grip_detector) {
+    // At the best release point of PMI + PD with the detector (if release was run for it).
+    for (std::size_t k = 0; k < ops.size(); ++k) {
+      if (ops[k] != ZwidthOperator::kRelease) continue;
+      for (std::size_t mi = 0; mi < methods.size(); ++mi) {
+        const ZwidthSweep& rs = per_op[k][mi];
+        if (methods[mi] == Method::kPmiPd && rs.best >= 0) {
+          write_grip_detector_plot(o.out, sc, rs.points[rs.best].gains);
+        }
+      }
+    }
   }
   if (!o.json.empty()) write_json(o.json, out);
 }
