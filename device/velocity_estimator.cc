@@ -1,10 +1,10 @@
 #include "device/velocity_estimator.h"
 
 #include <cmath>
-#include <numbers>
 #include <string>
 
 #include "reference/core/io.h"
+#include "reference/core/lowpass.h"
 
 namespace dentsim {
 
@@ -32,7 +32,7 @@ const VecX& VelocityEstimator::update(const VecX& q, double t) {
   if (params_.filter == VelocityFilter::kBackwardDifference) {
     qd_ = (q - q_prev_) / T;
   } else {
-    const double a = 1.0 - std::exp(-2.0 * std::numbers::pi * params_.cutoff_hz * T);
+    const double a = lowpass_gain(params_.cutoff_hz, T);
     qd_ += a * ((q - q_prev_) / T - qd_);
   }
   q_prev_ = q;

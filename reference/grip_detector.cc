@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "reference/core/lowpass.h"
+
 namespace dentsim {
 namespace {
 
@@ -22,9 +24,6 @@ void require_non_negative(double v, const char* what) {
                                 " must be finite and >= 0, got " + std::to_string(v));
   }
 }
-
-// a = 1 - exp(-T / tau): the step of a first-order low-pass of time constant tau.
-double lowpass_step(double T, double tau) { return 1.0 - std::exp(-T / tau); }
 
 }  // namespace
 
@@ -72,16 +71,16 @@ bool GripDetector::update(const VecX& q, const VecX& qd, const VecX& tau, double
   h0_ = J1.transpose() * obs0_.update(q, qd, tau, T);  // F = J1^T f_hat
   h1_ = J1.transpose() * obs1_.update(q, qd, tau, T);
   // Band-pass: b = lowpass_fhi(h), then the high-pass e = b - lowpass_flo(b).
-  constexpr double kTwoPi = 2.0 * std::numbers::pi;
-  const double a_lp = lowpass_step(T, 1.0 / (kTwoPi * params_.lowpass_hz));
-  const double a_hp = lowpass_step(T, 1.0 / (kTwoPi * params_.highpass_hz));
+  const double a_lp = lowpass_gain(params_.lowpass_hz, T);
+  const double a_hp = lowpass_gain(params_.highpass_hz, T);
   b0_ += a_lp * (h0_ - b0_);
   b1_ += a_lp * (h1_ - b1_);
   lp0_ += a_hp * (b0_ - lp0_);
   lp1_ += a_hp * (b1_ - lp1_);
   const Vec6 e0 = b0_ - lp0_, e1 = b1_ - lp1_;
-  // Band power in the norm Mt^-1, low-passed.
-  const double a_p = lowpass_step(T, params_.power_time_constant_s);
+  // Band power of the linear force in the norm 1/m, low-passed with time constant tau_p.
+  const double f_p = 1.0 / (2.0 * std::numbers::pi * params_.power_time_constant_s);
+  const double a_p = lowpass_gain(f_p, T);
   p0_ += a_p * (e0.cwiseProduct(w_).dot(e0) - p0_);
   p1_ += a_p * (e1.cwiseProduct(w_).dot(e1) - p1_);
   const double s = p1_ - p0_;

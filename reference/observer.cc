@@ -1,10 +1,11 @@
 #include "reference/observer.h"
 
 #include <cmath>
-#include <numbers>
 #include <stdexcept>
 #include <string>
 #include <utility>
+
+#include "reference/core/lowpass.h"
 
 namespace dentsim {
 namespace {
@@ -71,7 +72,7 @@ const VecX& MomentumObserver::update(const VecX& q, const VecX& qd, const VecX& 
   if (input_.lowpass_hz > 0.0) {
     // The velocity estimator's low-pass, applied to u; it starts settled at rest (u_f = 0), as
     // the estimator starts from qd = 0.
-    const double a = 1.0 - std::exp(-2.0 * std::numbers::pi * input_.lowpass_hz * T);
+    const double a = lowpass_gain(input_.lowpass_hz, T);
     u_f_ += a * (u - u_f_);
     u = u_f_;
   }
