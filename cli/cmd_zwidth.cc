@@ -154,6 +154,13 @@ int category(const ZwidthPoint& p) {
   return 3;
 }
 
+std::vector<double> to_mm(const std::vector<double>& metres) {
+  std::vector<double> out;
+  out.reserve(metres.size());
+  for (double x : metres) out.push_back(x * 1e3);
+  return out;
+}
+
 // The grip detector at work (docs/derivations/decomposition_and_observer.md §9): one `release`
 // run of PMI + PD at `g` with the hand's mass fixed in the model and one with the detector; the
 // penetration of both, and the detector's statistic and state.
@@ -165,18 +172,13 @@ void write_grip_detector_plot(const std::string& dir, const ZwidthScenario& sc,
   ZwidthTrace tf, td;
   run_zwidth_once(Method::kPmiPd, ZwidthOperator::kRelease, g, fixed, 0.0, &tf);
   run_zwidth_once(Method::kPmiPd, ZwidthOperator::kRelease, g, sc, 0.0, &td);
-  auto mm = [](const std::vector<double>& v) {
-    std::vector<double> o;
-    for (double x : v) o.push_back(x * 1e3);
-    return o;
-  };
   char gains[96];
   std::snprintf(gains, sizeof gains, "(K_vc %g, b_vc %g, K_tooth %g), model hand mass x%g", g.k_vc,
                 g.b_vc, g.k_tooth, sc.grasp_mass_scale);
   plot::Figure pen{std::string("pmi-pd, release: device penetration ") + gains, "time [s]",
                    "penetration [mm]", {}, false, false};
-  pen.series.push_back({"hand mass fixed in the model", tf.t, mm(tf.penetration_m)});
-  pen.series.push_back({"with the grip detector", td.t, mm(td.penetration_m)});
+  pen.series.push_back({"hand mass fixed in the model", tf.t, to_mm(tf.penetration_m)});
+  pen.series.push_back({"with the grip detector", td.t, to_mm(td.penetration_m)});
   plot::Figure st{"grip detector: statistic s = P1 - P0 and state (1 = gripped)", "time [s]",
                   "s [N^2/kg] / state", {}, false, false};
   std::vector<double> state;
@@ -212,8 +214,7 @@ void write_plots(const std::string& dir, const std::vector<ZwidthSweep>& force_s
                    {},
                    false,
                    false};
-    plot::Series ser{"measured", {}, tr.force_n};
-    for (double p : tr.penetration_m) ser.x.push_back(p * 1e3);
+    plot::Series ser{"measured", to_mm(tr.penetration_m), tr.force_n};
     f.series.push_back(ser);
     const double z = s.z_width_n_per_m();
     const double pmax = *std::max_element(tr.penetration_m.begin(), tr.penetration_m.end());
@@ -225,10 +226,8 @@ void write_plots(const std::string& dir, const std::vector<ZwidthSweep>& force_s
                    {},
                    false,
                    false};
-    std::vector<double> pm;
-    for (double p : tr.penetration_m) pm.push_back(p * 1e3);
     t.series.push_back({"force [N]", tr.t, tr.force_n});
-    t.series.push_back({"penetration [mm]", tr.t, pm});
+    t.series.push_back({"penetration [mm]", tr.t, to_mm(tr.penetration_m)});
     ft.push_back(t);
   }
   if (!fp.empty()) plot::write_png(fp, dir + "/force_vs_penetration.png", 1, 900, 360);

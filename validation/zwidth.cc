@@ -329,7 +329,7 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
   bool released = false;
   double t_released = -1.0;
   int last_grip = -1;
-  long n_grip_ticks = 0, n_grip_agree = 0;
+  long n_grip_ticks = 0, n_grip_agree = 0, n_on = 0, n_off = 0;
   const double cap = 2.0 + sc.hold_s + (tip0.x.z() - z_s) / std::max(speed, 1e-3);
   std::vector<double> ts, ps;  // penetration after first contact + settle
   double sum_f = 0, sum_p = 0;
@@ -390,10 +390,15 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
     }
     if (r.grip_state >= 0 && last_grip >= 0 && r.grip_state != last_grip) ++run.grip_switches;
     if (r.grip_state >= 0 && !released) {
-      run.grip_statistic_max_on = std::max(run.grip_statistic_max_on, r.grip_statistic);
-      run.grip_statistic_min_on = std::min(run.grip_statistic_min_on, r.grip_statistic);
+      const bool first = n_on++ == 0;
+      run.grip_statistic_max_on =
+          first ? r.grip_statistic : std::max(run.grip_statistic_max_on, r.grip_statistic);
+      run.grip_statistic_min_on =
+          first ? r.grip_statistic : std::min(run.grip_statistic_min_on, r.grip_statistic);
     } else if (r.grip_state >= 0) {
-      run.grip_statistic_max_off = std::max(run.grip_statistic_max_off, r.grip_statistic);
+      run.grip_statistic_max_off = n_off++ == 0
+                                       ? r.grip_statistic
+                                       : std::max(run.grip_statistic_max_off, r.grip_statistic);
     }
     last_grip = r.grip_state;
     if (trace) {

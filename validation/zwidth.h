@@ -171,8 +171,9 @@ struct ZwidthRun {
   int grip_switches = 0;
   double grip_agreement = -1.0;
   double release_detected_after_s = -1.0;
-  // The detector's statistic s [N^2/kg] (0 without one): extremes while the hand is on the tool
-  // (the whole run before letting go) and its maximum after.
+  // The detector's statistic s [N^2/kg] (0 without one, or without ticks in that phase): its
+  // extremes while the hand is on the tool (the whole run before letting go) and its maximum
+  // after.
   double grip_statistic_max_on = 0.0, grip_statistic_min_on = 0.0;
   double grip_statistic_max_off = 0.0;
   bool stable = false;

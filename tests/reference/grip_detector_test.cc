@@ -69,6 +69,12 @@ Outcome drive(const SixDofDeviceModel& plant, GripDetector& det, double amp, dou
   return out;
 }
 
+void report(const char* label, const Outcome& o) {
+  std::printf("%s: gripped %d switches %d s %.3g N^2/kg, rms |h0| %.3g N |h1| %.3g N, tip travel "
+              "%.2f mm\n",
+              label, o.gripped, o.switches, o.statistic, o.rms_h0, o.rms_h1, 1e3 * o.tip_travel);
+}
+
 TEST(GripDetector, PlantCarryingTheHandIsJudgedGripped) {
   const PhantomModel base(default_phantom_params());
   const GraspMassModel grasp(base, kMass, kInertia);
@@ -76,9 +82,7 @@ TEST(GripDetector, PlantCarryingTheHandIsJudgedGripped) {
   prm.start_gripped = false;
   GripDetector det(grasp, VecX::Constant(6, 200.0), {}, prm);
   const Outcome o = drive(grasp, det, 0.08, 6.0, 1.0);
-  std::printf("hand on: gripped %d switches %d s %.3g N^2/kg, rms |h0| %.3g N |h1| %.3g N, "
-              "tip travel %.2f mm\n",
-              o.gripped, o.switches, o.statistic, o.rms_h0, o.rms_h1, 1e3 * o.tip_travel);
+  report("hand on", o);
   EXPECT_TRUE(o.gripped);
   EXPECT_EQ(o.switches, 1);
   EXPECT_LT(o.statistic, -prm.grip_threshold);
@@ -95,9 +99,7 @@ TEST(GripDetector, PlantWithoutTheHandIsJudgedReleased) {
   GripDetector det(grasp, VecX::Constant(6, 200.0), {});
   ASSERT_TRUE(det.gripped());
   const Outcome o = drive(base, det, 0.04, 6.0, 1.0);
-  std::printf("hand off: gripped %d switches %d s %.3g N^2/kg, rms |h0| %.3g N |h1| %.3g N, "
-              "tip travel %.2f mm\n",
-              o.gripped, o.switches, o.statistic, o.rms_h0, o.rms_h1, 1e3 * o.tip_travel);
+  report("hand off", o);
   EXPECT_FALSE(o.gripped);
   EXPECT_EQ(o.switches, 1);
   EXPECT_GT(o.statistic, det.params().release_threshold);
