@@ -123,7 +123,11 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   VoxelTooth tooth(std::move(grid));
   ToolTip tip;
   tip.radius = scene.tool.bur_radius;
-  ToothContactProvider contacts(tooth, tip, scene.tooth.k_tooth, scene.tooth.b_tooth);
+  DrillParams drill;
+  drill.bur_speed_rad_s = scene.tool.bur_speed_rpm * 2.0 * std::numbers::pi / 60.0;
+  drill.cutting_coefficient = scene.tool.cutting_coefficient;
+  ToothContactProvider contacts(tooth, tip, scene.tooth.k_tooth, scene.tooth.b_tooth,
+                                scene.tool.drills() ? &drill : nullptr);
 
   // Hand.
   std::vector<HandKeyframe> keys;
@@ -168,12 +172,6 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   ReferencePipeline pipeline(belief, pc);
   ClosedLoop loop(device, pipeline, contacts);
 
-  DrillParams drill;
-  drill.bur_speed_rad_s = scene.tool.bur_speed_rpm * 2.0 * std::numbers::pi / 60.0;
-  drill.cutting_coefficient = scene.tool.cutting_coefficient;
-  DrillState drill_state = make_drill_state(tooth);
-  std::vector<std::size_t> removed;
-  removed.reserve(1024);
   CollisionScratch scratch;
   std::vector<Contact> device_contacts;
   device_contacts.reserve(4096);
@@ -203,8 +201,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     long drill_ns = 0;
     if (scene.tool.drills() && !r.contacts.empty()) {
       const auto d0 = std::chrono::steady_clock::now();
-      drill_tick(r.contacts, contacts.contact_voxels(), tip, drill, loop.last_tick_length(),
-                 &tooth, &drill_state, &removed);
+      contacts.drill(r.contacts, loop.last_tick_length());
       drill_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
                      std::chrono::steady_clock::now() - d0).count();
     }
@@ -288,7 +285,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   res.hand_work_j = hand_work;
   res.observer_rms_error_n = res.ticks > 0 ? std::sqrt(sum_obs2 / res.ticks) : 0.0;
   for (int m = 1; m < kMaterialCount; ++m) {
-    res.removed_volume_mm3[m] = drill_state.removed_volume_m3(m) * 1e9;
+    res.removed_volume_mm3[m] =
+        contacts.drills() ? contacts.drill_state().removed_volume_m3(m) * 1e9 : 0.0;
     res.removed_volume_total_mm3 += res.removed_volume_mm3[m];
   }
   for (int s = 0; s < kStageCount; ++s) {

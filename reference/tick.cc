@@ -71,6 +71,7 @@ ReferencePipeline::ReferencePipeline(const SixDofDeviceModel& device, PipelineCo
   }
   tau_prev_ = VecX::Zero(n);
   result_.tau = VecX::Zero(n);
+  result_.contacts.reserve(kContactCapacity);
 }
 
 ReferencePipeline::~ReferencePipeline() = default;
@@ -85,6 +86,7 @@ void ReferencePipeline::reset(const DeviceSample& s) {
   have_prev_ = false;
   result_ = TickResult{};
   result_.tau = VecX::Zero(device_.dof());
+  result_.contacts.reserve(kContactCapacity);
 }
 
 const TickResult& ReferencePipeline::tick(const DeviceSample& s, double T,
@@ -123,7 +125,7 @@ const TickResult& ReferencePipeline::tick(const DeviceSample& s, double T,
   clock.lap(kStageObserver);
 
   // Collision.
-  contacts.contacts(proxy_.pose, r.contacts);
+  contacts.contacts(proxy_.pose, r.contacts);  // (capacity: see the constructor)
   r.max_depth = 0.0;
   for (const Contact& c : r.contacts) {
     r.max_depth = std::max(r.max_depth, penetration_depth(c, proxy_.pose));

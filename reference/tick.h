@@ -23,26 +23,13 @@
 #include <vector>
 
 #include "reference/core/affine_wrench.h"
+#include "reference/core/contact_provider.h"
 #include "reference/core/device_model.h"
 #include "reference/core/params.h"
 #include "reference/grip_detector.h"
 #include "reference/observer.h"
 
 namespace dentsim {
-
-// The collision stage as seen by the tick: fills `out` (cleared first) with the contacts of the
-// proxy at `proxy` (the tool tip). Implementations: the voxel tooth's octree, analytic walls.
-class ContactProvider {
- public:
-  virtual ~ContactProvider() = default;
-  virtual void contacts(const Pose& proxy, std::vector<Contact>& out) = 0;
-};
-
-// A provider with no contacts (free space).
-class NoContacts : public ContactProvider {
- public:
-  void contacts(const Pose&, std::vector<Contact>& out) override { out.clear(); }
-};
 
 struct PipelineConfig {
   Method method = Method::kPmiVc;

@@ -12,25 +12,11 @@
 #include <functional>
 #include <string>
 
+#include "reference/half_space_wall.h"
 #include "reference/rigid_body_device.h"
 #include "reference/tick.h"
 
 namespace dentsim {
-
-// A flat wall {y : n^T (y - point) <= 0} touched by the tool tip, a sphere of radius
-// `tip_radius` centred at the proxy origin.
-class HalfSpaceWall : public ContactProvider {
- public:
-  HalfSpaceWall(Vec3 point, Vec3 normal, double tip_radius, double stiffness, double damping);
-  void contacts(const Pose& proxy, std::vector<Contact>& out) override;
-  // Penetration of a sphere centred at x (>0 inside the wall).
-  double depth(const Vec3& x) const;
-  const Vec3& normal() const { return n_; }
-
- private:
-  Vec3 p_, n_;
-  double rho_, k_, b_;
-};
 
 // The scripted hand: F_h = K (x_ref(t) - x1) - B v1 + push(t), torque -K_w log(R_ref^T R1) - B_w w1.
 // x_ref moves from x_start along `direction` at `speed` for `travel` metres, then holds;

@@ -243,7 +243,7 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
   const Pose tip0 = rig->true_tip();
   const double rho = sc.tip_radius_m;
   const double z_s = tip0.x.z() - rho - sc.approach_gap_m;
-  const VoxelTooth slab = enamel_slab(tip0.x, z_s, sc.voxel_size_m);
+  VoxelTooth slab = enamel_slab(tip0.x, z_s, sc.voxel_size_m);
   ToothContactProvider wall(slab, ToolTip{rho, Vec3::Zero()}, gains.k_tooth, sc.b_tooth);
 
   // The operator.

@@ -31,6 +31,19 @@ class DeviceModel {
   virtual VecX friction_torque(const VecX& q, const VecX& qd) const = 0;     // tau_f(q, qd)
 };
 
+// Everything the servo tick needs from a 6-DoF device model at one sample (q, qd), evaluated in
+// one pass (the tick's `device_terms` stage): the observer, the grip detector, the decomposition
+// and the command all read these instead of calling the model again.
+struct DeviceTerms {
+  Pose pose;                     // x1, R1: forward kinematics
+  Mat6 J_t = Mat6::Zero();       // tool Jacobian: V1 = J_t qd, V1 = [v1 (world); w1 (body)]
+  Mat6 J_t_dot = Mat6::Zero();   // dJ_t/dt along qd (only filled when asked for)
+  Mat6 M = Mat6::Zero();         // M(q)
+  Vec6 CTqd = Vec6::Zero();      // C(q, qd)^T qd
+  Vec6 g = Vec6::Zero();         // g(q)
+  Vec6 tau_f = Vec6::Zero();     // tau_f(q, qd)
+};
+
 // A 6-DoF device with a tool-tip frame: forward kinematics (x1, R1) and the modified Jacobian
 // J1 of (2.2), qd = J1 V1 with V1 = [v1 (world); w1 (body)].
 class SixDofDeviceModel : public DeviceModel {
@@ -38,6 +51,13 @@ class SixDofDeviceModel : public DeviceModel {
   int dof() const override { return 6; }
   virtual Pose forward_kinematics(const VecX& q) const = 0;
   virtual Mat6 twist_to_joint(const VecX& q) const = 0;  // J1(q)
+
+  // All of DeviceTerms at (q, qd); J_t_dot only when with_jacobian_rate. The default evaluates
+  // the functions above one by one (J_t = J1^-1, J_t_dot by a central difference of J_t along qd,
+  // h = 1e-6 s) and allocates; models used inside a servo loop override it with one pass that
+  // does not allocate (PhantomModel). Never throws for finite input of the right size.
+  virtual void terms(const Vec6& q, const Vec6& qd, bool with_jacobian_rate,
+                     DeviceTerms& out) const;
 };
 
 }  // namespace dentsim

@@ -70,4 +70,20 @@ Pose PhantomModel::forward_kinematics(const VecX& q) const {
 
 Mat6 PhantomModel::twist_to_joint(const VecX& q) const { return model_.J1(as6(q, "q")); }
 
+void PhantomModel::terms(const Vec6& q, const Vec6& qd, bool with_jacobian_rate,
+                         DeviceTerms& out) const {
+  const PhantomModelD::Kinematics k = model_.kinematics(q, qd);
+  Mat6 C;
+  model_.joint_terms(k, &out.M, &C, &out.g);
+  out.CTqd.noalias() = C.transpose() * qd;
+  out.tau_f = model_.friction(qd);
+  model_.tool_pose(k, &out.pose.x, &out.pose.R);
+  out.J_t = model_.tool_jacobian(k);
+  if (with_jacobian_rate) {
+    out.J_t_dot = model_.tool_jacobian_rate(k);
+  } else {
+    out.J_t_dot.setZero();
+  }
+}
+
 }  // namespace dentsim

@@ -124,6 +124,18 @@ class PhantomModelT {
   M6 tool_jacobian(const V6& q) const;         // J_t: [v1 (world); w1 (body)] = J_t qd
   M6 J1(const V6& q) const;                    // (2.2): qd = J1 [v1; w1], J1 = J_t^-1
 
+  // From one kinematics pass k = kinematics(q, qd) (the servo tick's device terms):
+  // joint-space M, C and g (any pointer may be null; M includes the armature), the tool tip pose,
+  // J_t, and its time derivative along qd:
+  //   column j (tree joint j, an ancestor of the roll body; x1 the tip, p_j the joint point):
+  //     v-row  d/dt (a_j x (x1 - p_j)) = (w_j x a_j) x (x1 - p_j) + a_j x (xd1 - vo_j)
+  //     w-row  d/dt (R1^T a_j)         = R1^T (w_j x a_j - w_roll x a_j)
+  //   with xd1 = vo_roll + w_roll x (x1 - p_roll), then J_t = J_tree G, dJ_t/dt = dJ_tree/dt G.
+  void joint_terms(const Kinematics& k, M6* M, M6* C, V6* g) const;
+  void tool_pose(const Kinematics& k, V3* x1, M3* R1) const;
+  M6 tool_jacobian(const Kinematics& k) const;
+  M6 tool_jacobian_rate(const Kinematics& k) const;
+
   T kinetic_energy(const V6& q, const V6& qd) const { return T(0.5) * qd.dot(M(q) * qd); }
   T potential_energy(const V6& q) const;  // sum_i m_i |g| z_i (zero at z = 0)
 
@@ -358,6 +370,56 @@ typename PhantomModelT<T>::M6 PhantomModelT<T>::J1(const V6& q) const {
 }
 
 template <typename T>
+void PhantomModelT<T>::joint_terms(const Kinematics& k, M6* M, M6* C, V6* g) const {
+  const Eigen::Matrix<T, kPhantomTreeDof, 6> G = phantom_tree_map().cast<T>();
+  MT Mt, Ct;
+  VT gt;
+  tree_terms(k, M ? &Mt : nullptr, C ? &Ct : nullptr, g ? &gt : nullptr);
+  if (M) {
+    *M = G.transpose() * Mt * G;
+    M->diagonal() += tree_.armature;
+  }
+  if (C) *C = G.transpose() * Ct * G;
+  if (g) *g = G.transpose() * gt;
+}
+
+template <typename T>
+void PhantomModelT<T>::tool_pose(const Kinematics& k, V3* x1, M3* R1) const {
+  if (x1) *x1 = k.p[kGimbalRoll] + k.R[kGimbalRoll] * tree_.tip;
+  if (R1) *R1 = k.R[kGimbalRoll];
+}
+
+template <typename T>
+typename PhantomModelT<T>::M6 PhantomModelT<T>::tool_jacobian(const Kinematics& k) const {
+  const Eigen::Matrix<T, kPhantomTreeDof, 6> G = phantom_tree_map().cast<T>();
+  const V3 x1 = k.p[kGimbalRoll] + k.R[kGimbalRoll] * tree_.tip;
+  Eigen::Matrix<T, 6, kPhantomTreeDof> Jt = Eigen::Matrix<T, 6, kPhantomTreeDof>::Zero();
+  for (int j = 0; j < kPhantomTreeDof; ++j) {
+    if (!ancestor_or_self(j, kGimbalRoll)) continue;
+    Jt.col(j).template head<3>() = k.a[j].cross(x1 - k.p[j]);              // v1, world
+    Jt.col(j).template tail<3>() = k.R[kGimbalRoll].transpose() * k.a[j];  // w1, body
+  }
+  return Jt * G;
+}
+
+template <typename T>
+typename PhantomModelT<T>::M6 PhantomModelT<T>::tool_jacobian_rate(const Kinematics& k) const {
+  const Eigen::Matrix<T, kPhantomTreeDof, 6> G = phantom_tree_map().cast<T>();
+  const M3& R = k.R[kGimbalRoll];
+  const V3 x1 = k.p[kGimbalRoll] + R * tree_.tip;
+  const V3 w_tip = k.w[kGimbalRoll];
+  const V3 xd1 = k.vo[kGimbalRoll] + w_tip.cross(x1 - k.p[kGimbalRoll]);
+  Eigen::Matrix<T, 6, kPhantomTreeDof> dJ = Eigen::Matrix<T, 6, kPhantomTreeDof>::Zero();
+  for (int j = 0; j < kPhantomTreeDof; ++j) {
+    if (!ancestor_or_self(j, kGimbalRoll)) continue;
+    const V3 da = k.w[j].cross(k.a[j]);  // the axis turns with its body
+    dJ.col(j).template head<3>() = da.cross(x1 - k.p[j]) + k.a[j].cross(xd1 - k.vo[j]);
+    dJ.col(j).template tail<3>() = R.transpose() * (da - w_tip.cross(k.a[j]));
+  }
+  return dJ * G;
+}
+
+template <typename T>
 T PhantomModelT<T>::potential_energy(const V6& q) const {
   const Kinematics k = kinematics(q, V6::Zero());
   T u = T(0);
@@ -385,6 +447,10 @@ class PhantomModel : public SixDofDeviceModel {
   VecX friction_torque(const VecX& q, const VecX& qd) const override;
   Pose forward_kinematics(const VecX& q) const override;
   Mat6 twist_to_joint(const VecX& q) const override;  // J1(q) of (2.2)
+  // One kinematics pass for every term (PhantomModelT::joint_terms, tool_jacobian(_rate));
+  // no allocation. M, C and g equal mass_matrix, coriolis_matrix and gravity bitwise.
+  void terms(const Vec6& q, const Vec6& qd, bool with_jacobian_rate,
+             DeviceTerms& out) const override;
 
  private:
   PhantomParams params_;

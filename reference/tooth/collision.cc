@@ -92,9 +92,10 @@ double disk_rect_area(double a, double x0, double x1, double y0, double y1) {
   return std::max(0.0, area);
 }
 
-void collide_tool_tip(const VoxelTooth& tooth, const Pose& proxy, const ToolTip& tip,
+bool collide_tool_tip(const VoxelTooth& tooth, const Pose& proxy, const ToolTip& tip,
                       double k_tooth, double b_tooth, CollisionScratch* scratch,
-                      std::vector<Contact>* contacts, std::vector<std::size_t>* contact_voxels) {
+                      std::vector<Contact>* contacts, std::vector<std::size_t>* contact_voxels,
+                      std::size_t max_contacts) {
   const double rho = tip.radius;
   if (!(rho > 0.0) || !std::isfinite(rho)) {
     throw InputError("tool tip: radius = " + std::to_string(rho) +
@@ -167,10 +168,12 @@ void collide_tool_tip(const VoxelTooth& tooth, const Pose& proxy, const ToolTip&
       contact.damping = b_tooth * props.damping_scale;
       contact.weight = weight;
       contact.material = material;
+      if (contacts->size() >= max_contacts) return false;
       contacts->push_back(contact);
       if (contact_voxels != nullptr) contact_voxels->push_back(v);
     }
   }
+  return true;
 }
 
 Vec3 blended_contact_force(const std::vector<Contact>& contacts) {

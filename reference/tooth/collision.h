@@ -35,6 +35,7 @@
 #pragma once
 
 #include <cstddef>
+#include <limits>
 #include <vector>
 
 #include "reference/core/params.h"
@@ -72,11 +73,14 @@ double disk_rect_area(double a, double x0, double x1, double y0, double y1);
 
 // Appends to `contacts` the contact set of the tip sphere at the proxy pose (steps above). If
 // `contact_voxels` is not null, appends the flat voxel index of each contact in parallel.
-// k_tooth [N/m], b_tooth [N s/m] are the scene's; throws InputError if rho <= 0.
-void collide_tool_tip(const VoxelTooth& tooth, const Pose& proxy, const ToolTip& tip,
+// k_tooth [N/m], b_tooth [N s/m] are the scene's; throws InputError if rho <= 0. Stops and
+// returns false when `contacts` would hold more than max_contacts members (the servo tick's
+// fixed-capacity buffer: it never grows); true when the whole set was reported.
+bool collide_tool_tip(const VoxelTooth& tooth, const Pose& proxy, const ToolTip& tip,
                       double k_tooth, double b_tooth, CollisionScratch* scratch,
                       std::vector<Contact>* contacts,
-                      std::vector<std::size_t>* contact_voxels = nullptr);
+                      std::vector<std::size_t>* contact_voxels = nullptr,
+                      std::size_t max_contacts = std::numeric_limits<std::size_t>::max());
 
 // The static penalty force of one contact set blended as the contact stage does:
 // f = sum_i w_i K_i depth_i n_i / sum_i w_i [N, world] (zero for an empty set). Used by drilling

@@ -25,7 +25,7 @@ double removal_threshold_j(std::uint8_t material, double voxel_size) {
          voxel_size * voxel_size * voxel_size;
 }
 
-int drill_tick(const std::vector<Contact>& contacts, const std::vector<std::size_t>& contact_voxels,
+int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> contact_voxels,
                const ToolTip& tip, const DrillParams& params, double T, VoxelTooth* tooth,
                DrillState* state, std::vector<std::size_t>* removed) {
   if (contacts.size() != contact_voxels.size()) {

@@ -20,6 +20,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "reference/core/params.h"
@@ -57,7 +58,7 @@ double removal_threshold_j(std::uint8_t material, double voxel_size);
 // removes every contacted voxel whose work reached its threshold. Appends the removed flat indices
 // to `removed` if not null and returns their number. The contact set is stale afterwards. Throws
 // InputError if the vectors differ in length, T <= 0, or the params are negative.
-int drill_tick(const std::vector<Contact>& contacts, const std::vector<std::size_t>& contact_voxels,
+int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> contact_voxels,
                const ToolTip& tip, const DrillParams& params, double T, VoxelTooth* tooth,
                DrillState* state, std::vector<std::size_t>* removed = nullptr);
 
