@@ -10,8 +10,10 @@
 #include "cli/png_writer.h"
 #include "cli/progress.h"
 #include "cli/registry.h"
+#include "device/fault_injection.h"
 #include "device/scene.h"
 #include "device/simulator.h"
+#include "fast/registry.h"
 #include "reference/core/io.h"
 #include "reference/tooth/materials.h"
 #include "reference/tooth/render_png.h"
@@ -27,6 +29,8 @@ struct RunCliOptions {
   bool list = false;
   bool show = false;
   int log_every = 1;
+  std::string pipeline = "reference";
+  std::string inject_fault;
 };
 
 nlohmann::json report_json(const Scene& scene, const RunResult& r) {
@@ -35,6 +39,7 @@ nlohmann::json report_json(const Scene& scene, const RunResult& r) {
   j["scene_origin"] = scene.origin;
   j["method"] = method_name(scene.method.method);
   j["device_model"] = r.device_model;
+  j["pipeline"] = r.pipeline;
   j["tick_hz"] = scene.tick_hz;
   j["simulated_s"] = r.simulated_s;
   j["wall_s"] = r.wall_s;
@@ -61,6 +66,7 @@ nlohmann::json report_json(const Scene& scene, const RunResult& r) {
   }
   j["timing_us"] = tj;
   j["faults"] = r.faults;
+  if (!r.faults.empty()) j["torque_after_fault_n_m"] = r.torque_after_fault_n_m;
   return j;
 }
 
@@ -141,6 +147,12 @@ void run(const RunCliOptions& o) {
   }
   if (o.duration < 0.0) throw InputError("--duration must be positive");
   if (o.log_every < 1) throw InputError("--log-every must be at least 1");
+  if (find_stage_table(o.pipeline) == nullptr) {
+    throw InputError("--pipeline '" + o.pipeline + "': expected one of " + stage_table_names());
+  }
+  const InjectedFault fault = o.inject_fault.empty()
+                                  ? InjectedFault{}
+                                  : parse_injected_fault(o.inject_fault, "--inject-fault");
   const Scene scene = load_scene(o.scene);
   std::error_code ec;
   std::filesystem::create_directories(o.out, ec);
@@ -148,12 +160,14 @@ void run(const RunCliOptions& o) {
     throw InputError("--out '" + o.out + "': cannot create the directory (" + ec.message() + ")");
   }
 
-  std::fprintf(stderr, "dentsim run: scene '%s' (%s), %.2f s at %.0f Hz, method %s\n",
+  std::fprintf(stderr, "dentsim run: scene '%s' (%s), %.2f s at %.0f Hz, method %s, %s pipeline\n",
                scene.name.c_str(), scene.origin.c_str(),
                o.duration > 0 ? o.duration : scene.duration, scene.tick_hz,
-               method_name(scene.method.method));
+               method_name(scene.method.method), o.pipeline.c_str());
   ProgressBar bar("simulating");
   RunOptions ro;
+  ro.pipeline = o.pipeline;
+  ro.fault = fault;
   ro.realtime = o.realtime;
   ro.duration_override = o.duration;
   ro.log_every = o.log_every;
@@ -203,6 +217,12 @@ void setup_run(CLI::App& app) {
   sub->add_option("--duration", o->duration, "Override the scene's duration [s]");
   sub->add_option("--log-every", o->log_every, "Keep every n-th tick in the time series")
       ->capture_default_str();
+  sub->add_option("--pipeline", o->pipeline, "The tick's implementation: " + stage_table_names())
+      ->capture_default_str();
+  sub->add_option("--inject-fault", o->inject_fault,
+                  "Inject a device fault, KIND@T: nan-sample@T (q[0] NaN from T s on) or "
+                  "inf-sample@T (qd[0] infinite); the run must end in a named fault with zero "
+                  "torque and its report written");
   sub->add_flag("--list", o->list, "List the built-in scenes");
   sub->add_flag("--show", o->show, "Print the scene file (e.g. to start a new scene from a built-in one)");
   sub->callback([o] { run(*o); });

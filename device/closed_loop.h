@@ -1,4 +1,6 @@
-// The closed loop of one servo tick against any Device (DESIGN.md "One servo tick"):
+// The loop owner: the closed loop of one servo tick against any Device (DESIGN.md "One servo
+// tick", "The tick as Model/Data stages"), used by the simulator, the Z-width rig, the wall loop
+// and the observer report:
 //
 //   device.read(sample) -> pipeline.tick(sample, T_k, contacts) -> device.write(tau) ->
 //   device.advance()
@@ -6,6 +8,13 @@
 // T_k handed to the pipeline is the length of the tick about to run. A device cannot know it in
 // advance: the loop uses the last measured tick length (t_k - t_k-1; the nominal period on the
 // first tick), which is what a real servo loop sees and what PMI's varying-T_k form allows.
+//
+// Faults: a tick that returns a status other than kOk (reference/core/pipeline.h: a NaN in the
+// sample, a singular device model, a full contact buffer, a failed solve, a non-finite command)
+// latches that status as the loop's fault, named by tick_status_name ("tick_bad_sample", ...).
+// From then on the loop commands exactly zero torque every tick (the device keeps being
+// advanced, so a simulated device still moves under the hand); the owner of the loop reads
+// fault() and ends the run, writing its report. Nothing in step() allocates or throws.
 //
 // Passivity observer at the device port: E_v = sum_k (tau_k - tau_g,k)^T (q_k+1 - q_k), the
 // energy the virtual side put into the device through the motors, from the torque actually
@@ -25,8 +34,12 @@ class ClosedLoop {
   // All references must outlive the loop.
   ClosedLoop(Device& device, Pipeline& pipeline, ContactProvider& contacts);
 
-  // Reads the first sample and resets the pipeline on it (proxy at the device, at rest).
+  // Reads the first sample and resets the pipeline on it (proxy at the device, at rest). A
+  // sample the pipeline cannot start from latches the fault.
   void start();
+  // Hand the pipeline the device's nominal period every tick instead of the measured one (an
+  // ideal simulated device whose tick is exact by construction).
+  void use_nominal_period(bool on) { nominal_ = on; }
   // One tick: read, tick, write, advance. Returns the tick's result (valid until the next step).
   const TickResult& step();
 
@@ -34,15 +47,26 @@ class ClosedLoop {
   double energy_virtual_j() const { return energy_; }     // E_v so far
   double last_tick_length() const { return T_; }
   long ticks() const { return ticks_; }
+  // The latched fault (kOk while none), its name, and the time of the sample it was raised on.
+  TickStatus fault() const { return fault_; }
+  bool faulted() const { return fault_ != TickStatus::kOk; }
+  const char* fault_name() const { return tick_status_name(fault_); }
+  double fault_time() const { return fault_t_; }
+  // The torque commanded on the last step (zero once faulted) [N m].
+  const VecX& commanded_torque() const { return tau_cmd_; }
 
  private:
   Device& device_;
   Pipeline& pipeline_;
   ContactProvider& contacts_;
   DeviceSample sample_, next_;
+  VecX tau_cmd_;
   double T_ = 1e-3;
   double energy_ = 0.0;
   long ticks_ = 0;
+  TickStatus fault_ = TickStatus::kOk;
+  double fault_t_ = 0.0;
+  bool nominal_ = false;
 };
 
 }  // namespace dentsim

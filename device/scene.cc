@@ -176,9 +176,10 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
 
   // Method and gains.
   const auto& m = rd.object(doc, "", "method");
-  rd.only_keys(m, "method", {"name", "k_vc_n_per_m", "b_vc_n_s_per_m", "k_vc_ang_n_m_per_rad",
-                             "b_vc_ang_n_m_s_per_rad", "observer_gain_per_s", "friction_mu",
-                             "grasp_mass_scale"});
+  rd.only_keys(
+      m, "method",
+      {"name", "k_vc_n_per_m", "b_vc_n_s_per_m", "k_vc_ang_n_m_per_rad", "b_vc_ang_n_m_s_per_rad",
+       "observer_gain_per_s", "friction_mu", "grasp_mass_scale", "grip_detector"});
   const std::string mname = rd.string(m, "method", "name");
   try {
     s.method.method = parse_method(mname);
@@ -201,6 +202,14 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   }
   s.method.grasp_mass_scale = rd.number(m, "method", "grasp_mass_scale", 0.0);
   rd.non_negative("method.grasp_mass_scale", s.method.grasp_mass_scale);
+  s.method.grip_detector = rd.boolean(m, "method", "grip_detector", false);
+  if (s.method.grip_detector && !(s.method.grasp_mass_scale > 0.0)) {
+    rd.fail("method.grip_detector",
+            "needs method.grasp_mass_scale > 0 (the hand's mass to detect)");
+  }
+  if (s.method.grip_detector && s.method.method != Method::kPmiPd) {
+    rd.fail("method.grip_detector", "only the pmi-pd method uses the hand's mass");
+  }
   s.method.friction.mu = rd.number(m, "method", "friction_mu", 0.0);
   rd.non_negative("method.friction_mu", s.method.friction.mu);
   s.method.friction.enabled = s.method.friction.mu > 0.0;

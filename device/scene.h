@@ -56,6 +56,9 @@ struct SceneMethod {
   // > 0: the pipeline's device model carries this fraction of the hand's mass and inertia at the
   // tip while it grips (reference/grasp_mass_model.h); 0 = the device alone.
   double grasp_mass_scale = 0.0;
+  // With grasp_mass_scale > 0 and pmi-pd: a grip detector decides tick by tick whether the hand
+  // is on the tool (reference/grip_detector.h) instead of assuming it always is.
+  bool grip_detector = false;
   FrictionParams friction;
   ProxyParams proxy;
 };

@@ -10,6 +10,7 @@
 #include "device/closed_loop.h"
 #include "device/phantom_device.h"
 #include "device/simulated_phantom.h"
+#include "fast/registry.h"
 #include "reference/core/io.h"
 #include "reference/core/so3.h"
 #include "reference/grasp_mass_model.h"
@@ -88,67 +89,71 @@ StageStats stats_of(std::vector<double>& v) {
 
 }  // namespace
 
-RunResult run_scene(const Scene& scene, const RunOptions& options) {
-  RunResult res;
-  res.scene = scene.name;
-  const double T = 1.0 / scene.tick_hz;
-  const double duration = options.duration_override > 0.0 ? options.duration_override
-                                                           : scene.duration;
+std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOptions& options) {
+  auto rig = std::make_unique<SceneRig>();
+  SceneRig& g = *rig;
+  g.tick = 1.0 / scene.tick_hz;
 
   // Device: the model file drives both the simulated plant and the pipeline's model.
-  const PhantomParams params = scene.device.model_file.empty()
-                                   ? default_phantom_params()
-                                   : load_phantom_params(scene.device.model_file);
-  res.device_model = scene.device.model_file.empty() ? "default Phantom Premium 1.5A"
-                                                     : scene.device.model_file;
-  const PhantomModel model(params);
-  const VecX q_home = phantom_home_q(params);
-  const Pose home = model.forward_kinematics(q_home);
+  g.params = scene.device.model_file.empty() ? default_phantom_params()
+                                             : load_phantom_params(scene.device.model_file);
+  g.model = std::make_unique<PhantomModel>(g.params);
+  g.q_home = phantom_home_q(g.params);
+  g.home = g.model->forward_kinematics(g.q_home);
 
-  SimulatedDeviceConfig dcfg = phantom_device_config(params);
+  SimulatedDeviceConfig dcfg = phantom_device_config(g.params);
   dcfg.quantize = scene.device.quantize;
   dcfg.saturate = scene.device.saturate;
-  dcfg.jitter.period = T;
+  dcfg.jitter.period = g.tick;
   if (scene.device.jitter_us > 0.0) {
     dcfg.jitter.kind = TickJitterKind::kUniform;
     dcfg.jitter.half_width = 1e-6 * scene.device.jitter_us;
   }
-  SimulatedPhantom device(phantom_plant(params), dcfg, q_home);
+  g.device = std::make_unique<SimulatedPhantom>(phantom_plant(g.params), dcfg, g.q_home);
+  Device* loop_device = g.device.get();
+  if (options.fault.kind != InjectedFault::kNone) {
+    g.faulty = std::make_unique<FaultInjectingDevice>(*g.device, options.fault);
+    loop_device = g.faulty.get();
+  }
 
   // Tooth, placed so its occlusal anchor sits at home + anchor_offset.
   VoxelGrid grid = build_tooth(scene.tooth);
-  const Vec3 anchor_target = home.x + scene.tooth.anchor_offset;
-  grid.origin += anchor_target - occlusal_anchor(grid);
-  res.tooth_before = grid;
-  VoxelTooth tooth(std::move(grid));
-  ToolTip tip;
-  tip.radius = scene.tool.bur_radius;
+  g.anchor = g.home.x + scene.tooth.anchor_offset;
+  grid.origin += g.anchor - occlusal_anchor(grid);
+  g.tooth_before = grid;
+  g.tooth = std::make_unique<VoxelTooth>(std::move(grid));
+  g.tip.radius = scene.tool.bur_radius;
   DrillParams drill;
   drill.bur_speed_rad_s = scene.tool.bur_speed_rpm * 2.0 * std::numbers::pi / 60.0;
   drill.cutting_coefficient = scene.tool.cutting_coefficient;
-  ToothContactProvider contacts(tooth, tip, scene.tooth.k_tooth, scene.tooth.b_tooth,
-                                scene.tool.drills() ? &drill : nullptr);
+  g.contacts = std::make_unique<ToothContactProvider>(*g.tooth, g.tip, scene.tooth.k_tooth,
+                                                      scene.tooth.b_tooth,
+                                                      scene.tool.drills() ? &drill : nullptr);
 
   // Hand.
   std::vector<HandKeyframe> keys;
   for (const SceneHandKey& k : scene.script) {
     HandKeyframe hk;
     hk.t = k.t;
-    hk.x_ref = anchor_target + k.offset;
+    hk.x_ref = g.anchor + k.offset;
     hk.wrench_ff = stack(k.force, Vec3::Zero());
     keys.push_back(hk);
   }
-  const ScriptedHand hand(scene.hand, keys, home.R);
-  device.set_hand(&hand);
+  g.hand = std::make_unique<ScriptedHand>(scene.hand, keys, g.home.R);
+  g.device->set_hand(g.hand.get());
 
   // The pipeline's device model: the model file's, plus the gripping hand's nominal mass at the
-  // tip when the scene asks for it (reference/grasp_mass_model.h).
-  std::unique_ptr<GraspMassModel> grasp;
+  // tip when the scene asks for it (reference/grasp_mass_model.h): always (a fixed mass), or
+  // tick by tick as the grip detector decides (method.grip_detector; then the pipeline's model
+  // is the device alone and the detector adds the mass).
   if (scene.method.grasp_mass_scale > 0.0) {
-    grasp = std::make_unique<GraspMassModel>(model, scene.method.grasp_mass_scale * scene.hand.mass,
-                                             scene.method.grasp_mass_scale * scene.hand.inertia);
+    g.grasp =
+        std::make_unique<GraspMassModel>(*g.model, scene.method.grasp_mass_scale * scene.hand.mass,
+                                         scene.method.grasp_mass_scale * scene.hand.inertia);
   }
-  const SixDofDeviceModel& belief = grasp ? *grasp : static_cast<const SixDofDeviceModel&>(model);
+  const bool detect = g.grasp && scene.method.grip_detector;
+  const SixDofDeviceModel& belief =
+      g.grasp && !detect ? *g.grasp : static_cast<const SixDofDeviceModel&>(*g.model);
 
   // Pipeline.
   PipelineConfig pc;
@@ -158,26 +163,52 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   pc.friction = scene.method.friction;
   // The tool's desired inertia sits on this device's locked inertia M_L = M1 + M2 at home
   // (thesis §3.1.2: M_d at least the device's own inertia, or the feed-forward makes the tool
-  // feel lighter than the device by injecting energy).
+  // feel lighter than the device by injecting energy); with the detector, on the gripped model.
   {
-    const Mat6 J1 = belief.twist_to_joint(q_home);
-    const Mat6 M1 = J1.transpose() * belief.mass_matrix(q_home) * J1;
+    const SixDofDeviceModel& heaviest =
+        g.grasp ? static_cast<const SixDofDeviceModel&>(*g.grasp) : *g.model;
+    const Mat6 J1 = heaviest.twist_to_joint(g.q_home);
+    const Mat6 M1 = J1.transpose() * heaviest.mass_matrix(g.q_home) * J1;
     pc.tool = tool_preset(scene.tool.preset, M1 + scene.method.proxy.M());
   }
   pc.observer_gain = VecX::Constant(6, scene.method.observer_gain);
   // The observer's input matched to the driver's velocity estimate (reference/observer.h): without
   // it the decomposition's feed-forward closes a loop through the velocity filter's lag.
-  pc.observer_input = matched_observer_input(device.capabilities());
-  pc.torque_limit = params.torque_limit_n_m;
-  ReferencePipeline pipeline(belief, pc);
-  ClosedLoop loop(device, pipeline, contacts);
+  pc.observer_input = matched_observer_input(g.device->capabilities());
+  pc.torque_limit = g.params.torque_limit_n_m;
+  if (detect) pc.grasp_model = g.grasp.get();
+  g.pipeline = make_pipeline(options.pipeline, belief, pc);
+  g.loop = std::make_unique<ClosedLoop>(*loop_device, *g.pipeline, *g.contacts);
+  return rig;
+}
+
+RunResult run_scene(const Scene& scene, const RunOptions& options) {
+  RunResult res;
+  res.scene = scene.name;
+  const double duration =
+      options.duration_override > 0.0 ? options.duration_override : scene.duration;
+  SceneRigOptions rig_options;
+  rig_options.pipeline = options.pipeline;
+  rig_options.fault = options.fault;
+  const std::unique_ptr<SceneRig> rig = build_scene_rig(scene, rig_options);
+  const double T = rig->tick;
+  res.device_model =
+      scene.device.model_file.empty() ? "default Phantom Premium 1.5A" : scene.device.model_file;
+  res.pipeline = rig->pipeline->name();
+  res.tooth_before = rig->tooth_before;
+  SimulatedPhantom& device = *rig->device;
+  ClosedLoop& loop = *rig->loop;
+  const Pipeline& pipeline = *rig->pipeline;
+  ToothContactProvider& contacts = *rig->contacts;
+  const VoxelTooth& tooth = *rig->tooth;
+  const ToolTip& tip = rig->tip;
 
   CollisionScratch scratch;
   std::vector<Contact> device_contacts;
   device_contacts.reserve(4096);
 
   const long n_ticks = static_cast<long>(std::ceil(duration / T));
-  std::vector<double> stage_us[kStageCount + 3];
+  std::vector<double> stage_us[kStageCount + 2];
   for (auto& v : stage_us) v.reserve(n_ticks);
   res.series.reserve(n_ticks / std::max(1, options.log_every) + 1);
 
@@ -187,7 +218,11 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   const auto wall_start = std::chrono::steady_clock::now();
   long next_progress = 0;
   loop.start();
-  for (long k = 0; k < n_ticks; ++k) {
+  if (loop.faulted()) {
+    res.faults.push_back(std::string(loop.fault_name()) +
+                         " at t = " + std::to_string(loop.fault_time()) + " s");
+  }
+  for (long k = 0; !loop.faulted() && k < n_ticks; ++k) {
     if (options.realtime) {
       std::this_thread::sleep_until(wall_start + std::chrono::duration<double>(k * T));
     }
@@ -195,29 +230,28 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     const double t = loop.sample().t;
     q_true_prev = device.true_q();
     const TickResult& r = loop.step();
+    if (loop.faulted()) {
+      // The loop latched a tick fault and commanded zero torque: end the run here; the report
+      // and the time series up to the fault are kept.
+      res.faults.push_back(std::string(loop.fault_name()) +
+                           " at t = " + std::to_string(loop.fault_time()) + " s");
+      break;
+    }
     // Hand port: the hand's joint torques (averaged over the tick) times the true joint motion.
     hand_work += device.hand_joint_torque().dot(device.true_q() - q_true_prev);
     res.hand_work_min_j = std::min(res.hand_work_min_j, hand_work);
-    long drill_ns = 0;
-    if (scene.tool.drills() && !r.contacts.empty()) {
-      const auto d0 = std::chrono::steady_clock::now();
-      contacts.drill(r.contacts, loop.last_tick_length());
-      drill_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                     std::chrono::steady_clock::now() - d0).count();
-    }
     // The servo tick is what a real loop computes: the pipeline's stages and drilling. The
     // simulated device's physics (MuJoCo substeps, hand) runs inside loop.step too and is
     // reported apart, as "device_simulation".
     const double step_us = 1e-3 * std::chrono::duration_cast<std::chrono::nanoseconds>(
                                       std::chrono::steady_clock::now() - t0).count();
-    long tick_ns = drill_ns;
+    long tick_ns = 0;
     for (int s = 0; s < kStageCount; ++s) {
       stage_us[s].push_back(1e-3 * r.stage_ns[s]);
       tick_ns += r.stage_ns[s];
     }
-    stage_us[kStageCount].push_back(1e-3 * drill_ns);
-    stage_us[kStageCount + 1].push_back(1e-3 * tick_ns);
-    stage_us[kStageCount + 2].push_back(step_us - 1e-3 * tick_ns);
+    stage_us[kStageCount].push_back(1e-3 * tick_ns);
+    stage_us[kStageCount + 1].push_back(step_us - 1e-3 * tick_ns);
 
     // Measurements.
     const double f_contact = r.F_contact.head<3>().norm();
@@ -266,10 +300,6 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       res.faults.push_back(fault_string(device.faults()) + " at t = " + std::to_string(t) + " s");
       break;
     }
-    if (!pipeline.proxy().pose.x.allFinite()) {
-      res.faults.push_back("proxy state not finite at t = " + std::to_string(t) + " s");
-      break;
-    }
     if (options.progress && k >= next_progress) {
       options.progress(static_cast<double>(k) / n_ticks);
       next_progress = k + std::max(1L, n_ticks / 100);
@@ -292,10 +322,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   for (int s = 0; s < kStageCount; ++s) {
     res.timing.emplace_back(tick_stage_name(s), stats_of(stage_us[s]));
   }
-  res.timing.emplace_back("drilling", stats_of(stage_us[kStageCount]));
-  res.timing.emplace_back("tick", stats_of(stage_us[kStageCount + 1]));
-  res.timing.emplace_back("device_simulation", stats_of(stage_us[kStageCount + 2]));
+  res.timing.emplace_back("tick", stats_of(stage_us[kStageCount]));
+  res.timing.emplace_back("device_simulation", stats_of(stage_us[kStageCount + 1]));
   res.tooth_after = tooth.grid();
+  res.torque_after_fault_n_m = loop.faulted() ? device.applied_torque().norm() : 0.0;
   return res;
 }
 

@@ -30,15 +30,26 @@
 
 #include <array>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "device/closed_loop.h"
+#include "device/fault_injection.h"
 #include "device/scene.h"
+#include "device/scripted_hand.h"
+#include "device/simulated_phantom.h"
+#include "reference/grasp_mass_model.h"
+#include "reference/phantom/phantom_model.h"
+#include "reference/tick.h"
+#include "reference/tooth/tooth_contacts.h"
 #include "reference/tooth/voxel_grid.h"
 
 namespace dentsim {
 
 struct RunOptions {
+  std::string pipeline = "reference";  // the tick's implementation (fast/registry.h)
+  InjectedFault fault;                 // a device fault to inject (device/fault_injection.h)
   bool realtime = false;           // pace the loop at the tick rate (sleep to absolute deadlines)
   double duration_override = 0.0;  // > 0: run this long instead of the scene's duration [s]
   int log_every = 1;               // keep every n-th tick in the time series
@@ -88,7 +99,40 @@ struct RunResult {
   std::vector<RunSample> series;
   VoxelGrid tooth_before, tooth_after;      // for pictures
   std::string device_model;                 // which device model file
+  std::string pipeline;                     // the tick's implementation that ran
+  double torque_after_fault_n_m = 0.0;      // |tau| applied over the faulting tick (0 expected)
 };
+
+// Everything a scene runs on, built once: the simulated Phantom (behind a fault injector when
+// asked), the placed voxel tooth and its contact provider, the scripted hand, the pipeline and
+// the loop owner. run_scene drives it; tests drive it tick by tick (the allocation test).
+struct SceneRigOptions {
+  std::string pipeline = "reference";
+  InjectedFault fault;
+};
+
+struct SceneRig {
+  double tick = 1e-3;  // nominal T [s]
+  PhantomParams params;
+  std::unique_ptr<PhantomModel> model;
+  VecX q_home;
+  Pose home;
+  Vec3 anchor = Vec3::Zero();  // the tooth's occlusal anchor (world)
+  std::unique_ptr<SimulatedPhantom> device;
+  std::unique_ptr<FaultInjectingDevice> faulty;  // set when a fault is injected
+  VoxelGrid tooth_before;
+  std::unique_ptr<VoxelTooth> tooth;
+  ToolTip tip;
+  std::unique_ptr<ToothContactProvider> contacts;
+  std::unique_ptr<ScriptedHand> hand;
+  std::unique_ptr<GraspMassModel> grasp;
+  std::unique_ptr<Pipeline> pipeline;
+  std::unique_ptr<ClosedLoop> loop;
+};
+
+// Builds the rig of a scene. Throws InputError for a bad scene input (e.g. an unreadable mesh)
+// or an unknown pipeline.
+std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOptions& options = {});
 
 // Runs the scene. Throws InputError for a bad scene input (e.g. an unreadable mesh).
 RunResult run_scene(const Scene& scene, const RunOptions& options = {});

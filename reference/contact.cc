@@ -73,19 +73,32 @@ Mat63 contact_wrench_map(const Vec3& r, const Mat3& R) {
 }
 
 std::vector<double> contact_weights(std::span<const Contact> contacts) {
-  double sum = 0.0;
   for (std::size_t i = 0; i < contacts.size(); ++i) {
     const double w = contacts[i].weight;
     if (!std::isfinite(w) || w < 0.0) {
       bad_member("contact_weights", i, "weight", "expected a finite weight >= 0, got " + num(w));
     }
-    sum += w;
   }
+  const ContactWeights cw(contacts);
   std::vector<double> out(contacts.size());
-  for (std::size_t i = 0; i < contacts.size(); ++i) {
-    out[i] = sum > 0.0 ? contacts[i].weight / sum : 1.0 / static_cast<double>(contacts.size());
-  }
+  for (std::size_t i = 0; i < contacts.size(); ++i) out[i] = cw(contacts[i]);
   return out;
+}
+
+ContactWeights::ContactWeights(std::span<const Contact> contacts) : n_(contacts.size()) {
+  for (const Contact& c : contacts) sum_ += c.weight;
+}
+
+bool contacts_well_formed(std::span<const Contact> contacts) {
+  for (const Contact& c : contacts) {
+    if (!c.x_o.allFinite() || !c.r.allFinite() || !c.n.allFinite() ||
+        std::abs(c.n.norm() - 1.0) > kUnitNormalTolerance || !std::isfinite(c.stiffness) ||
+        c.stiffness < 0.0 || !std::isfinite(c.damping) || c.damping < 0.0 ||
+        !std::isfinite(c.weight) || c.weight < 0.0) {
+      return false;
+    }
+  }
+  return true;
 }
 
 AffineWrench contact_wrench(std::span<const Contact> contacts, const Pose& proxy, double T,
@@ -94,17 +107,21 @@ AffineWrench contact_wrench(std::span<const Contact> contacts, const Pose& proxy
     throw InputError("contact_wrench: tick length T = " + num(T) + " s (expected finite > 0)");
   }
   validate_contacts(contacts, "contact_wrench");
-  const std::vector<double> w = contact_weights(contacts);
+  return contact_wrench_unchecked(contacts, proxy, T, scheme);
+}
+
+AffineWrench contact_wrench_unchecked(std::span<const Contact> contacts, const Pose& proxy,
+                                      double T, Scheme scheme) {
+  const ContactWeights w(contacts);
   AffineWrench F;
-  for (std::size_t i = 0; i < contacts.size(); ++i) {
-    const Contact& c = contacts[i];
+  for (const Contact& c : contacts) {
     const double delta = penetration_depth(c, proxy);
     if (!(delta > 0.0)) continue;  // unilateral: no spring or damper unless penetrating
     const Mat36 J = contact_point_jacobian(c.r, proxy.R);
     const Mat63 Jt = J.transpose();
     const Eigen::Matrix<double, 1, 6> d = -c.n.transpose() * J;  // d(delta)/dt = d V   (2.16)
-    const double k = w[i] * c.stiffness;
-    const double b = w[i] * c.damping;
+    const double k = w(c) * c.stiffness;
+    const double b = w(c) * c.damping;
     F.f0 += Jt * (k * delta * c.n);  // K delta_k n                                    (2.16)
     // PMI: K T/2 (delta_k+1 - delta_k)/T ~ K T/2 d V_hat ((2.16)-(2.18)); damping B d V (2.19).
     const double g = (scheme == Scheme::kMidpoint ? 0.5 * T * k : 0.0) + b;
@@ -114,7 +131,7 @@ AffineWrench contact_wrench(std::span<const Contact> contacts, const Pose& proxy
 }
 
 double contact_potential(std::span<const Contact> contacts, const Pose& proxy) {
-  const std::vector<double> w = contact_weights(contacts);
+  const std::vector<double> w = contact_weights(contacts);  // validates the weights
   double U = 0.0;
   for (std::size_t i = 0; i < contacts.size(); ++i) {
     const double delta = penetration_depth(contacts[i], proxy);
@@ -124,7 +141,7 @@ double contact_potential(std::span<const Contact> contacts, const Pose& proxy) {
 }
 
 BlendedContact blended_contact(std::span<const Contact> contacts, const Pose& proxy) {
-  const std::vector<double> w = contact_weights(contacts);
+  const ContactWeights w(contacts);
   BlendedContact out;
   double a = 0.0;
   Vec3 n = Vec3::Zero(), r = Vec3::Zero();
@@ -132,10 +149,11 @@ BlendedContact blended_contact(std::span<const Contact> contacts, const Pose& pr
   for (std::size_t i = 0; i < contacts.size(); ++i) {
     const double delta = penetration_depth(contacts[i], proxy);
     if (!(delta > 0.0)) continue;
-    a += w[i];
-    n += w[i] * contacts[i].n;
-    r += w[i] * contacts[i].r;
-    depth += w[i] * delta;
+    const double wi = w(contacts[i]);
+    a += wi;
+    n += wi * contacts[i].n;
+    r += wi * contacts[i].r;
+    depth += wi * delta;
   }
   // Active members with zero weight exert no normal force, hence no friction either.
   if (a <= 0.0 || n.norm() <= 1e-12 * a) return out;

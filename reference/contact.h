@@ -53,6 +53,24 @@ Mat63 contact_wrench_map(const Vec3& r, const Mat3& R);
 // member if a weight is negative or not finite.
 std::vector<double> contact_weights(std::span<const Contact> contacts);
 
+// The same weights without a vector (the servo tick's form; no validation): w(c) =
+// c.weight / sum over the set, or 1/N when all weights are zero. Bitwise equal to
+// contact_weights.
+class ContactWeights {
+ public:
+  explicit ContactWeights(std::span<const Contact> contacts);
+  double operator()(const Contact& c) const {
+    return sum_ > 0.0 ? c.weight / sum_ : 1.0 / static_cast<double>(n_);
+  }
+
+ private:
+  double sum_ = 0.0;
+  std::size_t n_ = 0;
+};
+
+// Whether every member satisfies validate_contacts's rules (never throws).
+bool contacts_well_formed(std::span<const Contact> contacts);
+
 // Penalty contact (2.15)-(2.16) + damping (2.19) of a contact set as a wrench affine in the proxy
 // twist, F(V) = f0 + G V. With w_i from contact_weights, J_i = J_c(r_i, R2), d_i = -n_i^T J_i
 // (so d(delta_i)/dt = d_i V), and only members with delta_i,k > 0 (depth recomputed from `proxy`):
@@ -70,6 +88,11 @@ std::vector<double> contact_weights(std::span<const Contact> contacts);
 // negative or non-finite stiffness/damping/weight, non-finite x_o or r).
 AffineWrench contact_wrench(std::span<const Contact> contacts, const Pose& proxy, double T,
                             Scheme scheme);
+
+// contact_wrench without validation (the tick checks the set with contacts_well_formed and T
+// once): never throws, never allocates.
+AffineWrench contact_wrench_unchecked(std::span<const Contact> contacts, const Pose& proxy,
+                                      double T, Scheme scheme);
 
 // Contact potential U = sum_i w_i 1/2 K_i delta_i^2 over members with delta_i > 0 [J].
 // -dU/dt = V^T F(V) for the spring part (F at kExplicit without damping).

@@ -31,6 +31,12 @@ AffineWrench coupling_proxy_wrench(const CouplingGains& g, const Pose& device, c
                                    const ProxyState& proxy, double T, Scheme scheme) {
   validate_coupling_gains(g);
   validate_tick_length(T);
+  return coupling_proxy_wrench_unchecked(g, device, V1, proxy, T, scheme);
+}
+
+AffineWrench coupling_proxy_wrench_unchecked(const CouplingGains& g, const Pose& device,
+                                             const Vec6& V1, const ProxyState& proxy, double T,
+                                             Scheme scheme) {
   const Mat3 R21 = proxy.pose.R.transpose() * device.R;  // R2^T R1
   AffineWrench F;
   // (4.5)/(4.6): the parts independent of the proxy velocity.
@@ -49,6 +55,11 @@ Vec6 coupling_device_wrench(const CouplingGains& g, const Pose& device, const Ve
                             const ProxyState& proxy, double T, Scheme scheme) {
   validate_coupling_gains(g);
   validate_tick_length(T);
+  return coupling_device_wrench_unchecked(g, device, V1, proxy, T, scheme);
+}
+
+Vec6 coupling_device_wrench_unchecked(const CouplingGains& g, const Pose& device, const Vec6& V1,
+                                      const ProxyState& proxy, double T, Scheme scheme) {
   const Mat3 R12 = device.R.transpose() * proxy.pose.R;  // R1^T R2
   // kMidpoint: the proxy's last representative velocity V_hat_2,k-1 (4.3)-(4.4);
   // kExplicit: its current velocity V_2,k.

@@ -49,6 +49,14 @@ AffineWrench coupling_proxy_wrench(const CouplingGains& g, const Pose& device, c
 Vec6 coupling_device_wrench(const CouplingGains& g, const Pose& device, const Vec6& V1,
                             const ProxyState& proxy, double T, Scheme scheme);
 
+// The same without validating g and T (the servo tick validates them once, when its model is
+// built): never throws.
+AffineWrench coupling_proxy_wrench_unchecked(const CouplingGains& g, const Pose& device,
+                                             const Vec6& V1, const ProxyState& proxy, double T,
+                                             Scheme scheme);
+Vec6 coupling_device_wrench_unchecked(const CouplingGains& g, const Pose& device, const Vec6& V1,
+                                      const ProxyState& proxy, double T, Scheme scheme);
+
 // Coupling potential 1/2 k_lin |x1 - x2|^2 + 1/2 k_ang phi_12^2 [J], phi_12 of (2.11).
 double coupling_potential(const CouplingGains& g, const Pose& device, const Pose& proxy);
 

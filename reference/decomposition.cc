@@ -34,6 +34,19 @@ Mat6 coupling_frame_map(const Mat3& R1, const Mat3& R2) {
   return block_diag(Mat3::Identity(), R2.transpose() * R1);
 }
 
+bool decompose_locked(const Mat6& M1, const Mat6& M2, const Mat3& R1, const Mat3& R2,
+                      Decomposition* out) {
+  Decomposition& d = *out;
+  d.E = coupling_frame_map(R1, R2);
+  const Mat6 M2_dev = d.E.transpose() * M2 * d.E;  // E^T M2 E: proxy inertia in device coords
+  d.M_L = M1 + M2_dev;                             // (3.3)
+  d.M_L = 0.5 * (d.M_L + d.M_L.transpose());
+  const Eigen::LLT<Mat6> llt(d.M_L);
+  if (llt.info() != Eigen::Success) return false;
+  d.phi = llt.solve(M2_dev);  // phi = M_L^-1 E^T M2 E   (3.3)
+  return d.phi.allFinite();
+}
+
 Decomposition decompose(const Mat6& M1, const Mat6& M2, const Mat3& R1, const Mat3& R2) {
   require_spd(M1, "decompose: M1 (device inertia J1^T M J1)");
   require_spd(M2, "decompose: M2 (proxy inertia)");
@@ -42,11 +55,10 @@ Decomposition decompose(const Mat6& M1, const Mat6& M2, const Mat3& R1, const Ma
 
   const Mat6 I = Mat6::Identity();
   Decomposition d;
-  d.E = coupling_frame_map(R1, R2);
-  const Mat6 M2_dev = d.E.transpose() * M2 * d.E;  // E^T M2 E: proxy inertia in device coords
-  d.M_L = M1 + M2_dev;                             // (3.3)
-  d.M_L = 0.5 * (d.M_L + d.M_L.transpose());
-  d.phi = d.M_L.llt().solve(M2_dev);  // phi = M_L^-1 E^T M2 E   (3.3)
+  if (!decompose_locked(M1, M2, R1, R2, &d)) {
+    throw std::invalid_argument("decompose: the locked inertia M1 + E^T M2 E is not SPD");
+  }
+  const Mat6 M2_dev = d.E.transpose() * M2 * d.E;
   d.M_shape = d.phi.transpose() * M1 * d.phi + (d.phi - I).transpose() * M2_dev * (d.phi - I);
   d.M_shape = 0.5 * (d.M_shape + d.M_shape.transpose());
 
@@ -92,19 +104,25 @@ Mat6 maximal_inertia(const MatX& M_joint, const Mat6& J1) {
 
 PdFeedforward pd_feedforward(const Decomposition& d, const ToolDynamics& tool, const Vec6& V1,
                              const Vec6& F1_hat, const AffineWrench& F2) {
-  const Mat6 I = Mat6::Identity();
-  const Mat6 Et = d.E.transpose();
-  // A = M_L M_d^-1 (M_d SPD: A^T = M_d^-1 M_L solves M_d A^T = M_L).
   const Eigen::LLT<Mat6> Md_llt(tool.M_d);
   if (Md_llt.info() != Eigen::Success || !tool.M_d.allFinite()) {
     throw std::invalid_argument("pd_feedforward: tool '" + tool.name +
                                 "' has an M_d that is not positive definite");
   }
+  return pd_feedforward(d, Md_llt, tool.D_d, V1, F1_hat, F2);
+}
+
+PdFeedforward pd_feedforward(const Decomposition& d, const Eigen::LLT<Mat6>& Md_llt,
+                             const Mat6& D_d, const Vec6& V1, const Vec6& F1_hat,
+                             const AffineWrench& F2) {
+  const Mat6 I = Mat6::Identity();
+  const Mat6 Et = d.E.transpose();
+  // A = M_L M_d^-1 (M_d SPD: A^T = M_d^-1 M_L solves M_d A^T = M_L).
   const Mat6 A = Md_llt.solve(d.M_L).transpose();
   // X(V) = A (F_L(V) - D_d v_L(V)) = X0 + XG V with                                       (4.7)
   //   F_L(V) = F1_hat + E^T (f0 + G V),  v_L(V) = (I - phi) V1 + phi E^T V.
-  const Vec6 X0 = A * (F1_hat + Et * F2.f0 - tool.D_d * ((I - d.phi) * V1));
-  const Mat6 XG = A * (Et * F2.G - tool.D_d * d.phi * Et);
+  const Vec6 X0 = A * (F1_hat + Et * F2.f0 - D_d * ((I - d.phi) * V1));
+  const Mat6 XG = A * (Et * F2.G - D_d * d.phi * Et);
 
   PdFeedforward out;
   const Mat6 P1 = I - d.phi.transpose();    // (I - phi^T)

@@ -31,6 +31,8 @@
 // with F_L = F1_hat + E^T F2 and v_L = (I - phi) V1 + phi E^T V2.
 #pragma once
 
+#include <Eigen/Cholesky>
+
 #include "reference/core/affine_wrench.h"
 #include "reference/core/params.h"
 #include "reference/core/types.h"
@@ -55,6 +57,11 @@ struct Decomposition {
 // Builds the decomposition at the current poses. M1, M2 must be symmetric positive definite and
 // R1, R2 rotations; throws std::invalid_argument otherwise (M_L not SPD or non-finite input).
 Decomposition decompose(const Mat6& M1, const Mat6& M2, const Mat3& R1, const Mat3& R2);
+
+// The part of the decomposition the servo tick needs (E, phi, M_L; S, S^-1 and M_shape are left
+// untouched): no validation, never throws; returns false when M_L is not positive definite.
+bool decompose_locked(const Mat6& M1, const Mat6& M2, const Mat3& R1, const Mat3& R2,
+                      Decomposition* d);
 
 // E = diag(I, R2^T R1).
 Mat6 coupling_frame_map(const Mat3& R1, const Mat3& R2);
@@ -82,5 +89,10 @@ struct PdFeedforward {
 };
 PdFeedforward pd_feedforward(const Decomposition& d, const ToolDynamics& tool, const Vec6& V1,
                              const Vec6& F1_hat, const AffineWrench& F2);
+// The same with M_d factorised once (the servo tick's model holds the factorisation); needs only
+// d.E, d.phi and d.M_L. Never throws.
+PdFeedforward pd_feedforward(const Decomposition& d, const Eigen::LLT<Mat6>& Md_llt,
+                             const Mat6& D_d, const Vec6& V1, const Vec6& F1_hat,
+                             const AffineWrench& F2);
 
 }  // namespace dentsim

@@ -14,6 +14,11 @@ ProxyState explicit_euler_advance(const ProxyParams& p, const ProxyState& s, con
   validate_proxy_params(p);
   validate_tick_length(T);
   if (!F.allFinite()) throw std::runtime_error("explicit_euler_advance: wrench F is not finite");
+  return explicit_euler_advance_unchecked(p, s, F, T);
+}
+
+ProxyState explicit_euler_advance_unchecked(const ProxyParams& p, const ProxyState& s,
+                                            const Vec6& F, double T) {
   Vec6 rhs = F - p.B() * s.V;
   if (p.gyroscopic) {
     // C(w_k) w_k = [0; -S(J w_k) w_k] = [0; w_k x J w_k]   (2.5), (2.8)

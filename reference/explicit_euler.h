@@ -22,5 +22,8 @@ namespace dentsim {
 // sees as the proxy's last velocity.
 ProxyState explicit_euler_advance(const ProxyParams& p, const ProxyState& s, const Vec6& F,
                                   double T);
+// The servo tick's form (p and T validated once, F checked by the caller): never throws.
+ProxyState explicit_euler_advance_unchecked(const ProxyParams& p, const ProxyState& s,
+                                            const Vec6& F, double T);
 
 }  // namespace dentsim

@@ -27,18 +27,31 @@ FrictionSolution solve_with_friction(const PmiSystem& sys, std::span<const Conta
     throw InputError("solve_with_friction: friction.mu = " + std::to_string(fp.mu) +
                      " (expected a finite coefficient >= 0)");
   }
-  const Eigen::FullPivLU<Mat6> lu(sys.A);
-  if (!lu.isInvertible()) {
+  FrictionSolution out;
+  if (!solve_with_friction_unchecked(sys, contacts, proxy, normal, fp, &out)) {
     throw InputError(
         "solve_with_friction: the proxy system matrix A is singular (expected the "
         "inertia term M 2/T to make it invertible)");
   }
-  FrictionSolution out;
+  return out;
+}
+
+bool solve_with_friction_unchecked(const PmiSystem& sys, std::span<const Contact> contacts,
+                                   const Pose& proxy, const AffineWrench& normal,
+                                   const FrictionParams& fp, FrictionSolution* result) {
+  const Eigen::FullPivLU<Mat6> lu(sys.A);
+  if (!lu.isInvertible()) return false;
+  FrictionSolution& out = *result;
   const Vec6 V0 = lu.solve(sys.b);  // the frictionless solution
   out.V = V0;
-  if (!fp.enabled || fp.mu == 0.0) return out;
+  out.f_t.setZero();
+  out.f_n = 0.0;
+  out.sliding = false;
+  out.F.setZero();
+  out.active = false;
+  if (!fp.enabled || fp.mu == 0.0) return true;
   const BlendedContact bc = blended_contact(contacts, proxy);
-  if (!bc.active) return out;
+  if (!bc.active) return true;
   out.active = true;
 
   const Vec3& n = bc.n;
@@ -65,7 +78,7 @@ FrictionSolution solve_with_friction(const PmiSystem& sys, std::span<const Conta
     out.f_t = f_stick;
     out.f_n = fn_stick;
     out.F = Jt * f_stick;
-    return out;
+    return true;
   }
 
   // 2-3. Slide: f_t = s d, cone with equality at the final solution V(s) = V0 + s A^-1 J^T d.
@@ -86,7 +99,7 @@ FrictionSolution solve_with_friction(const PmiSystem& sys, std::span<const Conta
   out.f_t = s * d;
   out.f_n = std::max(0.0, normal_force(out.V));
   out.F = Jt * out.f_t;
-  return out;
+  return true;
 }
 
 }  // namespace dentsim

@@ -36,7 +36,7 @@
 namespace dentsim {
 
 struct FrictionSolution {
-  Vec6 V;                   // the solved velocity (V_hat for PMI, V_{k+1} for explicit)
+  Vec6 V = Vec6::Zero();    // the solved velocity (V_hat for PMI, V_{k+1} for explicit)
   Vec3 f_t = Vec3::Zero();  // tangential friction force (world), |f_t| <= mu |f_n|
   double f_n = 0.0;         // normal force magnitude used for the cone, at the solved V [N]
   bool sliding = false;     // true when the cone clamped the sticking force
@@ -55,5 +55,11 @@ void tangent_basis(const Vec3& n, Vec3& t1, Vec3& t2);
 FrictionSolution solve_with_friction(const PmiSystem& sys, std::span<const Contact> contacts,
                                      const Pose& proxy, const AffineWrench& normal,
                                      const FrictionParams& fp);
+
+// The servo tick's form (mu validated once when its model is built): fills `out` and returns
+// true, or returns false when A is singular. Never throws.
+bool solve_with_friction_unchecked(const PmiSystem& sys, std::span<const Contact> contacts,
+                                   const Pose& proxy, const AffineWrench& normal,
+                                   const FrictionParams& fp, FrictionSolution* out);
 
 }  // namespace dentsim

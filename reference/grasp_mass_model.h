@@ -21,6 +21,12 @@
 
 namespace dentsim {
 
+// The hand's part of the model at one sample, from the base model's terms (J_t, dJ_t/dt) and
+// V1 = J_t qd: M_h = J_t^T Mt J_t and C_h^T qd = dJ_t/dt^T Mt V1, Mt = diag(Mt) (the tick's
+// device_terms stage and GraspMassModel::terms share it). Never allocates.
+void grasp_mass_terms(const Vec6& Mt, const DeviceTerms& base, const Vec6& V1, Mat6* M_hand,
+                      Vec6* CTqd_hand);
+
 class GraspMassModel : public SixDofDeviceModel {
  public:
   // `base` must outlive this model. Throws std::invalid_argument for a negative or non-finite
@@ -35,13 +41,16 @@ class GraspMassModel : public SixDofDeviceModel {
   }
   Pose forward_kinematics(const VecX& q) const override { return base_.forward_kinematics(q); }
   Mat6 twist_to_joint(const VecX& q) const override { return base_.twist_to_joint(q); }
+  // The base model's terms plus the hand's (grasp_mass_terms); J_t_dot always filled.
+  void terms(const Vec6& q, const Vec6& qd, bool with_jacobian_rate,
+             DeviceTerms& out) const override;
 
   double mass() const { return m_; }
   double inertia() const { return J_; }
   const SixDofDeviceModel& base() const { return base_; }
+  const Mat6& hand_inertia() const { return Mt_; }  // Mt = diag(m I, J I)
 
  private:
-  Mat6 joint_to_twist(const VecX& q) const;  // J1^-1
   const SixDofDeviceModel& base_;
   double m_, J_;
   Mat6 Mt_;

@@ -36,15 +36,18 @@
 
 namespace dentsim {
 
-struct GripDetectorParams {
-  double highpass_hz = 4.0;              // band of the statistic: first-order high-pass [Hz]
-  double lowpass_hz = 20.0;              // and first-order low-pass [Hz] on h0, h1
-  double power_time_constant_s = 0.05;   // first-order low-pass on the band powers [s]
-  double release_threshold = 0.4;        // switch to released when s > this [N^2/kg]
-  double grip_threshold = 0.02;          // switch to gripped when s < -this [N^2/kg]
-  double evidence = 0.02;                // G: the CUSUM's decision level [N^2 s/kg]
-  bool start_gripped = true;
-};
+// GripDetectorParams: reference/core/params.h.
+
+// The detector's filters and decision for one tick, given the two hypotheses' estimates
+// h0 (no hand), h1 (gripped) in maximal coordinates; `norm` is the diagonal of the statistic's
+// norm (1/m on the force, 0 on the torque). Shared by GripDetector and the tick's observe stage.
+// Returns whether the hand is judged on the tool after this tick.
+void grip_filter_reset(const GripDetectorParams& p, GripFilterState& s);
+bool grip_filter_update(const GripDetectorParams& p, const Vec6& norm, GripFilterState& s,
+                        const Vec6& h0, const Vec6& h1, double T);
+// Throws std::invalid_argument naming the parameter unless the hand has mass and inertia and the
+// filter constants and thresholds are valid (used when a pipeline model is built, too).
+void validate_grip_detector(double hand_mass, double hand_inertia, const GripDetectorParams& p);
 
 class GripDetector {
  public:
@@ -59,14 +62,14 @@ class GripDetector {
   // whether the hand is judged on the tool after this tick.
   bool update(const VecX& q, const VecX& qd, const VecX& tau, double T, const Mat6& J1);
 
-  bool gripped() const { return gripped_; }
+  bool gripped() const { return f_.gripped; }
   // The human wrench estimate (maximal coordinates) under the current hypothesis, and the model
   // that hypothesis uses.
-  const Vec6& estimate() const { return gripped_ ? h1_ : h0_; }
+  const Vec6& estimate() const { return f_.gripped ? f_.h1 : f_.h0; }
   const SixDofDeviceModel& model() const;
-  double statistic() const { return p1_ - p0_; }  // s [N^2/kg]
-  const Vec6& estimate_released() const { return h0_; }
-  const Vec6& estimate_gripped() const { return h1_; }
+  double statistic() const { return f_.p1 - f_.p0; }  // s [N^2/kg]
+  const Vec6& estimate_released() const { return f_.h0; }
+  const Vec6& estimate_gripped() const { return f_.h1; }
   const GripDetectorParams& params() const { return params_; }
 
  private:
@@ -74,12 +77,7 @@ class GripDetector {
   GripDetectorParams params_;
   MomentumObserver obs0_, obs1_;
   Vec6 w_ = Vec6::Zero();  // diagonal of the norm: 1/m on the force, 0 on the torque
-  Vec6 h0_ = Vec6::Zero(), h1_ = Vec6::Zero();
-  Vec6 b0_ = Vec6::Zero(), b1_ = Vec6::Zero();    // h_i low-passed at lowpass_hz
-  Vec6 lp0_ = Vec6::Zero(), lp1_ = Vec6::Zero();  // b_i low-passed at highpass_hz (band = b - lp)
-  double p0_ = 0.0, p1_ = 0.0;
-  double g_release_ = 0.0, g_grip_ = 0.0;  // CUSUM sums [N^2 s/kg]
-  bool gripped_ = true;
+  GripFilterState f_;
 };
 
 }  // namespace dentsim

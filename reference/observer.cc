@@ -5,8 +5,6 @@
 #include <string>
 #include <utility>
 
-#include "reference/core/lowpass.h"
-
 namespace dentsim {
 namespace {
 
@@ -20,21 +18,25 @@ void require_size(const VecX& v, int n, const char* what) {
 
 }  // namespace
 
-MomentumObserver::MomentumObserver(const DeviceModel& model, VecX gain_L, ObserverInput input)
-    : model_(model), L_(std::move(gain_L)), input_(input) {
-  require_size(L_, model_.dof(), "gain_L");
-  for (int i = 0; i < L_.size(); ++i) {
-    if (!(L_(i) > 0.0) || !std::isfinite(L_(i))) {
+void validate_observer(const VecX& gain_L, int dof, const ObserverInput& input) {
+  require_size(gain_L, dof, "gain_L");
+  for (int i = 0; i < gain_L.size(); ++i) {
+    if (!(gain_L(i) > 0.0) || !std::isfinite(gain_L(i))) {
       throw std::invalid_argument("MomentumObserver: gain_L[" + std::to_string(i) +
                                   "] must be a finite positive gain [1/s], got " +
-                                  std::to_string(L_(i)));
+                                  std::to_string(gain_L(i)));
     }
   }
-  if (!(input_.lowpass_hz >= 0.0) || !std::isfinite(input_.lowpass_hz)) {
+  if (!(input.lowpass_hz >= 0.0) || !std::isfinite(input.lowpass_hz)) {
     throw std::invalid_argument("MomentumObserver: input lowpass_hz must be finite and >= 0, got " +
-                                std::to_string(input_.lowpass_hz));
+                                std::to_string(input.lowpass_hz));
   }
-  f_hat_ = VecX::Zero(L_.size());
+}
+
+MomentumObserver::MomentumObserver(const DeviceModel& model, VecX gain_L, ObserverInput input)
+    : model_(model), L_(std::move(gain_L)), input_(input) {
+  validate_observer(L_, model_.dof(), input_);
+  s_.f_hat = VecX::Zero(L_.size());
 }
 
 VecX MomentumObserver::beta(const VecX& q, const VecX& qd) const {
@@ -46,16 +48,12 @@ VecX MomentumObserver::beta(const VecX& q, const VecX& qd) const {
 void MomentumObserver::reset(const VecX& q, const VecX& qd) {
   require_size(q, model_.dof(), "q");
   require_size(qd, model_.dof(), "qd");
-  p_hat_ = model_.mass_matrix(q) * qd;  // p = M(q) qd
-  f_hat_ = VecX::Zero(model_.dof());
-  beta_prev_ = beta(q, qd);
-  tau_prev_ = -beta_prev_;
-  u_f_ = VecX::Zero(model_.dof());
-  ready_ = true;
+  const VecX Mqd = model_.mass_matrix(q) * qd;
+  momentum_observer_reset<VecX>(s_, Mqd, beta(q, qd));
 }
 
 const VecX& MomentumObserver::update(const VecX& q, const VecX& qd, const VecX& tau, double T) {
-  if (!ready_) throw std::logic_error("MomentumObserver: update() before reset()");
+  if (!s_.ready) throw std::logic_error("MomentumObserver: update() before reset()");
   require_size(q, model_.dof(), "q");
   require_size(qd, model_.dof(), "qd");
   require_size(tau, model_.dof(), "tau");
@@ -63,26 +61,9 @@ const VecX& MomentumObserver::update(const VecX& q, const VecX& qd, const VecX& 
     throw std::invalid_argument("MomentumObserver: tick length T must be > 0, got " +
                                 std::to_string(T));
   }
-  const VecX beta_next = beta(q, qd);
-  // u_k: thesis form (beta_k + beta_k+1)/2 + tau_k; matched to a backward difference,
-  // beta_k + (tau_k-1 + tau_k)/2 (the triangle of the two ticks the difference spans, centred at
-  // t_k). reset() sets tau_k-1 = -beta_0: the device was at rest in equilibrium before the start.
-  VecX u = input_.match_backward_difference ? VecX(beta_prev_ + 0.5 * (tau_prev_ + tau))
-                                             : VecX(0.5 * (beta_prev_ + beta_next) + tau);
-  if (input_.lowpass_hz > 0.0) {
-    // The velocity estimator's low-pass, applied to u; it starts settled at rest (u_f = 0), as
-    // the estimator starts from qd = 0.
-    const double a = lowpass_gain(input_.lowpass_hz, T);
-    u_f_ += a * (u - u_f_);
-    u = u_f_;
-  }
-  tau_prev_ = tau;
-  // p_hat_k+1 = p_hat_k + T (u_k + f_hat_k)                                        (3.8), §4.1.1
-  p_hat_ += T * (u + f_hat_);
-  // f_hat_k+1 = L (M(q_k+1) qd_k+1 - p_hat_k+1)                                          §4.1.1
-  f_hat_ = L_.asDiagonal() * (model_.mass_matrix(q) * qd - p_hat_);
-  beta_prev_ = beta_next;
-  return f_hat_;
+  const VecX Mqd = model_.mass_matrix(q) * qd;
+  momentum_observer_update<VecX>(L_, input_, s_, Mqd, beta(q, qd), tau, T);
+  return s_.f_hat;
 }
 
 Vec6 joint_to_wrench(const Mat6& J1, const VecX& f_joint) {

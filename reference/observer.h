@@ -40,16 +40,56 @@
 #pragma once
 
 #include "reference/core/device_model.h"
+#include "reference/core/lowpass.h"
+#include "reference/core/params.h"
+#include "reference/core/pipeline.h"
 #include "reference/core/types.h"
 
 namespace dentsim {
 
-// How the observer's known input u = tau + beta is matched to the velocity estimate (above).
-// The default (both off) is the thesis's discretisation.
-struct ObserverInput {
-  bool match_backward_difference = false;  // u uses (tau_k-1 + tau_k)/2
-  double lowpass_hz = 0.0;                 // > 0: u low-passed like qd (first order, f_c [Hz])
-};
+// ObserverInput (how u = tau + beta is matched to the velocity estimate) is in
+// reference/core/params.h.
+
+// The observer's step on model terms already evaluated at the new sample, shared by
+// MomentumObserver (any n, VecX) and the tick's observe stage (Vec6, the device terms of the
+// tick): Mqd = M(q_k+1) qd_k+1 and beta_next = beta(q_k+1, qd_k+1); tau is the torque held over
+// the tick of length T that just ended. The state starts at rest (reset).
+template <class V>
+void momentum_observer_reset(MomentumObserverState<V>& s, const V& Mqd, const V& beta) {
+  s.p_hat = Mqd;  // p = M(q) qd
+  s.f_hat = V::Zero(Mqd.size());
+  s.beta_prev = beta;
+  s.tau_prev = -beta;  // at rest in equilibrium before the start
+  s.u_f = V::Zero(Mqd.size());
+  s.ready = true;
+}
+
+template <class V>
+void momentum_observer_update(const V& L, const ObserverInput& in, MomentumObserverState<V>& s,
+                              const V& Mqd, const V& beta_next, const V& tau, double T) {
+  // u_k: thesis form (beta_k + beta_k+1)/2 + tau_k; matched to a backward difference,
+  // beta_k + (tau_k-1 + tau_k)/2 (the triangle of the two ticks the difference spans, centred at
+  // t_k). reset() sets tau_k-1 = -beta_0: the device was at rest in equilibrium before the start.
+  V u = in.match_backward_difference ? V(s.beta_prev + 0.5 * (s.tau_prev + tau))
+                                     : V(0.5 * (s.beta_prev + beta_next) + tau);
+  if (in.lowpass_hz > 0.0) {
+    // The velocity estimator's low-pass, applied to u; it starts settled at rest (u_f = 0), as
+    // the estimator starts from qd = 0.
+    const double a = lowpass_gain(in.lowpass_hz, T);
+    s.u_f += a * (u - s.u_f);
+    u = s.u_f;
+  }
+  s.tau_prev = tau;
+  // p_hat_k+1 = p_hat_k + T (u_k + f_hat_k)                                        (3.8), §4.1.1
+  s.p_hat += T * (u + s.f_hat);
+  // f_hat_k+1 = L (M(q_k+1) qd_k+1 - p_hat_k+1)                                          §4.1.1
+  s.f_hat = L.asDiagonal() * (Mqd - s.p_hat);
+  s.beta_prev = beta_next;
+}
+
+// Throws std::invalid_argument naming the entry unless gain_L has `dof` finite positive gains and
+// input.lowpass_hz is finite and >= 0 (MomentumObserver and the pipeline's model use it).
+void validate_observer(const VecX& gain_L, int dof, const ObserverInput& input);
 
 class MomentumObserver {
  public:
@@ -65,7 +105,7 @@ class MomentumObserver {
   // sizes or T <= 0.
   const VecX& update(const VecX& q, const VecX& qd, const VecX& tau, double T);
   // The current joint-space estimate f_hat.
-  const VecX& estimate() const { return f_hat_; }
+  const VecX& estimate() const { return s_.f_hat; }
   const VecX& gain() const { return L_; }
   const ObserverInput& input() const { return input_; }
 
@@ -75,13 +115,8 @@ class MomentumObserver {
  private:
   const DeviceModel& model_;
   VecX L_;
-  VecX p_hat_;
-  VecX f_hat_;
-  VecX beta_prev_;
   ObserverInput input_;
-  VecX tau_prev_;  // tau_k-1 (match_backward_difference)
-  VecX u_f_;       // low-passed input (lowpass_hz > 0)
-  bool ready_ = false;
+  MomentumObserverState<VecX> s_;
 };
 
 // The human wrench in maximal coordinates from the joint estimate: F1_hat = J1^T f_hat, with

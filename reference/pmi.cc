@@ -43,6 +43,11 @@ PmiSystem pmi_inertia_system(const ProxyParams& p, const ProxyState& s, double T
                              GyroVelocity gyro) {
   validate_proxy_params(p);
   validate_tick_length(T);
+  return pmi_inertia_system_unchecked(p, s, T, gyro);
+}
+
+PmiSystem pmi_inertia_system_unchecked(const ProxyParams& p, const ProxyState& s, double T,
+                                       GyroVelocity gyro) {
   const Mat6 M = p.M();
   PmiSystem sys;
   sys.A = M * (2.0 / T) + p.B();  // (4.2) left-hand side
@@ -56,10 +61,12 @@ PmiSystem pmi_inertia_system(const ProxyParams& p, const ProxyState& s, double T
   return sys;
 }
 
-Vec6 pmi_solve(const PmiSystem& sys) {
-  if (!sys.A.allFinite() || !sys.b.allFinite()) {
-    throw std::runtime_error("pmi_solve: the PMI system (4.9) is not finite");
-  }
+namespace {
+
+enum class SolveOutcome { kOk, kSystemNotFinite, kSingular, kResultNotFinite };
+
+SolveOutcome solve_scaled(const PmiSystem& sys, Vec6* V_hat) {
+  if (!sys.A.allFinite() || !sys.b.allFinite()) return SolveOutcome::kSystemNotFinite;
   // Symmetric diagonal scaling with D = diag(1/sqrt|A_ii|): solve (D A D) y = D b, V_hat = D y.
   Vec6 d;
   for (int i = 0; i < 6; ++i) {
@@ -68,17 +75,39 @@ Vec6 pmi_solve(const PmiSystem& sys) {
   }
   const Mat6 As = d.asDiagonal() * sys.A * d.asDiagonal();
   const Eigen::FullPivLU<Mat6> lu(As);
-  if (!lu.isInvertible()) {
-    throw std::runtime_error("pmi_solve: the PMI matrix A of (4.9) is singular");
-  }
+  if (!lu.isInvertible()) return SolveOutcome::kSingular;
   const Vec6 y = lu.solve(d.cwiseProduct(sys.b));
-  const Vec6 V_hat = d.cwiseProduct(y);
-  if (!V_hat.allFinite()) throw std::runtime_error("pmi_solve: V_hat is not finite");
-  return V_hat;
+  *V_hat = d.cwiseProduct(y);
+  return V_hat->allFinite() ? SolveOutcome::kOk : SolveOutcome::kResultNotFinite;
+}
+
+}  // namespace
+
+bool pmi_try_solve(const PmiSystem& sys, Vec6* V_hat) {
+  return solve_scaled(sys, V_hat) == SolveOutcome::kOk;
+}
+
+Vec6 pmi_solve(const PmiSystem& sys) {
+  Vec6 V_hat;
+  switch (solve_scaled(sys, &V_hat)) {
+    case SolveOutcome::kOk:
+      return V_hat;
+    case SolveOutcome::kSystemNotFinite:
+      throw std::runtime_error("pmi_solve: the PMI system (4.9) is not finite");
+    case SolveOutcome::kSingular:
+      throw std::runtime_error("pmi_solve: the PMI matrix A of (4.9) is singular");
+    case SolveOutcome::kResultNotFinite:
+      break;
+  }
+  throw std::runtime_error("pmi_solve: V_hat is not finite");
 }
 
 ProxyState pmi_advance(const ProxyState& s, const Vec6& V_hat, double T) {
   validate_tick_length(T);
+  return pmi_advance_unchecked(s, V_hat, T);
+}
+
+ProxyState pmi_advance_unchecked(const ProxyState& s, const Vec6& V_hat, double T) {
   ProxyState n;
   n.V = 2.0 * V_hat - s.V;                        // (2.7): V_hat = (V_k + V_k+1)/2
   n.pose.x = s.pose.x + T * lin(V_hat);           // (2.7): v_hat = (x_k+1 - x_k)/T

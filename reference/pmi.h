@@ -58,6 +58,13 @@ Vec6 pmi_solve(const PmiSystem& sys);
 // V_hat_prev = V_hat. R is not re-orthonormalised (the drift is measured in pmi_test).
 ProxyState pmi_advance(const ProxyState& s, const Vec6& V_hat, double T);
 
+// The servo tick's forms (its model validated p and the driver T once): never throw.
+// pmi_try_solve returns false (V_hat unspecified) when A is singular or the system not finite.
+PmiSystem pmi_inertia_system_unchecked(const ProxyParams& p, const ProxyState& s, double T,
+                                       GyroVelocity gyro = GyroVelocity::kStart);
+bool pmi_try_solve(const PmiSystem& sys, Vec6* V_hat);
+ProxyState pmi_advance_unchecked(const ProxyState& s, const Vec6& V_hat, double T);
+
 // Kinetic energy 1/2 V^T M V [J].
 double proxy_kinetic_energy(const ProxyParams& p, const Vec6& V);
 

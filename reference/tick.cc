@@ -1,211 +1,310 @@
 #include "reference/tick.h"
 
-#include <Eigen/LU>
+#include <Eigen/Cholesky>
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include "reference/contact.h"
+#include "reference/core/io.h"
 #include "reference/coupling.h"
 #include "reference/decomposition.h"
 #include "reference/explicit_euler.h"
 #include "reference/friction.h"
+#include "reference/grip_detector.h"
 #include "reference/observer.h"
 #include "reference/pmi.h"
 
 namespace dentsim {
 
-const char* tick_stage_name(int stage) {
-  static const char* const kNames[kStageCount] = {"kinematics", "observer", "collision", "solve",
-                                                  "command"};
-  return stage >= 0 && stage < kStageCount ? kNames[stage] : "?";
-}
-
-namespace {
-
-// Records the wall-clock time of consecutive stages.
-class StageClock {
- public:
-  explicit StageClock(long* out) : out_(out), last_(std::chrono::steady_clock::now()) {}
-  void lap(int stage) {
-    const auto now = std::chrono::steady_clock::now();
-    out_[stage] = std::chrono::duration_cast<std::chrono::nanoseconds>(now - last_).count();
-    last_ = now;
+PipelineModel make_pipeline_model(const SixDofDeviceModel& device, const PipelineConfig& config) {
+  const int n = device.dof();
+  PipelineModel m;
+  m.device = &device;
+  m.method = config.method;
+  m.scheme = config.method == Method::kExplicitVc ? Scheme::kExplicit : Scheme::kMidpoint;
+  validate_proxy_params(config.proxy);
+  m.proxy = config.proxy;
+  validate_coupling_gains(config.coupling);
+  m.coupling = config.coupling;
+  if (!std::isfinite(config.friction.mu) || config.friction.mu < 0.0) {
+    throw InputError("friction.mu = " + std::to_string(config.friction.mu) +
+                     " (expected a finite coefficient >= 0)");
   }
-
- private:
-  long* out_;
-  std::chrono::steady_clock::time_point last_;
-};
-
-}  // namespace
-
-ReferencePipeline::ReferencePipeline(const SixDofDeviceModel& device, PipelineConfig config)
-    : device_(device), config_(std::move(config)) {
-  const int n = device_.dof();
-  if (config_.observer_gain.size() != 0) {
-    if (config_.observer_gain.size() != n) {
+  m.friction = config.friction;
+  m.tool = config.tool;
+  if (config.method == Method::kPmiPd) {
+    m.tool_Md_llt.compute(config.tool.M_d);
+    if (m.tool_Md_llt.info() != Eigen::Success || !config.tool.M_d.allFinite()) {
+      throw std::invalid_argument("tool '" + config.tool.name +
+                                  "' has an M_d that is not positive definite");
+    }
+    if (!config.tool.D_d.allFinite()) {
+      throw std::invalid_argument("tool '" + config.tool.name + "' has a D_d that is not finite");
+    }
+  }
+  if (config.observer_gain.size() != 0) {
+    if (config.observer_gain.size() != n) {
       throw std::invalid_argument("observer gain has " +
-                                  std::to_string(config_.observer_gain.size()) +
+                                  std::to_string(config.observer_gain.size()) +
                                   " entries; the device has " + std::to_string(n) + " joints");
     }
-    if (config_.grasp_model) {
-      if (&config_.grasp_model->base() != &device_) {
+    validate_observer(config.observer_gain, n, config.observer_input);
+    m.observe = true;
+    m.observer_gain = config.observer_gain;
+    m.observer_input = config.observer_input;
+    if (config.grasp_model != nullptr) {
+      if (&config.grasp_model->base() != &device) {
         throw std::invalid_argument(
             "grasp_model: its base model must be the pipeline's device model");
       }
-      grip_ = std::make_unique<GripDetector>(*config_.grasp_model, config_.observer_gain,
-                                             config_.observer_input, config_.grip_detector);
-    } else {
-      observer_ = std::make_unique<MomentumObserver>(device_, config_.observer_gain,
-                                                     config_.observer_input);
+      validate_grip_detector(config.grasp_model->mass(), config.grasp_model->inertia(),
+                             config.grip_detector);
+      m.grasp = true;
+      m.grasp_mass.mass = config.grasp_model->mass();
+      m.grasp_mass.inertia = config.grasp_model->inertia();
+      m.grasp_mass.Mt = config.grasp_model->hand_inertia().diagonal();
+      m.grip = config.grip_detector;
+      m.grip_norm << Vec3::Constant(1.0 / m.grasp_mass.mass), Vec3::Zero();
     }
-  } else if (config_.method == Method::kPmiPd) {
+  } else if (config.method == Method::kPmiPd) {
     throw std::invalid_argument("method pmi-pd needs the observer gain L (one per joint)");
   }
-  if (config_.torque_limit.size() != 0 && config_.torque_limit.size() != n) {
-    throw std::invalid_argument("torque limit has " +
-                                std::to_string(config_.torque_limit.size()) +
-                                " entries; the device has " + std::to_string(n) + " joints");
+  if (config.torque_limit.size() != 0) {
+    if (config.torque_limit.size() != n) {
+      throw std::invalid_argument("torque limit has " + std::to_string(config.torque_limit.size()) +
+                                  " entries; the device has " + std::to_string(n) + " joints");
+    }
+    for (int i = 0; i < n; ++i) {
+      if (!(config.torque_limit(i) >= 0.0) || std::isnan(config.torque_limit(i))) {
+        throw std::invalid_argument("torque limit[" + std::to_string(i) +
+                                    "] = " + std::to_string(config.torque_limit(i)) +
+                                    " N m (expected >= 0)");
+      }
+    }
+    m.saturate = true;
+    m.torque_limit = config.torque_limit;
   }
-  tau_prev_ = VecX::Zero(n);
-  result_.tau = VecX::Zero(n);
-  result_.contacts.reserve(kContactCapacity);
+  m.compensate_gravity = config.compensate_gravity;
+  return m;
 }
 
-ReferencePipeline::~ReferencePipeline() = default;
+namespace reference {
 
-void ReferencePipeline::reset(const DeviceSample& s) {
-  proxy_ = ProxyState{};
-  proxy_.pose = device_.forward_kinematics(s.q);
-  tau_prev_.setZero();
-  if (observer_) observer_->reset(s.q, s.qd);
-  if (grip_) grip_->reset(s.q, s.qd);
-  t_prev_ = s.t;
-  have_prev_ = false;
-  result_ = TickResult{};
-  result_.tau = VecX::Zero(device_.dof());
-  result_.contacts.reserve(kContactCapacity);
+TickStatus device_terms(const PipelineModel& m, PipelineData& d) {
+  // One pass of the device model: x1, R1, J_t (V1 = J_t qd), M, C^T qd, g, tau_f   (2.1), (2.2)
+  DeviceTerms& t = d.dev;
+  m.device->terms(d.q, d.qd, m.grasp, t);
+  if (!t.pose.x.allFinite() || !t.pose.R.allFinite() || !t.J_t.allFinite() ||
+      !t.J_t_dot.allFinite() || !t.M.allFinite() || !t.CTqd.allFinite() || !t.g.allFinite() ||
+      !t.tau_f.allFinite()) {
+    return TickStatus::kDeviceModelFailure;
+  }
+  // J1 = J_t^-1 (2.2): the one inverse a tick needs (observer wrench, device inertia).
+  d.J_t_lu.compute(t.J_t);
+  d.J1 = d.J_t_lu.inverse();
+  if (!d.J1.allFinite()) return TickStatus::kDeviceModelFailure;
+  d.r.device = t.pose;
+  d.r.V1.noalias() = t.J_t * d.qd;  // V1 = J_t qd                                   (2.2)
+  if (m.grasp) grasp_mass_terms(m.grasp_mass.Mt, t, d.r.V1, &d.M_hand, &d.CTqd_hand);
+  return TickStatus::kOk;
 }
 
-const TickResult& ReferencePipeline::tick(const DeviceSample& s, double T,
-                                          ContactProvider& contacts) {
-  if (!(T > 0.0) || !std::isfinite(T)) {
-    throw std::invalid_argument("tick length must be positive and finite");
-  }
-  TickResult& r = result_;
-  StageClock clock(r.stage_ns);
-  const Method method = config_.method;
-  const Scheme scheme = method == Method::kExplicitVc ? Scheme::kExplicit : Scheme::kMidpoint;
-
-  // Device kinematics (2.2): x1, R1, V1 = J1^-1 qd.
-  r.device = device_.forward_kinematics(s.q);
-  const Mat6 J1 = device_.twist_to_joint(s.q);
-  const Eigen::PartialPivLU<Mat6> J1_lu(J1);
-  r.V1 = J1_lu.solve(Vec6(s.qd));
-  clock.lap(kStageKinematics);
-
+TickStatus observe(const PipelineModel& m, PipelineData& d) {
   // Observer (3.7)-(3.8): joint estimate from the torque applied over the last tick, which
   // lasted from the previous sample to this one (tick lengths may vary).
+  TickResult& r = d.r;
   r.F1_hat.setZero();
-  const double T_last = have_prev_ && s.t > t_prev_ ? s.t - t_prev_ : T;
-  t_prev_ = s.t;
-  have_prev_ = true;
-  if (observer_) {
-    const VecX& f1_hat = observer_->update(s.q, s.qd, tau_prev_, T_last);
-    r.F1_hat = J1.transpose() * f1_hat;  // F1 = J1^T f1
-  }
   r.grip_state = -1;
-  if (grip_) {
-    r.grip_state = grip_->update(s.q, s.qd, tau_prev_, T_last, J1) ? 1 : 0;
-    r.grip_statistic = grip_->statistic();
-    r.F1_hat = grip_->estimate();
+  d.T_last = d.have_prev && d.t > d.t_prev ? d.t - d.t_prev : d.T;
+  d.t_prev = d.t;
+  d.have_prev = true;
+  if (!m.observe) return TickStatus::kOk;
+  const DeviceTerms& t = d.dev;
+  // beta = C^T qd - g - tau_f (3.7), p = M qd
+  const Vec6 beta = t.CTqd - t.g - t.tau_f;
+  const Vec6 Mqd = t.M * d.qd;
+  momentum_observer_update<Vec6>(m.observer_gain, m.observer_input, d.obs0, Mqd, beta, d.tau_prev,
+                                 d.T_last);
+  if (!m.grasp) {
+    r.F1_hat.noalias() = d.J1.transpose() * d.obs0.f_hat;  // F1 = J1^T f1
+    return TickStatus::kOk;
   }
-  clock.lap(kStageObserver);
+  // Grip detector: the second hypothesis adds the hand's mass, M' = M + M_h, C'^T qd = C^T qd +
+  // C_h^T qd (reference/grasp_mass_model.h).
+  const Vec6 beta1 = beta + d.CTqd_hand;
+  const Vec6 Mqd1 = Mqd + d.M_hand * d.qd;
+  momentum_observer_update<Vec6>(m.observer_gain, m.observer_input, d.obs1, Mqd1, beta1, d.tau_prev,
+                                 d.T_last);
+  const Vec6 h0 = d.J1.transpose() * d.obs0.f_hat;
+  const Vec6 h1 = d.J1.transpose() * d.obs1.f_hat;
+  const bool gripped = grip_filter_update(m.grip, m.grip_norm, d.grip, h0, h1, d.T_last);
+  r.grip_state = gripped ? 1 : 0;
+  r.grip_statistic = d.grip.p1 - d.grip.p0;
+  r.F1_hat = gripped ? h1 : h0;
+  return TickStatus::kOk;
+}
 
-  // Collision.
-  contacts.contacts(proxy_.pose, r.contacts);  // (capacity: see the constructor)
+TickStatus collide(const PipelineModel&, PipelineData& d) {
+  TickResult& r = d.r;
+  if (!d.env->contacts(d.proxy.pose, r.contacts)) return TickStatus::kContactBufferFull;
+  if (!contacts_well_formed(r.contacts)) return TickStatus::kBadContact;
   r.max_depth = 0.0;
   for (const Contact& c : r.contacts) {
-    r.max_depth = std::max(r.max_depth, penetration_depth(c, proxy_.pose));
+    r.max_depth = std::max(r.max_depth, penetration_depth(c, d.proxy.pose));
   }
-  clock.lap(kStageCollision);
+  return TickStatus::kOk;
+}
 
+TickStatus assemble(const PipelineModel& m, PipelineData& d) {
   // Force elements on the proxy, affine in the velocity they are evaluated at.
-  const AffineWrench coupling =
-      coupling_proxy_wrench(config_.coupling, r.device, r.V1, proxy_, T, scheme);
-  const AffineWrench contact = contact_wrench(r.contacts, proxy_.pose, T, scheme);
-  AffineWrench pd_T1, pd_T2;
-  if (method == Method::kPmiPd) {
-    const SixDofDeviceModel& model = grip_ ? grip_->model() : device_;
-    const Mat6 M1 = J1.transpose() * model.mass_matrix(s.q) * J1;  // (2.2)
-    const Decomposition d = decompose(M1, config_.proxy.M(), r.device.R, proxy_.pose.R);
-    const PdFeedforward pd = pd_feedforward(d, config_.tool, r.V1, r.F1_hat, contact);
-    pd_T1 = pd.T1;
-    pd_T2 = pd.T2;
-  }
-
+  TickResult& r = d.r;
+  d.coupling = coupling_proxy_wrench_unchecked(m.coupling, r.device, r.V1, d.proxy, d.T, m.scheme);
+  d.contact = contact_wrench_unchecked(r.contacts, d.proxy.pose, d.T, m.scheme);
   // Device-side coupling (4.3)-(4.4): uses the proxy at k and V_hat_2,k-1.
-  r.T1_vc = coupling_device_wrench(config_.coupling, r.device, r.V1, proxy_, T, scheme);
-
-  Vec6 friction_wrench = Vec6::Zero();
-  r.friction_sliding = false;
-  if (method == Method::kExplicitVc) {
-    // Explicit Euler: every force at V_k.
-    r.V_hat = proxy_.V;
-    const Vec6 F = coupling.at(proxy_.V) + contact.at(proxy_.V);
-    r.F_coupling = coupling.at(proxy_.V);
-    r.F_contact = contact.at(proxy_.V);
-    r.T1_pd.setZero();
-    proxy_ = explicit_euler_advance(config_.proxy, proxy_, F, T);
-  } else {
-    // PMI (4.9): one linear solve for V_hat, friction as tangential multipliers (2.21)-(2.22).
-    PmiSystem sys = pmi_inertia_system(config_.proxy, proxy_, T);
-    sys.add(coupling);
-    sys.add(contact);
-    if (method == Method::kPmiPd) sys.add(pd_T2);
-    if (config_.friction.enabled && !r.contacts.empty()) {
-      const FrictionSolution fs =
-          solve_with_friction(sys, r.contacts, proxy_.pose, contact, config_.friction);
-      r.V_hat = fs.V;
-      r.friction_sliding = fs.sliding;
-      friction_wrench = fs.F;  // (4.10)
-    } else {
-      r.V_hat = pmi_solve(sys);
+  r.T1_vc = coupling_device_wrench_unchecked(m.coupling, r.device, r.V1, d.proxy, d.T, m.scheme);
+  if (m.method == Method::kPmiPd) {
+    // The device inertia in maximal coordinates (2.2) under the hypothesis in force.
+    Mat6 M_joint = d.dev.M;
+    if (m.grasp && d.grip.gripped) M_joint += d.M_hand;
+    const Mat6 M1 = d.J1.transpose() * M_joint * d.J1;
+    Decomposition dec;
+    if (!decompose_locked(M1, m.proxy.M(), r.device.R, d.proxy.pose.R, &dec)) {
+      return TickStatus::kDeviceModelFailure;
     }
-    r.F_coupling = coupling.at(r.V_hat);
-    r.F_contact = contact.at(r.V_hat) + friction_wrench;
-    r.T1_pd = method == Method::kPmiPd ? pd_T1.at(r.V_hat) : Vec6::Zero();
-    proxy_ = pmi_advance(proxy_, r.V_hat, T);
+    const PdFeedforward pd =
+        pd_feedforward(dec, m.tool_Md_llt, m.tool.D_d, r.V1, r.F1_hat, d.contact);  // (4.7)
+    d.pd_T1 = pd.T1;
+    d.pd_T2 = pd.T2;
   }
-  clock.lap(kStageSolve);
+  if (m.method != Method::kExplicitVc) {
+    // PMI (4.9): inertia, coupling, contact and the feed-forward in one 6x6 system.
+    d.sys = pmi_inertia_system_unchecked(m.proxy, d.proxy, d.T);
+    d.sys.add(d.coupling);
+    d.sys.add(d.contact);
+    if (m.method == Method::kPmiPd) d.sys.add(d.pd_T2);
+  }
+  return TickStatus::kOk;
+}
 
-  // Device command: tau1 = J1^-T T1 + g(q), scaled down uniformly (direction kept) to the limits.
+TickStatus solve(const PipelineModel& m, PipelineData& d) {
+  TickResult& r = d.r;
+  r.friction_sliding = false;
+  if (m.method == Method::kExplicitVc) {
+    // Explicit Euler: every force at V_k.
+    r.V_hat = d.proxy.V;
+    r.F_coupling = d.coupling.at(d.proxy.V);
+    r.F_contact = d.contact.at(d.proxy.V);
+    r.T1_pd.setZero();
+    const Vec6 F = r.F_coupling + r.F_contact;
+    if (!F.allFinite()) return TickStatus::kSolverFailure;
+    d.proxy = explicit_euler_advance_unchecked(m.proxy, d.proxy, F, d.T);
+    return TickStatus::kOk;
+  }
+  // PMI (4.9): one linear solve for V_hat, friction as tangential multipliers (2.21)-(2.22).
+  Vec6 friction_wrench = Vec6::Zero();
+  if (m.friction.enabled && !r.contacts.empty()) {
+    FrictionSolution fs;
+    if (!solve_with_friction_unchecked(d.sys, r.contacts, d.proxy.pose, d.contact, m.friction,
+                                       &fs)) {
+      return TickStatus::kSolverFailure;
+    }
+    r.V_hat = fs.V;
+    r.friction_sliding = fs.sliding;
+    friction_wrench = fs.F;  // (4.10)
+  } else if (!pmi_try_solve(d.sys, &r.V_hat)) {
+    return TickStatus::kSolverFailure;
+  }
+  r.F_coupling = d.coupling.at(r.V_hat);
+  r.F_contact = d.contact.at(r.V_hat) + friction_wrench;
+  r.T1_pd = m.method == Method::kPmiPd ? d.pd_T1.at(r.V_hat) : Vec6::Zero();
+  d.proxy = pmi_advance_unchecked(d.proxy, r.V_hat, d.T);
+  return TickStatus::kOk;
+}
+
+TickStatus command(const PipelineModel& m, PipelineData& d) {
+  // Device command: tau1 = J_t^T T1 + g(q), scaled down uniformly (direction kept) to the limits.
+  TickResult& r = d.r;
   r.T1 = r.T1_vc + r.T1_pd;
-  r.tau = J1_lu.transpose().solve(r.T1);
-  if (config_.compensate_gravity) {
-    r.tau_gravity = device_.gravity(s.q);  // (2.1): gravity compensated
-    r.tau += r.tau_gravity;
-  } else {
-    r.tau_gravity = VecX::Zero(r.tau.size());
+  Vec6 tau = d.dev.J_t.transpose() * r.T1;  // qd^T tau1 = V1^T T1 with V1 = J_t qd   (2.2)
+  Vec6 tau_gravity = Vec6::Zero();
+  if (m.compensate_gravity) {
+    tau_gravity = d.dev.g;  // (2.1): gravity compensated
+    tau += tau_gravity;
   }
   r.saturated = false;
-  if (config_.torque_limit.size() != 0) {
+  if (m.saturate) {
     double scale = 1.0;
-    for (int i = 0; i < r.tau.size(); ++i) {
-      const double a = std::abs(r.tau(i));
-      if (a > config_.torque_limit(i)) scale = std::min(scale, config_.torque_limit(i) / a);
+    for (int i = 0; i < 6; ++i) {
+      const double a = std::abs(tau(i));
+      if (a > m.torque_limit(i)) scale = std::min(scale, m.torque_limit(i) / a);
     }
     if (scale < 1.0) {
-      r.tau *= scale;
-      r.tau_gravity *= scale;
+      tau *= scale;
+      tau_gravity *= scale;
       r.saturated = true;
     }
   }
-  tau_prev_ = r.tau;
-  clock.lap(kStageCommand);
-  return r;
+  if (!tau.allFinite() || !d.proxy.pose.x.allFinite() || !d.proxy.pose.R.allFinite() ||
+      !d.proxy.V.allFinite()) {
+    return TickStatus::kNonFiniteOutput;
+  }
+  r.tau = tau;
+  r.tau_gravity = tau_gravity;
+  d.tau_prev = tau;
+  return TickStatus::kOk;
+}
+
+TickStatus drill(const PipelineModel&, PipelineData& d) {
+  TickResult& r = d.r;
+  r.removed_voxels = 0;
+  if (d.env->drills() && !r.contacts.empty()) r.removed_voxels = d.env->drill(r.contacts, d.T);
+  return TickStatus::kOk;
+}
+
+TickStatus reset(const PipelineModel& m, PipelineData& d) {
+  const TickStatus st = device_terms(m, d);
+  if (st != TickStatus::kOk) return st;
+  d.proxy = ProxyState{};
+  d.proxy.pose = d.dev.pose;
+  d.tau_prev.setZero();
+  if (m.observe) {
+    const Vec6 beta = d.dev.CTqd - d.dev.g - d.dev.tau_f;
+    const Vec6 Mqd = d.dev.M * d.qd;
+    momentum_observer_reset<Vec6>(d.obs0, Mqd, beta);
+    if (m.grasp) {
+      momentum_observer_reset<Vec6>(d.obs1, Vec6(Mqd + d.M_hand * d.qd), Vec6(beta + d.CTqd_hand));
+      grip_filter_reset(m.grip, d.grip);
+    }
+  }
+  return TickStatus::kOk;
+}
+
+}  // namespace reference
+
+const StageTable& reference_stage_table() {
+  static const StageTable kTable = {
+      "reference",
+      {reference::device_terms, reference::observe, reference::collide, reference::assemble,
+       reference::solve, reference::command, reference::drill},
+      reference::reset};
+  return kTable;
+}
+
+StagedPipeline::StagedPipeline(const StageTable& table, const SixDofDeviceModel& device,
+                               const PipelineConfig& config)
+    : table_(&table),
+      model_(make_pipeline_model(device, config)),
+      data_(std::make_unique<PipelineData>()) {}
+
+TickStatus StagedPipeline::reset(const DeviceSample& s) {
+  return pipeline_reset(*table_, model_, *data_, s);
+}
+
+const TickResult& StagedPipeline::tick(const DeviceSample& s, double T, ContactProvider& contacts) {
+  pipeline_tick(*table_, model_, *data_, s, T, contacts);
+  return data_->r;
 }
 
 }  // namespace dentsim

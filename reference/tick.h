@@ -1,33 +1,36 @@
-// One servo tick of the reference pipeline (DESIGN.md "One servo tick"; thesis Fig. 4.1, §4.1.1).
+// One servo tick of the reference pipeline (DESIGN.md "One servo tick"; thesis Fig. 4.1, §4.1.1),
+// written as the Model/Data stages of reference/core/pipeline.h:
 //
-//   device sample (q, qd, t)          -> forward kinematics: x1, R1, V1 = J1^-1 qd      (2.2)
-//   observer (3.7)-(3.8)              -> f1_hat (joint), F1_hat = J1^T f1_hat (maximal)
-//   collision (ContactProvider)       -> contact set {x_o, n, r, depth, material}
-//   proxy solve: PMI (4.9) with coupling (4.5), contact (2.16)/(2.19), friction (2.21),
-//     decomposition feed-forward T2_pd (4.7)  -> V2_hat, then x2, R2 at k+1            (2.7)
-//     (or explicit Euler with the same force elements evaluated at V_k, the baseline)
-//   device command T1 = T1_vc (4.3)-(4.4) + T1_pd (4.7) -> tau1 = J1^-T T1 (+ g(q)), saturated
+//   device_terms  device sample (q, qd, t) -> x1, R1, J_t, M, C^T qd, g, tau_f in one pass of
+//                 the device model; J1 = J_t^-1 (one LU), V1 = J_t qd                   (2.2)
+//   observe       momentum observer (3.7)-(3.8) -> f1_hat (joint), F1_hat = J1^T f1_hat
+//                 (or the grip detector's two observers, reference/grip_detector.h)
+//   collide       ContactProvider -> contact set {x_o, n, r, depth, material}
+//   assemble      force elements on the proxy, affine in V_hat: coupling (4.5), contact
+//                 (2.16)/(2.19), decomposition feed-forward T2_pd (4.7); device coupling T1_vc
+//                 (4.3)-(4.4); the PMI system (4.9)
+//   solve         PMI (4.9) with friction (2.21)-(2.22) -> V2_hat, x2, R2 at k+1       (2.7)
+//                 (or explicit Euler with the same force elements at V_k, the baseline)
+//   command       T1 = T1_vc (4.3)-(4.4) + T1_pd (4.7) -> tau1 = J_t^T T1 (+ g(q)), saturated
+//   drill         the environment's cut over the tick (ContactProvider::drill)
 //
 // Methods: kExplicitVc = explicit-Euler proxy + standard coupling; kPmiVc = PMI proxy + PMI
 // coupling; kPmiPd = kPmiVc + passive decomposition + momentum observer.
 //
 // Frames: T1 is a wrench on the device in maximal coordinates (f in {O}, tau in the device body
-// frame); tau1 = J1^-T T1 since qd = J1 V1 makes qd^T tau1 = V1^T T1. The observer's joint
-// estimate maps the same way: F1_hat = J1^T f1_hat.
+// frame); with V1 = J_t qd the joint torque of T1 is tau1 = J_t^T T1 (= J1^-T T1), since
+// qd^T tau1 = V1^T T1. The observer's joint estimate maps the same way: F1_hat = J1^T f1_hat.
 //
-// Drilling is not part of the tick here: the caller (simulator) applies it after the tick from
-// the returned contact set and contact wrench (see reference/tooth/drilling.h).
+// The stages never throw and never allocate: constant inputs are validated once, when the
+// model is built (make_pipeline_model, with the messages users get), and the tick returns a
+// TickStatus (reference/core/pipeline.h).
 #pragma once
 
 #include <memory>
-#include <vector>
 
-#include "reference/core/affine_wrench.h"
 #include "reference/core/contact_provider.h"
-#include "reference/core/device_model.h"
-#include "reference/core/params.h"
-#include "reference/grip_detector.h"
-#include "reference/observer.h"
+#include "reference/core/pipeline.h"
+#include "reference/grasp_mass_model.h"
 
 namespace dentsim {
 
@@ -45,72 +48,72 @@ struct PipelineConfig {
   bool compensate_gravity = true;
   // kPmiPd with a hand on the tool: the device model plus the hand's nominal mass (must outlive
   // the pipeline; its base() must be the pipeline's device model). Set, the pipeline runs a
-  // GripDetector (reference/grip_detector.h) in place of the single observer and uses, tick by
+  // grip detector (reference/grip_detector.h) in place of the single observer and uses, tick by
   // tick, the estimate and the mass matrix of the hypothesis it judges true.
   const GraspMassModel* grasp_model = nullptr;
   GripDetectorParams grip_detector;
 };
 
-// Stages of the tick, for timing (TickResult::stage_ns).
-enum TickStage { kStageKinematics, kStageObserver, kStageCollision, kStageSolve, kStageCommand,
-                 kStageCount };
-const char* tick_stage_name(int stage);  // "kinematics", "observer", "collision", "solve", "command"
+// Validates `config` against `device` and builds the constant model of the tick. Throws
+// std::invalid_argument (or InputError) naming what is wrong: an observer gain of the wrong size
+// or not positive, kPmiPd without an observer gain, a torque limit of the wrong size, a grasp
+// model on another device, bad proxy parameters, coupling gains, friction coefficient, tool
+// dynamics or grip-detector parameters. `device` must outlive the model.
+PipelineModel make_pipeline_model(const SixDofDeviceModel& device, const PipelineConfig& config);
 
-// Everything one tick computed (for logging, tests and the fast path's differential tests).
-struct TickResult {
-  Pose device;                        // x1, R1
-  Vec6 V1 = Vec6::Zero();             // device twist
-  Vec6 F1_hat = Vec6::Zero();         // human wrench estimate (maximal), zero without observer
-  Vec6 T1_vc = Vec6::Zero();          // coupling wrench on the device
-  Vec6 T1_pd = Vec6::Zero();          // decomposition feed-forward on the device
-  Vec6 T1 = Vec6::Zero();             // total device wrench before saturation
-  VecX tau;                           // joint torques sent to the device (saturated)
-  VecX tau_gravity;                   // the gravity-compensation part of tau (zero when off)
-  bool saturated = false;
-  Vec6 V_hat = Vec6::Zero();          // proxy velocity the forces were evaluated at
-  Vec6 F_contact = Vec6::Zero();      // contact + friction wrench on the proxy at V_hat
-  Vec6 F_coupling = Vec6::Zero();     // coupling wrench on the proxy at V_hat
-  std::vector<Contact> contacts;      // the contact set of this tick
-  double max_depth = 0.0;             // deepest penetration in the set [m]
-  bool friction_sliding = false;
-  int grip_state = -1;                // grip detector: 1 gripped, 0 released, -1 no detector
-  double grip_statistic = 0.0;        // its statistic s [N^2/kg] (GripDetector::statistic)
-  long stage_ns[kStageCount] = {};    // wall-clock time of each stage [ns] (steady_clock)
-};
+// The reference stages (same names and signatures as fast/tick.h's).
+namespace reference {
+TickStatus device_terms(const PipelineModel& m, PipelineData& d);
+TickStatus observe(const PipelineModel& m, PipelineData& d);
+TickStatus collide(const PipelineModel& m, PipelineData& d);
+TickStatus assemble(const PipelineModel& m, PipelineData& d);
+TickStatus solve(const PipelineModel& m, PipelineData& d);
+TickStatus command(const PipelineModel& m, PipelineData& d);
+TickStatus drill(const PipelineModel& m, PipelineData& d);
+// Proxy on the device pose at rest, observers at rest on the sample in d (device_terms first).
+TickStatus reset(const PipelineModel& m, PipelineData& d);
+}  // namespace reference
 
-// The pipeline interface both reference/ and fast/ implement.
+// The reference implementation's entry of the stage registry.
+const StageTable& reference_stage_table();
+
+// The pipeline interface every implementation offers to the loop owner (device/closed_loop.h).
 class Pipeline {
  public:
   virtual ~Pipeline() = default;
   // Places the proxy on the device pose at rest and resets the observer.
-  virtual void reset(const DeviceSample& s) = 0;
-  // One tick of length T (the time until the next sample; may vary tick to tick).
+  virtual TickStatus reset(const DeviceSample& s) = 0;
+  // One tick of length T (the time until the next sample; may vary tick to tick). Never throws;
+  // the result's status says whether the tick succeeded (if not, its torque is zero).
   virtual const TickResult& tick(const DeviceSample& s, double T, ContactProvider& contacts) = 0;
   virtual const ProxyState& proxy() const = 0;
+  virtual const char* name() const = 0;  // "reference", "fast"
 };
 
-class ReferencePipeline : public Pipeline {
+// A Pipeline running one StageTable over its own model and data.
+class StagedPipeline : public Pipeline {
  public:
-  // `device` must outlive the pipeline. Throws std::invalid_argument on inconsistent config
-  // (e.g. kPmiPd without an observer gain of the device's size).
-  ReferencePipeline(const SixDofDeviceModel& device, PipelineConfig config);
-  ~ReferencePipeline() override;
-
-  void reset(const DeviceSample& s) override;
+  // Builds the model (make_pipeline_model: throws on a bad configuration) and the data.
+  StagedPipeline(const StageTable& table, const SixDofDeviceModel& device,
+                 const PipelineConfig& config);
+  TickStatus reset(const DeviceSample& s) override;
   const TickResult& tick(const DeviceSample& s, double T, ContactProvider& contacts) override;
-  const ProxyState& proxy() const override { return proxy_; }
-  const PipelineConfig& config() const { return config_; }
+  const ProxyState& proxy() const override { return data_->proxy; }
+  const char* name() const override { return table_->implementation; }
+  const PipelineModel& model() const { return model_; }
+  const PipelineData& data() const { return *data_; }
+  PipelineData& mutable_data() { return *data_; }
 
  private:
-  const SixDofDeviceModel& device_;
-  PipelineConfig config_;
-  ProxyState proxy_;
-  std::unique_ptr<MomentumObserver> observer_;
-  std::unique_ptr<GripDetector> grip_;
-  VecX tau_prev_;           // torque applied during the previous tick (observer input)
-  double t_prev_ = 0.0;     // time of the previous sample
-  bool have_prev_ = false;
-  TickResult result_;
+  const StageTable* table_;
+  PipelineModel model_;
+  std::unique_ptr<PipelineData> data_;
+};
+
+class ReferencePipeline : public StagedPipeline {
+ public:
+  ReferencePipeline(const SixDofDeviceModel& device, const PipelineConfig& config)
+      : StagedPipeline(reference_stage_table(), device, config) {}
 };
 
 }  // namespace dentsim

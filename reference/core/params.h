@@ -82,4 +82,23 @@ const char* method_name(Method m);
 // Parses "explicit", "pmi" or "pmi-pd"; throws std::invalid_argument naming the value otherwise.
 Method parse_method(const std::string& s);
 
+// How the momentum observer's known input u = tau + beta is matched to the velocity estimate
+// (reference/observer.h). The default (both off) is the thesis's discretisation.
+struct ObserverInput {
+  bool match_backward_difference = false;  // u uses (tau_k-1 + tau_k)/2
+  double lowpass_hz = 0.0;                 // > 0: u low-passed like qd (first order, f_c [Hz])
+};
+
+// The sensorless grip detector's band, power filter and CUSUM thresholds
+// (reference/grip_detector.h).
+struct GripDetectorParams {
+  double highpass_hz = 4.0;             // band of the statistic: first-order high-pass [Hz]
+  double lowpass_hz = 20.0;             // and first-order low-pass [Hz] on h0, h1
+  double power_time_constant_s = 0.05;  // first-order low-pass on the band powers [s]
+  double release_threshold = 0.4;       // switch to released when s > this [N^2/kg]
+  double grip_threshold = 0.02;         // switch to gripped when s < -this [N^2/kg]
+  double evidence = 0.02;               // G: the CUSUM's decision level [N^2 s/kg]
+  bool start_gripped = true;
+};
+
 }  // namespace dentsim

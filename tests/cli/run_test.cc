@@ -77,7 +77,9 @@ void check_common(const nlohmann::json& r) {
   EXPECT_TRUE(r.at("passive_at_hand").get<bool>());
   EXPECT_TRUE(std::isfinite(r.at("virtual_energy_generated_j").get<double>()));
   EXPECT_GT(r.at("rendered_stiffness_n_per_m").get<double>(), 0.0);
-  for (const char* stage : {"kinematics", "observer", "collision", "solve", "command", "tick"}) {
+  EXPECT_EQ(r.at("pipeline").get<std::string>(), "reference");
+  for (const char* stage :
+       {"device_terms", "observe", "collide", "assemble", "solve", "command", "drill", "tick"}) {
     const auto& t = r.at("timing_us").at(stage);
     EXPECT_LE(t.at("median").get<double>(), t.at("p99").get<double>());
     EXPECT_LE(t.at("p99").get<double>(), t.at("max").get<double>());
@@ -127,6 +129,34 @@ TEST(RunCli, ListsBuiltinScenes) {
   EXPECT_EQ(c.status, 0);
   EXPECT_NE(c.output.find("probe"), std::string::npos);
   EXPECT_NE(c.output.find("drill"), std::string::npos);
+}
+
+// A fault injected into the tick (a NaN in the device sample from 0.4 s on) ends the run with the
+// tick's named fault, zero torque over the faulting tick, and the report and time series written
+// up to the fault (exit status non-zero, the fault named on stderr).
+TEST(RunCli, InjectedNanSampleEndsInANamedFaultWithZeroTorqueAndTheReportWritten) {
+  const fs::path out = temp_dir("fault");
+  const Cmd c = run("run drill --duration 1 --inject-fault nan-sample@0.4 --out " + out.string());
+  EXPECT_NE(c.status, 0) << c.output;
+  EXPECT_NE(c.output.find("tick_bad_sample"), std::string::npos) << c.output;
+  std::ifstream f(out / "report.json");
+  ASSERT_TRUE(f.good()) << "the report must be written on a fault";
+  const nlohmann::json r = nlohmann::json::parse(f);
+  ASSERT_EQ(r.at("faults").size(), 1u);
+  const std::string fault = r.at("faults")[0].get<std::string>();
+  EXPECT_EQ(fault.rfind("tick_bad_sample at t = 0.4", 0), 0u) << fault;
+  EXPECT_EQ(r.at("torque_after_fault_n_m").get<double>(), 0.0);
+  // The run stopped at the fault: 400 good ticks, then the faulting one is not counted.
+  EXPECT_EQ(r.at("ticks").get<long>(), 400);
+  EXPECT_TRUE(is_png(out / "force_penetration.png"));
+  std::ifstream csv(out / "timeseries.csv");
+  long rows = 0;
+  for (std::string line; std::getline(csv, line);) ++rows;
+  EXPECT_EQ(rows, 401);  // header + one row per tick up to the fault
+  // A malformed injection is refused before the run.
+  const Cmd bad = run("run drill --inject-fault nan-sample@-1 --out " + out.string());
+  EXPECT_EQ(bad.status, 2) << bad.output;
+  EXPECT_NE(bad.output.find("--inject-fault"), std::string::npos) << bad.output;
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "reference/core/so3.h"
 #include "reference/grasp_mass_model.h"
@@ -220,16 +221,136 @@ TEST(Tick, GripDetectorStuckInOneStateIsThePipelineOnThatModel) {
   EXPECT_THROW(ReferencePipeline(dev, bad), std::invalid_argument);
 }
 
-TEST(Tick, RejectsNonPositiveTick) {
+// A bad tick never throws (it may run inside a device's servo callback): it returns a status
+// naming the failure and commands exactly zero torque.
+TEST(Tick, BadTickLengthOrSampleReturnsANamedStatusAndZeroTorque) {
+  const RigidBodyDevice dev;
+  PipelineConfig cfg;
+  cfg.coupling.k_lin = 400.0;
+  ReferencePipeline p(dev, cfg);
+  DeviceSample s;
+  s.q = dev.joint_position(Pose{Vec3(0.01, 0.0, 0.0), Mat3::Identity()});
+  s.qd = VecX::Zero(6);
+  ASSERT_EQ(p.reset(s), TickStatus::kOk);
+  // Move the device away from the proxy so that a good tick commands a force.
+  s.q(0) = 0.02;
+  s.t = 1e-3;
+  NoContacts none;
+  EXPECT_EQ(p.tick(s, 1e-3, none).status, TickStatus::kOk);
+  EXPECT_GT(p.tick(s, 1e-3, none).tau.norm(), 1.0);
+  for (const double T : {0.0, -1e-3, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    const TickResult& r = p.tick(s, T, none);
+    EXPECT_EQ(r.status, TickStatus::kBadTickLength) << T;
+    EXPECT_STREQ(tick_status_name(r.status), "tick_bad_length");
+    EXPECT_EQ(r.tau.norm(), 0.0);
+  }
+  for (const int field : {0, 1, 2}) {
+    DeviceSample bad = s;
+    if (field == 0) bad.q(3) = std::nan("");
+    if (field == 1) bad.qd(1) = std::numeric_limits<double>::infinity();
+    if (field == 2) bad.t = std::nan("");
+    const TickResult& r = p.tick(bad, 1e-3, none);
+    EXPECT_EQ(r.status, TickStatus::kBadSample) << field;
+    EXPECT_STREQ(tick_status_name(r.status), "tick_bad_sample");
+    EXPECT_EQ(r.tau.norm(), 0.0);
+  }
+  DeviceSample short_sample = s;
+  short_sample.q = VecX::Zero(3);
+  EXPECT_EQ(p.tick(short_sample, 1e-3, none).status, TickStatus::kBadSample);
+  // A good tick afterwards is computed again.
+  EXPECT_EQ(p.tick(s, 1e-3, none).status, TickStatus::kOk);
+  EXPECT_GT(p.tick(s, 1e-3, none).tau.norm(), 1.0);
+}
+
+// An environment whose contact set does not fit the tick's buffer, and one reporting a malformed
+// contact: named statuses, zero torque, no exception.
+class OverfullProvider : public ContactProvider {
+ public:
+  explicit OverfullProvider(bool malformed) : malformed_(malformed) {}
+  bool contacts(const Pose& proxy, std::vector<Contact>& out) override {
+    out.clear();
+    Contact c;
+    c.x_o = proxy.x;
+    c.stiffness = 1000.0;
+    if (malformed_) {
+      c.n = Vec3(0.0, 0.0, 2.0);  // not a unit normal
+      out.push_back(c);
+      return true;
+    }
+    while (out.size() < out.capacity()) out.push_back(c);
+    return false;  // more members than fit
+  }
+
+ private:
+  bool malformed_;
+};
+
+TEST(Tick, FullContactBufferAndMalformedContactsAreNamedStatuses) {
   const RigidBodyDevice dev;
   ReferencePipeline p(dev, PipelineConfig{});
   DeviceSample s;
   s.q = VecX::Zero(6);
   s.qd = VecX::Zero(6);
   p.reset(s);
-  NoContacts none;
-  EXPECT_THROW(p.tick(s, 0.0, none), std::invalid_argument);
-  EXPECT_THROW(p.tick(s, std::nan(""), none), std::invalid_argument);
+  OverfullProvider full(false), bad(true);
+  const std::size_t capacity = p.data().r.contacts.capacity();
+  EXPECT_EQ(capacity, kContactCapacity);
+  const TickResult& r1 = p.tick(s, 1e-3, full);
+  EXPECT_EQ(r1.status, TickStatus::kContactBufferFull);
+  EXPECT_STREQ(tick_status_name(r1.status), "tick_contact_buffer_full");
+  EXPECT_EQ(r1.contacts.capacity(), capacity) << "the buffer must never grow";
+  EXPECT_EQ(r1.tau.norm(), 0.0);
+  const TickResult& r2 = p.tick(s, 1e-3, bad);
+  EXPECT_EQ(r2.status, TickStatus::kBadContact);
+  EXPECT_EQ(r2.tau.norm(), 0.0);
+}
+
+// The registry drives the tick: running the reference table's stages one by one on a copy of the
+// data gives exactly what tick() gives, and the stage list is the one fast/ implements.
+TEST(Tick, RegistryStagesInOrderAreTheTick) {
+  const char* expected[kStageCount] = {"device_terms", "observe", "collide", "assemble",
+                                       "solve",        "command", "drill"};
+  for (int i = 0; i < kStageCount; ++i) EXPECT_STREQ(tick_stage_name(i), expected[i]);
+  EXPECT_STREQ(reference_stage_table().implementation, "reference");
+
+  const RigidBodyDevice dev;
+  PipelineConfig cfg;
+  cfg.method = Method::kPmiPd;
+  cfg.observer_gain = VecX::Constant(6, 100.0);
+  cfg.tool = tool_preset("handpiece");
+  cfg.friction.enabled = true;
+  ReferencePipeline p(dev, cfg);
+  Pose pose;
+  pose.x = Vec3(0.0, 0.0, 0.8e-3);
+  DeviceSample s;
+  s.q = dev.joint_position(pose);
+  s.qd = VecX::Zero(6);
+  p.reset(s);
+  HalfSpaceWall wall(Vec3::Zero(), Vec3::UnitZ(), 1e-3, 3000.0, 2.0);
+  for (int k = 1; k <= 50; ++k) {
+    pose.x = Vec3(1e-4 * k, 0.0, 0.8e-3 - 2e-5 * k);
+    const VecX q = dev.joint_position(pose);
+    s.qd = (q - s.q) / 1e-3;
+    s.q = q;
+    s.t = 1e-3 * k;
+    // By hand, on a copy of the data: the stages in registry order.
+    PipelineData d = p.data();
+    d.q = s.q;
+    d.qd = s.qd;
+    d.t = s.t;
+    d.T = 1e-3;
+    d.env = &wall;
+    for (int i = 0; i < kStageCount; ++i) {
+      ASSERT_EQ(reference_stage_table().stage[i](p.model(), d), TickStatus::kOk) << i;
+    }
+    const TickResult& r = p.tick(s, 1e-3, wall);
+    ASSERT_EQ(r.status, TickStatus::kOk);
+    EXPECT_EQ((r.tau - d.r.tau).norm(), 0.0);
+    EXPECT_EQ((p.proxy().pose.x - d.proxy.pose.x).norm(), 0.0);
+    if (k > 10) {
+      EXPECT_FALSE(r.contacts.empty()) << "the proxy must be in contact with the wall";
+    }
+  }
 }
 
 }  // namespace

@@ -1,0 +1,227 @@
+// The servo tick as Model/Data stages (DESIGN.md "The tick as Model/Data stages"; MuJoCo's
+// mjModel/mjData, Pinocchio's model/data). Shared by reference/ and fast/: both implement the
+// same stage list over the same PipelineModel and PipelineData, and one registry of stage
+// tables (StageTable) drives the tick, the differential tests, the benchmarks and the
+// allocation-counting test.
+//
+//   PipelineModel  everything constant for a run: the device model, gains, proxy inertia, tool
+//                  dynamics and its factorisation, observer and grip-detector parameters, the
+//                  torque limits. Built and validated once (make_pipeline_model in
+//                  reference/tick.h), with the messages users get for bad configurations.
+//   PipelineData   everything that changes, allocated once: the sample, the device terms, the
+//                  observer and grip states, the proxy, the fixed-capacity contact buffer, the
+//                  assembled force elements, the solve, the command and the result.
+//
+// The stages, in order (stage(const PipelineModel&, PipelineData&) -> TickStatus):
+//   device_terms  one pass of the device model at (q, qd): x1, R1, J_t, M, C^T qd, g, tau_f
+//                 (+ dJ_t/dt and the hand's inertia when a grasp mass is modelled); J1 = J_t^-1
+//                 (the one factorisation a tick needs); V1 = J_t qd                         (2.2)
+//   observe       the momentum observer (3.7)-(3.8), or the grip detector's two observers,
+//                 -> F1_hat = J1^T f1_hat
+//   collide       the environment's contact set at the proxy pose (ContactProvider)
+//   assemble      the force elements affine in V_hat: coupling (4.5), contact (2.16)/(2.19),
+//                 decomposition feed-forward (4.7); the device-side coupling (4.3)-(4.4)
+//   solve         PMI (4.9) with friction (2.21)-(2.22), or explicit Euler; the proxy advances
+//   command       T1 = T1_vc + T1_pd -> tau = J_t^T T1 (+ g(q)), saturated; finite check
+//   drill         the tool's cut of the environment over the tick (ContactProvider::drill)
+//
+// A tick never allocates and never throws: it returns a TickStatus, and on anything but kOk the
+// result's torque is zero; the loop owner (device/closed_loop.h) latches the status as a named
+// fault and keeps commanding zero torque.
+#pragma once
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "reference/core/affine_wrench.h"
+#include "reference/core/contact_provider.h"
+#include "reference/core/device_model.h"
+#include "reference/core/params.h"
+
+namespace dentsim {
+
+// ---- status --------------------------------------------------------------------------------
+
+enum class TickStatus : std::uint8_t {
+  kOk = 0,
+  kBadTickLength,       // T not finite or <= 0
+  kBadSample,           // q, qd or t not finite, or not 6 joints
+  kDeviceModelFailure,  // device terms not finite, J_t singular, or the locked inertia not SPD
+  kContactBufferFull,   // the contact set did not fit the buffer (kContactCapacity)
+  kBadContact,          // a contact from the environment is malformed (contact.h's rules)
+  kSolverFailure,       // the PMI / friction system is singular or not finite
+  kNonFiniteOutput,     // the torque or the proxy state is not finite
+};
+// The fault name: "ok", "tick_bad_length", "tick_bad_sample", "tick_device_model_failure",
+// "tick_contact_buffer_full", "tick_bad_contact", "tick_solver_failure", "tick_non_finite_output".
+const char* tick_status_name(TickStatus s);
+
+// ---- stages --------------------------------------------------------------------------------
+
+// X-macro of the stage list, in tick order: X(enumerator, name).
+#define DENTSIM_TICK_STAGES(X)         \
+  X(kStageDeviceTerms, "device_terms") \
+  X(kStageObserve, "observe")          \
+  X(kStageCollide, "collide")          \
+  X(kStageAssemble, "assemble")        \
+  X(kStageSolve, "solve")              \
+  X(kStageCommand, "command")          \
+  X(kStageDrill, "drill")
+
+enum TickStage : int {
+#define DENTSIM_STAGE_ENUM(id, name) id,
+  DENTSIM_TICK_STAGES(DENTSIM_STAGE_ENUM)
+#undef DENTSIM_STAGE_ENUM
+      kStageCount
+};
+const char* tick_stage_name(int stage);  // "device_terms", ..., "drill"; "?" out of range
+
+// ---- model ---------------------------------------------------------------------------------
+
+// The hand's nominal mass on the tool tip (reference/grasp_mass_model.h): in maximal coordinates
+// the constant inertia Mt = diag(m I, J I); in joint space M_h = J_t^T Mt J_t and
+// C_h^T qd = dJ_t/dt^T Mt V1.
+struct GraspMass {
+  double mass = 0.0;       // m [kg]
+  double inertia = 0.0;    // J [kg m^2]
+  Vec6 Mt = Vec6::Zero();  // diagonal of Mt
+};
+
+struct PipelineModel {
+  const SixDofDeviceModel* device = nullptr;  // must outlive the model
+  Method method = Method::kPmiVc;
+  Scheme scheme = Scheme::kMidpoint;  // kExplicit for kExplicitVc
+  ProxyParams proxy;
+  CouplingGains coupling;
+  FrictionParams friction;
+  ToolDynamics tool;
+  Eigen::LLT<Mat6> tool_Md_llt;       // M_d = L L^T, factorised once (kPmiPd)
+  bool observe = false;               // an observer runs (gain set)
+  Vec6 observer_gain = Vec6::Zero();  // L [1/s]
+  ObserverInput observer_input;
+  bool grasp = false;  // the grip detector runs (a hand mass is modelled)
+  GraspMass grasp_mass;
+  GripDetectorParams grip;
+  Vec6 grip_norm = Vec6::Zero();  // its norm's diagonal: 1/m on the force, 0 on torque
+  bool saturate = false;
+  Vec6 torque_limit = Vec6::Zero();  // [N m]
+  bool compensate_gravity = true;
+};
+
+// ---- data ----------------------------------------------------------------------------------
+
+// Momentum observer state (reference/observer.h), for any vector type (VecX: n-DoF, Vec6: tick).
+template <class V>
+struct MomentumObserverState {
+  V p_hat, f_hat, beta_prev, tau_prev, u_f;
+  bool ready = false;
+};
+
+// The grip detector's filters and decision (reference/grip_detector.h).
+struct GripFilterState {
+  Vec6 h0 = Vec6::Zero(), h1 = Vec6::Zero();    // estimates of H0 (no hand) and H1 (gripped)
+  Vec6 b0 = Vec6::Zero(), b1 = Vec6::Zero();    // h_i low-passed at lowpass_hz
+  Vec6 lp0 = Vec6::Zero(), lp1 = Vec6::Zero();  // b_i low-passed at highpass_hz
+  double p0 = 0.0, p1 = 0.0;                    // band powers
+  double g_release = 0.0, g_grip = 0.0;         // CUSUM sums
+  bool gripped = true;
+};
+
+// The tick's fixed-capacity contact buffer: a vector reserved to kContactCapacity that keeps that
+// capacity when copied (a copy of PipelineData is a working tick state too, e.g. in the
+// differential tests). Providers fill it without growing it (contact_provider.h).
+class ContactBuffer : public std::vector<Contact> {
+ public:
+  ContactBuffer() { reserve(kContactCapacity); }
+  ContactBuffer(const ContactBuffer& o) : std::vector<Contact>() {
+    reserve(kContactCapacity);
+    assign(o.begin(), o.end());
+  }
+  ContactBuffer& operator=(const ContactBuffer& o) {
+    if (this != &o) assign(o.begin(), o.end());
+    return *this;
+  }
+  ContactBuffer(ContactBuffer&&) = default;
+  ContactBuffer& operator=(ContactBuffer&&) = default;
+};
+
+// Everything one tick computed (for logging, tests and the fast path's differential tests).
+struct TickResult {
+  TickStatus status = TickStatus::kOk;
+  Pose device;                       // x1, R1
+  Vec6 V1 = Vec6::Zero();            // device twist
+  Vec6 F1_hat = Vec6::Zero();        // human wrench estimate (maximal), zero without observer
+  Vec6 T1_vc = Vec6::Zero();         // coupling wrench on the device
+  Vec6 T1_pd = Vec6::Zero();         // decomposition feed-forward on the device
+  Vec6 T1 = Vec6::Zero();            // total device wrench before saturation
+  VecX tau = VecX::Zero(6);          // joint torques sent to the device (saturated)
+  VecX tau_gravity = VecX::Zero(6);  // the gravity-compensation part of tau (zero when off)
+  bool saturated = false;
+  Vec6 V_hat = Vec6::Zero();       // proxy velocity the forces were evaluated at
+  Vec6 F_contact = Vec6::Zero();   // contact + friction wrench on the proxy at V_hat
+  Vec6 F_coupling = Vec6::Zero();  // coupling wrench on the proxy at V_hat
+  ContactBuffer contacts;          // the contact set of this tick (capacity kContactCapacity)
+  double max_depth = 0.0;          // deepest penetration in the set [m]
+  bool friction_sliding = false;
+  int grip_state = -1;              // grip detector: 1 gripped, 0 released, -1 no detector
+  double grip_statistic = 0.0;      // its statistic s [N^2/kg]
+  int removed_voxels = 0;           // voxels the drill stage removed this tick
+  long stage_ns[kStageCount] = {};  // wall-clock time of each stage [ns] (steady_clock)
+};
+
+struct PipelineData {
+  // Input of this tick.
+  Vec6 q = Vec6::Zero(), qd = Vec6::Zero();
+  double t = 0.0;        // sample time [s]
+  double T = 1e-3;       // length of the tick about to run [s]
+  double T_last = 1e-3;  // length of the tick that just ended (observer input) [s]
+  ContactProvider* env = nullptr;
+
+  // device_terms
+  DeviceTerms dev;
+  Eigen::PartialPivLU<Mat6> J_t_lu;
+  Mat6 J1 = Mat6::Identity();     // J_t^-1: qd = J1 V1 (2.2)
+  Mat6 M_hand = Mat6::Zero();     // J_t^T Mt J_t (grasp)
+  Vec6 CTqd_hand = Vec6::Zero();  // dJ_t/dt^T Mt V1 (grasp)
+
+  // observe
+  MomentumObserverState<Vec6> obs0, obs1;  // obs0: the device (H0), obs1: device + hand (H1)
+  GripFilterState grip;
+  Vec6 tau_prev = Vec6::Zero();  // torque applied over the tick that just ended
+  double t_prev = 0.0;
+  bool have_prev = false;
+
+  // assemble / solve
+  ProxyState proxy;
+  AffineWrench coupling, contact, pd_T1, pd_T2;
+  PmiSystem sys;
+
+  TickResult r;
+};
+
+// ---- registry ------------------------------------------------------------------------------
+
+using StageFn = TickStatus (*)(const PipelineModel&, PipelineData&);
+
+// One implementation of the tick: a function per stage, in TickStage order, plus the reset.
+struct StageTable {
+  const char* implementation;  // "reference", "fast"
+  std::array<StageFn, kStageCount> stage;
+  // Places the proxy on the device pose at rest and resets the observers on the sample in `d`
+  // (d.q, d.qd, d.t set); runs the device_terms stage itself.
+  TickStatus (*reset)(const PipelineModel&, PipelineData&);
+};
+
+// Copies the sample into `d` and runs `table`'s reset. kBadSample for a malformed sample.
+TickStatus pipeline_reset(const StageTable& table, const PipelineModel& m, PipelineData& d,
+                          const DeviceSample& s);
+// One tick: checks T and the sample, runs every stage in order (timing each into
+// d.r.stage_ns), stops at the first failing stage. On failure d.r.tau and d.r.tau_gravity are
+// zero and d.r.status names the failure. Never allocates, never throws.
+TickStatus pipeline_tick(const StageTable& table, const PipelineModel& m, PipelineData& d,
+                         const DeviceSample& s, double T, ContactProvider& env);
+
+}  // namespace dentsim
