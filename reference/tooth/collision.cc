@@ -51,6 +51,13 @@ VoxelTooth::VoxelTooth(VoxelGrid grid) : octree(std::move(grid)) {
   codes = encode_neighbors(octree.grid());
 }
 
+void validate_tool_tip(const ToolTip& tip) {
+  if (!(tip.radius > 0.0) || !std::isfinite(tip.radius)) {
+    throw InputError("tool tip: radius = " + std::to_string(tip.radius) +
+                     ", expected a finite value > 0 [m]");
+  }
+}
+
 double disk_rect_area(double a, double x0, double x1, double y0, double y1) {
   if (!(a > 0.0)) return 0.0;
   const double lo = std::max(x0, -a);
@@ -96,11 +103,8 @@ bool collide_tool_tip(const VoxelTooth& tooth, const Pose& proxy, const ToolTip&
                       double k_tooth, double b_tooth, CollisionScratch* scratch,
                       std::vector<Contact>* contacts, std::vector<std::size_t>* contact_voxels,
                       std::size_t max_contacts) {
+  validate_tool_tip(tip);
   const double rho = tip.radius;
-  if (!(rho > 0.0) || !std::isfinite(rho)) {
-    throw InputError("tool tip: radius = " + std::to_string(rho) +
-                     ", expected a finite value > 0 [m]");
-  }
   const VoxelGrid& grid = tooth.grid();
   const Vec3 c = proxy.x + proxy.R * tip.offset_body;
   scratch->candidates.clear();

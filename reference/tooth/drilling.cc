@@ -15,6 +15,14 @@ DrillState make_drill_state(const VoxelTooth& tooth) {
   return state;
 }
 
+void validate_drill_params(const DrillParams& params) {
+  if (!(params.bur_speed_rad_s >= 0.0) || !(params.cutting_coefficient >= 0.0) ||
+      !std::isfinite(params.bur_speed_rad_s) || !std::isfinite(params.cutting_coefficient)) {
+    throw InputError("drill params: bur_speed_rad_s and cutting_coefficient must be finite and "
+                     ">= 0");
+  }
+}
+
 double removal_threshold_j(std::uint8_t material, double voxel_size) {
   if (material == kEmpty || material >= kMaterialCount) {
     throw InputError("removal_threshold_j: material id " + std::to_string(material) +

@@ -46,6 +46,9 @@ struct DrillState {
   double removed_volume_m3(int m) const { return voxel_volume_m3 * removed_voxels[m]; }
 };
 
+// Throws InputError unless bur speed and cutting coefficient are finite and >= 0.
+void validate_drill_params(const DrillParams& params);
+
 // A zero-work state sized for the tooth (allocates once).
 DrillState make_drill_state(const VoxelTooth& tooth);
 

@@ -1,26 +1,15 @@
 #include "reference/tooth/tooth_contacts.h"
 
 #include <algorithm>
-#include <cmath>
-#include <string>
-
-#include "reference/core/io.h"
 
 namespace dentsim {
 
 ToothContactProvider::ToothContactProvider(VoxelTooth& tooth, ToolTip tip, double k_tooth,
                                            double b_tooth, const DrillParams* drill)
     : tooth_(tooth), tip_(tip), k_tooth_(k_tooth), b_tooth_(b_tooth) {
-  if (!(tip_.radius > 0.0) || !std::isfinite(tip_.radius)) {
-    throw InputError("tool tip: radius = " + std::to_string(tip_.radius) +
-                     ", expected a finite value > 0 [m]");
-  }
+  validate_tool_tip(tip_);
   if (drill != nullptr) {
-    if (!(drill->bur_speed_rad_s >= 0.0) || !(drill->cutting_coefficient >= 0.0) ||
-        !std::isfinite(drill->bur_speed_rad_s) || !std::isfinite(drill->cutting_coefficient)) {
-      throw InputError("drill params: bur_speed_rad_s and cutting_coefficient must be finite and "
-                       ">= 0");
-    }
+    validate_drill_params(*drill);
     drills_ = true;
     drill_params_ = *drill;
     drill_state_ = make_drill_state(tooth_);
