@@ -47,6 +47,25 @@ double clamp_along_run(const std::uint8_t* codes, std::size_t v, int cell, int n
 
 double disk_rect_area(double a, double x0, double x1, double y0, double y1) {
   if (!(a > 0.0)) return 0.0;
+  // Rectangle inside the disk (the common case: a face well inside the contact disk): the
+  // reference's sweep then has no breakpoint strictly inside (x0, x1) -- t = sqrt(a^2 - y^2) >=
+  // max(x1, -x0) for y = y0, y1 -- and its single piece has s_mid >= max(y1, -y0), so no chord:
+  // area = y1 (x1 - x0) - y0 (x1 - x0). The conditions are decided on the squares with a relative
+  // margin of 1e-12 (far above the rounding of sqrt and of the squares), so whenever this branch
+  // is taken the reference's own decisions are the same, and the result is bitwise equal; cases
+  // within the margin take the full sweep below.
+  if (x0 >= -a && x1 <= a && x0 < x1 && y0 < y1) {
+    constexpr double kMargin = 1.0 + 1e-12;
+    const double a2 = a * a;
+    const double m = std::max(x1, -x0);
+    const double ym = std::max(y1, -y0);
+    const double mid = 0.5 * (x0 + x1);
+    if (a2 - y0 * y0 >= m * m * kMargin && a2 - y1 * y1 >= m * m * kMargin &&
+        a2 - mid * mid >= ym * ym * kMargin) {
+      const double width = x1 - x0;
+      return std::max(0.0, y1 * width - y0 * width);
+    }
+  }
   const double lo = std::max(x0, -a);
   const double hi = std::min(x1, a);
   if (!(lo < hi) || !(y0 < y1)) return 0.0;
@@ -101,6 +120,87 @@ bool sphere_voxel_box(const BrickTooth& tooth, const Vec3& c, double rho, int lo
   return true;
 }
 
+namespace {
+
+// What one query shares across its faces.
+struct Query {
+  const VoxelGrid& grid;
+  const std::uint8_t* codes;
+  const Pose& proxy;
+  Vec3 c;
+  double rho, h, k_tooth, b_tooth;
+  int n, reach;
+  std::ptrdiff_t stride[3];
+  std::vector<Contact>* contacts;
+  std::vector<std::size_t>* contact_voxels;
+  std::size_t max_contacts;
+};
+
+// Face F (compile-time: its axis and side, so every coordinate index below is a constant and the
+// points stay in registers) of surface voxel idx / v: the reference's steps 2 (collision.h) on
+// the same expressions. Returns false when the contact buffer is full.
+template <int F>
+bool face_contact(const Query& qr, const int idx[3], std::size_t v, std::uint8_t material,
+                  const MaterialProperties& props) {
+  constexpr int a = F / 2;
+  constexpr int sign = F % 2 == 0 ? -1 : 1;
+  constexpr int u = (a + 1) % 3, w = (a + 2) % 3;
+  const Vec3& c = qr.c;
+  const double h = qr.h;
+  const Vec3& origin = qr.grid.origin;
+  const double plane = origin[a] + h * (idx[a] + (sign > 0 ? 1 : 0));
+  const double d = sign * (c[a] - plane);
+  if (!(std::abs(d) < qr.rho)) return true;
+  const double u0 = origin[u] + h * idx[u], u1 = origin[u] + h * (idx[u] + 1);
+  const double w0 = origin[w] + h * idx[w], w1 = origin[w] + h * (idx[w] + 1);
+  const auto clamp_axis = [&](int axis, double lo_e, double hi_e) {
+    const int s = c[axis] > hi_e ? 1 : (c[axis] < lo_e ? -1 : 0);
+    return s == 0 ? c[axis]
+                  : clamp_along_run(qr.codes, v, idx[axis], qr.n, qr.stride[axis], 1u << F, s,
+                                    c[axis], origin[axis], h, qr.reach);
+  };
+  Vec3 q;  // nearest point of the face region to c, on the face plane
+  q[a] = plane;
+  q[u] = clamp_axis(u, u0, u1);
+  q[w] = clamp_axis(w, w0, w1);
+  Vec3 normal;
+  double factor;
+  if (q[u] == c[u] && q[w] == c[w]) {
+    // c projects onto the face region: for d > 0 the reference's c - q is (c_a - plane) e_a with
+    // +0 elsewhere, |c - q| = sqrt(fl(x^2)) = |x| = d exactly (radix 2, round to nearest), so
+    // n = sign e_a = n_f and the taper d / |c - q| = 1 exactly; for d <= 0 the reference sets the
+    // same. No square root, no division.
+    normal = face_normal(F);
+    factor = 1.0;
+  } else if (d > 0.0) {
+    const Vec3 gap = c - q;
+    const double dist = gap.norm();
+    if (!(dist < qr.rho)) return true;
+    normal = gap / dist;
+    factor = d / dist;
+  } else {
+    return true;  // centre behind the face plane and not over the face region
+  }
+  const double disk = std::sqrt(qr.rho * qr.rho - d * d);
+  const double weight = factor * disk_rect_area(disk, u0 - c[u], u1 - c[u], w0 - c[w], w1 - c[w]);
+  if (!(weight > 0.0)) return true;
+  if (qr.contacts->size() >= qr.max_contacts) return false;
+  Contact& contact = qr.contacts->emplace_back();
+  contact.n = normal;
+  contact.x_o = q;
+  const Vec3 x_c = c - qr.rho * normal;
+  contact.r = qr.proxy.R.transpose() * (x_c - qr.proxy.x);
+  contact.depth = normal.dot(contact.x_o - x_c);
+  contact.stiffness = qr.k_tooth * props.stiffness_scale;
+  contact.damping = qr.b_tooth * props.damping_scale;
+  contact.weight = weight;
+  contact.material = material;
+  if (qr.contact_voxels != nullptr) qr.contact_voxels->push_back(v);
+  return true;
+}
+
+}  // namespace
+
 bool collide_tool_tip(const BrickTooth& tooth, const Pose& proxy, const ToolTip& tip,
                       double k_tooth, double b_tooth, std::vector<Contact>* contacts,
                       std::vector<std::size_t>* contact_voxels, std::size_t max_contacts) {
@@ -109,73 +209,35 @@ bool collide_tool_tip(const BrickTooth& tooth, const Pose& proxy, const ToolTip&
   const Vec3 c = proxy.x + proxy.R * tip.offset_body;
   int lo[3], hi[3];
   if (!sphere_voxel_box(tooth, c, rho, lo, hi)) return true;
-
   const VoxelGrid& grid = tooth.grid();
-  const std::uint8_t* codes = tooth.codes().code.data();
-  const double h = grid.voxel_size;
   const int n = grid.n;
-  const std::ptrdiff_t stride[3] = {1, n, static_cast<std::ptrdiff_t>(n) * n};
-  const int reach = static_cast<int>(std::ceil(rho / h)) + 2;  // as the reference
+  const Query qr{grid,
+                 tooth.codes().code.data(),
+                 proxy,
+                 c,
+                 rho,
+                 grid.voxel_size,
+                 k_tooth,
+                 b_tooth,
+                 n,
+                 static_cast<int>(std::ceil(rho / grid.voxel_size)) + 2,  // reach, as the reference
+                 {1, n, static_cast<std::ptrdiff_t>(n) * n},
+                 contacts,
+                 contact_voxels,
+                 max_contacts};
   bool fits = true;
   tooth.for_each_surface_voxel(lo, hi, [&](int i, int j, int k, std::size_t v) {
     if (!fits || !sphere_intersects_voxel(grid, i, j, k, c, rho)) return;
-    const std::uint8_t code = codes[v];
+    const std::uint8_t code = qr.codes[v];
     const int idx[3] = {i, j, k};
     const std::uint8_t material = grid.voxels[v];
     const MaterialProperties& props = material_properties(material);
-    for (int f = 0; f < 6; ++f) {
-      if ((code & (1u << f)) == 0) continue;
-      const int a = face_axis(f);
-      const int sign = face_sign(f);
-      const int u = (a + 1) % 3, w = (a + 2) % 3;
-      const double plane = grid.origin[a] + h * (idx[a] + (sign > 0 ? 1 : 0));
-      const double d = sign * (c[a] - plane);
-      if (!(std::abs(d) < rho)) continue;
-      const double u0 = grid.origin[u] + h * idx[u], u1 = grid.origin[u] + h * (idx[u] + 1);
-      const double w0 = grid.origin[w] + h * idx[w], w1 = grid.origin[w] + h * (idx[w] + 1);
-      Vec3 q;
-      q[a] = plane;
-      for (const int axis : {u, w}) {
-        const double lo_e = axis == u ? u0 : w0, hi_e = axis == u ? u1 : w1;
-        const int s = c[axis] > hi_e ? 1 : (c[axis] < lo_e ? -1 : 0);
-        q[axis] = s == 0 ? c[axis]
-                         : clamp_along_run(codes, v, idx[axis], n, stride[axis], 1u << f, s,
-                                           c[axis], grid.origin[axis], h, reach);
-      }
-      const Vec3 face_n = face_normal(f);
-      Vec3 normal;
-      double factor;
-      if (d > 0.0) {
-        const Vec3 gap = c - q;
-        const double dist = gap.norm();
-        if (!(dist < rho)) continue;
-        normal = gap / dist;
-        factor = d / dist;
-      } else {
-        if (q[u] != c[u] || q[w] != c[w]) continue;
-        normal = face_n;
-        factor = 1.0;
-      }
-      const double disk = std::sqrt(rho * rho - d * d);
-      const double weight =
-          factor * disk_rect_area(disk, u0 - c[u], u1 - c[u], w0 - c[w], w1 - c[w]);
-      if (!(weight > 0.0)) continue;
-      if (contacts->size() >= max_contacts) {
-        fits = false;
-        return;
-      }
-      Contact& contact = contacts->emplace_back();
-      contact.n = normal;
-      contact.x_o = q;
-      const Vec3 x_c = c - rho * normal;
-      contact.r = proxy.R.transpose() * (x_c - proxy.x);
-      contact.depth = normal.dot(contact.x_o - x_c);
-      contact.stiffness = k_tooth * props.stiffness_scale;
-      contact.damping = b_tooth * props.damping_scale;
-      contact.weight = weight;
-      contact.material = material;
-      if (contact_voxels != nullptr) contact_voxels->push_back(v);
-    }
+    fits = ((code & 1u) == 0 || face_contact<0>(qr, idx, v, material, props)) &&
+           ((code & 2u) == 0 || face_contact<1>(qr, idx, v, material, props)) &&
+           ((code & 4u) == 0 || face_contact<2>(qr, idx, v, material, props)) &&
+           ((code & 8u) == 0 || face_contact<3>(qr, idx, v, material, props)) &&
+           ((code & 16u) == 0 || face_contact<4>(qr, idx, v, material, props)) &&
+           ((code & 32u) == 0 || face_contact<5>(qr, idx, v, material, props));
   });
   return fits;
 }
