@@ -39,6 +39,12 @@ BrickTooth::BrickTooth(const VoxelTooth& tooth) : grid_(tooth.grid()), codes_(to
       }
     }
   }
+  const double h = grid_.voxel_size;
+  inv_h_ = 1.0 / h;
+  for (int a = 0; a < 3; ++a) {
+    box_min_[a] = grid_.origin[a] + h * (solid_lo_[a] - 1);
+    box_max_[a] = grid_.origin[a] + h * (solid_hi_[a] + 2);
+  }
   // Brick octree bottom up: level B_L-1 from the bricks, each level from the one below.
   for (int l = brick_levels_ - 1; l >= 0; --l) {
     const int nl = 1 << l;

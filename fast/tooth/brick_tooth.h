@@ -62,6 +62,10 @@ class BrickTooth {
   // Inclusive voxel bounds of the solid at construction (lo > hi on every axis: no solid).
   const std::array<int, 3>& solid_lo() const { return solid_lo_; }
   const std::array<int, 3>& solid_hi() const { return solid_hi_; }
+  // The same box in world coordinates, padded by one voxel [m] (empty solid: lo > hi), and 1 / h.
+  const Vec3& solid_box_min() const { return box_min_; }
+  const Vec3& solid_box_max() const { return box_max_; }
+  double inv_voxel_size() const { return inv_h_; }
 
   // Removes voxel (i, j, k) (see the header comment). Returns the material it held; kEmpty (no
   // change) if it was empty or outside the grid.
@@ -103,6 +107,9 @@ class BrickTooth {
   std::vector<std::uint8_t> brick_masks_;
   std::array<int, 3> solid_lo_{};
   std::array<int, 3> solid_hi_{};
+  Vec3 box_min_ = Vec3::Zero();
+  Vec3 box_max_ = Vec3::Zero();
+  double inv_h_ = 0.0;
 };
 
 // Masks of the local voxels of a brick whose coordinate along `axis` lies in [lo, hi]

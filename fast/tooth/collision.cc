@@ -106,13 +106,21 @@ double disk_rect_area(double a, double x0, double x1, double y0, double y1) {
 }
 
 bool sphere_voxel_box(const BrickTooth& tooth, const Vec3& c, double rho, int lo[3], int hi[3]) {
+  // Free space first: the sphere's box against the solid's world box padded by a voxel (a few
+  // compares; false for NaN too, whose comparisons fail).
+  const Vec3& bmin = tooth.solid_box_min();
+  const Vec3& bmax = tooth.solid_box_max();
+  if (!(c.x() + rho > bmin.x() && c.x() - rho < bmax.x() && c.y() + rho > bmin.y() &&
+        c.y() - rho < bmax.y() && c.z() + rho > bmin.z() && c.z() - rho < bmax.z())) {
+    return false;
+  }
   if (!c.allFinite()) return false;  // the reference's predicate rejects every voxel then
   const VoxelGrid& g = tooth.grid();
   // One voxel of padding each way: the exact predicate decides, the box only has to contain it.
   const double limit_hi = static_cast<double>(g.n) + 1.0;
   for (int a = 0; a < 3; ++a) {
-    const double t0 = std::floor((c[a] - rho - g.origin[a]) / g.voxel_size) - 1.0;
-    const double t1 = std::floor((c[a] + rho - g.origin[a]) / g.voxel_size) + 1.0;
+    const double t0 = std::floor((c[a] - rho - g.origin[a]) * tooth.inv_voxel_size()) - 1.0;
+    const double t1 = std::floor((c[a] + rho - g.origin[a]) * tooth.inv_voxel_size()) + 1.0;
     lo[a] = std::max(tooth.solid_lo()[a], static_cast<int>(std::clamp(t0, -2.0, limit_hi)));
     hi[a] = std::min(tooth.solid_hi()[a], static_cast<int>(std::clamp(t1, -2.0, limit_hi)));
     if (lo[a] > hi[a]) return false;
