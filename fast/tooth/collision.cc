@@ -128,6 +128,15 @@ bool sphere_voxel_box(const BrickTooth& tooth, const Vec3& c, double rho, int lo
   return true;
 }
 
+void sphere_surface_voxels(const BrickTooth& tooth, const Vec3& c, double rho,
+                           std::vector<std::size_t>* out) {
+  int lo[3], hi[3];
+  if (!sphere_voxel_box(tooth, c, rho, lo, hi)) return;
+  tooth.for_each_surface_voxel(lo, hi, [&](int i, int j, int k, std::size_t v) {
+    if (sphere_intersects_voxel(tooth.grid(), i, j, k, c, rho)) out->push_back(v);
+  });
+}
+
 namespace {
 
 // What one query shares across its faces.

@@ -43,4 +43,10 @@ bool collide_tool_tip(const BrickTooth& tooth, const Pose& proxy, const ToolTip&
 // to the solid's bounding box; false (nothing to test) when it is empty or c is not finite.
 bool sphere_voxel_box(const BrickTooth& tooth, const Vec3& c, double rho, int lo[3], int hi[3]);
 
+// The candidate stage alone: appends to `out` the flat indices of the surface voxels that the
+// sphere (c, rho) intersects (sphere_intersects_voxel), in the reference octree's order. Used by
+// the benchmarks against other voxel structures (bench/tooth_vdb_bench.cc) and by tests.
+void sphere_surface_voxels(const BrickTooth& tooth, const Vec3& c, double rho,
+                           std::vector<std::size_t>* out);
+
 }  // namespace dentsim::fast
