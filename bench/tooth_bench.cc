@@ -7,10 +7,10 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
-#include <map>
 #include <memory>
 #include <random>
 
+#include "bench/tooth_bench.h"
 #include "fast/tooth/tooth_contacts.h"
 #include "reference/tooth/procedural_molar.h"
 #include "reference/tooth/tooth_contacts.h"
@@ -27,25 +27,8 @@ struct Teeth {
   fast::BrickTooth fst;
   explicit Teeth(int n) : ref(voxelize_procedural_molar(MolarParams{}, n)), fst(ref) {}
 };
-Teeth& teeth(int n) {
-  static std::map<int, std::unique_ptr<Teeth>> cache;
-  auto& slot = cache[n];
-  if (!slot) slot = std::make_unique<Teeth>(n);
-  return *slot;
-}
-
-// The pose of BM_ToothCollision: above the highest solid voxel of the centre column, the tip
-// sunk 0.1 mm into the occlusal surface.
-Pose occlusal_pose(const VoxelGrid& g, double rho) {
-  const int c = g.n / 2;
-  int top = 0;
-  for (int k = 0; k < g.n; ++k) {
-    if (g.solid(c, c, k)) top = k;
-  }
-  Pose pose;
-  pose.x = g.center(c, c, top) + Vec3(0, 0, 0.5 * g.voxel_size + rho - 1e-4);
-  return pose;
-}
+Teeth& teeth(int n) { return bench::built_once<Teeth>(n); }
+using bench::occlusal_pose;
 
 void run_query(benchmark::State& state, ContactProvider& provider, const Pose& pose) {
   std::vector<Contact> contacts;

@@ -16,10 +16,10 @@
 #include <openvdb/openvdb.h>
 
 #include <algorithm>
-#include <map>
 #include <memory>
 #include <vector>
 
+#include "bench/tooth_bench.h"
 #include "fast/tooth/collision.h"
 #include "reference/tooth/procedural_molar.h"
 
@@ -51,21 +51,7 @@ struct Structures {
     octo->updateInnerOccupancy();
   }
 };
-Structures& structures(int n) {
-  static std::map<int, std::unique_ptr<Structures>> cache;
-  auto& slot = cache[n];
-  if (!slot) slot = std::make_unique<Structures>(n);
-  return *slot;
-}
-
-Vec3 occlusal_centre(const VoxelGrid& g, double rho) {
-  const int c = g.n / 2;
-  int top = 0;
-  for (int k = 0; k < g.n; ++k) {
-    if (g.solid(c, c, k)) top = k;
-  }
-  return g.center(c, c, top) + Vec3(0, 0, 0.5 * g.voxel_size + rho - 1e-4);
-}
+Structures& structures(int n) { return bench::built_once<Structures>(n); }
 
 void query_vdb(const Structures& s, const Vec3& c, double rho, std::vector<std::size_t>* out) {
   int lo[3], hi[3];
@@ -116,7 +102,7 @@ void query_octomap(const Structures& s, const Vec3& c, double rho, std::vector<s
 void run(benchmark::State& state, int which) {
   Structures& s = structures(static_cast<int>(state.range(0)));
   const double rho = static_cast<double>(state.range(1)) * 1e-4;
-  const Vec3 c = occlusal_centre(s.ref.grid(), rho);
+  const Vec3 c = bench::occlusal_pose(s.ref.grid(), rho).x;
   const auto query = [&](std::vector<std::size_t>* out) {
     out->clear();
     if (which == 0) fast::sphere_surface_voxels(s.fst, c, rho, out);

@@ -11,18 +11,10 @@
 #include "fast/tooth/collision.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 
 namespace dentsim::fast {
 namespace {
-
-// Antiderivative of sqrt(a^2 - x^2) on [-a, a] (as reference/tooth/collision.cc).
-double half_chord_integral(double a, double x) {
-  const double t = std::clamp(x / a, -1.0, 1.0);
-  const double xc = a * t;
-  return 0.5 * (xc * std::sqrt(std::max(0.0, a * a - xc * xc)) + a * a * std::asin(t));
-}
 
 // The in-plane coordinate of the face region's point nearest to c along one axis, for c_u
 // outside the face's own span on side s (+1: c_u > u1, -1: c_u < u0): the end of the run of
@@ -46,14 +38,13 @@ double clamp_along_run(const std::uint8_t* codes, std::size_t v, int cell, int n
 }  // namespace
 
 double disk_rect_area(double a, double x0, double x1, double y0, double y1) {
-  if (!(a > 0.0)) return 0.0;
   // Rectangle inside the disk (the common case: a face well inside the contact disk): the
   // reference's sweep then has no breakpoint strictly inside (x0, x1) -- t = sqrt(a^2 - y^2) >=
   // max(x1, -x0) for y = y0, y1 -- and its single piece has s_mid >= max(y1, -y0), so no chord:
   // area = y1 (x1 - x0) - y0 (x1 - x0). The conditions are decided on the squares with a relative
   // margin of 1e-12 (far above the rounding of sqrt and of the squares), so whenever this branch
   // is taken the reference's own decisions are the same, and the result is bitwise equal; cases
-  // within the margin take the full sweep below.
+  // within the margin take the reference's sweep. (a <= 0 or NaN never enters: x0 < x1 fails.)
   if (x0 >= -a && x1 <= a && x0 < x1 && y0 < y1) {
     constexpr double kMargin = 1.0 + 1e-12;
     const double a2 = a * a;
@@ -66,43 +57,7 @@ double disk_rect_area(double a, double x0, double x1, double y0, double y1) {
       return std::max(0.0, y1 * width - y0 * width);
     }
   }
-  const double lo = std::max(x0, -a);
-  const double hi = std::min(x1, a);
-  if (!(lo < hi) || !(y0 < y1)) return 0.0;
-  std::array<double, 6> xs;
-  int count = 0;
-  xs[count++] = lo;
-  xs[count++] = hi;
-  for (const double y : {y0, y1}) {
-    if (std::abs(y) < a) {
-      const double t = std::sqrt(a * a - y * y);
-      if (-t > lo && -t < hi) xs[count++] = -t;
-      if (t > lo && t < hi) xs[count++] = t;
-    }
-  }
-  for (int m = 1; m < count; ++m) {
-    for (int q = m; q > 0 && xs[q - 1] > xs[q]; --q) std::swap(xs[q - 1], xs[q]);
-  }
-  double area = 0.0;
-  for (int m = 0; m + 1 < count; ++m) {
-    const double p = xs[m], q = xs[m + 1];
-    if (!(p < q)) continue;
-    const double mid = 0.5 * (p + q);
-    const double s_mid = std::sqrt(std::max(0.0, a * a - mid * mid));
-    const bool top_is_chord = s_mid < y1;
-    const bool bottom_is_chord = -s_mid > y0;
-    const double top = top_is_chord ? s_mid : y1;
-    const double bottom = bottom_is_chord ? -s_mid : y0;
-    if (!(top > bottom)) continue;
-    // The circular-segment integral only where a chord bounds the piece.
-    const double chord = (top_is_chord || bottom_is_chord)
-                             ? half_chord_integral(a, q) - half_chord_integral(a, p)
-                             : 0.0;
-    const double int_top = top_is_chord ? chord : y1 * (q - p);
-    const double int_bottom = bottom_is_chord ? -chord : y0 * (q - p);
-    area += int_top - int_bottom;
-  }
-  return std::max(0.0, area);
+  return dentsim::disk_rect_area(a, x0, x1, y0, y1);
 }
 
 bool sphere_voxel_box(const BrickTooth& tooth, const Vec3& c, double rho, int lo[3], int hi[3]) {

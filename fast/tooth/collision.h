@@ -11,8 +11,8 @@
 // - patch bounds: q_u = clamp(c_u, lo_u, hi_u) needs only the bound on c's side of the face, and
 //   only until the run passes c_u, so the walk along coplanar exposed faces goes one way and
 //   stops early; the clamped value equals the reference's (the header of collision.cc proves it);
-// - disk_rect_area: the reference's piecewise closed form, evaluating the circular-segment
-//   integral (two asin) only on the pieces whose top or bottom is the chord; bitwise equal.
+// - disk_rect_area: a face square well inside the contact disk skips the reference's sweep (its
+//   result there is one product difference, decided with a margin); otherwise the reference's.
 // Units and frames as the reference: world frame, metres.
 #pragma once
 
@@ -27,7 +27,7 @@
 
 namespace dentsim::fast {
 
-// Bitwise equal to dentsim::disk_rect_area (the same operations on the pieces it uses).
+// Bitwise equal to dentsim::disk_rect_area (collision.cc: the inside-the-disk shortcut).
 double disk_rect_area(double a, double x0, double x1, double y0, double y1);
 
 // The twin of dentsim::collide_tool_tip over the fast tooth (same arguments, no scratch: nothing

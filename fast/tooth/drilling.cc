@@ -1,17 +1,9 @@
 #include "fast/tooth/drilling.h"
 
-#include <algorithm>
 #include <array>
 #include <cmath>
 
 namespace dentsim::fast {
-
-DrillState make_drill_state(const BrickTooth& tooth) {
-  DrillState state;
-  state.work_j.assign(tooth.grid().voxels.size(), 0.0);
-  state.voxel_volume_m3 = tooth.grid().voxel_volume();
-  return state;
-}
 
 int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> contact_voxels,
                const ToolTip& tip, const DrillParams& params, double T, BrickTooth* tooth,
@@ -21,16 +13,7 @@ int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> c
       state->work_j.size() != tooth->grid().voxels.size()) {
     return 0;
   }
-  double total_weight = 0.0;
-  for (const Contact& ct : contacts) total_weight += ct.weight;
-  if (!(total_weight > 0.0)) return 0;
-
-  const double speed = params.bur_speed_rad_s * tip.radius;  // u = omega rho [m/s]
-  for (std::size_t i = 0; i < contacts.size(); ++i) {
-    const Contact& ct = contacts[i];
-    const double f_i = ct.weight / total_weight * ct.stiffness * std::max(0.0, ct.depth);
-    state->work_j[contact_voxels[i]] += params.cutting_coefficient * f_i * speed * T;
-  }
+  if (!accumulate_drill_work(contacts, contact_voxels, tip, params, T, state)) return 0;
 
   // Thresholds of the three materials, by the reference's expression (removal_threshold_j).
   const double h = tooth->grid().voxel_size;

@@ -18,8 +18,7 @@
 
 namespace dentsim::fast {
 
-// A zero-work state sized for the tooth (allocates once): reference/tooth/drilling.h DrillState.
-DrillState make_drill_state(const BrickTooth& tooth);
+// The drill state is the reference's (make_drill_state(tooth.grid()), reference/tooth/drilling.h).
 
 // The twin of dentsim::drill_tick. Where the reference throws InputError (vectors of different
 // length, T not finite and > 0, negative params, a state of another size) this returns 0 and

@@ -1,31 +1,14 @@
 #include "fast/tooth/tooth_contacts.h"
 
-#include <algorithm>
-
 namespace dentsim::fast {
 
-ToothContactProvider::ToothContactProvider(BrickTooth& tooth, ToolTip tip, double k_tooth,
-                                           double b_tooth, const DrillParams* drill)
-    : tooth_(tooth), tip_(tip), k_tooth_(k_tooth), b_tooth_(b_tooth) {
-  validate_tool_tip(tip_);
-  if (drill != nullptr) {
-    validate_drill_params(*drill);
-    drills_ = true;
-    drill_params_ = *drill;
-    drill_state_ = make_drill_state(tooth_);
-  }
-  voxels_.reserve(kContactCapacity);
-}
-
 bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out) {
-  out.clear();
-  voxels_.clear();
-  return collide_tool_tip(tooth_, proxy, tip_, k_tooth_, b_tooth_, &out, &voxels_,
-                          std::min(out.capacity(), voxels_.capacity()));
+  const std::size_t max_contacts = begin_query(out);
+  return collide_tool_tip(tooth_, proxy, tip_, k_tooth_, b_tooth_, &out, &voxels_, max_contacts);
 }
 
 int ToothContactProvider::drill(std::span<const Contact> contacts, double T) {
-  if (!drills_ || contacts.empty() || contacts.size() != voxels_.size()) return 0;
+  if (!can_drill(contacts)) return 0;
   return drill_tick(contacts, voxels_, tip_, drill_params_, T, &tooth_, &drill_state_);
 }
 

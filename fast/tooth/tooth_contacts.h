@@ -12,34 +12,24 @@
 #include "fast/tooth/brick_tooth.h"
 #include "fast/tooth/collision.h"
 #include "fast/tooth/drilling.h"
-#include "reference/core/contact_provider.h"
+#include "reference/tooth/tooth_contacts.h"
 
 namespace dentsim::fast {
 
-class ToothContactProvider : public ContactProvider {
+class ToothContactProvider : public ToothProviderBase {
  public:
   // As dentsim::ToothContactProvider: `tooth` must outlive the provider; throws InputError for a
   // non-positive or non-finite tip radius or invalid drill params.
   ToothContactProvider(BrickTooth& tooth, ToolTip tip, double k_tooth, double b_tooth,
-                       const DrillParams* drill = nullptr);
+                       const DrillParams* drill = nullptr)
+      : ToothProviderBase(tooth.grid(), tip, k_tooth, b_tooth, drill), tooth_(tooth) {}
 
   bool contacts(const Pose& proxy, std::vector<Contact>& out) override;
-  bool drills() const override { return drills_; }
   int drill(std::span<const Contact> contacts, double T) override;
-
-  const std::vector<std::size_t>& contact_voxels() const { return voxels_; }
-  const ToolTip& tip() const { return tip_; }
-  const DrillState& drill_state() const { return drill_state_; }
   const BrickTooth& tooth() const { return tooth_; }
 
  private:
   BrickTooth& tooth_;
-  ToolTip tip_;
-  double k_tooth_, b_tooth_;
-  bool drills_ = false;
-  DrillParams drill_params_;
-  DrillState drill_state_;
-  std::vector<std::size_t> voxels_;
 };
 
 }  // namespace dentsim::fast

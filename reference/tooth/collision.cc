@@ -91,7 +91,10 @@ double disk_rect_area(double a, double x0, double x1, double y0, double y1) {
     const double top = top_is_chord ? s_mid : y1;
     const double bottom = bottom_is_chord ? -s_mid : y0;
     if (!(top > bottom)) continue;
-    const double chord = half_chord_integral(a, q) - half_chord_integral(a, p);
+    // The circular-segment integral (two asin), evaluated only where a chord bounds the piece.
+    const double chord = (top_is_chord || bottom_is_chord)
+                             ? half_chord_integral(a, q) - half_chord_integral(a, p)
+                             : 0.0;
     const double int_top = top_is_chord ? chord : y1 * (q - p);
     const double int_bottom = bottom_is_chord ? -chord : y0 * (q - p);
     area += int_top - int_bottom;

@@ -6,32 +6,14 @@
 
 #include <gtest/gtest.h>
 
-#include <atomic>
-#include <cstdlib>
-#include <new>
 #include <random>
 
 #include "reference/core/io.h"
 #include "reference/tooth/procedural_molar.h"
 #include "reference/tooth/tooth_contacts.h"
 #include "tests/fast/tooth_diff.h"
+#include "tests/support/alloc_counter.h"
 #include "tests/support/stress.h"
-
-// Allocation counter (as tests/device/simulated_phantom_test.cc). GCC cannot see that the
-// replaced operator new pairs with the replaced operator delete below.
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-namespace {
-std::atomic<bool> g_count_allocs{false};
-std::atomic<long> g_allocs{0};
-}  // namespace
-
-void* operator new(std::size_t n) {
-  if (g_count_allocs.load(std::memory_order_relaxed)) g_allocs.fetch_add(1);
-  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace dentsim {
 namespace {
@@ -39,6 +21,8 @@ namespace {
 // Keeps the probe allocation from being optimised away.
 void benchmark_guard(const void* p) { asm volatile("" : : "g"(p) : "memory"); }
 
+using testing::g_allocs;
+using testing::g_count_allocs;
 using testing::kToothB;
 using testing::kToothK;
 

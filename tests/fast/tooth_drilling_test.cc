@@ -38,7 +38,7 @@ struct Twin {
       : ref(std::move(grid)),
         fst(ref),
         ref_state(make_drill_state(ref)),
-        fast_state(fast::make_drill_state(fst)) {}
+        fast_state(make_drill_state(fst.grid())) {}
 };
 
 // The fast tooth's structures equal those built from scratch from its current grid.
