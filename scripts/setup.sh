@@ -7,6 +7,8 @@ PACKAGES=(
   build-essential cmake ccache pkg-config
   libmujoco-dev libqhull-dev libeigen3-dev libceres-dev libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev libfmt-dev libpng-dev libcairo2-dev
+  # benchmark-only (bench/tooth_bench.cc compares the tooth query; the build works without them)
+  libopenvdb-dev libboost-dev liboctomap-dev
 )
 
 missing=()

@@ -51,6 +51,13 @@ VoxelTooth::VoxelTooth(VoxelGrid grid) : octree(std::move(grid)) {
   codes = encode_neighbors(octree.grid());
 }
 
+void validate_tool_tip(const ToolTip& tip) {
+  if (!(tip.radius > 0.0) || !std::isfinite(tip.radius)) {
+    throw InputError("tool tip: radius = " + std::to_string(tip.radius) +
+                     ", expected a finite value > 0 [m]");
+  }
+}
+
 double disk_rect_area(double a, double x0, double x1, double y0, double y1) {
   if (!(a > 0.0)) return 0.0;
   const double lo = std::max(x0, -a);
@@ -84,7 +91,10 @@ double disk_rect_area(double a, double x0, double x1, double y0, double y1) {
     const double top = top_is_chord ? s_mid : y1;
     const double bottom = bottom_is_chord ? -s_mid : y0;
     if (!(top > bottom)) continue;
-    const double chord = half_chord_integral(a, q) - half_chord_integral(a, p);
+    // The circular-segment integral (two asin), evaluated only where a chord bounds the piece.
+    const double chord = (top_is_chord || bottom_is_chord)
+                             ? half_chord_integral(a, q) - half_chord_integral(a, p)
+                             : 0.0;
     const double int_top = top_is_chord ? chord : y1 * (q - p);
     const double int_bottom = bottom_is_chord ? -chord : y0 * (q - p);
     area += int_top - int_bottom;
@@ -96,11 +106,8 @@ bool collide_tool_tip(const VoxelTooth& tooth, const Pose& proxy, const ToolTip&
                       double k_tooth, double b_tooth, CollisionScratch* scratch,
                       std::vector<Contact>* contacts, std::vector<std::size_t>* contact_voxels,
                       std::size_t max_contacts) {
+  validate_tool_tip(tip);
   const double rho = tip.radius;
-  if (!(rho > 0.0) || !std::isfinite(rho)) {
-    throw InputError("tool tip: radius = " + std::to_string(rho) +
-                     ", expected a finite value > 0 [m]");
-  }
   const VoxelGrid& grid = tooth.grid();
   const Vec3 c = proxy.x + proxy.R * tip.offset_body;
   scratch->candidates.clear();

@@ -67,6 +67,9 @@ struct CollisionScratch {
   CollisionScratch() { candidates.reserve(4096); }
 };
 
+// Throws InputError naming the field unless the tip radius is finite and > 0.
+void validate_tool_tip(const ToolTip& tip);
+
 // Area of the intersection of the disk of radius a centred at the origin with the rectangle
 // [x0, x1] x [y0, y1] (x0 <= x1, y0 <= y1), exact (piecewise closed form); 0 for a <= 0.
 double disk_rect_area(double a, double x0, double x1, double y0, double y1);

@@ -8,11 +8,35 @@
 
 namespace dentsim {
 
-DrillState make_drill_state(const VoxelTooth& tooth) {
+DrillState make_drill_state(const VoxelGrid& grid) {
   DrillState state;
-  state.work_j.assign(tooth.grid().voxels.size(), 0.0);
-  state.voxel_volume_m3 = tooth.grid().voxel_volume();
+  state.work_j.assign(grid.voxels.size(), 0.0);
+  state.voxel_volume_m3 = grid.voxel_volume();
   return state;
+}
+
+bool accumulate_drill_work(std::span<const Contact> contacts,
+                           std::span<const std::size_t> contact_voxels, const ToolTip& tip,
+                           const DrillParams& params, double T, DrillState* state) {
+  double total_weight = 0.0;
+  for (const Contact& ct : contacts) total_weight += ct.weight;
+  if (!(total_weight > 0.0)) return false;
+  // W_i = mu_c f_i omega rho T_k with f_i the contact's share of the blended normal force.
+  const double speed = params.bur_speed_rad_s * tip.radius;  // u = omega rho [m/s]
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    const Contact& ct = contacts[i];
+    const double f_i = ct.weight / total_weight * ct.stiffness * std::max(0.0, ct.depth);
+    state->work_j[contact_voxels[i]] += params.cutting_coefficient * f_i * speed * T;
+  }
+  return true;
+}
+
+void validate_drill_params(const DrillParams& params) {
+  if (!(params.bur_speed_rad_s >= 0.0) || !(params.cutting_coefficient >= 0.0) ||
+      !std::isfinite(params.bur_speed_rad_s) || !std::isfinite(params.cutting_coefficient)) {
+    throw InputError("drill params: bur_speed_rad_s and cutting_coefficient must be finite and "
+                     ">= 0");
+  }
 }
 
 double removal_threshold_j(std::uint8_t material, double voxel_size) {
@@ -41,17 +65,7 @@ int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> c
   if (state->work_j.size() != tooth->grid().voxels.size()) {
     throw InputError("drill_tick: drill state sized for another tooth");
   }
-  double total_weight = 0.0;
-  for (const Contact& ct : contacts) total_weight += ct.weight;
-  if (!(total_weight > 0.0)) return 0;
-
-  // W_i = mu_c f_i omega rho T_k with f_i the contact's share of the blended normal force.
-  const double speed = params.bur_speed_rad_s * tip.radius;  // u = omega rho [m/s]
-  for (std::size_t i = 0; i < contacts.size(); ++i) {
-    const Contact& ct = contacts[i];
-    const double f_i = ct.weight / total_weight * ct.stiffness * std::max(0.0, ct.depth);
-    state->work_j[contact_voxels[i]] += params.cutting_coefficient * f_i * speed * T;
-  }
+  if (!accumulate_drill_work(contacts, contact_voxels, tip, params, T, state)) return 0;
 
   int count = 0;
   const VoxelGrid& grid = tooth->grid();

@@ -46,8 +46,19 @@ struct DrillState {
   double removed_volume_m3(int m) const { return voxel_volume_m3 * removed_voxels[m]; }
 };
 
-// A zero-work state sized for the tooth (allocates once).
-DrillState make_drill_state(const VoxelTooth& tooth);
+// Throws InputError unless bur speed and cutting coefficient are finite and >= 0.
+void validate_drill_params(const DrillParams& params);
+
+// A zero-work state sized for the tooth / its grid (allocates once).
+DrillState make_drill_state(const VoxelGrid& grid);
+inline DrillState make_drill_state(const VoxelTooth& tooth) { return make_drill_state(tooth.grid()); }
+
+// The work step of drill_tick, shared with fast/tooth/drilling.h: adds each contact's work W_i to
+// its voxel (contact_voxels[i]) in contact order. Returns false (adding nothing) when the set's
+// total weight is not > 0. Never throws or allocates; the caller validates the arguments.
+bool accumulate_drill_work(std::span<const Contact> contacts,
+                           std::span<const std::size_t> contact_voxels, const ToolTip& tip,
+                           const DrillParams& params, double T, DrillState* state);
 
 // Work needed to remove one voxel of `material` of edge h [J]; throws InputError for kEmpty or an
 // unknown id.

@@ -1,42 +1,36 @@
 #include "reference/tooth/tooth_contacts.h"
 
 #include <algorithm>
-#include <cmath>
-#include <string>
-
-#include "reference/core/io.h"
 
 namespace dentsim {
 
-ToothContactProvider::ToothContactProvider(VoxelTooth& tooth, ToolTip tip, double k_tooth,
-                                           double b_tooth, const DrillParams* drill)
-    : tooth_(tooth), tip_(tip), k_tooth_(k_tooth), b_tooth_(b_tooth) {
-  if (!(tip_.radius > 0.0) || !std::isfinite(tip_.radius)) {
-    throw InputError("tool tip: radius = " + std::to_string(tip_.radius) +
-                     ", expected a finite value > 0 [m]");
-  }
+ToothProviderBase::ToothProviderBase(const VoxelGrid& grid, ToolTip tip, double k_tooth,
+                                     double b_tooth, const DrillParams* drill)
+    : tip_(tip), k_tooth_(k_tooth), b_tooth_(b_tooth) {
+  validate_tool_tip(tip_);
   if (drill != nullptr) {
-    if (!(drill->bur_speed_rad_s >= 0.0) || !(drill->cutting_coefficient >= 0.0) ||
-        !std::isfinite(drill->bur_speed_rad_s) || !std::isfinite(drill->cutting_coefficient)) {
-      throw InputError("drill params: bur_speed_rad_s and cutting_coefficient must be finite and "
-                       ">= 0");
-    }
+    validate_drill_params(*drill);
     drills_ = true;
     drill_params_ = *drill;
-    drill_state_ = make_drill_state(tooth_);
+    drill_state_ = make_drill_state(grid);
   }
   voxels_.reserve(kContactCapacity);
 }
 
-bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out) {
+std::size_t ToothProviderBase::begin_query(std::vector<Contact>& out) {
   out.clear();
   voxels_.clear();
+  return std::min(out.capacity(), voxels_.capacity());
+}
+
+bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out) {
+  const std::size_t max_contacts = begin_query(out);
   return collide_tool_tip(tooth_, proxy, tip_, k_tooth_, b_tooth_, &scratch_, &out, &voxels_,
-                          std::min(out.capacity(), voxels_.capacity()));
+                          max_contacts);
 }
 
 int ToothContactProvider::drill(std::span<const Contact> contacts, double T) {
-  if (!drills_ || contacts.empty() || contacts.size() != voxels_.size()) return 0;
+  if (!can_drill(contacts)) return 0;
   return drill_tick(contacts, voxels_, tip_, drill_params_, T, &tooth_, &drill_state_);
 }
 

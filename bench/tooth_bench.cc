@@ -1,0 +1,133 @@
+// Google Benchmark of the tooth query and drilling update: reference (reference/tooth/) against
+// fast (fast/tooth/), both through their ContactProvider (what the servo tick calls), on the
+// procedural molar at 128^3, 256^3 and 512^3 with the bur radii 0.3 / 0.5 / 1.0 mm of
+// BM_ToothCollision (26 / 68 / 245 contacts at 128^3); the free-space early out; and one tick of
+// query + drilling along a fixed cutting path. Results and command: docs/benchmarks.md "Tooth
+// query: reference vs fast". Run: build/release/bench/dentsim_bench --benchmark_filter=Tooth
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <memory>
+#include <random>
+
+#include "bench/tooth_bench.h"
+#include "fast/tooth/tooth_contacts.h"
+#include "reference/tooth/procedural_molar.h"
+#include "reference/tooth/tooth_contacts.h"
+
+namespace dentsim {
+namespace {
+
+constexpr double kK = 3000.0;  // K_tooth [N/m]
+constexpr double kB = 5.0;     // B_tooth [N s/m]
+
+// The molar at resolution n, built once per process (512^3 takes ~10 s and ~0.6 GB for both).
+struct Teeth {
+  VoxelTooth ref;
+  fast::BrickTooth fst;
+  explicit Teeth(int n) : ref(voxelize_procedural_molar(MolarParams{}, n)), fst(ref) {}
+};
+Teeth& teeth(int n) { return bench::built_once<Teeth>(n); }
+using bench::occlusal_pose;
+
+void run_query(benchmark::State& state, ContactProvider& provider, const Pose& pose) {
+  std::vector<Contact> contacts;
+  contacts.reserve(kContactCapacity);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(provider.contacts(pose, contacts));
+    benchmark::DoNotOptimize(contacts.data());
+  }
+  state.counters["contacts"] = static_cast<double>(contacts.size());
+}
+
+// Args: resolution, bur radius [0.1 mm].
+void BM_ToothQueryReference(benchmark::State& state) {
+  Teeth& t = teeth(static_cast<int>(state.range(0)));
+  ToolTip tip;
+  tip.radius = static_cast<double>(state.range(1)) * 1e-4;
+  ToothContactProvider provider(t.ref, tip, kK, kB);
+  run_query(state, provider, occlusal_pose(t.ref.grid(), tip.radius));
+}
+void BM_ToothQueryFast(benchmark::State& state) {
+  Teeth& t = teeth(static_cast<int>(state.range(0)));
+  ToolTip tip;
+  tip.radius = static_cast<double>(state.range(1)) * 1e-4;
+  fast::ToothContactProvider provider(t.fst, tip, kK, kB);
+  run_query(state, provider, occlusal_pose(t.ref.grid(), tip.radius));
+}
+BENCHMARK(BM_ToothQueryReference)->ArgsProduct({{128, 256, 512}, {3, 5, 10}});
+BENCHMARK(BM_ToothQueryFast)->ArgsProduct({{128, 256, 512}, {3, 5, 10}});
+
+// Free space: the tip 2 mm above the tooth's highest point (no candidate), 128^3, r = 0.5 mm.
+// Arg: 0 reference, 1 fast.
+void BM_ToothQueryFreeSpace(benchmark::State& state) {
+  Teeth& t = teeth(128);
+  ToolTip tip;
+  tip.radius = 0.5e-3;
+  Pose pose = occlusal_pose(t.ref.grid(), tip.radius);
+  pose.x.z() = t.ref.grid().origin.z() + t.ref.grid().n * t.ref.grid().voxel_size + 2e-3;
+  if (state.range(0) == 0) {
+    ToothContactProvider provider(t.ref, tip, kK, kB);
+    run_query(state, provider, pose);
+  } else {
+    fast::ToothContactProvider provider(t.fst, tip, kK, kB);
+    run_query(state, provider, pose);
+  }
+  state.SetLabel(state.range(0) == 0 ? "reference" : "fast");
+}
+BENCHMARK(BM_ToothQueryFreeSpace)->Arg(0)->Arg(1);
+
+// One tick of query + drilling along a fixed cutting path: the bur (r = 0.5 mm, default drill
+// params) wanders over the crown in steps of up to 0.3 voxel and follows the drilled surface
+// down, pressing 0.3 rho into it. A fixed iteration count makes both run the same ticks on their
+// own copy of the tooth. Args: resolution, 0 reference / 1 fast.
+void BM_ToothDrillTick(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  VoxelTooth ref(teeth(n).ref.grid());  // a fresh copy: drilling changes it
+  fast::BrickTooth fst(ref);
+  ToolTip tip;
+  tip.radius = 0.5e-3;
+  const DrillParams drill;
+  std::unique_ptr<ContactProvider> provider;
+  if (state.range(1) == 0) {
+    provider = std::make_unique<ToothContactProvider>(ref, tip, kK, kB, &drill);
+  } else {
+    provider = std::make_unique<fast::ToothContactProvider>(fst, tip, kK, kB, &drill);
+  }
+  const VoxelGrid& g = state.range(1) == 0 ? ref.grid() : fst.grid();
+  std::vector<Contact> contacts;
+  contacts.reserve(kContactCapacity);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const double h = g.voxel_size;
+  const Vec3 start = g.center(g.n / 2, g.n / 2, 0);
+  Pose pose;
+  pose.x = start;
+  long removed = 0, members = 0;
+  for (auto _ : state) {
+    for (int a = 0; a < 2; ++a) {
+      pose.x[a] = std::clamp(pose.x[a] + 0.3 * h * unit(rng), start[a] - 2e-3, start[a] + 2e-3);
+    }
+    const int i = static_cast<int>((pose.x.x() - g.origin.x()) / h);
+    const int j = static_cast<int>((pose.x.y() - g.origin.y()) / h);
+    int top = 0;
+    for (int k = g.n - 1; k >= 0; --k) {
+      if (g.solid(i, j, k)) {
+        top = k + 1;
+        break;
+      }
+    }
+    pose.x.z() = g.origin.z() + h * top + 0.7 * tip.radius;
+    provider->contacts(pose, contacts);
+    removed += provider->drill(contacts, 1e-3);
+    members += static_cast<long>(contacts.size());
+  }
+  state.counters["removed"] = static_cast<double>(removed);
+  state.counters["contacts_per_tick"] =
+      static_cast<double>(members) / static_cast<double>(state.iterations());
+  state.SetLabel(state.range(1) == 0 ? "reference" : "fast");
+}
+BENCHMARK(BM_ToothDrillTick)->ArgsProduct({{128, 256}, {0, 1}})->Iterations(20000);
+
+}  // namespace
+}  // namespace dentsim

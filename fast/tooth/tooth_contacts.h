@@ -1,0 +1,35 @@
+// The fast voxel tooth as the tick's collision and drilling stages: the twin of
+// reference/tooth/tooth_contacts.h over fast::collide_tool_tip and fast::drill_tick. Same
+// contract (reference/core/contact_provider.h): contacts() fills the tick's fixed-capacity buffer
+// and returns false when the set does not fit; neither contacts() nor drill() allocates or throws
+// once constructed (tests/fast/tooth_contacts_test.cc counts allocations).
+#pragma once
+
+#include <cstddef>
+#include <span>
+#include <vector>
+
+#include "fast/tooth/brick_tooth.h"
+#include "fast/tooth/collision.h"
+#include "fast/tooth/drilling.h"
+#include "reference/tooth/tooth_contacts.h"
+
+namespace dentsim::fast {
+
+class ToothContactProvider : public ToothProviderBase {
+ public:
+  // As dentsim::ToothContactProvider: `tooth` must outlive the provider; throws InputError for a
+  // non-positive or non-finite tip radius or invalid drill params.
+  ToothContactProvider(BrickTooth& tooth, ToolTip tip, double k_tooth, double b_tooth,
+                       const DrillParams* drill = nullptr)
+      : ToothProviderBase(tooth.grid(), tip, k_tooth, b_tooth, drill), tooth_(tooth) {}
+
+  bool contacts(const Pose& proxy, std::vector<Contact>& out) override;
+  int drill(std::span<const Contact> contacts, double T) override;
+  const BrickTooth& tooth() const { return tooth_; }
+
+ private:
+  BrickTooth& tooth_;
+};
+
+}  // namespace dentsim::fast
