@@ -9,7 +9,6 @@
 #include "cli/registry.h"
 #include "device/session_replay.h"
 #include "reference/core/io.h"
-#include "reference/phantom/phantom_model.h"
 
 namespace dentsim::cli {
 namespace {
@@ -22,11 +21,7 @@ struct ReplayOptions {
 
 void replay(const ReplayOptions& o) {
   const Session session = read_session(o.file);
-  const PhantomParams params = default_phantom_params();
-  const PhantomModel model(params);
-  ReferencePipeline pipeline(model, free_space_pipeline_config(params.torque_limit_n_m));
-  NoContacts contacts;
-  const ReplayResult r = replay_session(session, pipeline, contacts, model);
+  const ReplayResult r = replay_free_space_reference(session);
   nlohmann::json j;
   j["file"] = o.file;
   j["pipeline"] = o.pipeline;

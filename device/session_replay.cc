@@ -5,6 +5,7 @@
 #include "device/device.h"
 #include "device/velocity_estimator.h"
 #include "reference/core/io.h"
+#include "reference/phantom/phantom_model.h"
 
 namespace dentsim {
 
@@ -46,6 +47,14 @@ PipelineConfig free_space_pipeline_config(const VecX& torque_limit) {
   caps.velocity_lowpass_hz = VelocityEstimatorParams{}.cutoff_hz;
   pc.observer_input = matched_observer_input(caps);
   return pc;
+}
+
+ReplayResult replay_free_space_reference(const Session& session) {
+  const PhantomParams params = default_phantom_params();
+  const PhantomModel model(params);
+  ReferencePipeline pipeline(model, free_space_pipeline_config(params.torque_limit_n_m));
+  NoContacts contacts;
+  return replay_session(session, pipeline, contacts, model);
 }
 
 }  // namespace dentsim

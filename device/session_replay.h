@@ -34,4 +34,8 @@ ReplayResult replay_session(const Session& session, Pipeline& pipeline, ContactP
 // observer input matched to a device without a tachometer.
 PipelineConfig free_space_pipeline_config(const VecX& torque_limit);
 
+// replay_session() through the reference pipeline with free_space_pipeline_config() on the
+// default Phantom model (default_phantom_params()), no contacts: `dentsim replay` today.
+ReplayResult replay_free_space_reference(const Session& session);
+
 }  // namespace dentsim

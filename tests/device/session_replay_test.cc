@@ -70,11 +70,7 @@ TEST(SessionReplay, SamePipelineReproducesTheRecordingExactly) {
   }
   EXPECT_GT(spread, 1e-4);
 
-  const PhantomParams params = default_phantom_params();
-  const PhantomModel model(params);
-  ReferencePipeline pipeline(model, free_space_pipeline_config(params.torque_limit_n_m));
-  NoContacts contacts;
-  const ReplayResult r = replay_session(s, pipeline, contacts, model);
+  const ReplayResult r = replay_free_space_reference(s);
   EXPECT_EQ(r.ticks, 300);
   EXPECT_EQ(r.max_torque_diff_n_m, 0.0);
   EXPECT_EQ(r.max_force_diff_n, 0.0);
@@ -98,11 +94,8 @@ TEST(SessionReplay, APerturbedCommandIsFoundAtItsTick) {
   Session s = read_session(path);
   const double delta = 1.0 / 1024;
   s.records[37].tau[2] += delta;
-  const PhantomParams params = default_phantom_params();
-  const PhantomModel model(params);
-  ReferencePipeline pipeline(model, free_space_pipeline_config(params.torque_limit_n_m));
-  NoContacts contacts;
-  const ReplayResult r = replay_session(s, pipeline, contacts, model);
+  const ReplayResult r = replay_free_space_reference(s);
+  const PhantomModel model(default_phantom_params());
   EXPECT_EQ(r.worst_tick, 37);
   // |tau_rec + delta - tau_rec| to one rounding of tau_rec + delta (|tau| < 1 N m).
   EXPECT_NEAR(r.max_torque_diff_n_m, delta, 1.2e-16);
