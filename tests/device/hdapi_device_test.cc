@@ -8,14 +8,36 @@
 #include <stdlib.h>
 
 #include <array>
+#include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <initializer_list>
+#include <memory>
+#include <new>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "device/safety_chain.h"
 #include "device/simulated_phantom.h"
+
+// Allocation counter (as tests/device/simulated_phantom_test.cc), counting only on threads that
+// switched it on: the servo test switches it on from inside the scheduler callback, so every
+// allocation of the scheduler thread (the backend's tick and the emulator's) is counted. GCC cannot
+// see that the replaced operator new pairs with the replaced operator delete below.
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+namespace {
+thread_local bool t_count_allocs = false;
+std::atomic<long> g_allocs{0};
+}  // namespace
+
+void* operator new(std::size_t n) {
+  if (t_count_allocs) g_allocs.fetch_add(1);
+  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace dentsim {
 namespace {
@@ -258,6 +280,45 @@ TEST(HdapiDevice, ServoFunctionRunsInTheSchedulerCallback) {
   EXPECT_EQ(dev.faults(), kFaultNone);
   // The last frame (the one returning DONE) commanded zero.
   EXPECT_EQ(motor_torque_mnm(dev)[1], 0.0);
+}
+
+// Switches allocation counting on for the scheduler thread from inside its callback.
+// Its first call allocates once, on purpose: the control that the counter sees that thread.
+struct AllocationProbe {
+  std::atomic<int> calls{0};
+  std::unique_ptr<int> control;
+  static bool run(void* self, const DeviceSample&, VecX& tau) {
+    auto* p = static_cast<AllocationProbe*>(self);
+    t_count_allocs = true;
+    if (p->calls.load() == 0) p->control = std::make_unique<int>(7);
+    tau.setZero();
+    p->calls.fetch_add(1);
+    return true;
+  }
+};
+
+TEST(HdapiDevice, SchedulerTicksDoNotAllocate) {
+  const EmulatorEnv env({{"DENTSIM_HD_EMU_GRAVITY", "0"}});
+  HdapiDevice dev(emulator_config());
+  AllocationProbe probe;
+  dev.set_servo_function(&AllocationProbe::run, &probe);
+  for (int i = 0; i < 100 && probe.calls.load() < 2; ++i) dev.wait_ticks(1);
+  ASSERT_GE(probe.calls.load(), 2);
+  EXPECT_GE(g_allocs.load(), 1);  // the control
+  g_allocs = 0;
+  // 100 ticks through the servo function ...
+  const int first = probe.calls.load();
+  for (int i = 0; i < 1000 && probe.calls.load() < first + 100; ++i) dev.wait_ticks(1);
+  EXPECT_GE(probe.calls.load(), first + 100);
+  // ... and 100 through write() / advance() (this thread does not count).
+  dev.set_servo_function(nullptr, nullptr);
+  const VecX tau = (VecX(6) << 0.01, 0.01, 0.01, 0, 0, 0).finished();
+  for (int k = 0; k < 100; ++k) {
+    dev.write(tau);
+    dev.advance();
+  }
+  EXPECT_EQ(dev.faults(), kFaultNone);
+  EXPECT_EQ(g_allocs.load(), 0);
 }
 
 }  // namespace

@@ -115,7 +115,24 @@ class Emulator {
     if (thread.joinable()) thread.join();
   }
 
-  void push_error(HDerror code) { errors.push_back({code, static_cast<int>(code), 0}); }
+  // Per-tick storage, sized once so a scheduler tick does not allocate (tests count allocations
+  // on the scheduler thread to prove the backend's callback allocation-free).
+  dentsim::DeviceSample sample;
+  VecX tau_device = VecX::Zero(6);
+  std::vector<Callback> order;
+  static constexpr std::size_t kMaxErrors = 64;     // the oldest error is dropped beyond this
+  static constexpr std::size_t kMaxCallbacks = 32;  // HD_SCHEDULER_FULL beyond this
+
+  Emulator() {
+    errors.reserve(kMaxErrors);
+    callbacks.reserve(kMaxCallbacks);
+    order.reserve(kMaxCallbacks);
+  }
+
+  void push_error(HDerror code) {
+    if (errors.size() == kMaxErrors) errors.erase(errors.begin());
+    errors.push_back({code, static_cast<int>(code), 0});
+  }
 
   void read_env() {
     init_fail = env_long("DENTSIM_HD_EMU_INIT_FAIL", 0);
@@ -132,16 +149,14 @@ class Emulator {
 
   // Vendor convention <-> dentsim's simulated device (see the header).
   void sample_locked() {
-    dentsim::DeviceSample s = device->make_sample();
-    device->read(s);
-    for (int i = 0; i < 6; ++i) q_frame[i] = s.q[i];
-    q_frame[0] = -s.q[0];
+    device->read(sample);
+    for (int i = 0; i < 6; ++i) q_frame[i] = sample.q[i];
+    q_frame[0] = -sample.q[0];
   }
   void advance_locked() {
-    VecX tau(6);
-    for (int i = 0; i < 6; ++i) tau[i] = 1e-3 * tau_held[i];
-    tau[0] = -tau[0];
-    device->write(tau);
+    for (int i = 0; i < 6; ++i) tau_device[i] = tau_held[i] / 1000.0;
+    tau_device[0] = -tau_device[0];
+    device->write(tau_device);
     device->advance();
     device->clear_faults();  // the vendor device has no such latch: its command is clamped
   }
@@ -155,13 +170,14 @@ class Emulator {
     }
     if (k == stall_at) std::this_thread::sleep_for(std::chrono::milliseconds(stall_ms));
     // Callbacks, highest priority first; run without the lock (they call back into the API).
-    std::vector<Callback> order;
     {
       std::lock_guard<std::mutex> lock(mu);
-      order = callbacks;
+      order.assign(callbacks.begin(), callbacks.end());  // within the reserved capacity
     }
-    std::stable_sort(order.begin(), order.end(),
-                     [](const Callback& a, const Callback& b) { return a.priority > b.priority; });
+    // Highest priority first, equal priorities in the order they were scheduled.
+    std::sort(order.begin(), order.end(), [](const Callback& a, const Callback& b) {
+      return a.priority != b.priority ? a.priority > b.priority : a.handle < b.handle;
+    });
     for (const Callback& c : order) {
       HDCallbackCode code = c.fn(c.data);
       if (!c.synchronous && k == done_at) code = hd::kCallbackDone;
@@ -255,6 +271,7 @@ HD_EMU_EXPORT HHD hdInitDevice(HDstring name) {
   e.tau_set = {};
   e.tau_held = {};
   e.tick.store(0);
+  e.sample = e.device->make_sample();
   e.sample_locked();
   return 0;
 }
@@ -479,7 +496,7 @@ HD_EMU_EXPORT HDSchedulerHandle hdScheduleAsynchronous(HDSchedulerCallback cb, v
                                                        HDushort priority) {
   Emulator& e = emu();
   std::lock_guard<std::mutex> lock(e.mu);
-  if (e.callbacks.size() >= 32) {
+  if (e.callbacks.size() >= Emulator::kMaxCallbacks) {
     e.push_error(hd::kSchedulerFull);
     return 0;
   }
@@ -496,6 +513,10 @@ HD_EMU_EXPORT void hdScheduleSynchronous(HDSchedulerCallback cb, void* data, HDu
     return;
   }
   std::unique_lock<std::mutex> lock(e.mu);
+  if (e.callbacks.size() >= Emulator::kMaxCallbacks) {
+    e.push_error(hd::kSchedulerFull);
+    return;
+  }
   const HDSchedulerHandle h = e.next_handle++;
   e.callbacks.push_back({cb, data, priority, h, true});
   e.cv.wait(lock, [&] {
