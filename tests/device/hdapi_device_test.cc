@@ -18,8 +18,11 @@
 #include <utility>
 #include <vector>
 
+#include "device/phantom_device.h"
 #include "device/safety_chain.h"
+#include "device/scene_device.h"
 #include "device/simulated_phantom.h"
+#include "reference/phantom/phantom_model.h"
 
 // Allocation counter (as tests/device/simulated_phantom_test.cc), counting only on threads that
 // switched it on: the servo test switches it on from inside the scheduler callback, so every
@@ -322,6 +325,58 @@ TEST(HdapiDevice, SchedulerTicksDoNotAllocate) {
   }
   EXPECT_EQ(dev.faults(), kFaultNone);
   EXPECT_EQ(g_allocs.load(), 0);
+}
+
+// Records (tick index, q) from inside the scheduler callback into preallocated storage.
+struct TrajectoryRecorder {
+  static constexpr int kMax = 200;
+  const HdapiDevice* dev = nullptr;
+  std::array<long, kMax> tick{};
+  std::array<Vec6, kMax> q{};
+  std::atomic<int> n{0};
+  static bool run(void* self, const DeviceSample& s, VecX& tau) {
+    auto* r = static_cast<TrajectoryRecorder*>(self);
+    tau.setZero();
+    const int i = r->n.load();
+    if (i >= kMax) return false;
+    r->tick[i] = r->dev->ticks();  // this callback's index on the emulator's clock
+    r->q[i] = s.q;
+    r->n.store(i + 1);
+    return true;
+  }
+};
+
+TEST(HdapiDevice, EmulatedSceneIsTheSimulatedDeviceOfThatScene) {
+  // The drill scene's device and hand behind the HDAPI, zero torque: every sample the backend
+  // reads equals, bit for bit, the direct SimulatedPhantom of the scene after as many ticks.
+  const EmulatorEnv env({{"DENTSIM_HD_EMU_SCENE", "drill"}});
+  HdapiDevice dev(emulator_config());
+  TrajectoryRecorder rec;
+  rec.dev = &dev;
+  dev.set_servo_function(&TrajectoryRecorder::run, &rec);
+  for (int i = 0; i < 2000 && !dev.servo_done(); ++i) dev.wait_ticks(1);
+  ASSERT_TRUE(dev.servo_done());
+
+  const Scene scene = load_scene("drill");
+  const PhantomParams p = scene_phantom_params(scene);
+  SimulatedPhantom direct(phantom_plant(p), scene_device_config(scene, p), phantom_home_q(p));
+  const ScriptedHand hand =
+      scene_hand(scene, PhantomModel(p).forward_kinematics(phantom_home_q(p)));
+  direct.set_hand(&hand);
+  DeviceSample s = direct.make_sample();
+  const VecX zero = VecX::Zero(6);
+  long k = 0;
+  double moved = 0.0;
+  for (int i = 0; i < TrajectoryRecorder::kMax; ++i) {
+    for (; k < rec.tick[i]; ++k) {
+      direct.write(zero);
+      direct.advance();
+    }
+    direct.read(s);
+    ASSERT_EQ(VecX(rec.q[i]), s.q) << "emulator tick " << k;
+    moved = std::max(moved, (s.q - rec.q[0]).cwiseAbs().maxCoeff());
+  }
+  EXPECT_GT(moved, 1e-3);  // the hand moved the device: the comparison is not of a device at rest
 }
 
 }  // namespace

@@ -38,6 +38,11 @@
 //   DENTSIM_HD_EMU_DONE_AT=N          at tick N every asynchronous callback is treated as having
 //                                     returned HD_CALLBACK_DONE (it is unscheduled)
 //   DENTSIM_HD_EMU_GRAVITY=0          gravity off in the simulated device (it then rests in place)
+//   DENTSIM_HD_EMU_SCENE=NAME|FILE    the device and the scripted hand of that scene
+//                                     (device/scene_device.h: the plant `dentsim run` simulates),
+//                                     the hand's clock starting at hdInitDevice; a scene that does
+//                                     not load fails hdInitDevice (HD_DEVICE_FAULT, reason on
+//                                     stderr)
 //   DENTSIM_HD_EMU_SERIAL=S           the serial number reported (default "EMU-00001")
 #include <algorithm>
 #include <array>
@@ -56,6 +61,8 @@
 
 #include "device/hdapi/hdapi_abi.h"
 #include "device/phantom_device.h"
+#include "device/scene_device.h"
+#include "reference/phantom/phantom_model.h"
 #include "reference/phantom/phantom_params.h"
 
 #define HD_EMU_EXPORT extern "C" __attribute__((visibility("default")))
@@ -95,6 +102,7 @@ class Emulator {
   bool force_output = false;
   bool in_frame = false;
   long rate_hz = 1000;
+  std::unique_ptr<dentsim::ScriptedHand> hand;  // DENTSIM_HD_EMU_SCENE's (outlives `device`)
   std::unique_ptr<dentsim::SimulatedPhantom> device;
   std::array<double, 6> q_frame{};   // vendor angles of the current tick [rad]
   std::array<double, 6> tau_set{};   // set in the open frame [mN m], vendor convention
@@ -109,6 +117,7 @@ class Emulator {
   // Injection.
   long init_fail = 0, comm_error_at = -1, stall_at = -1, stall_ms = 200, warm_at = -1, done_at = -1;
   bool gravity = true;
+  std::string scene;
 
   ~Emulator() {  // a process exiting with the scheduler running
     running.store(false);
@@ -143,6 +152,8 @@ class Emulator {
     warm_at = env_long("DENTSIM_HD_EMU_WARM_AT", -1);
     done_at = env_long("DENTSIM_HD_EMU_DONE_AT", -1);
     gravity = env_long("DENTSIM_HD_EMU_GRAVITY", 1) != 0;
+    const char* sc = std::getenv("DENTSIM_HD_EMU_SCENE");
+    scene = sc != nullptr ? sc : "";
     const char* s = std::getenv("DENTSIM_HD_EMU_SERIAL");
     serial = (s != nullptr && *s != '\0') ? s : "EMU-00001";
   }
@@ -260,11 +271,28 @@ HD_EMU_EXPORT HHD hdInitDevice(HDstring name) {
     e.push_error(static_cast<HDerror>(e.init_fail));
     return hd::kInvalidHandle;
   }
-  dentsim::PhantomParams p = dentsim::default_phantom_params();
-  dentsim::SimulatedDeviceConfig cfg = dentsim::phantom_device_config(p);
-  cfg.gravity = e.gravity;
-  e.device = std::make_unique<dentsim::SimulatedPhantom>(dentsim::phantom_plant(p), cfg,
-                                                         dentsim::phantom_home_q(p));
+  try {
+    dentsim::PhantomParams p = dentsim::default_phantom_params();
+    dentsim::SimulatedDeviceConfig cfg = dentsim::phantom_device_config(p);
+    if (!e.scene.empty()) {
+      const dentsim::Scene sc = dentsim::load_scene(e.scene);
+      p = dentsim::scene_phantom_params(sc);
+      cfg = dentsim::scene_device_config(sc, p);
+      const dentsim::PhantomModel model(p);
+      e.hand = std::make_unique<dentsim::ScriptedHand>(
+          dentsim::scene_hand(sc, model.forward_kinematics(dentsim::phantom_home_q(p))));
+    }
+    cfg.gravity = e.gravity;
+    e.device = std::make_unique<dentsim::SimulatedPhantom>(dentsim::phantom_plant(p), cfg,
+                                                           dentsim::phantom_home_q(p));
+    if (e.hand) e.device->set_hand(e.hand.get());
+  } catch (const std::exception& ex) {
+    std::fprintf(stderr, "dentsim HD emulator: %s\n", ex.what());
+    e.device.reset();
+    e.hand.reset();
+    e.push_error(hd::kDeviceFault);
+    return hd::kInvalidHandle;
+  }
   e.initialized = true;
   e.force_output = false;
   e.in_frame = false;
@@ -293,6 +321,7 @@ HD_EMU_EXPORT void hdDisableDevice(HHD h) {
   }
   e.callbacks.clear();
   e.device.reset();
+  e.hand.reset();
   e.initialized = false;
 }
 
