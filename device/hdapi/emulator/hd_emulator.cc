@@ -138,6 +138,20 @@ class Emulator {
     order.reserve(kMaxCallbacks);
   }
 
+  // Whether callback `h` is scheduled; removes it (and wakes waiters). Both with `mu` held.
+  bool scheduled_locked(HDSchedulerHandle h) const {
+    return std::any_of(callbacks.begin(), callbacks.end(),
+                       [h](const Callback& c) { return c.handle == h; });
+  }
+  bool unschedule_locked(HDSchedulerHandle h) {
+    const auto it = std::find_if(callbacks.begin(), callbacks.end(),
+                                 [h](const Callback& c) { return c.handle == h; });
+    if (it == callbacks.end()) return false;
+    callbacks.erase(it);
+    cv.notify_all();
+    return true;
+  }
+
   void push_error(HDerror code) {
     if (errors.size() == kMaxErrors) errors.erase(errors.begin());
     errors.push_back({code, static_cast<int>(code), 0});
@@ -194,13 +208,7 @@ class Emulator {
       if (!c.synchronous && k == done_at) code = hd::kCallbackDone;
       if (code == hd::kCallbackDone) {
         std::lock_guard<std::mutex> lock(mu);
-        for (auto it = callbacks.begin(); it != callbacks.end(); ++it) {
-          if (it->handle == c.handle) {
-            callbacks.erase(it);
-            break;
-          }
-        }
-        cv.notify_all();
+        unschedule_locked(c.handle);
       }
     }
     std::lock_guard<std::mutex> lock(mu);
@@ -548,39 +556,20 @@ HD_EMU_EXPORT void hdScheduleSynchronous(HDSchedulerCallback cb, void* data, HDu
   }
   const HDSchedulerHandle h = e.next_handle++;
   e.callbacks.push_back({cb, data, priority, h, true});
-  e.cv.wait(lock, [&] {
-    if (!e.running.load()) return true;
-    for (const Callback& c : e.callbacks) {
-      if (c.handle == h) return false;
-    }
-    return true;
-  });
+  e.cv.wait(lock, [&] { return !e.running.load() || !e.scheduled_locked(h); });
 }
 
 HD_EMU_EXPORT void hdUnschedule(HDSchedulerHandle h) {
   Emulator& e = emu();
   std::lock_guard<std::mutex> lock(e.mu);
-  for (auto it = e.callbacks.begin(); it != e.callbacks.end(); ++it) {
-    if (it->handle == h) {
-      e.callbacks.erase(it);
-      e.cv.notify_all();
-      return;
-    }
-  }
-  e.push_error(hd::kInvalidValue);
+  if (!e.unschedule_locked(h)) e.push_error(hd::kInvalidValue);
 }
 
 HD_EMU_EXPORT HDboolean hdWaitForCompletion(HDSchedulerHandle h, HDWaitCode code) {
   Emulator& e = emu();
   std::unique_lock<std::mutex> lock(e.mu);
-  auto active = [&] {
-    for (const Callback& c : e.callbacks) {
-      if (c.handle == h) return true;
-    }
-    return false;
-  };
-  if (code == hd::kWaitCheckStatus) return active() ? 1 : 0;
-  e.cv.wait(lock, [&] { return !active() || !e.running.load(); });
+  if (code == hd::kWaitCheckStatus) return e.scheduled_locked(h) ? 1 : 0;
+  e.cv.wait(lock, [&] { return !e.scheduled_locked(h) || !e.running.load(); });
   return 1;
 }
 
