@@ -19,6 +19,60 @@ const char* fault_name(DeviceFault f) {
       return "non_monotonic_time";
     case kFaultEncoderJump:
       return "encoder_jump";
+    case kFaultVelocityLimit:
+      return "velocity_limit";
+    case kFaultWorkspaceLimit:
+      return "workspace_limit";
+    case kFaultWatchdog:
+      return "watchdog";
+    case kFaultMotorTemperature:
+      return "motor_temperature";
+    case kFaultSchedulerStopped:
+      return "scheduler_stopped";
+    case kFaultHdUnknownError:
+      return "hd_unknown_error";
+    case kFaultHdInvalidEnum:
+      return "hd_invalid_enum";
+    case kFaultHdInvalidValue:
+      return "hd_invalid_value";
+    case kFaultHdInvalidOperation:
+      return "hd_invalid_operation";
+    case kFaultHdInvalidInputType:
+      return "hd_invalid_input_type";
+    case kFaultHdBadHandle:
+      return "hd_bad_handle";
+    case kFaultHdWarmMotors:
+      return "hd_warm_motors";
+    case kFaultHdExceededMaxForce:
+      return "hd_exceeded_max_force";
+    case kFaultHdExceededMaxForceImpulse:
+      return "hd_exceeded_max_force_impulse";
+    case kFaultHdExceededMaxVelocity:
+      return "hd_exceeded_max_velocity";
+    case kFaultHdForceError:
+      return "hd_force_error";
+    case kFaultHdDeviceFault:
+      return "hd_device_fault";
+    case kFaultHdDeviceAlreadyInitiated:
+      return "hd_device_already_initiated";
+    case kFaultHdCommError:
+      return "hd_comm_error";
+    case kFaultHdCommConfigError:
+      return "hd_comm_config_error";
+    case kFaultHdTimerError:
+      return "hd_timer_error";
+    case kFaultHdIllegalBegin:
+      return "hd_illegal_begin";
+    case kFaultHdIllegalEnd:
+      return "hd_illegal_end";
+    case kFaultHdFrameError:
+      return "hd_frame_error";
+    case kFaultHdInvalidPriority:
+      return "hd_invalid_priority";
+    case kFaultHdSchedulerFull:
+      return "hd_scheduler_full";
+    case kFaultHdInvalidLicense:
+      return "hd_invalid_license";
   }
   return "unknown";
 }

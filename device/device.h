@@ -35,9 +35,40 @@ enum DeviceFault : std::uint32_t {
   kFaultTorqueBeyondLimit = 1u << 1,  // |tau_cmd_i| > tau_fault_i
   kFaultNonMonotonicTime = 1u << 2,   // sample time did not increase (t_k <= t_k-1)
   kFaultEncoderJump = 1u << 3,        // |q_k - q_k-1| > max_joint_step on some joint
+  // The safety chain (device/safety_chain.h).
+  kFaultVelocityLimit = 1u << 4,      // |qd_i| > qd_max_i
+  kFaultWorkspaceLimit = 1u << 5,     // q_i outside [q_min_i, q_max_i]
+  kFaultWatchdog = 1u << 6,           // a tick did not finish within its time budget
+  kFaultMotorTemperature = 1u << 7,   // the device reported a motor at or above its limit
+  kFaultSchedulerStopped = 1u << 8,   // the device's clock stopped calling the servo tick
+  // Errors of the OpenHaptics HDAPI (device/hdapi/): one flag per HD error code, named after the
+  // code in lower case (HD_COMM_ERROR -> "hd_comm_error"); hd_fault_for_error() maps a code.
+  kFaultHdUnknownError = 1u << 9,     // an HD error code not in the list below
+  kFaultHdInvalidEnum = 1u << 11,
+  kFaultHdInvalidValue = 1u << 12,
+  kFaultHdInvalidOperation = 1u << 13,
+  kFaultHdInvalidInputType = 1u << 14,
+  kFaultHdBadHandle = 1u << 15,
+  kFaultHdWarmMotors = 1u << 16,
+  kFaultHdExceededMaxForce = 1u << 17,
+  kFaultHdExceededMaxForceImpulse = 1u << 18,
+  kFaultHdExceededMaxVelocity = 1u << 19,
+  kFaultHdForceError = 1u << 20,
+  kFaultHdDeviceFault = 1u << 21,
+  kFaultHdDeviceAlreadyInitiated = 1u << 22,
+  kFaultHdCommError = 1u << 23,
+  kFaultHdCommConfigError = 1u << 24,
+  kFaultHdTimerError = 1u << 25,
+  kFaultHdIllegalBegin = 1u << 26,
+  kFaultHdIllegalEnd = 1u << 27,
+  kFaultHdFrameError = 1u << 28,
+  kFaultHdInvalidPriority = 1u << 29,
+  kFaultHdSchedulerFull = 1u << 30,
+  kFaultHdInvalidLicense = 1u << 31,
 };
 
-// Name of one flag ("non_finite_torque", ...); "none" for kFaultNone, "unknown" otherwise.
+// Name of one flag ("non_finite_torque", "hd_comm_error", ...); "none" for kFaultNone, "unknown"
+// otherwise.
 const char* fault_name(DeviceFault f);
 // All set flags, comma separated ("none" when no flag is set).
 std::string fault_string(std::uint32_t faults);

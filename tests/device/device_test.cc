@@ -75,7 +75,7 @@ TEST(DeviceFaults, NamesAreStable) {
   EXPECT_EQ(fault_string(kFaultTorqueBeyondLimit | kFaultEncoderJump),
             "torque_beyond_limit,encoder_jump");
   EXPECT_EQ(fault_string(kFaultNonMonotonicTime), "non_monotonic_time");
-  EXPECT_STREQ(fault_name(static_cast<DeviceFault>(1u << 20)), "unknown");
+  EXPECT_STREQ(fault_name(static_cast<DeviceFault>(1u << 10)), "unknown");
 }
 
 }  // namespace

@@ -1,0 +1,60 @@
+#include "device/session_replay.h"
+
+#include <cmath>
+
+#include "device/device.h"
+#include "device/velocity_estimator.h"
+#include "reference/core/io.h"
+#include "reference/phantom/phantom_model.h"
+
+namespace dentsim {
+
+ReplayResult replay_session(const Session& session, Pipeline& pipeline, ContactProvider& contacts,
+                            const SixDofDeviceModel& model) {
+  if (session.header.dof != model.dof()) {
+    throw InputError("replay: the session has " + std::to_string(session.header.dof) +
+                     " joints, the device model " + std::to_string(model.dof()));
+  }
+  ReplayResult r;
+  if (session.records.empty()) return r;
+  pipeline.reset(session.records.front().sample);
+  double t_prev = session.records.front().sample.t;
+  for (std::size_t k = 0; k < session.records.size(); ++k) {
+    const SessionRecord& rec = session.records[k];
+    const double T = k == 0 ? 1.0 / session.header.tick_rate_hz : rec.sample.t - t_prev;
+    t_prev = rec.sample.t;
+    const TickResult& out = pipeline.tick(rec.sample, T, contacts);
+    const VecX d = out.tau - rec.tau;
+    const double dt = d.cwiseAbs().maxCoeff();
+    if (dt > r.max_torque_diff_n_m || !std::isfinite(dt)) {
+      r.max_torque_diff_n_m = dt;
+      r.worst_tick = static_cast<long>(k);
+    }
+    const Vec6 W = model.twist_to_joint(rec.sample.q).transpose() * d;
+    r.max_force_diff_n = std::max(r.max_force_diff_n, W.head<3>().norm());
+    if (out.contacts.size() != rec.contacts) ++r.contact_count_mismatches;
+    ++r.ticks;
+  }
+  return r;
+}
+
+PipelineConfig free_space_pipeline_config(const VecX& torque_limit) {
+  PipelineConfig pc;
+  pc.method = Method::kPmiVc;
+  pc.torque_limit = torque_limit;
+  DeviceCapabilities caps;  // a device reporting angles only, low-passed velocity (HDAPI)
+  caps.measures_velocity = false;
+  caps.velocity_lowpass_hz = VelocityEstimatorParams{}.cutoff_hz;
+  pc.observer_input = matched_observer_input(caps);
+  return pc;
+}
+
+ReplayResult replay_free_space_reference(const Session& session) {
+  const PhantomParams params = default_phantom_params();
+  const PhantomModel model(params);
+  ReferencePipeline pipeline(model, free_space_pipeline_config(params.torque_limit_n_m));
+  NoContacts contacts;
+  return replay_session(session, pipeline, contacts, model);
+}
+
+}  // namespace dentsim
