@@ -89,6 +89,17 @@ StageStats stats_of(std::vector<double>& v) {
 
 }  // namespace
 
+const VoxelGrid& SceneRig::tooth_grid() const { return brick ? brick->grid() : tooth->grid(); }
+
+void SceneRig::tip_contacts(const Pose& pose, std::vector<Contact>* out) {
+  out->clear();
+  if (brick) {
+    fast::collide_tool_tip(*brick, pose, tip, k_tooth, b_tooth, out);
+  } else {
+    collide_tool_tip(*tooth, pose, tip, k_tooth, b_tooth, &scratch_, out);
+  }
+}
+
 std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOptions& options) {
   auto rig = std::make_unique<SceneRig>();
   SceneRig& g = *rig;
@@ -123,12 +134,21 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   g.tooth_before = grid;
   g.tooth = std::make_unique<VoxelTooth>(std::move(grid));
   g.tip.radius = scene.tool.bur_radius;
+  g.k_tooth = scene.tooth.k_tooth;
+  g.b_tooth = scene.tooth.b_tooth;
   DrillParams drill;
   drill.bur_speed_rad_s = scene.tool.bur_speed_rpm * 2.0 * std::numbers::pi / 60.0;
   drill.cutting_coefficient = scene.tool.cutting_coefficient;
-  g.contacts = std::make_unique<ToothContactProvider>(*g.tooth, g.tip, scene.tooth.k_tooth,
-                                                      scene.tooth.b_tooth,
-                                                      scene.tool.drills() ? &drill : nullptr);
+  const DrillParams* drilling = scene.tool.drills() ? &drill : nullptr;
+  const bool fast_path = options.pipeline == "fast";
+  if (fast_path) {
+    g.brick = std::make_unique<fast::BrickTooth>(*g.tooth);
+    g.contacts = std::make_unique<fast::ToothContactProvider>(*g.brick, g.tip, g.k_tooth, g.b_tooth,
+                                                              drilling);
+  } else {
+    g.contacts =
+        std::make_unique<ToothContactProvider>(*g.tooth, g.tip, g.k_tooth, g.b_tooth, drilling);
+  }
 
   // Hand.
   std::vector<HandKeyframe> keys;
@@ -199,11 +219,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   SimulatedPhantom& device = *rig->device;
   ClosedLoop& loop = *rig->loop;
   const Pipeline& pipeline = *rig->pipeline;
-  ToothContactProvider& contacts = *rig->contacts;
-  const VoxelTooth& tooth = *rig->tooth;
-  const ToolTip& tip = rig->tip;
-
-  CollisionScratch scratch;
+  const ToothProviderBase& contacts = *rig->contacts;
   std::vector<Contact> device_contacts;
   device_contacts.reserve(4096);
 
@@ -256,9 +272,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     // Measurements.
     const double f_contact = r.F_contact.head<3>().norm();
     const double f_device = r.T1.head<3>().norm();
-    device_contacts.clear();
-    collide_tool_tip(tooth, r.device, tip, scene.tooth.k_tooth, scene.tooth.b_tooth, &scratch,
-                     &device_contacts);
+    rig->tip_contacts(r.device, &device_contacts);
     double d_dev = 0.0;
     for (const Contact& c : device_contacts) d_dev = std::max(d_dev, c.depth);
     if (!r.contacts.empty()) {
@@ -324,7 +338,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   }
   res.timing.emplace_back("tick", stats_of(stage_us[kStageCount]));
   res.timing.emplace_back("device_simulation", stats_of(stage_us[kStageCount + 1]));
-  res.tooth_after = tooth.grid();
+  res.tooth_after = rig->tooth_grid();
   res.torque_after_fault_n_m = loop.faulted() ? device.applied_torque().norm() : 0.0;
   return res;
 }

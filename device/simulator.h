@@ -39,6 +39,7 @@
 #include "device/scene.h"
 #include "device/scripted_hand.h"
 #include "device/simulated_phantom.h"
+#include "fast/tooth/tooth_contacts.h"
 #include "reference/grasp_mass_model.h"
 #include "reference/phantom/phantom_model.h"
 #include "reference/tick.h"
@@ -121,13 +122,23 @@ struct SceneRig {
   std::unique_ptr<SimulatedPhantom> device;
   std::unique_ptr<FaultInjectingDevice> faulty;  // set when a fault is injected
   VoxelGrid tooth_before;
-  std::unique_ptr<VoxelTooth> tooth;
+  std::unique_ptr<VoxelTooth> tooth;        // the reference tooth (drilled by "reference")
+  std::unique_ptr<fast::BrickTooth> brick;  // the fast tooth (drilled by "fast")
   ToolTip tip;
-  std::unique_ptr<ToothContactProvider> contacts;
+  double k_tooth = 0.0, b_tooth = 0.0;
+  std::unique_ptr<ToothProviderBase> contacts;  // the provider of the pipeline's implementation
   std::unique_ptr<ScriptedHand> hand;
   std::unique_ptr<GraspMassModel> grasp;
   std::unique_ptr<Pipeline> pipeline;
   std::unique_ptr<ClosedLoop> loop;
+
+  // The grid of the tooth the pipeline drills, and the contact set of the tool tip at `pose` on
+  // it (for measurements outside the tick; same code as the pipeline's collision stage).
+  const VoxelGrid& tooth_grid() const;
+  void tip_contacts(const Pose& pose, std::vector<Contact>* out);
+
+ private:
+  CollisionScratch scratch_;
 };
 
 // Builds the rig of a scene. Throws InputError for a bad scene input (e.g. an unreadable mesh)

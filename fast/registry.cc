@@ -2,12 +2,14 @@
 
 #include <array>
 
+#include "fast/tick.h"
 #include "reference/core/io.h"
 
 namespace dentsim {
 
 std::span<const StageTable* const> stage_tables() {
-  static const std::array<const StageTable*, 1> kTables = {&reference_stage_table()};
+  static const std::array<const StageTable*, 2> kTables = {&reference_stage_table(),
+                                                           &fast::fast_stage_table()};
   return kTables;
 }
 

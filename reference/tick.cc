@@ -158,10 +158,17 @@ TickStatus collide(const PipelineModel&, PipelineData& d) {
 }
 
 TickStatus assemble(const PipelineModel& m, PipelineData& d) {
-  // Force elements on the proxy, affine in the velocity they are evaluated at.
+  d.contact = contact_wrench_unchecked(d.r.contacts, d.proxy.pose, d.T, m.scheme);
+  return detail::assemble_given_contact(m, d);
+}
+
+namespace detail {
+
+TickStatus assemble_given_contact(const PipelineModel& m, PipelineData& d) {
+  // Force elements on the proxy, affine in the velocity they are evaluated at (the contact's,
+  // d.contact, already there).
   TickResult& r = d.r;
   d.coupling = coupling_proxy_wrench_unchecked(m.coupling, r.device, r.V1, d.proxy, d.T, m.scheme);
-  d.contact = contact_wrench_unchecked(r.contacts, d.proxy.pose, d.T, m.scheme);
   // Device-side coupling (4.3)-(4.4): uses the proxy at k and V_hat_2,k-1.
   r.T1_vc = coupling_device_wrench_unchecked(m.coupling, r.device, r.V1, d.proxy, d.T, m.scheme);
   if (m.method == Method::kPmiPd) {
@@ -188,7 +195,16 @@ TickStatus assemble(const PipelineModel& m, PipelineData& d) {
   return TickStatus::kOk;
 }
 
+}  // namespace detail
+
 TickStatus solve(const PipelineModel& m, PipelineData& d) {
+  return detail::solve_with(m, d, pmi_try_solve);
+}
+
+namespace detail {
+
+TickStatus solve_with(const PipelineModel& m, PipelineData& d,
+                      bool (*pmi_solver)(const PmiSystem&, Vec6*)) {
   TickResult& r = d.r;
   r.friction_sliding = false;
   if (m.method == Method::kExplicitVc) {
@@ -213,7 +229,7 @@ TickStatus solve(const PipelineModel& m, PipelineData& d) {
     r.V_hat = fs.V;
     r.friction_sliding = fs.sliding;
     friction_wrench = fs.F;  // (4.10)
-  } else if (!pmi_try_solve(d.sys, &r.V_hat)) {
+  } else if (!pmi_solver(d.sys, &r.V_hat)) {
     return TickStatus::kSolverFailure;
   }
   r.F_coupling = d.coupling.at(r.V_hat);
@@ -222,6 +238,8 @@ TickStatus solve(const PipelineModel& m, PipelineData& d) {
   d.proxy = pmi_advance_unchecked(d.proxy, r.V_hat, d.T);
   return TickStatus::kOk;
 }
+
+}  // namespace detail
 
 TickStatus command(const PipelineModel& m, PipelineData& d) {
   // Device command: tau1 = J_t^T T1 + g(q), scaled down uniformly (direction kept) to the limits.

@@ -72,6 +72,16 @@ TickStatus command(const PipelineModel& m, PipelineData& d);
 TickStatus drill(const PipelineModel& m, PipelineData& d);
 // Proxy on the device pose at rest, observers at rest on the sample in d (device_terms first).
 TickStatus reset(const PipelineModel& m, PipelineData& d);
+
+// The parts of assemble and solve that fast/ shares (it brings its own contact wrench and PMI
+// solver; everything else in these two stages is one code).
+namespace detail {
+// assemble with d.contact already computed.
+TickStatus assemble_given_contact(const PipelineModel& m, PipelineData& d);
+// solve with `pmi_solver` for the frictionless PMI system (4.9).
+TickStatus solve_with(const PipelineModel& m, PipelineData& d,
+                      bool (*pmi_solver)(const PmiSystem&, Vec6*));
+}  // namespace detail
 }  // namespace reference
 
 // The reference implementation's entry of the stage registry.

@@ -1,0 +1,83 @@
+// The servo tick of every implementation in the registry (fast/registry.h), stage by stage, on
+// the drill scene's closed loop (simulated Phantom, procedural molar at 128^3, 0.5 mm bur: ~68
+// contacts, drilling): the same registry that drives the differential tests.
+//
+// BM_Tick/<impl>/<kind>: one servo tick (the pipeline's seven stages; the simulated device's
+// physics runs between ticks and is not timed: manual time = the tick's own stage times).
+// kind 0: free space (ticks before the first contact), 1: in contact (and drilling). Counters:
+// the mean time of each stage over the timed ticks [ns], and the mean contact count.
+// Results: docs/benchmarks.md "The tick, stage by stage".
+#include <benchmark/benchmark.h>
+
+#include <array>
+#include <memory>
+#include <string>
+
+#include "device/scene.h"
+#include "device/simulator.h"
+#include "fast/registry.h"
+
+namespace dentsim {
+namespace {
+
+void BM_Tick(benchmark::State& state, const StageTable* table, bool contact, const char* method) {
+  Scene scene = load_scene("drill");
+  scene.method.method = parse_method(method);
+  SceneRigOptions options;
+  options.pipeline = table->implementation;
+  std::unique_ptr<SceneRig> rig;
+  long ticks_in_run = 0;
+  const long run_ticks = static_cast<long>(scene.duration * scene.tick_hz);
+  std::array<double, kStageCount> stage_sum{};
+  double contacts = 0.0;
+  long timed = 0;
+  for (auto _ : state) {
+    for (;;) {
+      if (!rig || ticks_in_run >= run_ticks) {
+        rig = build_scene_rig(scene, options);
+        rig->loop->start();
+        ticks_in_run = 0;
+      }
+      const TickResult& r = rig->loop->step();
+      ++ticks_in_run;
+      if (rig->loop->faulted()) {
+        state.SkipWithError(rig->loop->fault_name());
+        return;
+      }
+      if (r.contacts.empty() == contact) continue;
+      long total = 0;
+      for (int i = 0; i < kStageCount; ++i) {
+        total += r.stage_ns[i];
+        stage_sum[i] += static_cast<double>(r.stage_ns[i]);
+      }
+      contacts += static_cast<double>(r.contacts.size());
+      ++timed;
+      state.SetIterationTime(1e-9 * static_cast<double>(total));
+      break;
+    }
+  }
+  for (int i = 0; i < kStageCount; ++i) {
+    state.counters[std::string(tick_stage_name(i)) + "_ns"] = stage_sum[i] / std::max(1L, timed);
+  }
+  state.counters["contacts"] = contacts / std::max(1L, timed);
+  state.SetLabel(std::string(table->implementation) + ", " + method +
+                 (contact ? ", contact + drilling" : ", free space"));
+}
+
+const int kRegistered = [] {
+  for (const StageTable* t : stage_tables()) {
+    for (const char* method : {"pmi-pd", "pmi"}) {
+      for (const bool contact : {false, true}) {
+        const std::string name = std::string("BM_Tick/") + t->implementation + "/" + method +
+                                 (contact ? "/contact" : "/free");
+        benchmark::RegisterBenchmark(name.c_str(), BM_Tick, t, contact, method)
+            ->UseManualTime()
+            ->Unit(benchmark::kMicrosecond);
+      }
+    }
+  }
+  return 0;
+}();
+
+}  // namespace
+}  // namespace dentsim

@@ -1,0 +1,88 @@
+// `dentsim crosscheck fast`: the fast pipeline against the reference, per stage on the drill
+// scene's states and in closed loop on the built-in scenes (validation/crosscheck_fast.h).
+// Prints and writes (--json) per stage `max_rel`, per scene `max_force_diff_n` and `ticks`; exit
+// status 1 when a bound is broken.
+#include <cstdio>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "cli/registry.h"
+#include "reference/core/io.h"
+#include "validation/crosscheck_fast.h"
+
+namespace dentsim::cli {
+namespace {
+
+struct Options {
+  std::string json;
+  FastCrosscheckOptions check;
+};
+
+void run(const Options& o) {
+  if (o.check.stage_ticks < 1 || o.check.stage_ticks > 1000000) {
+    throw InputError("--stage-ticks must be in [1, 1000000]");
+  }
+  if (!(o.check.scene_duration_s > 0.0) || o.check.scene_duration_s > 3600.0) {
+    throw InputError("--duration must be in (0, 3600] s");
+  }
+  const FastCrosscheckResult r = crosscheck_fast(o.check);
+  nlohmann::json stages = nlohmann::json::object();
+  for (const StageCrosscheck& s : r.stages) {
+    std::printf("  %-6s %-13s max_rel %.3e over %ld samples, count mismatches %ld\n",
+                s.implementation.c_str(), s.stage.c_str(), s.max_rel, s.samples,
+                s.count_mismatches);
+    stages[s.stage] = {{"implementation", s.implementation},
+                       {"max_rel", s.max_rel},
+                       {"samples", s.samples},
+                       {"contact_samples", s.contact_samples},
+                       {"count_mismatches", s.count_mismatches}};
+  }
+  nlohmann::json scenes = nlohmann::json::object();
+  for (const SceneCrosscheck& c : r.scenes) {
+    std::printf(
+        "  %-6s %-6s %ld ticks (%ld in contact): max |force diff| %.3e N (largest force "
+        "%.3f N); before contact %.3e N; diverged past 1e-9 N at %.3f s, 1e-6 N at %.3f "
+        "s, 1e-3 N at %.3f s (-1: never)\n",
+        c.implementation.c_str(), c.scene.c_str(), c.ticks, c.contact_ticks, c.max_force_diff_n,
+        c.max_force_n, c.max_force_diff_before_contact_n, c.diverged_1e9_s, c.diverged_1e6_s,
+        c.diverged_1e3_s);
+    scenes[c.scene] = {{"implementation", c.implementation},
+                       {"ticks", c.ticks},
+                       {"contact_ticks", c.contact_ticks},
+                       {"max_force_diff_n", c.max_force_diff_n},
+                       {"max_force_diff_before_contact_n", c.max_force_diff_before_contact_n},
+                       {"max_force_n", c.max_force_n},
+                       {"first_contact_s", c.first_contact_s},
+                       {"diverged_past_1e-9_n_at_s", c.diverged_1e9_s},
+                       {"diverged_past_1e-6_n_at_s", c.diverged_1e6_s},
+                       {"diverged_past_1e-3_n_at_s", c.diverged_1e3_s}};
+  }
+  if (!o.json.empty()) {
+    write_json(o.json, {{"stages", stages},
+                        {"scenes", scenes},
+                        {"max_rel_bound", o.check.max_rel_bound},
+                        {"ok", r.ok},
+                        {"failures", r.failures}});
+  }
+  if (!r.ok) throw std::runtime_error("crosscheck fast: " + r.failures.front());
+  std::printf("crosscheck fast: every bound held\n");
+}
+
+void setup_crosscheck_fast(CLI::App& app) {
+  CLI::App* group_app = group(app, "crosscheck", "Cross-checks against an independent oracle");
+  CLI::App* sub = group_app->add_subcommand(
+      "fast", "The fast pipeline vs the reference: per stage (max_rel) and in closed loop");
+  auto opt = std::make_shared<Options>();
+  sub->add_option("--json", opt->json, "Write the results (stages, scenes, ...) to FILE");
+  sub->add_option("--stage-ticks", opt->check.stage_ticks,
+                  "Ticks of the drill scene checked stage by stage")
+      ->capture_default_str();
+  sub->add_option("--duration", opt->check.scene_duration_s, "Closed-loop run per scene [s]")
+      ->capture_default_str();
+  sub->callback([opt] { run(*opt); });
+}
+DENTSIM_REGISTER_COMMAND(setup_crosscheck_fast);
+
+}  // namespace
+}  // namespace dentsim::cli

@@ -1,0 +1,42 @@
+#include "fast/contact.h"
+
+#include <Eigen/Geometry>
+
+#include "reference/contact.h"
+
+namespace dentsim::fast {
+
+AffineWrench contact_wrench_unchecked(std::span<const Contact> contacts, const Pose& proxy,
+                                      double T, Scheme scheme) {
+  const ContactWeights w(contacts);
+  const double half_T = scheme == Scheme::kMidpoint ? 0.5 * T : 0.0;
+  const Mat3 Rt = proxy.R.transpose();
+  Vec6 f0 = Vec6::Zero();
+  Mat6 G = Mat6::Zero();  // -sum g a a^T, upper triangle accumulated
+  for (const Contact& c : contacts) {
+    // delta = n^T (x_o - x_c), x_c = x + R r                                              (§2.3)
+    const Vec3 x_c = proxy.x + proxy.R * c.r;
+    const double delta = c.n.dot(c.x_o - x_c);
+    if (!(delta > 0.0)) continue;  // unilateral
+    const double wi = w(c);
+    const double k = wi * c.stiffness;
+    const double g = half_T * k + wi * c.damping;
+    Vec6 a;
+    a.head<3>() = c.n;
+    a.tail<3>() = c.r.cross(Rt * c.n);  // S(r) R^T n
+    f0 += (k * delta) * a;              // K delta_k n                                  (2.16)
+    for (int j = 0; j < 6; ++j) {
+      const double ga = g * a(j);
+      for (int i = 0; i <= j; ++i) G(i, j) -= ga * a(i);  // (2.16)-(2.19)
+    }
+  }
+  for (int j = 0; j < 6; ++j) {
+    for (int i = j + 1; i < 6; ++i) G(i, j) = G(j, i);
+  }
+  AffineWrench F;
+  F.f0 = f0;
+  F.G = G;
+  return F;
+}
+
+}  // namespace dentsim::fast
