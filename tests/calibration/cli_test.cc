@@ -185,18 +185,13 @@ TEST(CalibrateCli, BadFitAndExciteFlagsExitTwoAndWriteNothing) {
   EXPECT_FALSE(fs::exists(d / "e.csv"));
 }
 
-std::string contents(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(f), {});
-}
-
 // Issue #18: outputs that are inputs, low-pass cut-offs the log cannot carry, a negative seed.
 // Each exits 2 before any work, names the flag, and leaves existing files as they were.
 TEST(CalibrateCli, OutputPathsAndLowpassAreCheckedAtTheDoor) {
   const fs::path d = temp_dir("door");
   ASSERT_EQ(run("excite -o " + (d / "log.csv").string() + " --duration 1").status, 0);
   const std::string log = (d / "log.csv").string();
-  const std::string log_before = contents(log);
+  const std::string log_before = dentsim::read_file(log);
   write_file_atomic((d / "old.json").string(), "previous report\n");
   const std::string json = (d / "old.json").string();
   const std::string model = (d / "m.json").string();
@@ -225,8 +220,8 @@ TEST(CalibrateCli, OutputPathsAndLowpassAreCheckedAtTheDoor) {
     const Cmd r = run(c.args);
     EXPECT_EQ(r.status, 2) << c.args << ": " << r.output;
     EXPECT_THAT(r.output, HasSubstr(c.needle)) << c.args;
-    EXPECT_EQ(contents(log), log_before) << c.args;
-    EXPECT_EQ(contents(json), "previous report\n") << c.args;
+    EXPECT_EQ(dentsim::read_file(log), log_before) << c.args;
+    EXPECT_EQ(dentsim::read_file(json), "previous report\n") << c.args;
     EXPECT_FALSE(fs::exists(model)) << c.args;
   }
 }

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <string>
 
+#include "reference/core/io.h"
 #include "tests/support/cli.h"
 
 namespace {
@@ -24,11 +25,6 @@ fs::path temp_dir(const std::string& name) {
   fs::remove_all(d);
   fs::create_directories(d);
   return d;
-}
-
-std::string contents(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(f), {});
 }
 
 struct Case {
@@ -64,7 +60,7 @@ TEST(CliLimits, OutOfRangeFlagsExitTwoNamingTheFlag) {
     const Cmd r = run(c.args);
     EXPECT_EQ(r.status, 2) << c.args << ": " << r.output;
     EXPECT_THAT(r.output, HasSubstr(c.needle)) << c.args;
-    EXPECT_EQ(contents(out), "previous\n") << c.args;
+    EXPECT_EQ(dentsim::read_file(out), "previous\n") << c.args;
   }
   EXPECT_FALSE(fs::exists(d / "r"));
 }
@@ -91,11 +87,11 @@ TEST(CliLimits, OutputPathsAreCheckedBeforeTheWork) {
   EXPECT_FALSE(fs::exists(x));
   const std::string mesh = (d / "t.obj").string();
   std::ofstream(mesh) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
-  const std::string before = contents(mesh);
+  const std::string before = dentsim::read_file(mesh);
   const Cmd c = run("voxelize " + mesh + " --size-mm 10 --resolution 32 --json " + mesh);
   EXPECT_EQ(c.status, 2) << c.output;
   EXPECT_THAT(c.output, HasSubstr("is the input MESH"));
-  EXPECT_EQ(contents(mesh), before);
+  EXPECT_EQ(dentsim::read_file(mesh), before);
   const Cmd e = run("demo --duration 0.01 --json " + (d / "nodir/d.json").string());
   EXPECT_EQ(e.status, 2) << e.output;
   EXPECT_THAT(e.output, HasSubstr("does not exist"));

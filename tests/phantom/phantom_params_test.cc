@@ -202,6 +202,22 @@ TEST(DeviceCli, CheckAcceptsGoodAndRejectsBadNamingTheField) {
     EXPECT_EQ(d.status, 2) << cmd;
     EXPECT_THAT(d.out, AllOf(HasSubstr(deep), HasSubstr("nested deeper than 64"))) << cmd;
   }
+  // Valid only if `run` can build the simulated device from it: masses of 1e-20 kg pass the
+  // model's checks but MuJoCo refuses them (mjMINVAL); device check used to call them valid.
+  PhantomParams tiny = default_phantom_params();
+  for (PhantomBody* b : {&tiny.base, &tiny.upper_arm, &tiny.forearm, &tiny.crank,
+                         &tiny.parallel_link, &tiny.gimbal_yaw, &tiny.gimbal_pitch,
+                         &tiny.gimbal_roll}) {
+    b->mass_kg = 1e-20;
+    b->inertia_kg_m2 = Vec3::Constant(1e-20);
+  }
+  const std::string tiny_path = temp_path("tiny.json");
+  write_file_atomic(tiny_path, phantom_params_to_text(tiny));
+  const RunResult t = run("device check " + tiny_path + " 2>&1");
+  EXPECT_EQ(t.status, 2) << t.out;
+  EXPECT_THAT(t.out, AllOf(HasSubstr(tiny_path), HasSubstr("the simulated device cannot be built"),
+                           HasSubstr("mjMINVAL")));
+  std::filesystem::remove(tiny_path);
   // Not a regular file: refused at once instead of reading forever.
   const RunResult z = run("device check /dev/zero 2>&1");
   EXPECT_EQ(z.status, 2);
