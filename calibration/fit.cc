@@ -245,7 +245,7 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
   // The filters' start and end transients: samples within one cut-off period of either end of
   // the log are not used.
   const int trim = opt.lowpass_hz > 0.0
-                       ? std::min(n / 4, static_cast<int>(std::ceil(1.0 / (opt.lowpass_hz * dt))))
+                       ? static_cast<int>(std::min(n / 4.0, std::ceil(1.0 / (opt.lowpass_hz * dt))))
                        : 0;
   for (int k = std::max(1, trim); k + 1 < n - trim; k += stride) {
     const Vec6 qdd = (qd[k + 1] - qd[k - 1]) / (log.t[k + 1] - log.t[k - 1]);

@@ -99,7 +99,14 @@ CalibrationLog parse_calibration_log(const std::string& text, const std::string&
     }
     const auto cells = split_csv(l);
     if (index.empty()) {
-      for (std::size_t i = 0; i < cells.size(); ++i) index[cells[i]] = static_cast<int>(i);
+      for (std::size_t i = 0; i < cells.size(); ++i) {
+        if (!index.emplace(cells[i], static_cast<int>(i)).second) {
+          throw InputError(origin + ": line " + std::to_string(line_no) + ": header: column '" +
+                           printable(cells[i]) + "' given twice (columns " +
+                           std::to_string(index[cells[i]] + 1) + " and " + std::to_string(i + 1) +
+                           "); expected each column once");
+        }
+      }
       std::string missing;
       for (const auto& c : cols) {
         if (index.count(c)) {
@@ -130,7 +137,15 @@ CalibrationLog parse_calibration_log(const std::string& text, const std::string&
       const bool parsed = res.ec == std::errc() && res.ptr == cell.data() + cell.size();
       if (!parsed || !std::isfinite(x)) {
         throw InputError(origin + ": line " + std::to_string(line_no) + ": column " + cols[c] +
-                         ": expected a finite number, got '" + cell + "'");
+                         ": expected a finite number, got '" + printable(cell) + "'");
+      }
+      const double limit = c == 0                ? kMaxLogTime
+                           : c <= kLogJoints     ? kMaxLogAngle
+                           : c <= 2 * kLogJoints ? kMaxLogVelocity
+                                                 : kMaxLogTorque;
+      if (!(std::abs(x) <= limit)) {
+        throw InputError(origin + ": line " + std::to_string(line_no) + ": column " + cols[c] +
+                         ": |value| must be at most " + fmt(limit) + ", got " + fmt(x));
       }
       v[c] = x;
     }

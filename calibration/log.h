@@ -11,8 +11,10 @@
 // Device joint order and units as in device/device.h (index 1 = device).
 //
 // The reader rejects, with an InputError naming the file, the line and the problem: a missing
-// column, a non-numeric or non-finite value, a short row, non-monotonic time, a log with fewer
-// than kMinLogSamples samples, and a joint that never moves (range of q below kMinJointRange).
+// or repeated column, a non-numeric or non-finite value, a value beyond the limits below (no
+// Phantom reaches them; 1e300 in one cell would otherwise turn the fit's residual infinite), a
+// short row, non-monotonic time, a log with fewer than kMinLogSamples samples, and a joint that
+// never moves (range of q below kMinJointRange).
 #pragma once
 
 #include <string>
@@ -25,6 +27,10 @@ namespace dentsim {
 inline constexpr int kLogJoints = 6;
 inline constexpr int kMinLogSamples = 200;
 inline constexpr double kMinJointRange = 1e-3;  // [rad]
+inline constexpr double kMaxLogTime = 1e6;      // |t| [s]
+inline constexpr double kMaxLogAngle = 100.0;   // |q| [rad]
+inline constexpr double kMaxLogVelocity = 1e4;  // |qd| [rad/s]
+inline constexpr double kMaxLogTorque = 100.0;  // |tau| [N m]
 
 struct CalibrationLog {
   std::vector<double> t;              // [s]

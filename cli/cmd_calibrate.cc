@@ -51,7 +51,8 @@ void setup_excite(CLI::App& app) {
                   "device model file of the simulated Phantom (default: built-in Premium 1.5A)");
   sub->add_option("-o,--output", opt->out, "calibration log to write (CSV)")->required();
   sub->add_option("--duration", opt->duration, "length of the run [s] (default 30)");
-  sub->add_option("--seed", opt->seed, "seed of the Fourier coefficients (default 1)");
+  sub->add_option("--seed", opt->seed, "seed of the Fourier coefficients, 0..2^64-1 (default 1)")
+      ->check(CLI::NonNegativeNumber);
   sub->add_flag("--no-friction", opt->no_friction,
                 "simulate the device without Coulomb friction (MuJoCo frictionloss off)");
   sub->add_option(
@@ -66,6 +67,7 @@ void setup_excite(CLI::App& app) {
       throw InputError("--duration: expected 1 <= S <= 3600 s, got " +
                        std::to_string(opt->duration));
     }
+    check_output_paths({{"-o", opt->out}}, {{"--device", opt->device}});
     const PhantomParams p =
         opt->device.empty() ? default_phantom_params() : load_phantom_params(opt->device);
     const VecX home = phantom_home_q(p);
@@ -112,6 +114,26 @@ struct CalibrateOptions {
   int lowpass_order = 2;
   std::string coulomb_velocity = "filtered";
 };
+
+// The zero-phase low-pass needs its cut-off below the Nyquist frequency (the Butterworth's
+// prewarping tan(pi fc T) has a pole at fc T = 1/2) and its transient, one cut-off period trimmed
+// at each end of the log, shorter than a quarter of the log.
+void check_lowpass(double fc, const CalibrationLog& log, const std::string& path) {
+  if (fc == 0.0) return;
+  const double duration = log.t.back() - log.t.front();
+  const double T = duration / (log.size() - 1);
+  if (!(fc * T <= 0.45)) {
+    throw InputError("--lowpass " + std::to_string(fc) + " Hz: above 0.45 / (time step " +
+                     std::to_string(T) + " s of " + path + ") = " + std::to_string(0.45 / T) +
+                     " Hz; expected a cut-off below the Nyquist frequency");
+  }
+  if (!(fc * duration >= 4.0)) {
+    throw InputError("--lowpass " + std::to_string(fc) + " Hz: below 4 / (duration " +
+                     std::to_string(duration) + " s of " + path +
+                     ") = " + std::to_string(4.0 / duration) +
+                     " Hz; the filter's transient would cover the whole log");
+  }
+}
 
 void write_plots(const FitResult& r, const std::string& dir) {
   std::filesystem::create_directories(dir);
@@ -162,8 +184,8 @@ void setup_calibrate(CLI::App& app) {
                   "true device model (simulated data): adds true values and max_rel_error");
   sub->add_option("--plots", opt->plots, "directory for PNG plots (torque fit, residuals)");
   sub->add_option("--lowpass", opt->lowpass_hz,
-                  "zero-phase low-pass of qd and tau before differentiating [Hz], 0 = off "
-                  "(default 10)");
+                  "zero-phase low-pass of qd and tau before differentiating [Hz], 0 = off, else\n"
+                  "between 4 / (log duration) and 0.45 / (time step) (default 10)");
   sub->add_option("--max-samples", opt->max_samples, "samples used (default 3000)");
   sub->add_option("--torque-shift", opt->torque_shift,
                   "use the torque logged this many more ticks earlier with each sample\n"
@@ -184,9 +206,15 @@ void setup_calibrate(CLI::App& app) {
   sub->add_option("--max-iterations", opt->max_iterations,
                   "Ceres iteration limit (default 100); a fit that hits it did not converge");
   sub->callback([opt] {
-    if (!(opt->lowpass_hz >= 0.0)) throw InputError("--lowpass: expected >= 0 Hz");
+    if (!(opt->lowpass_hz >= 0.0 && std::isfinite(opt->lowpass_hz))) {
+      throw InputError("--lowpass: expected a finite frequency >= 0 Hz, got " +
+                       std::to_string(opt->lowpass_hz));
+    }
     if (opt->max_samples < 100) throw InputError("--max-samples: expected >= 100");
+    check_output_paths({{"--json", opt->json}, {"-o", opt->out}},
+                       {{"LOG", opt->log}, {"--prior", opt->prior}, {"--truth", opt->truth}});
     const CalibrationLog log = read_calibration_log(opt->log);
+    check_lowpass(opt->lowpass_hz, log, opt->log);
     const PhantomParams prior =
         opt->prior.empty() ? default_phantom_params() : load_phantom_params(opt->prior);
     std::unique_ptr<PhantomParams> truth;
@@ -233,6 +261,12 @@ void setup_calibrate(CLI::App& app) {
       fo.torque_shift_samples += velocity_lag + 0.5;
     }
     const FitResult r = fit_calibration(log, prior, fo);
+    bool finite = std::isfinite(r.residual_rms);
+    for (const FitParameter& fp : r.params) finite = finite && std::isfinite(fp.value);
+    if (!finite) {
+      throw std::runtime_error("calibrate: the fit of " + opt->log +
+                               " ended with a non-finite residual or parameter; no file written");
+    }
 
     nlohmann::json j;
     j["log"] = opt->log;

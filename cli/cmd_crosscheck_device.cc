@@ -30,10 +30,11 @@ void setup_crosscheck_device(CLI::App& app) {
   sub->add_option("--model", o->model, "device model file (default: built-in Premium 1.5A)");
   sub->add_option("--json", o->json, "write the error report as JSON to FILE");
   sub->add_option("--samples", o->samples, "random states (>= 1)")->check(CLI::Range(1, 100000000));
-  sub->add_option("--seed", o->seed, "random seed");
+  sub->add_option("--seed", o->seed, "random seed, 0..2^64-1")->check(CLI::NonNegativeNumber);
   sub->add_option("--duration", o->duration_s, "trajectory length [s] (> 0)")
       ->check(CLI::Range(1e-6, 1e6));
   sub->callback([o] {
+    check_output_paths({{"--json", o->json}}, {{"--model", o->model}});
     const PhantomParams params =
         o->model.empty() ? default_phantom_params() : load_phantom_params(o->model);
     DeviceCrosscheckOptions opt;

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "cli/registry.h"
+#include "reference/core/io.h"
 #include "reference/tooth/octree.h"
 #include "validation/crosscheck_octree.h"
 
@@ -49,12 +50,14 @@ void setup_crosscheck_octree(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--spheres", opt->check.spheres, "Number of random sphere queries")
       ->capture_default_str();
-  sub->add_option("--seed", opt->check.seed, "Random seed (std::mt19937_64)")
-      ->capture_default_str();
+  sub->add_option("--seed", opt->check.seed, "Random seed (std::mt19937_64), 0..2^64-1")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   sub->add_option("--remove-every", opt->check.remove_every,
                   "Remove a random voxel every K queries (0: never)")
       ->capture_default_str();
   sub->callback([opt] {
+    check_output_paths({{"--json", opt->json}});
     const OctreeCrosscheckResult r = crosscheck_octree(opt->check);
     std::printf(
         "crosscheck octree: n=%d seed=%llu queries=%ld mismatches=%ld nonempty=%ld "

@@ -52,6 +52,7 @@ void run_demo(const DemoOptions& o) {
   if (!(o.duration > 0.0)) throw InputError("--duration must be positive");
   if (!(o.tick_ms > 0.0)) throw InputError("--tick-ms must be positive");
   if (!(o.k_vc > 0.0) || !(o.k_tooth > 0.0)) throw InputError("--k-vc and --k-tooth must be positive");
+  check_output_paths({{"--json", o.json}});
   nlohmann::json out;
   out["scenario"] = "rigid-body device, hand pushing into a flat wall";
   out["duration_s"] = o.duration;
@@ -92,11 +93,21 @@ void setup_demo(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "demo", "Short reference-pipeline demo: a hand pushes a rigid-body device into a stiff wall");
   sub->add_option("--json", o->json, "Write the results as JSON to FILE");
-  sub->add_option("--duration", o->duration, "Simulated time per method [s]")->capture_default_str();
-  sub->add_option("--k-vc", o->k_vc, "Virtual coupling stiffness [N/m]")->capture_default_str();
-  sub->add_option("--k-tooth", o->k_tooth, "Wall stiffness [N/m]")->capture_default_str();
-  sub->add_option("--tick-ms", o->tick_ms, "Servo tick [ms]")->capture_default_str();
-  sub->add_option("--push", o->push_n, "Hand push into the wall [N]")->capture_default_str();
+  sub->add_option("--duration", o->duration, "Simulated time per method [s]")
+      ->capture_default_str()
+      ->check(finite_range(1e-3, 600.0));
+  sub->add_option("--k-vc", o->k_vc, "Virtual coupling stiffness [N/m]")
+      ->capture_default_str()
+      ->check(finite_range(1e-6, 1e7));
+  sub->add_option("--k-tooth", o->k_tooth, "Wall stiffness [N/m]")
+      ->capture_default_str()
+      ->check(finite_range(1e-6, 1e7));
+  sub->add_option("--tick-ms", o->tick_ms, "Servo tick [ms]")
+      ->capture_default_str()
+      ->check(finite_range(0.05, 100.0));
+  sub->add_option("--push", o->push_n, "Hand push into the wall [N]")
+      ->capture_default_str()
+      ->check(finite_range(0.0, 20.0));
   sub->add_option("--method", o->methods, "Methods to run (explicit, pmi, pmi-pd)")
       ->check(CLI::IsMember({"explicit", "pmi", "pmi-pd"}));
   sub->callback([o] { run_demo(*o); });

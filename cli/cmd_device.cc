@@ -11,6 +11,8 @@
 
 #include "cli/registry.h"
 #include "device/hdapi/hdapi_device.h"
+#include "device/phantom_device.h"
+#include "device/simulated_phantom.h"
 #include "reference/core/io.h"
 #include "reference/phantom/phantom_params.h"
 
@@ -86,8 +88,9 @@ void setup_device(CLI::App& app) {
   auto check_opts = std::make_shared<DeviceOptions>();
   CLI::App* check = device->add_subcommand(
       "check",
-      "Validate a device model file: every field, and M(q) positive definite over the\n"
-      "joint-limit box; exit 0 if valid, 2 with a message naming the field otherwise");
+      "Validate a device model file: every field, M(q) positive definite over the\n"
+      "joint-limit box, and the simulated device `run` builds from it; exit 0 if valid,\n"
+      "2 with a message naming the field otherwise");
   check->add_option("MODEL", check_opts->model, "device model file (JSON)")->required();
   check
       ->add_option("--workspace-samples", check_opts->workspace_samples,
@@ -96,8 +99,17 @@ void setup_device(CLI::App& app) {
       ->check(CLI::Range(0, 100000000));
   check->callback([check_opts] {
     const PhantomParams p = load_phantom_params(check_opts->model);  // validates with 256 points
-    validate_phantom_params(p, "device model file '" + check_opts->model + "'",
-                            check_opts->workspace_samples);
+    const std::string origin = "device model file '" + check_opts->model + "'";
+    validate_phantom_params(p, origin, check_opts->workspace_samples);
+    // Valid means `run` can run it: build the simulated device exactly as run_scene does
+    // (MuJoCo plant from the generated MJCF, driver configuration, home pose).
+    try {
+      const MujocoPlant plant = phantom_plant(p);
+      const SimulatedPhantom sim(plant, phantom_device_config(p), phantom_home_q(p));
+    } catch (const InputError& e) {
+      throw InputError(origin + ": the simulated device cannot be built from it: " +
+                       printable(e.what(), 300));
+    }
     std::printf("%s: valid device model \"%s\"\n", check_opts->model.c_str(), p.name.c_str());
   });
 

@@ -214,7 +214,8 @@ void setup_run(CLI::App& app) {
   sub->add_option("scene", o->scene, "Built-in scene name or scene file (JSON, docs/scenes.md)");
   sub->add_option("--out", o->out, "Output directory")->capture_default_str();
   sub->add_flag("--realtime", o->realtime, "Pace the loop at the tick rate (default: as fast as possible)");
-  sub->add_option("--duration", o->duration, "Override the scene's duration [s]");
+  sub->add_option("--duration", o->duration, "Override the scene's duration [s] (0 = the scene's)")
+      ->check(finite_range(0.0, 3600.0));
   sub->add_option("--log-every", o->log_every, "Keep every n-th tick in the time series")
       ->capture_default_str();
   sub->add_option("--pipeline", o->pipeline, "The tick's implementation: " + stage_table_names())

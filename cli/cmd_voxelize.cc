@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "cli/png_writer.h"
+#include "cli/progress.h"
 #include "cli/registry.h"
 #include "reference/core/io.h"
 #include "reference/tooth/materials.h"
@@ -54,6 +55,10 @@ void run(const Options& o) {
   }
   if (!(o.enamel_mm >= 0)) throw InputError("--enamel-mm: expected a thickness >= 0 (mm)");
   if (o.png_size < 8 || o.png_size > 4096) throw InputError("--png-size: expected 8..4096 pixels");
+  check_output_paths({{"--json", o.json}, {"--png", o.png}}, {{"MESH", o.mesh}});
+  // Voxelising at 1024^3 takes about a minute: say so on stderr every few seconds, terminal or not.
+  const Heartbeat heartbeat("dentsim voxelize: voxelizing at " + std::to_string(o.resolution) +
+                            "^3");
   nlohmann::json j;
   VoxelGrid grid;
   VoxelizeReport rep;
@@ -153,12 +158,15 @@ void setup_voxelize(CLI::App& app) {
   sub->add_option("--resolution", o->resolution, "Voxels per axis N (power of two, 32..1024)")
       ->required();
   auto* size = sub->add_option("--size-mm", o->size_mm,
-                               "Scale so the largest bounding-box extent is S millimetres");
+                               "Scale so the largest bounding-box extent is S millimetres")
+                   ->check(finite_range(1e-3, 100.0));
   auto* scale = sub->add_option("--scale", o->scale,
-                                "Metres per mesh unit (procedural: factor on its real size)");
+                                "Metres per mesh unit (procedural: factor on its real size)")
+                    ->check(finite_range(1e-12, 10.0));
   size->excludes(scale);
   sub->add_option("--enamel-mm", o->enamel_mm,
-                  "Enamel thickness over the crown top for meshes, mm (default 2.5)");
+                  "Enamel thickness over the crown top for meshes, mm (default 2.5)")
+      ->check(finite_range(0.0, 10.0));
   sub->add_option("--json", o->json, "Write the report here (JSON)")->required();
   sub->add_option("--png", o->png, "Write a shaded picture (whole tooth and cut-away) here");
   sub->add_option("--png-size", o->png_size, "Picture panel size in pixels (default 512)");

@@ -280,7 +280,10 @@ void run_zwidth(const ZwidthOptions& o) {
   if (!(o.tick_ms > 0.0 && o.tick_ms <= 10.0)) {
     throw InputError("--tick-ms: expected a tick in (0, 10] ms, got " + std::to_string(o.tick_ms));
   }
-  if (!(o.push_n > 0.0)) throw InputError("--push: expected a force > 0 N");
+  if (!(o.push_n > 0.0 && o.push_n <= 20.0)) {
+    throw InputError("--push: expected a force in (0, 20] N, got " + std::to_string(o.push_n));
+  }
+  check_output_paths({{"--json", o.json}});
   std::vector<Method> methods;
   for (const std::string& m : o.methods) {
     try {
@@ -535,8 +538,12 @@ void setup_zwidth(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--testbed", o->testbed, "phantom (simulated Phantom) or axis (1-DoF)")
       ->capture_default_str();
-  sub->add_option("--threads", o->threads, "Worker threads (0 = all cores)")->capture_default_str();
-  sub->add_option("--hold", o->hold_s, "Contact time per run [s] (>= 5)")->capture_default_str();
+  sub->add_option("--threads", o->threads, "Worker threads (0 = all cores)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 256));
+  sub->add_option("--hold", o->hold_s, "Contact time per run [s]")
+      ->capture_default_str()
+      ->check(finite_range(5.0, 600.0));
   sub->add_option("--tick-ms", o->tick_ms, "Servo tick [ms]")->capture_default_str();
   sub->add_option("--push", o->push_n, "Operator force [N]")->capture_default_str();
   sub->add_option("--k-vc", o->k_vc, "Override the grid's K_vc values [N/m]");

@@ -11,8 +11,10 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -29,6 +31,30 @@ struct Registrar {
 // The subcommand `name` of `parent`, created (with `description`) when it does not exist yet, so
 // that two files can add children to one group (e.g. `crosscheck device`, `crosscheck octree`).
 CLI::App* group(CLI::App& parent, const std::string& name, const std::string& description);
+
+// A number flag that must be finite and within [lo, hi]: NaN and inf are refused (CLI::Range lets
+// NaN through), and the range shows in --help. A value outside exits with status 2 naming the flag.
+inline CLI::Validator finite_range(double lo, double hi) {
+  std::ostringstream desc;
+  desc << "in [" << lo << ", " << hi << "]";
+  return CLI::Validator(
+      [lo, hi](std::string& s) -> std::string {
+        double v = 0.0;
+        std::size_t used = 0;
+        try {
+          v = std::stod(s, &used);
+        } catch (const std::exception&) {
+          used = 0;
+        }
+        if (used != s.size() || !std::isfinite(v) || v < lo || v > hi) {
+          std::ostringstream m;
+          m << "expected a finite number in [" << lo << ", " << hi << "], got '" << s << "'";
+          return m.str();
+        }
+        return "";
+      },
+      desc.str(), "FINITE_RANGE");
+}
 
 // Writes `j` (pretty-printed) to `path` atomically; throws naming the path on failure.
 void write_json(const std::string& path, const nlohmann::json& j);

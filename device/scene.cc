@@ -10,6 +10,22 @@
 namespace dentsim {
 namespace {
 
+// Upper limits of scene numbers (docs/scenes.md): generous for any dental scene and any gain
+// study, small enough that every product in the pipeline stays finite.
+constexpr double kMaxMeshScale = 1.0;            // [m per mesh unit]
+constexpr double kMaxToothSizeMm = 100.0;        // [mm]
+constexpr double kMaxBurRadiusMm = 5.0;          // [mm]
+constexpr double kMaxBurRpm = 1e6;               // [rpm]
+constexpr double kMaxCuttingCoefficient = 10.0;  // [-]
+constexpr double kMaxFrictionMu = 10.0;          // [-]
+constexpr double kMaxGraspMassScale = 10.0;      // [-]
+constexpr double kMaxStiffness = 1e7;            // [N/m], [N m/rad]
+constexpr double kMaxDamping = 1e5;              // [N s/m], [N m s/rad]
+constexpr double kMaxMassKg = 100.0;             // [kg]
+constexpr double kMaxInertia = 10.0;             // [kg m^2]
+constexpr double kMaxOffsetMm = 1000.0;          // [mm]
+constexpr const char* kWhyStiffness = "far beyond any stable haptic gain";
+
 // Built-in scenes. Positions in the hand script are offsets from the tooth's anchor (the top of
 // the occlusal surface near the crown axis) in mm; the tool tip starts at the device's home pose,
 // 6 mm above the anchor. Gains: the thesis's PMI + passive decomposition setting (K_vc = 700 N/m,
@@ -88,7 +104,7 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
                          "tool", "device", "method", "proxy", "hand"});
   Scene s;
   s.origin = origin;
-  s.version = static_cast<int>(rd.integer(doc, "", "dentsim_scene", -1));
+  s.version = static_cast<int>(rd.integer(doc, "", "dentsim_scene", -1, 0, 1000));
   if (s.version != 1) {
     rd.fail("dentsim_scene", "unsupported or missing scene format version (expected 1)");
   }
@@ -116,6 +132,9 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
     s.tooth.size_mm = rd.number(t, "tooth", "size_mm", 0.0);
     rd.non_negative("tooth.mesh_scale_m_per_unit", s.tooth.mesh_scale);
     rd.non_negative("tooth.size_mm", s.tooth.size_mm);
+    rd.at_most("tooth.mesh_scale_m_per_unit", s.tooth.mesh_scale, kMaxMeshScale,
+               "metres per mesh unit");
+    rd.at_most("tooth.size_mm", s.tooth.size_mm, kMaxToothSizeMm, "a tooth, not a building");
     if ((s.tooth.mesh_scale > 0.0) == (s.tooth.size_mm > 0.0)) {
       rd.fail("tooth", "a mesh needs exactly one of mesh_scale_m_per_unit or size_mm (meshes are unitless)");
     }
@@ -128,16 +147,20 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   } else if (t.contains("mesh")) {
     rd.fail("tooth.mesh", "only allowed with \"source\": \"mesh\"");
   }
-  s.tooth.resolution = static_cast<int>(rd.integer(t, "tooth", "resolution", 128));
+  s.tooth.resolution = static_cast<int>(rd.integer(t, "tooth", "resolution", 128, 32, 512));
   const int r = s.tooth.resolution;
-  if (r < 32 || r > 512 || (r & (r - 1)) != 0) {
+  if ((r & (r - 1)) != 0) {
     rd.fail("tooth.resolution", "must be a power of two from 32 to 512 (got " + std::to_string(r) + ")");
   }
   s.tooth.k_tooth = rd.number(t, "tooth", "k_tooth_n_per_m");
   rd.positive("tooth.k_tooth_n_per_m", s.tooth.k_tooth);
+  rd.at_most("tooth.k_tooth_n_per_m", s.tooth.k_tooth, kMaxStiffness, kWhyStiffness);
   s.tooth.b_tooth = rd.number(t, "tooth", "b_tooth_n_s_per_m", 0.0);
   rd.non_negative("tooth.b_tooth_n_s_per_m", s.tooth.b_tooth);
+  rd.at_most("tooth.b_tooth_n_s_per_m", s.tooth.b_tooth, kMaxDamping, kWhyStiffness);
   s.tooth.anchor_offset = 1e-3 * rd.vec3(t, "tooth", "anchor_offset_mm", Vec3(0, 0, -6));
+  rd.at_most("tooth.anchor_offset_mm", 1e3 * s.tooth.anchor_offset.cwiseAbs().maxCoeff(),
+             kMaxOffsetMm, "every component, inside the device's workspace");
 
   // Tool.
   const auto& tl = rd.object(doc, "", "tool");
@@ -152,10 +175,16 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   }
   s.tool.bur_radius = 1e-3 * rd.number(tl, "tool", "bur_radius_mm");
   rd.positive("tool.bur_radius_mm", s.tool.bur_radius);
+  rd.at_most("tool.bur_radius_mm", 1e3 * s.tool.bur_radius, kMaxBurRadiusMm,
+             "dental burs are 0.25-2.5 mm in radius");
   s.tool.bur_speed_rpm = rd.number(tl, "tool", "bur_speed_rpm", 0.0);
   rd.non_negative("tool.bur_speed_rpm", s.tool.bur_speed_rpm);
+  rd.at_most("tool.bur_speed_rpm", s.tool.bur_speed_rpm, kMaxBurRpm,
+             "air turbines run up to 450000 rpm");
   s.tool.cutting_coefficient = rd.number(tl, "tool", "cutting_coefficient", 0.5);
   rd.non_negative("tool.cutting_coefficient", s.tool.cutting_coefficient);
+  rd.at_most("tool.cutting_coefficient", s.tool.cutting_coefficient, kMaxCuttingCoefficient,
+             "tangential over normal force");
 
   // Device.
   const auto& dv = rd.object(doc, "", "device");
@@ -202,6 +231,8 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   }
   s.method.grasp_mass_scale = rd.number(m, "method", "grasp_mass_scale", 0.0);
   rd.non_negative("method.grasp_mass_scale", s.method.grasp_mass_scale);
+  rd.at_most("method.grasp_mass_scale", s.method.grasp_mass_scale, kMaxGraspMassScale,
+             "a fraction of the hand's mass, 1 = all of it");
   s.method.grip_detector = rd.boolean(m, "method", "grip_detector", false);
   if (s.method.grip_detector && !(s.method.grasp_mass_scale > 0.0)) {
     rd.fail("method.grip_detector",
@@ -212,6 +243,14 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   }
   s.method.friction.mu = rd.number(m, "method", "friction_mu", 0.0);
   rd.non_negative("method.friction_mu", s.method.friction.mu);
+  rd.at_most("method.friction_mu", s.method.friction.mu, kMaxFrictionMu, "a friction coefficient");
+  for (const auto& [field, v] : {std::pair<const char*, double>{"k_vc_n_per_m", g.k_lin},
+                                 {"b_vc_n_s_per_m", g.b_lin},
+                                 {"k_vc_ang_n_m_per_rad", g.k_ang},
+                                 {"b_vc_ang_n_m_s_per_rad", g.b_ang}}) {
+    rd.at_most(std::string("method.") + field, v,
+               field[0] == 'k' ? kMaxStiffness : kMaxDamping, kWhyStiffness);
+  }
   s.method.friction.enabled = s.method.friction.mu > 0.0;
 
   // Proxy.
@@ -220,8 +259,10 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
                             "damping_ang_n_m_s_per_rad"});
   s.method.proxy.mass = rd.number(p, "proxy", "mass_kg");
   rd.positive("proxy.mass_kg", s.method.proxy.mass);
+  rd.at_most("proxy.mass_kg", s.method.proxy.mass, kMaxMassKg, "a hand tool");
   const double J = rd.number(p, "proxy", "inertia_kg_m2");
   rd.positive("proxy.inertia_kg_m2", J);
+  rd.at_most("proxy.inertia_kg_m2", J, kMaxInertia, "a hand tool");
   s.method.proxy.inertia = Mat3::Identity() * J;
   s.method.proxy.damping_lin = rd.number(p, "proxy", "damping_n_s_per_m", 0.0);
   rd.non_negative("proxy.damping_n_s_per_m", s.method.proxy.damping_lin);
@@ -248,6 +289,12 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
     rd.non_negative(zp + ".b_n_s_per_m", s.hand.b_lin);
     rd.non_negative(zp + ".k_ang_n_m_per_rad", s.hand.k_ang);
     rd.non_negative(zp + ".b_ang_n_m_s_per_rad", s.hand.b_ang);
+    rd.at_most(zp + ".mass_kg", s.hand.mass, kMaxMassKg, "a hand");
+    rd.at_most(zp + ".inertia_kg_m2", s.hand.inertia, kMaxInertia, "a hand");
+    rd.at_most(zp + ".k_n_per_m", s.hand.k_lin, kMaxStiffness, kWhyStiffness);
+    rd.at_most(zp + ".b_n_s_per_m", s.hand.b_lin, kMaxDamping, kWhyStiffness);
+    rd.at_most(zp + ".k_ang_n_m_per_rad", s.hand.k_ang, kMaxStiffness, kWhyStiffness);
+    rd.at_most(zp + ".b_ang_n_m_s_per_rad", s.hand.b_ang, kMaxDamping, kWhyStiffness);
   }
   if (!h.contains("script") || !h.at("script").is_array() || h.at("script").empty()) {
     rd.fail("hand.script", "expected a non-empty array of keyframes");
@@ -264,6 +311,8 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
       rd.fail(kp + ".t_s", "keyframe times must increase strictly");
     }
     key.offset = 1e-3 * rd.vec3(k, kp, "offset_mm");
+    rd.at_most(kp + ".offset_mm", 1e3 * key.offset.cwiseAbs().maxCoeff(), kMaxOffsetMm,
+               "every component, inside the device's workspace");
     key.force = rd.vec3(k, kp, "force_n", Vec3::Zero());
     if (key.force.norm() > 20.0) rd.fail(kp + ".force_n", "must be at most 20 N");
     key.phase = rd.string(k, kp, "phase", "");

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# Configures and builds one flavour of dentsim.  Usage: scripts/build.sh release|asan [targets...]
+# Configures and builds one flavour of dentsim.  Usage: scripts/build.sh release|asan|fuzz [targets...]
 #   release: build/release, Release (the default flavour, what the simulator and benchmarks use)
 #   asan:    build/asan, -O1 with asserts + AddressSanitizer + UndefinedBehaviorSanitizer (tests)
+#   fuzz:    build/fuzz, clang, -O1 + libFuzzer + ASan + UBSan: only reference/, the file readers
+#            and the targets in tests/fuzz/ (binaries in build/fuzz/fuzz/; scripts/fuzz.sh runs them)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 flavour=${1:-release}
@@ -14,7 +16,10 @@ case "$flavour" in
   # -O1 keeps the sanitizer build quick to compile (CI builds both flavours); asserts stay on.
   asan)    extra=(-DCMAKE_BUILD_TYPE=Release "-DCMAKE_CXX_FLAGS_RELEASE=-O1" "-DCMAKE_C_FLAGS_RELEASE=-O1"
                   -DDENTSIM_SANITIZE=ON -DDENTSIM_BUILD_BENCHMARKS=OFF) ;;
-  *) echo "build.sh: unknown flavour '$flavour' (expected release or asan)" >&2; exit 2 ;;
+  fuzz)    extra=(-DCMAKE_BUILD_TYPE=Release "-DCMAKE_CXX_FLAGS_RELEASE=-O1 -g" "-DCMAKE_C_FLAGS_RELEASE=-O1 -g"
+                  -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DDENTSIM_FUZZ=ON
+                  -DBUILD_TESTING=OFF -DDENTSIM_BUILD_BENCHMARKS=OFF) ;;
+  *) echo "build.sh: unknown flavour '$flavour' (expected release, asan or fuzz)" >&2; exit 2 ;;
 esac
 mkdir -p build
 log="build/$flavour.configure.log"

@@ -9,6 +9,7 @@ PACKAGES=(
   libcli11-dev nlohmann-json3-dev libfmt-dev libpng-dev libcairo2-dev
   # benchmark-only (bench/tooth_bench.cc compares the tooth query; the build works without them)
   libopenvdb-dev libboost-dev liboctomap-dev
+  clang libclang-rt-14-dev  # the fuzz flavour: clang with libFuzzer (scripts/build.sh fuzz)
 )
 
 missing=()

@@ -1,17 +1,27 @@
 #!/usr/bin/env bash
 # README command 2: install what is missing, build, and run the whole test suite — first the
-# Release build, then the same suite under AddressSanitizer + UndefinedBehaviorSanitizer.
+# Release build, then the same suite under AddressSanitizer + UndefinedBehaviorSanitizer, then
+# the fuzz stage: the libFuzzer targets of tests/fuzz/ for a short fixed budget each
+# (FUZZ_SECONDS, default 20 s per target; the long runs: docs/results/reliability.md).
 # Stress suites run in their short form unless DENTSIM_STRESS=full.
-# Usage: scripts/test.sh            (both flavours)
-#        scripts/test.sh release    (one flavour)
+# Usage: scripts/test.sh            (release, asan, fuzz)
+#        scripts/test.sh release    (one flavour; fuzz = only the fuzz stage)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
 scripts/setup.sh
 jobs=$(nproc 2>/dev/null || echo 2)
 flavours=("$@")
-[ ${#flavours[@]} -gt 0 ] || flavours=(release asan)
+[ ${#flavours[@]} -gt 0 ] || flavours=(release asan fuzz)
 for f in "${flavours[@]}"; do
+  if [ "$f" = fuzz ]; then
+    echo "== fuzz: build and run each target ${FUZZ_SECONDS:-20} s"
+    start=$(date +%s)
+    scripts/build.sh fuzz
+    scripts/fuzz.sh "${FUZZ_SECONDS:-20}"
+    echo "== fuzz took $(( $(date +%s) - start )) s"
+    continue
+  fi
   echo "== build ($f)"
   start=$(date +%s)
   scripts/build.sh "$f"

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "reference/core/io.h"
+#include "reference/core/json_reader.h"
 #include "reference/phantom/phantom_model.h"
 
 namespace dentsim {
@@ -39,97 +40,19 @@ std::string body_text(const PhantomBody& b) {
          ", \"inertia_kg_m2\": " + vec(b.inertia_kg_m2) + "}";
 }
 
-// ---- reading -----------------------------------------------------------------------------------
+// ---- reading ----------------------------------------------------------------------------------
 
-class Reader {
- public:
-  explicit Reader(std::string origin) : origin_(std::move(origin)) {}
-
-  [[noreturn]] void fail(const std::string& field, const std::string& what) const {
-    throw InputError(origin_ + ": " + field + ": " + what);
-  }
-
-  static std::string type_name(const Json& j) { return std::string(j.type_name()); }
-
-  const Json& member(const Json& obj, const std::string& path, const std::string& key) const {
-    const std::string field = path.empty() ? key : path + "." + key;
-    if (!obj.contains(key)) fail(field, "missing (required)");
-    return obj.at(key);
-  }
-
-  const Json& object(const Json& obj, const std::string& path, const std::string& key,
-                     const std::vector<std::string>& allowed) const {
-    const Json& j = member(obj, path, key);
-    const std::string field = path.empty() ? key : path + "." + key;
-    if (!j.is_object()) fail(field, "expected an object, got " + type_name(j));
-    check_keys(j, field, allowed);
-    return j;
-  }
-
-  void check_keys(const Json& j, const std::string& field,
-                  const std::vector<std::string>& allowed) const {
-    for (const auto& item : j.items()) {
-      bool ok = false;
-      for (const auto& a : allowed) ok = ok || item.key() == a;
-      if (!ok) {
-        std::string list;
-        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
-        fail((field.empty() ? "" : field + ".") + item.key(),
-             "unknown key (expected one of: " + list + ")");
-      }
-    }
-  }
-
-  double number(const Json& obj, const std::string& path, const std::string& key) const {
-    const Json& j = member(obj, path, key);
-    if (!j.is_number()) {
-      fail(path + "." + key, "expected a number, got " + type_name(j) + " " + j.dump());
-    }
-    const double v = j.get<double>();
-    if (!std::isfinite(v)) fail(path + "." + key, "expected a finite number");
-    return v;
-  }
-
-  bool boolean(const Json& obj, const std::string& path, const std::string& key) const {
-    const Json& j = member(obj, path, key);
-    if (!j.is_boolean()) {
-      fail(path.empty() ? key : path + "." + key, "expected true or false, got " + j.dump());
-    }
-    return j.get<bool>();
-  }
-
-  template <int N>
-  Eigen::Matrix<double, N, 1> vector(const Json& obj, const std::string& path,
-                                     const std::string& key) const {
-    const std::string field = path + "." + key;
-    const Json& j = member(obj, path, key);
-    if (!j.is_array() || j.size() != static_cast<size_t>(N)) {
-      fail(field, "expected an array of " + std::to_string(N) + " numbers, got " + j.dump());
-    }
-    Eigen::Matrix<double, N, 1> v;
-    for (int i = 0; i < N; ++i) {
-      if (!j[i].is_number()) {
-        fail(field + "[" + std::to_string(i) + "]",
-             "expected a number, got " + type_name(j[i]) + " " + j[i].dump());
-      }
-      v(i) = j[i].get<double>();
-    }
-    return v;
-  }
-
-  PhantomBody body(const Json& bodies, const std::string& name) const {
-    const Json& b = object(bodies, "bodies", name, {"mass_kg", "com_m", "inertia_kg_m2"});
-    const std::string path = "bodies." + name;
-    PhantomBody out;
-    out.mass_kg = number(b, path, "mass_kg");
-    out.com_m = vector<3>(b, path, "com_m");
-    out.inertia_kg_m2 = vector<3>(b, path, "inertia_kg_m2");
-    return out;
-  }
-
- private:
-  std::string origin_;
-};
+PhantomBody read_body(const JsonReader& r, const JsonReader::Json& bodies,
+                      const std::string& name) {
+  const std::string path = "bodies." + name;
+  const auto& b = r.object(bodies, "bodies", name);
+  r.only_keys(b, path, {"mass_kg", "com_m", "inertia_kg_m2"});
+  PhantomBody out;
+  out.mass_kg = r.number(b, path, "mass_kg");
+  out.com_m = r.vec3(b, path, "com_m");
+  out.inertia_kg_m2 = r.vec3(b, path, "inertia_kg_m2");
+  return out;
+}
 
 // Bodies in file order with a pointer-to-member each.
 struct BodyField {
@@ -245,58 +168,53 @@ std::string default_phantom_model_file() {
 }
 
 PhantomParams parse_phantom_params(const std::string& text, const std::string& origin) {
-  Json root;
-  try {
-    root = Json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(origin + ": not valid JSON (" + e.what() + ")");
-  }
-  Reader r(origin);
-  if (!root.is_object()) r.fail("(top level)", "expected a JSON object, got " + root.dump());
-  r.check_keys(root, "",
-               {"format", "version", "name", "gravity_on", "gravity_m_s2", "arm", "bodies",
-                "gimbal", "joints"});
-  const Json& format = r.member(root, "", "format");
+  const JsonReader r(origin);
+  const JsonReader::Json root = r.parse(text);
+  if (!root.is_object())
+    r.fail("(top level)", "expected a JSON object, got " + JsonReader::shown(root));
+  r.only_keys(root, "",
+              {"format", "version", "name", "gravity_on", "gravity_m_s2", "arm", "bodies", "gimbal",
+               "joints"});
+  const auto& format = r.member(root, "", "format");
   if (!format.is_string() || format.get<std::string>() != kFormat) {
-    r.fail("format", std::string("expected \"") + kFormat + "\", got " + format.dump());
+    r.fail("format", std::string("expected \"") + kFormat + "\", got " + JsonReader::shown(format));
   }
-  const Json& version = r.member(root, "", "version");
-  if (!version.is_number_integer() || version.get<int>() != kVersion) {
-    r.fail("version", "expected " + std::to_string(kVersion) + ", got " + version.dump());
+  if (!r.member(root, "", "version").is_number_integer() ||
+      r.integer(root, "", "version", 0, 1000) != kVersion) {
+    r.fail("version", "expected " + std::to_string(kVersion) + ", got " +
+                          JsonReader::shown(root.at("version")));
   }
   PhantomParams p;
-  const Json& name = r.member(root, "", "name");
-  if (!name.is_string()) r.fail("name", "expected a string, got " + name.dump());
-  p.name = name.get<std::string>();
+  p.name = r.string(root, "", "name");
   p.gravity_on = r.boolean(root, "", "gravity_on");
-  const Json& gm = r.member(root, "", "gravity_m_s2");
-  if (!gm.is_number()) r.fail("gravity_m_s2", "expected a number, got " + gm.dump());
-  p.gravity_m_s2 = gm.get<double>();
+  p.gravity_m_s2 = r.number(root, "", "gravity_m_s2");
 
-  const Json& arm = r.object(root, "", "arm", {"l1_m", "l2_m", "l3_m"});
+  const auto& arm = r.object(root, "", "arm");
+  r.only_keys(arm, "arm", {"l1_m", "l2_m", "l3_m"});
   p.l1_m = r.number(arm, "arm", "l1_m");
   p.l2_m = r.number(arm, "arm", "l2_m");
   p.l3_m = r.number(arm, "arm", "l3_m");
 
-  std::vector<std::string> body_names;
-  for (const auto& b : kBodies) body_names.emplace_back(b.name);
-  const Json& bodies = r.object(root, "", "bodies", body_names);
-  for (const auto& b : kBodies) p.*(b.member) = r.body(bodies, b.name);
+  const auto& bodies = r.object(root, "", "bodies");
+  r.only_keys(bodies, "bodies",
+              {"base", "upper_arm", "forearm", "crank", "parallel_link", "gimbal_yaw",
+               "gimbal_pitch", "gimbal_roll"});
+  for (const auto& b : kBodies) p.*(b.member) = read_body(r, bodies, b.name);
 
-  const Json& gimbal = r.object(
-      root, "", "gimbal",
-      {"pitch_pos_m", "roll_pos_m", "yaw_axis", "pitch_axis", "roll_axis", "tip_offset_m"});
-  p.pitch_pos_m = r.vector<3>(gimbal, "gimbal", "pitch_pos_m");
-  p.roll_pos_m = r.vector<3>(gimbal, "gimbal", "roll_pos_m");
-  p.yaw_axis = r.vector<3>(gimbal, "gimbal", "yaw_axis");
-  p.pitch_axis = r.vector<3>(gimbal, "gimbal", "pitch_axis");
-  p.roll_axis = r.vector<3>(gimbal, "gimbal", "roll_axis");
-  p.tip_offset_m = r.vector<3>(gimbal, "gimbal", "tip_offset_m");
+  const auto& gimbal = r.object(root, "", "gimbal");
+  r.only_keys(gimbal, "gimbal",
+              {"pitch_pos_m", "roll_pos_m", "yaw_axis", "pitch_axis", "roll_axis", "tip_offset_m"});
+  p.pitch_pos_m = r.vec3(gimbal, "gimbal", "pitch_pos_m");
+  p.roll_pos_m = r.vec3(gimbal, "gimbal", "roll_pos_m");
+  p.yaw_axis = r.vec3(gimbal, "gimbal", "yaw_axis");
+  p.pitch_axis = r.vec3(gimbal, "gimbal", "pitch_axis");
+  p.roll_axis = r.vec3(gimbal, "gimbal", "roll_axis");
+  p.tip_offset_m = r.vec3(gimbal, "gimbal", "tip_offset_m");
 
-  const Json& joints =
-      r.object(root, "", "joints",
-               {"armature_kg_m2", "damping_n_m_s_per_rad", "coulomb_n_m", "coulomb_smoothing_rad_s",
-                "q_min_rad", "q_max_rad", "torque_limit_n_m", "encoder_counts_per_rev"});
+  const auto& joints = r.object(root, "", "joints");
+  r.only_keys(joints, "joints",
+              {"armature_kg_m2", "damping_n_m_s_per_rad", "coulomb_n_m", "coulomb_smoothing_rad_s",
+               "q_min_rad", "q_max_rad", "torque_limit_n_m", "encoder_counts_per_rev"});
   p.armature_kg_m2 = r.vector<6>(joints, "joints", "armature_kg_m2");
   p.damping_n_m_s_per_rad = r.vector<6>(joints, "joints", "damping_n_m_s_per_rad");
   p.coulomb_n_m = r.vector<6>(joints, "joints", "coulomb_n_m");
@@ -316,7 +234,7 @@ PhantomParams load_phantom_params(const std::string& path) {
 
 void validate_phantom_params(const PhantomParams& p, const std::string& origin,
                              int workspace_samples) {
-  Reader r(origin);
+  const JsonReader r(origin);
   auto positive = [&](double v, const std::string& field) {
     if (!(v > 0.0) || !std::isfinite(v)) {
       r.fail(field, "expected a positive finite number, got " + num(v));
@@ -380,7 +298,9 @@ void validate_phantom_params(const PhantomParams& p, const std::string& origin,
            "expected a non-negative number (0 = sign), got " + num(p.coulomb_smoothing_rad_s));
   }
   for (int j = 0; j < 6; ++j) {
-    const std::string idx = "[" + std::to_string(j) + "]";
+    std::string idx("[");  // (built by appending: GCC 12's -Wrestrict misfires on "[" + s)
+    idx += std::to_string(j);
+    idx += ']';
     if (!std::isfinite(p.q_min_rad(j))) r.fail("joints.q_min_rad" + idx, "expected a finite angle");
     if (!std::isfinite(p.q_max_rad(j))) r.fail("joints.q_max_rad" + idx, "expected a finite angle");
     if (!(p.q_min_rad(j) < p.q_max_rad(j))) {

@@ -108,9 +108,11 @@ double parse_number(std::istringstream& in, const std::string& where, const char
   char* end = nullptr;
   const double v = std::strtod(tok.c_str(), &end);
   if (end == tok.c_str() || *end != '\0') {
-    throw InputError(where + ": expected " + what + ", found '" + tok + "'");
+    throw InputError(where + ": expected " + what + ", found '" + printable(tok) + "'");
   }
-  if (!std::isfinite(v)) throw InputError(where + ": " + what + " is not finite ('" + tok + "')");
+  if (!std::isfinite(v)) {
+    throw InputError(where + ": " + what + " is not finite ('" + printable(tok) + "')");
+  }
   return v;
 }
 
@@ -185,7 +187,7 @@ LoadedMesh parse_stl_ascii(const std::string& text, const std::string& name) {
       append_triangle(mesh, {loop[0], loop[1], loop[2]}, group);
       in_loop = false;
     } else if (key != "facet" && key != "endfacet" && key != "endsolid") {
-      throw InputError(where + ": unexpected keyword '" + key + "'");
+      throw InputError(where + ": unexpected keyword '" + printable(key) + "'");
     }
   }
   if (in_loop) throw InputError("STL '" + name + "': file ends inside a facet");
@@ -286,6 +288,15 @@ MeshReport validate_and_repair(TriangleMesh& mesh, const std::string& name) {
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
     if (!mesh.vertices[i].allFinite()) {
       throw InputError(what + ": vertex " + std::to_string(i) + " is not finite");
+    }
+    // Bounded so that volumes (products of three coordinates) and winding tests stay finite.
+    if (mesh.vertices[i].cwiseAbs().maxCoeff() > kMaxMeshCoordinate) {
+      std::ostringstream v;
+      v << mesh.vertices[i].transpose();
+      throw InputError(what + ": vertex " + std::to_string(i) + " (" + v.str() +
+                       ") is too far out; expected |coordinate| <= " +
+                       std::to_string(static_cast<long long>(kMaxMeshCoordinate)) +
+                       " mesh units (rescale the file)");
     }
   }
 
@@ -426,8 +437,9 @@ LoadedMesh parse_obj(const std::string& text, const std::string& name) {
         const long nv = static_cast<long>(mesh.vertices.size());
         const long resolved = v > 0 ? v - 1 : nv + v;  // negative indices count back
         if (idx.empty() || *end != '\0' || v == 0 || resolved < 0 || resolved >= nv) {
-          throw InputError(where + ": face vertex '" + tok + "' is not a vertex index in 1.." +
-                           std::to_string(nv) + " (or -1..-" + std::to_string(nv) + ")");
+          throw InputError(where + ": face vertex '" + printable(tok) +
+                           "' is not a vertex index in 1.." + std::to_string(nv) + " (or -1..-" +
+                           std::to_string(nv) + ")");
         }
         poly.push_back(static_cast<int>(resolved));
       }
@@ -476,6 +488,13 @@ void scale_mesh(TriangleMesh& mesh, double k) {
     throw InputError("mesh scale " + std::to_string(k) + ": expected a finite number > 0");
   }
   for (Vec3& v : mesh.vertices) v *= k;
+  const Aabb box = mesh_bounds(mesh);
+  if (!(std::max(box.min.cwiseAbs().maxCoeff(), box.max.cwiseAbs().maxCoeff()) <=
+        kMaxMeshCoordinate)) {
+    throw InputError("mesh scale " + std::to_string(k) + ": the scaled mesh exceeds " +
+                     std::to_string(static_cast<long long>(kMaxMeshCoordinate)) +
+                     " m; expected a scale that makes a tooth-sized mesh");
+  }
 }
 
 double scale_for_size(const TriangleMesh& mesh, double size_m) {

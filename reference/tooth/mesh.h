@@ -19,6 +19,10 @@
 
 namespace dentsim {
 
+// Largest |coordinate| a mesh may have, in its own units (and in metres after scaling): volumes
+// are products of three coordinates, so 1e9 keeps every one far inside the range of a double.
+inline constexpr double kMaxMeshCoordinate = 1e9;
+
 struct TriangleMesh {
   std::vector<Vec3> vertices;                 // mesh units, or [m] after scale_mesh()
   std::vector<std::array<int, 3>> triangles;  // vertex indices, CCW seen from outside
@@ -56,8 +60,8 @@ LoadedMesh load_mesh(const std::string& path);
 
 // Welds exact duplicate vertices, removes degenerate triangles, checks that every edge is shared
 // by exactly two triangles in opposite directions, and turns inside-out outermost shells outward.
-// Throws InputError (naming `name` and the edge counts) for an empty, non-finite, open,
-// non-manifold or inconsistently oriented mesh.
+// Throws InputError (naming `name` and the edge counts) for an empty, non-finite, too large
+// (|coordinate| > kMaxMeshCoordinate), open, non-manifold or inconsistently oriented mesh.
 MeshReport validate_and_repair(TriangleMesh& mesh, const std::string& name);
 
 // Signed volume of the triangles listed (all when `triangles` is empty), divergence theorem.
@@ -89,7 +93,8 @@ struct Aabb {
 };
 Aabb mesh_bounds(const TriangleMesh& mesh);
 
-// Multiplies every vertex by `k` (metres per mesh unit). Throws InputError unless k > 0, finite.
+// Multiplies every vertex by `k` (metres per mesh unit). Throws InputError unless k > 0, finite,
+// and the scaled coordinates stay within kMaxMeshCoordinate.
 void scale_mesh(TriangleMesh& mesh, double k);
 // The scale k that makes the largest bounding-box extent equal `size_m`.
 double scale_for_size(const TriangleMesh& mesh, double size_m);

@@ -13,6 +13,7 @@
 #include <string>
 
 #include "calibration/fit.h"
+#include "calibration/log.h"
 #include "reference/core/io.h"
 #include "reference/phantom/phantom_model.h"
 #include "reference/phantom/phantom_params.h"
@@ -182,6 +183,63 @@ TEST(CalibrateCli, BadFitAndExciteFlagsExitTwoAndWriteNothing) {
   EXPECT_EQ(e.status, 2) << e.output;
   EXPECT_THAT(e.output, HasSubstr("--friction-law"));
   EXPECT_FALSE(fs::exists(d / "e.csv"));
+}
+
+// Issue #18: outputs that are inputs, low-pass cut-offs the log cannot carry, a negative seed.
+// Each exits 2 before any work, names the flag, and leaves existing files as they were.
+TEST(CalibrateCli, OutputPathsAndLowpassAreCheckedAtTheDoor) {
+  const fs::path d = temp_dir("door");
+  ASSERT_EQ(run("excite -o " + (d / "log.csv").string() + " --duration 1").status, 0);
+  const std::string log = (d / "log.csv").string();
+  const std::string log_before = dentsim::read_file(log);
+  write_file_atomic((d / "old.json").string(), "previous report\n");
+  const std::string json = (d / "old.json").string();
+  const std::string model = (d / "m.json").string();
+  struct Case {
+    std::string args, needle;
+  };
+  const Case cases[] = {
+      {"calibrate " + log + " --json " + log + " -o " + model,
+       "--json '" + log + "': is the input LOG '" + log + "'; refusing to overwrite an input"},
+      {"calibrate " + log + " --json " + json + " -o " + json,
+       "-o '" + json + "': is also the output --json; each output needs its own file"},
+      {"calibrate " + log + " --json " + json + " -o " + (d / "nodir/m.json").string(),
+       "-o '" + (d / "nodir/m.json").string() + "': directory '" + (d / "nodir").string() +
+           "' does not exist"},
+      {"calibrate " + log + " --json " + json + " -o " + model + " --lowpass inf",
+       "--lowpass: expected a finite frequency >= 0 Hz"},
+      {"calibrate " + log + " --json " + json + " -o " + model + " --lowpass 1e-9",
+       "--lowpass 0.000000 Hz: below 4 / (duration"},
+      {"calibrate " + log + " --json " + json + " -o " + model + " --lowpass 600",
+       "--lowpass 600.000000 Hz: above 0.45 / (time step"},
+      {"excite -o " + json + " --duration 1 --seed -1", "--seed"},
+      {"excite -o " + log + " --device " + log + " --duration 1",
+       "-o '" + log + "': is the input --device"},
+  };
+  for (const Case& c : cases) {
+    const Cmd r = run(c.args);
+    EXPECT_EQ(r.status, 2) << c.args << ": " << r.output;
+    EXPECT_THAT(r.output, HasSubstr(c.needle)) << c.args;
+    EXPECT_EQ(dentsim::read_file(log), log_before) << c.args;
+    EXPECT_EQ(dentsim::read_file(json), "previous report\n") << c.args;
+    EXPECT_FALSE(fs::exists(model)) << c.args;
+  }
+}
+
+// A log with a time step tiny against the cut-off used to crash the fit (a negative trim).
+TEST(CalibrateCli, TinyTimeStepIsRefusedNotACrash) {
+  const fs::path d = temp_dir("tinydt");
+  ASSERT_EQ(run("excite -o " + (d / "log.csv").string() + " --duration 1").status, 0);
+  CalibrationLog log = read_calibration_log((d / "log.csv").string());
+  for (double& t : log.t) t *= 1e-6;  // 1 ns ticks: the log lasts 1 us
+  write_calibration_log((d / "tiny.csv").string(), log);
+  const Cmd c = run("calibrate " + (d / "tiny.csv").string() + " --json " +
+                    (d / "fit.json").string() + " -o " + (d / "m.json").string());
+  EXPECT_EQ(c.status, 2) << c.output;
+  EXPECT_THAT(c.output, HasSubstr("--lowpass 10.000000 Hz: below 4 / (duration"));
+  EXPECT_THAT(c.output, HasSubstr("tiny.csv"));
+  EXPECT_FALSE(fs::exists(d / "fit.json"));
+  EXPECT_FALSE(fs::exists(d / "m.json"));
 }
 
 TEST(CalibrateCli, FitThatDoesNotConvergeSaysSoAndExitsNonZero) {

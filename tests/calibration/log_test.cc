@@ -96,6 +96,42 @@ TEST(CalibLog, NanIsNamedWithLineAndColumn) {
               HasSubstr("bad.csv: line 13: column qd2_rad_s: expected a finite number, got 'nan'"));
 }
 
+TEST(CalibLog, DuplicateColumnIsAnError) {
+  // A second q2_rad column used to be taken silently (the last one won).
+  std::string text = calibration_log_to_text(sine_log(300));
+  const auto h = text.find("t_s,");
+  text.insert(h + 4, "q2_rad,");
+  EXPECT_THAT(error_of(text),
+              HasSubstr("bad.csv: line 2: header: column 'q2_rad' given twice (columns 2 and 4)"));
+}
+
+TEST(CalibLog, HugeValuesAreNamed) {
+  // One velocity or torque cell of 1e300 used to crash the fit or make it "converge" with an
+  // infinite residual (issue #18).
+  CalibrationLog log = sine_log(300);
+  log.qd[10](2) = 1e300;
+  EXPECT_THAT(error_of(calibration_log_to_text(log)),
+              HasSubstr("bad.csv: line 13: column qd3_rad_s: |value| must be at most 10000, "
+                        "got 1.0000000000000001e+300"));
+  log = sine_log(300);
+  log.tau[20](5) = -1e300;
+  EXPECT_THAT(error_of(calibration_log_to_text(log)),
+              HasSubstr("line 23: column tau6_n_m: |value| must be at most 100, got"));
+  log = sine_log(300);
+  log.q[30](0) = 101.0;
+  EXPECT_THAT(error_of(calibration_log_to_text(log)),
+              HasSubstr("line 33: column q1_rad: |value| must be at most 100, got 101"));
+}
+
+TEST(CalibLog, GarbageIsEscapedInTheMessage) {
+  CalibrationLog log = sine_log(300);
+  std::string text = calibration_log_to_text(log);
+  const auto l3 = text.find('\n', text.find('\n') + 1) + 1;
+  text.replace(l3, text.find(',', l3) - l3, "\x1b[2J");
+  EXPECT_THAT(error_of(text), HasSubstr("line 3: column t_s: expected a finite number, got "
+                                        "'\\x1b[2J'"));
+}
+
 TEST(CalibLog, NonMonotonicTimeIsNamed) {
   CalibrationLog log = sine_log(300);
   log.t[50] = log.t[49];

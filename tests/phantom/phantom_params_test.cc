@@ -98,7 +98,7 @@ TEST(PhantomParams, OtherBadInputs) {
   EXPECT_THAT(error_of("{ not json"), AllOf(HasSubstr("model.json"), HasSubstr("not valid JSON")));
   EXPECT_THAT(error_of(replace(default_phantom_model_file(), "\"gimbal\": {",
                                "\"gimbal\": {\"extra\": 1, ")),
-              HasSubstr("gimbal.extra: unknown key"));
+              HasSubstr("gimbal.extra: unknown field"));
   EXPECT_THAT(error_of(replace(default_phantom_model_file(), "\"q_max_rad\": [0.9,",
                                "\"q_max_rad\": [-1.9,")),
               HasSubstr("joints.q_max_rad[0]"));
@@ -108,6 +108,29 @@ TEST(PhantomParams, OtherBadInputs) {
   EXPECT_THAT(error_of(replace(default_phantom_model_file(), "\"version\": 1", "\"version\": 7")),
               HasSubstr("version"));
   EXPECT_THROW(load_phantom_params("/nonexistent/phantom.json"), InputError);
+}
+
+// The model file is read by the one JSON reader (reference/core/json_reader.h): its checks at the
+// door apply here too (issue #18: these used to crash or be taken silently).
+TEST(PhantomParams, ReaderChecksAtTheDoor) {
+  std::string deep = std::string(100000, '[') + std::string(100000, ']');
+  EXPECT_THAT(error_of(deep), AllOf(HasSubstr("model.json"), HasSubstr("nested deeper than 64")));
+  EXPECT_EQ(error_of(replace(default_phantom_model_file(), "\"l1_m\": 0.215",
+                             "\"l1_m\": 1e400")),
+            "model.json: arm.l1_m: number '1e400' is outside the range of a double (|x| < 1.8e308)");
+  EXPECT_EQ(error_of(replace(default_phantom_model_file(), "\"l1_m\": 0.215",
+                             "\"l1_m\": 0.215, \"l1_m\": 0.3")),
+            "model.json: arm.l1_m: key given twice in one object (JSON would silently keep the "
+            "last)");
+  EXPECT_EQ(error_of(replace(default_phantom_model_file(), "\"version\": 1",
+                             "\"version\": 4294967297")),
+            "model.json: version: expected an integer in [0, 1000], got 4294967297");
+  EXPECT_THAT(error_of(replace(default_phantom_model_file(), "\"gravity_m_s2\": 9.81",
+                               "\"gravity_m_s2\": \"9.81\"")),
+              HasSubstr("model.json: gravity_m_s2: expected a number, got string"));
+  EXPECT_THAT(error_of(replace(default_phantom_model_file(), "\"q_max_rad\": [0.9,",
+                               "\"q_max_rad\": [null,")),
+              HasSubstr("model.json: joints.q_max_rad[0]: expected a finite number"));
 }
 
 // ---- CLI: dentsim device show / check ----------------------------------------------------------
@@ -169,6 +192,37 @@ TEST(DeviceCli, CheckAcceptsGoodAndRejectsBadNamingTheField) {
   EXPECT_THAT(ko.out, AllOf(HasSubstr(bad), HasSubstr("bodies.parallel_link.mass_kg")));
   const RunResult missing = run("device check 2>&1");
   EXPECT_EQ(missing.status, 2);
+  // A model file nested 10^5 levels deep used to crash device check/show (issue #18).
+  const std::string deep = temp_path("deep.json");
+  std::string nested;
+  for (int i = 0; i < 100000; ++i) nested += "{\"a\": ";
+  write_file_atomic(deep, nested + "1" + std::string(100000, '}'));
+  for (const char* cmd : {"device check ", "device show "}) {
+    const RunResult d = run(cmd + deep + " 2>&1");
+    EXPECT_EQ(d.status, 2) << cmd;
+    EXPECT_THAT(d.out, AllOf(HasSubstr(deep), HasSubstr("nested deeper than 64"))) << cmd;
+  }
+  // Valid only if `run` can build the simulated device from it: masses of 1e-20 kg pass the
+  // model's checks but MuJoCo refuses them (mjMINVAL); device check used to call them valid.
+  PhantomParams tiny = default_phantom_params();
+  for (PhantomBody* b : {&tiny.base, &tiny.upper_arm, &tiny.forearm, &tiny.crank,
+                         &tiny.parallel_link, &tiny.gimbal_yaw, &tiny.gimbal_pitch,
+                         &tiny.gimbal_roll}) {
+    b->mass_kg = 1e-20;
+    b->inertia_kg_m2 = Vec3::Constant(1e-20);
+  }
+  const std::string tiny_path = temp_path("tiny.json");
+  write_file_atomic(tiny_path, phantom_params_to_text(tiny));
+  const RunResult t = run("device check " + tiny_path + " 2>&1");
+  EXPECT_EQ(t.status, 2) << t.out;
+  EXPECT_THAT(t.out, AllOf(HasSubstr(tiny_path), HasSubstr("the simulated device cannot be built"),
+                           HasSubstr("mjMINVAL")));
+  std::filesystem::remove(tiny_path);
+  // Not a regular file: refused at once instead of reading forever.
+  const RunResult z = run("device check /dev/zero 2>&1");
+  EXPECT_EQ(z.status, 2);
+  EXPECT_THAT(z.out, HasSubstr("'/dev/zero': it is a character device; expected a regular file"));
+  std::filesystem::remove(deep);
   std::filesystem::remove(good);
   std::filesystem::remove(bad);
 }

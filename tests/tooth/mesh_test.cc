@@ -13,6 +13,8 @@
 #include <functional>
 #include <random>
 #include <sstream>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "reference/core/io.h"
 
@@ -189,6 +191,81 @@ TEST(Mesh, ObjErrorsNameTheLine) {
               HasSubstr("unknown extension '.ply'; expected .stl (binary or ASCII) or .obj"));
   EXPECT_THAT(message_of([] { load_mesh("/nonexistent/tooth.stl"); }),
               HasSubstr("cannot read '/nonexistent/tooth.stl'"));
+}
+
+// Regressions from the fuzz targets (tests/fuzz/): errors quoted the input's raw bytes, so a
+// crafted file could write control sequences to the user's terminal. They are escaped now.
+bool has_control_byte(const std::string& s) {
+  for (const char c : s) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u < 0x20 || u == 0x7f) return true;
+  }
+  return false;
+}
+
+TEST(Mesh, FuzzFoundRawBytesInMessagesAreEscaped) {
+  // stl_fuzz: a control byte (0x1e) in place of the indentation of "endloop".
+  const std::string stl =
+      "solid t\n facet normal 0 0 0\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 0\n"
+      "   vertex 0 1 0\n\x1e endloop\n endfacet\nendsolid t\n";
+  const std::string e1 = message_of([&] { parse_stl(stl, "f.stl"); });
+  EXPECT_EQ(e1, "STL 'f.stl' line 7: unexpected keyword '\\x1e'");
+  // obj_fuzz: a face index followed by 0xff bytes and 0x0e.
+  const std::string obj =
+      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf -4\xff\xff\xff\x0e -4 -3 -1\n";
+  const std::string e2 = message_of([&] { parse_obj(obj, "f.obj"); });
+  EXPECT_EQ(e2, "OBJ 'f.obj' line 5: face vertex '-4\\xff\\xff\\xff\\x0e' is not a vertex index "
+                "in 1..4 (or -1..-4)");
+  EXPECT_FALSE(has_control_byte(e1));
+  EXPECT_FALSE(has_control_byte(e2));
+  const std::string e3 = message_of([] { parse_obj("v 0 0 \x1b[2J\n", "f.obj"); });
+  EXPECT_EQ(e3, "OBJ 'f.obj' line 1: expected vertex z, found '\\x1b[2J'");
+}
+
+// A correctly oriented cube scaled to 1e300 used to come out "inside-out" with a negative volume
+// (the triple products overflow); such coordinates are refused with the vertex named.
+TEST(Mesh, HugeCoordinatesAreRefused) {
+  // kCubeObj with every vertex coordinate 1 replaced by `side` (face lines untouched).
+  auto cube_of_side = [](const std::string& side) {
+    std::istringstream in(kCubeObj);
+    std::string out, line;
+    while (std::getline(in, line)) {
+      if (line.rfind("v ", 0) == 0) {
+        for (std::size_t at = 0; (at = line.find('1', at)) != std::string::npos;) {
+          line.replace(at, 1, side);
+          at += side.size();
+        }
+      }
+      out += line + "\n";
+    }
+    return out;
+  };
+  EXPECT_EQ(message_of([&] { parse_obj(cube_of_side("1e300"), "big.obj"); }),
+            "mesh 'big.obj': vertex 1 (1e+300      0      0) is too far out; expected "
+            "|coordinate| <= 1000000000 mesh units (rescale the file)");
+  // Up to the limit the volume is right and nothing is flipped: cube of side 1e9 -> 1e27.
+  const LoadedMesh m = parse_obj(cube_of_side("1e9"), "edge.obj");
+  EXPECT_EQ(m.report.flipped_shells, 0);
+  EXPECT_DOUBLE_EQ(signed_volume(m.mesh), 1e27);
+  // A scale that pushes a good mesh beyond the limit is refused too.
+  TriangleMesh c = cube();
+  EXPECT_THAT(message_of([&] { scale_mesh(c, 1e308); }), HasSubstr("the scaled mesh exceeds"));
+}
+
+TEST(Mesh, NonRegularFilesAreRefused) {
+  // A mesh path that is /dev/zero or a FIFO used to fill memory or hang (issue #18).
+  const auto tmp = std::filesystem::temp_directory_path();
+  const std::string tag = std::to_string(::getpid());
+  const std::string zero = (tmp / ("dentsim_mesh_zero_" + tag + ".stl")).string();
+  const std::string fifo = (tmp / ("dentsim_mesh_fifo_" + tag + ".obj")).string();
+  std::filesystem::create_symlink("/dev/zero", zero);
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_EQ(message_of([&] { load_mesh(zero); }),
+            "cannot read '" + zero + "': it is a character device; expected a regular file");
+  EXPECT_EQ(message_of([&] { load_mesh(fifo); }),
+            "cannot read '" + fifo + "': it is a FIFO; expected a regular file");
+  std::filesystem::remove(zero);
+  std::filesystem::remove(fifo);
 }
 
 // Cube [0,4]^3 (group "Tooth0") with a nested outward octahedron (group "Nerve"), a nested

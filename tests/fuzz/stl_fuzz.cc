@@ -1,0 +1,9 @@
+// libFuzzer target: the STL reader (binary and ASCII; parse_stl dispatches on the bytes) with
+// welding and manifold validation (reference/tooth/mesh.h).
+#include "reference/tooth/mesh.h"
+#include "tests/fuzz/fuzz_input.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  return dentsim::fuzz::run_reader(
+      data, size, [](const std::string& bytes) { (void)dentsim::parse_stl(bytes, "fuzz.stl"); });
+}
