@@ -3,12 +3,12 @@
 // made them: docs/benchmarks.md. Run: build/release/bench/dentsim_bench
 #include <benchmark/benchmark.h>
 
+#include "reference/half_space_wall.h"
 #include "reference/rigid_body_device.h"
 #include "reference/tick.h"
 #include "reference/tools.h"
 #include "reference/tooth/collision.h"
 #include "reference/tooth/procedural_molar.h"
-#include "validation/wall_loop.h"
 
 namespace dentsim {
 namespace {

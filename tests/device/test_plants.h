@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "device/mujoco_plant.h"
+#include "plant/mujoco_plant.h"
 
 namespace dentsim::testing {
 
