@@ -1,5 +1,5 @@
 // Small MuJoCo plants for the simulated-device tests (independent of the Phantom model in
-// validation/): a 1-DoF wheel with a closed-form response and a 6-hinge serial arm shaped like
+// plant/): a 1-DoF wheel with a closed-form response and a 6-hinge serial arm shaped like
 // the Phantom (yaw, shoulder, elbow, 3-axis gimbal with an offset stylus mass).
 #pragma once
 
