@@ -1,7 +1,8 @@
 // `dentsim crosscheck octree`: the full octree's sphere queries against brute force over the flat
 // voxel array, on random and adversarial spheres (validation/crosscheck_octree.h). Prints and
 // writes (--json) `queries` and `mismatches`; exit status 1 if any query mismatched. The JSON also
-// holds the octree memory per resolution 32..512 (docs/tooth_octree.md).
+// holds the octree memory per resolution 32..512 (docs/tooth_octree.md). The check, the memory
+// table and the JSON are validation/crosscheck_octree.h; this file parses the flags and prints.
 #include <cstdio>
 #include <memory>
 #include <stdexcept>
@@ -19,26 +20,6 @@ struct Options {
   std::string json;
   OctreeCrosscheckOptions check;
 };
-
-nlohmann::json memory_table() {
-  nlohmann::json rows = nlohmann::json::array();
-  for (int n = 32; n <= 512; n *= 2) {
-    int levels = 0;
-    while ((1 << levels) < n) ++levels;
-    const std::size_t masks = FullOctree::internal_node_count(levels);
-    const std::size_t total = FullOctree::memory_bytes_for(n);
-    const std::size_t nn = static_cast<std::size_t>(n);
-    rows.push_back({{"n", n},
-                    {"levels", levels},
-                    {"internal_nodes", masks},
-                    {"mask_bytes", masks},
-                    {"leaf_bytes", nn * nn * nn},
-                    {"octree_bytes", total},
-                    {"neighbor_code_bytes", nn * nn * nn},
-                    {"drill_work_bytes", nn * nn * nn * sizeof(double)}});
-  }
-  return rows;
-}
 
 void setup_crosscheck_octree(CLI::App& app) {
   CLI::App* group_app = group(app, "crosscheck", "Cross-checks against an independent oracle");
@@ -64,24 +45,7 @@ void setup_crosscheck_octree(CLI::App& app) {
         "voxels_matched=%ld removals=%ld\n",
         opt->check.n, static_cast<unsigned long long>(opt->check.seed), r.queries, r.mismatches,
         r.nonempty_queries, r.voxels_matched, r.removals);
-    if (!opt->json.empty()) {
-      nlohmann::json by_placement = nlohmann::json::object();
-      for (int p = 0; p < static_cast<int>(SpherePlacement::kCount); ++p) {
-        by_placement[sphere_placement_name(static_cast<SpherePlacement>(p))] = r.by_placement[p];
-      }
-      nlohmann::json j = {{"n", opt->check.n},
-                          {"seed", opt->check.seed},
-                          {"remove_every", opt->check.remove_every},
-                          {"queries", r.queries},
-                          {"mismatches", r.mismatches},
-                          {"nonempty_queries", r.nonempty_queries},
-                          {"voxels_matched", r.voxels_matched},
-                          {"removals", r.removals},
-                          {"by_placement", by_placement},
-                          {"first_mismatch", r.first_mismatch},
-                          {"memory_per_resolution", memory_table()}};
-      write_json(opt->json, j);
-    }
+    if (!opt->json.empty()) write_json(opt->json, crosscheck_octree_json(opt->check, r));
     if (r.mismatches > 0) {
       throw std::runtime_error("crosscheck octree: " + std::to_string(r.mismatches) +
                                " mismatches; first: " + r.first_mismatch);

@@ -1,13 +1,15 @@
 // `dentsim demo`: a short run of the reference pipeline — an ideal rigid-body device held by a
 // scripted hand pressing the tool tip into a stiff flat wall, once per method (explicit, pmi,
-// pmi-pd) — printing and (with --json) writing what each rendered.
+// pmi-pd) — printing and (with --json) writing what each rendered. The experiment is
+// validation/wall_demo.h; this file parses the flags, prints the table and writes the JSON.
 #include <cstdio>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "cli/registry.h"
 #include "reference/core/io.h"
-#include "reference/tools.h"
-#include "validation/wall_loop.h"
+#include "validation/wall_demo.h"
 
 namespace dentsim::cli {
 namespace {
@@ -22,70 +24,31 @@ struct DemoOptions {
   std::vector<std::string> methods{"explicit", "pmi", "pmi-pd"};
 };
 
-WallLoopConfig demo_config(const DemoOptions& o, Method m) {
-  WallLoopConfig c;
-  c.device.mass = 0.075;                  // apparent tip mass of a Phantom Premium (< 75 g)
-  c.device.inertia = Mat3::Identity() * 2e-4;
-  c.device.damping_lin = 0.5;             // physical device damping b_d [N s/m]
-  c.device.damping_ang = 0.002;
-  c.pipeline.method = m;
-  c.pipeline.proxy.mass = 0.02;
-  c.pipeline.proxy.inertia = Mat3::Identity() * 2e-6;
-  c.pipeline.coupling.k_lin = o.k_vc;
-  c.pipeline.coupling.b_lin = 0.05;
-  c.pipeline.coupling.k_ang = 0.3;
-  c.pipeline.coupling.b_ang = 1e-4;
-  c.pipeline.tool = tool_preset("handpiece");
-  c.pipeline.observer_gain = VecX::Constant(6, 100.0);
-  c.wall_stiffness = o.k_tooth;
-  c.tick = o.tick_ms * 1e-3;
-  c.duration = o.duration;
-  // The hand is a force source with a little damping: at rest the force fed back equals the push.
-  c.hand.stiffness = 0.0;
-  c.hand.damping = 2.0;
-  c.hand.push = Vec3(0.0, 0.0, -o.push_n);
-  c.start = Vec3(0.0, 0.0, c.tip_radius + 2e-4);
-  return c;
-}
-
 void run_demo(const DemoOptions& o) {
   if (!(o.duration > 0.0)) throw InputError("--duration must be positive");
   if (!(o.tick_ms > 0.0)) throw InputError("--tick-ms must be positive");
-  if (!(o.k_vc > 0.0) || !(o.k_tooth > 0.0)) throw InputError("--k-vc and --k-tooth must be positive");
+  if (!(o.k_vc > 0.0) || !(o.k_tooth > 0.0))
+    throw InputError("--k-vc and --k-tooth must be positive");
   check_output_paths({{"--json", o.json}});
-  nlohmann::json out;
-  out["scenario"] = "rigid-body device, hand pushing into a flat wall";
-  out["duration_s"] = o.duration;
-  out["tick_s"] = o.tick_ms * 1e-3;
-  out["k_vc_n_per_m"] = o.k_vc;
-  out["k_tooth_n_per_m"] = o.k_tooth;
-  out["push_n"] = o.push_n;
+  WallDemo demo;
+  demo.duration_s = o.duration;
+  demo.k_vc = o.k_vc;
+  demo.k_tooth = o.k_tooth;
+  demo.tick = o.tick_ms * 1e-3;
+  demo.push_n = o.push_n;
+  demo.methods.clear();
+  for (const std::string& name : o.methods) demo.methods.push_back(parse_method(name));
+  const std::vector<WallDemoRun> runs = run_wall_demo(demo);
   std::printf("%-9s %10s %14s %14s %16s %12s\n", "method", "force[N]", "dev.depth[mm]",
               "stiffness[N/m]", "E_virtual[mJ]", "stable");
-  for (const std::string& name : o.methods) {
-    const Method m = parse_method(name);
-    const WallLoopResult r = run_wall_loop(demo_config(o, m));
-    const bool passive = r.energy_virtual_j <= 1e-6;
-    std::printf("%-9s %10.3f %14.4f %14.1f %16.4f %12s\n", name.c_str(), r.final_force_n,
-                r.final_device_depth_m * 1e3,
-                r.final_device_depth_m > 0 ? r.final_force_n / r.final_device_depth_m : 0.0,
-                r.energy_virtual_j * 1e3, r.finite ? (passive ? "passive" : "active") : "diverged");
-    nlohmann::json j;
-    j["ticks"] = r.ticks;
-    j["contact_ticks"] = r.contact_ticks;
-    j["finite"] = r.finite;
-    j["max_force_n"] = r.max_force_n;
-    j["max_device_depth_m"] = r.max_device_depth_m;
-    j["max_proxy_depth_m"] = r.max_proxy_depth_m;
-    j["final_force_n"] = r.final_force_n;
-    j["final_device_depth_m"] = r.final_device_depth_m;
-    j["rendered_stiffness_n_per_m"] = r.rendered_stiffness();
-    j["static_stiffness_n_per_m"] =
-        r.final_device_depth_m > 0 ? r.final_force_n / r.final_device_depth_m : 0.0;
-    j["virtual_energy_generated_j"] = r.energy_virtual_j;
-    out["methods"][name] = j;
+  for (const WallDemoRun& run : runs) {
+    const WallLoopResult& r = run.loop;
+    std::printf("%-9s %10.3f %14.4f %14.1f %16.4f %12s\n", method_name(run.method), r.final_force_n,
+                r.final_device_depth_m * 1e3, run.static_stiffness_n_per_m,
+                r.energy_virtual_j * 1e3,
+                r.finite ? (run.passive ? "passive" : "active") : "diverged");
   }
-  if (!o.json.empty()) write_json(o.json, out);
+  if (!o.json.empty()) write_json(o.json, wall_demo_json(demo, runs));
 }
 
 void setup_demo(CLI::App& app) {

@@ -1,6 +1,6 @@
 // `dentsim observer-report`: how well the momentum observer (thesis (3.7)-(3.8)) estimates the
 // scripted hand's joint torques on the simulated Phantom, with the true device model and with a
-// model whose inertia and damping are off by --model-error (device/observer_report.h,
+// model whose inertia and damping are off by --model-error (validation/observer_report.h,
 // docs/simulated_device.md). With --observer-model NAME=FILE (repeatable) the true model is
 // compared with the named model files instead (e.g. a calibrated and an uncalibrated model,
 // docs/calibration.md). Prints a table; --json writes the numbers.
@@ -12,10 +12,10 @@
 #include <vector>
 
 #include "cli/registry.h"
-#include "device/observer_report.h"
 #include "reference/core/io.h"
 #include "reference/phantom/phantom_model.h"
 #include "reference/phantom/phantom_params.h"
+#include "validation/observer_report.h"
 
 namespace dentsim::cli {
 namespace {

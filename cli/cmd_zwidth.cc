@@ -1,7 +1,7 @@
 // `dentsim zwidth`: the Z-width experiment of issue #7 (thesis §4.2, Fig. 4.9-4.11), protocol in
-// docs/zwidth_protocol.md, implementation in validation/zwidth.h. Sweeps K_vc, b_vc and K_tooth
-// for each method under each operator on the simulated Phantom (or the 1-DoF axis testbed),
-// writes the verdict of every grid point to --json and the figures to --out.
+// docs/zwidth_protocol.md. The experiment (grids, operators, bounds, ratios, sensitivity) is
+// validation/zwidth_experiment.h; this file turns the flags into a ZwidthExperiment, runs it,
+// prints the table, writes the JSON (--json) and draws the figures (--out).
 #include <unistd.h>
 
 #include <algorithm>
@@ -17,7 +17,7 @@
 #include "cli/plot.h"
 #include "cli/registry.h"
 #include "reference/core/io.h"
-#include "validation/zwidth.h"
+#include "validation/zwidth_experiment.h"
 
 namespace dentsim::cli {
 namespace {
@@ -54,98 +54,6 @@ void progress_bar(const char* what, int done, int total) {
   if (done == total) std::fprintf(stderr, "\n");
 }
 
-const double kThesis[3] = {315.0, 570.0, 3000.0};  // thesis Fig. 4.11 [N/m]
-
-double thesis_value(Method m) {
-  return m == Method::kExplicitVc ? kThesis[0] : m == Method::kPmiVc ? kThesis[1] : kThesis[2];
-}
-
-nlohmann::json gains_json(const ZwidthGains& g) {
-  return {{"k_vc_n_per_m", g.k_vc}, {"b_vc_n_s_per_m", g.b_vc}, {"k_tooth_n_per_m", g.k_tooth}};
-}
-
-nlohmann::json run_json(const ZwidthRun& r) {
-  return {{"approach_speed_m_s", r.approach_speed_m_s},
-          {"finite", r.finite},
-          {"faults", r.faults},
-          {"saturated", r.saturated},
-          {"growth_rate_per_s", r.growth_rate_per_s},
-          {"growth_limit_per_s", r.growth_limit_per_s},
-          {"last_amplitude_m", r.last_amplitude_m},
-          {"amplitude_bound_m", r.amplitude_bound_m},
-          {"energy_max_j", r.energy_max_j},
-          {"energy_final_j", r.energy_final_j},
-          {"energy_tol_j", r.energy_tol_j},
-          {"max_force_n", r.max_force_n},
-          {"max_penetration_m", r.max_penetration_m},
-          {"z_width_n_per_m", r.z_width_n_per_m},
-          {"static_stiffness_n_per_m", r.static_stiffness_n_per_m},
-          {"contact_time_s", r.contact_time_s},
-          {"proxy_tunnelled", r.proxy_tunnelled},
-          {"grip_switches", r.grip_switches},
-          {"grip_agreement", r.grip_agreement},
-          {"release_detected_after_s", r.release_detected_after_s},
-          {"grip_statistic_max_on", r.grip_statistic_max_on},
-          {"grip_statistic_min_on", r.grip_statistic_min_on},
-          {"grip_statistic_max_off", r.grip_statistic_max_off},
-          {"stable", r.stable},
-          {"passive", r.passive}};
-}
-
-nlohmann::json sweep_json(const ZwidthSweep& s) {
-  nlohmann::json j;
-  j["z_width_n_per_m"] = s.z_width_n_per_m();
-  j["gains"] = s.best >= 0 ? gains_json(s.points[s.best].gains) : nlohmann::json(nullptr);
-  nlohmann::json pts = nlohmann::json::array();
-  for (const ZwidthPoint& p : s.points) {
-    nlohmann::json pj = gains_json(p.gains);
-    pj["stable"] = p.stable;
-    pj["passive"] = p.passive;
-    pj["z_width_n_per_m"] = p.z_width_n_per_m;
-    nlohmann::json runs = nlohmann::json::array();
-    for (const ZwidthRun& r : p.runs) runs.push_back(run_json(r));
-    pj["runs"] = runs;
-    pts.push_back(pj);
-  }
-  j["points"] = pts;
-  // The same maximum under the issue's literal growth criterion, lambda <= 0 for every run (the
-  // protocol allows lambda <= ln 2 / (hold - settle): docs/zwidth_protocol.md).
-  double strict = 0.0;
-  for (const ZwidthPoint& p : s.points) {
-    bool ok = p.stable && p.passive;
-    for (const ZwidthRun& r : p.runs) ok = ok && r.growth_rate_per_s <= 0.0;
-    if (ok) strict = std::max(strict, p.z_width_n_per_m);
-  }
-  j["z_width_strict_growth_n_per_m"] = strict;
-  return j;
-}
-
-ZwidthGrid full_grid() {
-  ZwidthGrid g;
-  g.k_vc = {100, 200, 300, 400, 600, 800, 1200, 1600, 2400, 3200};
-  g.b_vc = {0.1, 0.5, 1.0, 2.0, 4.0};
-  g.k_tooth = {1500, 3000, 6000, 12000};
-  return g;
-}
-
-// The grid of the other operators (grip, tap, release): the thesis's neighbourhood and the
-// corners of the force grid's stable region, at the coupling damping that is stable for all.
-ZwidthGrid other_grid() {
-  ZwidthGrid g;
-  g.k_vc = {400, 1600, 3200};
-  g.b_vc = {2.0};
-  g.k_tooth = {1500, 3000, 12000};
-  return g;
-}
-
-ZwidthGrid quick_grid() {
-  ZwidthGrid g;
-  g.k_vc = {200, 400, 800, 1600, 3200};
-  g.b_vc = {0.5, 2.0};
-  g.k_tooth = {1500, 3000, 12000};
-  return g;
-}
-
 // Category of a point for the stability map.
 int category(const ZwidthPoint& p) {
   if (p.stable && p.passive) return 0;
@@ -162,49 +70,54 @@ std::vector<double> to_mm(const std::vector<double>& metres) {
 }
 
 // The grip detector at work (docs/derivations/decomposition_and_observer.md §9): one `release`
-// run of PMI + PD at `g` with the hand's mass fixed in the model and one with the detector; the
-// penetration of both, and the detector's statistic and state.
-void write_grip_detector_plot(const std::string& dir, const ZwidthScenario& sc,
-                              const ZwidthGains& g) {
+// run of PMI + PD at its best point with the hand's mass fixed in the model and one with the
+// detector; the penetration of both, and the detector's statistic and state.
+void write_grip_detector_plot(const std::string& dir, const ZwidthExperimentResult& r) {
   std::filesystem::create_directories(dir);
-  ZwidthScenario fixed = sc;
-  fixed.grip_detector = false;
-  ZwidthTrace tf, td;
-  run_zwidth_once(Method::kPmiPd, ZwidthOperator::kRelease, g, fixed, 0.0, &tf);
-  run_zwidth_once(Method::kPmiPd, ZwidthOperator::kRelease, g, sc, 0.0, &td);
+  const ZwidthScenario& sc = r.experiment.scenario;
+  const ZwidthGains& g = r.grip_trace_gains;
+  const ZwidthTrace &tf = r.grip_trace_fixed, &td = r.grip_trace_detector;
   char gains[96];
   std::snprintf(gains, sizeof gains, "(K_vc %g, b_vc %g, K_tooth %g), model hand mass x%g", g.k_vc,
                 g.b_vc, g.k_tooth, sc.grasp_mass_scale);
-  plot::Figure pen{std::string("pmi-pd, release: device penetration ") + gains, "time [s]",
-                   "penetration [mm]", {}, false, false};
+  plot::Figure pen{std::string("pmi-pd, release: device penetration ") + gains,
+                   "time [s]",
+                   "penetration [mm]",
+                   {},
+                   false,
+                   false};
   pen.series.push_back({"hand mass fixed in the model", tf.t, to_mm(tf.penetration_m)});
   pen.series.push_back({"with the grip detector", td.t, to_mm(td.penetration_m)});
-  plot::Figure st{"grip detector: statistic s = P1 - P0 and state (1 = gripped)", "time [s]",
-                  "s [N^2/kg] / state", {}, false, false};
+  plot::Figure st{"grip detector: statistic s = P1 - P0 and state (1 = gripped)",
+                  "time [s]",
+                  "s [N^2/kg] / state",
+                  {},
+                  false,
+                  false};
   std::vector<double> state;
   for (int v : td.grip_state) state.push_back(v);
   st.series.push_back({"s", td.t, td.grip_statistic});
   st.series.push_back({"state", td.t, state});
   const double t_end = td.t.empty() ? 1.0 : td.t.back();
-  st.series.push_back({"release threshold", {0.0, t_end},
-                       {sc.grip_detector_params.release_threshold,
-                        sc.grip_detector_params.release_threshold},
-                       false, -1, true});
+  st.series.push_back(
+      {"release threshold",
+       {0.0, t_end},
+       {sc.grip_detector_params.release_threshold, sc.grip_detector_params.release_threshold},
+       false,
+       -1,
+       true});
   plot::write_png({pen, st}, dir + "/grip_detector.png", 1, 900, 320);
 }
 
-void write_plots(const std::string& dir, const std::vector<ZwidthSweep>& force_sweeps,
-                 const ZwidthGrid& grid, const ZwidthScenario& sc,
-                 const std::vector<std::vector<double>>& op_values,
-                 const std::vector<std::string>& op_names) {
+void write_plots(const std::string& dir, const ZwidthExperimentResult& r) {
   std::filesystem::create_directories(dir);
   // Fig. 4.9-4.10: force vs penetration at each method's best point (force operator).
   std::vector<plot::Figure> fp, ft;
-  for (const ZwidthSweep& s : force_sweeps) {
+  for (const ZwidthMethodResult& mr : r.methods) {
+    const ZwidthSweep& s = mr.headline_sweep();
     if (s.best < 0) continue;
-    ZwidthTrace tr;
+    const ZwidthTrace& tr = mr.trace;
     const ZwidthGains g = s.points[s.best].gains;
-    run_zwidth_once(s.method, s.op, g, sc, 0.0, &tr);
     plot::Figure f{std::string(method_name(s.method)) + ": force vs penetration (K_vc " +
                        std::to_string(static_cast<int>(g.k_vc)) + ", b_vc " +
                        std::to_string(g.b_vc).substr(0, 4) + ", K_tooth " +
@@ -233,9 +146,11 @@ void write_plots(const std::string& dir, const std::vector<ZwidthSweep>& force_s
   if (!fp.empty()) plot::write_png(fp, dir + "/force_vs_penetration.png", 1, 900, 360);
   if (!ft.empty()) plot::write_png(ft, dir + "/time_series.png", 1, 900, 300);
   // Stability maps: one panel per method and b_vc (k_tooth across, k_vc up).
+  const ZwidthGrid& grid = r.headline_grid();
   std::vector<plot::CategoryMap> maps;
   const std::size_t nt = grid.k_tooth.size(), nk = grid.k_vc.size();
-  for (const ZwidthSweep& s : force_sweeps) {
+  for (const ZwidthMethodResult& mr : r.methods) {
+    const ZwidthSweep& s = mr.headline_sweep();
     for (std::size_t ib = 0; ib < grid.b_vc.size(); ++ib) {
       plot::CategoryMap m;
       m.title = std::string(method_name(s.method)) +
@@ -262,16 +177,57 @@ void write_plots(const std::string& dir, const std::vector<ZwidthSweep>& force_s
   plot::BarChart b;
   b.title = "Z-width per method (thesis vs measured per operator)";
   b.ylabel = "Z-width [N/m]";
-  for (const ZwidthSweep& s : force_sweeps) b.labels.push_back(method_name(s.method));
+  for (const ZwidthMethodResult& mr : r.methods) b.labels.push_back(method_name(mr.method));
   b.set_names.push_back("thesis");
   std::vector<double> th;
-  for (const ZwidthSweep& s : force_sweeps) th.push_back(thesis_value(s.method));
+  for (const ZwidthMethodResult& mr : r.methods) th.push_back(mr.thesis_z_width_n_per_m);
   b.values.push_back(th);
-  for (std::size_t i = 0; i < op_names.size(); ++i) {
-    b.set_names.push_back(op_names[i]);
-    b.values.push_back(op_values[i]);
+  const std::vector<ZwidthOperator>& ops = r.experiment.operators;
+  for (std::size_t k = 0; k < ops.size(); ++k) {
+    b.set_names.push_back(operator_name(ops[k]));
+    std::vector<double> values;
+    for (const ZwidthMethodResult& mr : r.methods) values.push_back(mr.sweeps[k].z_width_n_per_m());
+    b.values.push_back(values);
   }
   plot::write_png(b, dir + "/summary.png");
+}
+
+// The table on stdout: each method's headline Z-width beside the thesis's, per operator, the
+// bounds, the ratios and the sensitivity.
+void print_summary(const ZwidthExperimentResult& r) {
+  const ZwidthScenario& sc = r.experiment.scenario;
+  const std::vector<ZwidthOperator>& ops = r.experiment.operators;
+  std::printf(
+      "testbed %s, T = %.3g ms, device damping at the tip b_d = %.4g N s/m, tip encoder "
+      "quantum %.3g mm\n",
+      testbed_name(sc.testbed), sc.tick * 1e3, r.device_tip_damping_n_s_per_m,
+      r.device_tip_quantum_m * 1e3);
+  std::printf("%-8s %10s %24s", "method", "thesis", "Z-width [N/m] (gains)");
+  for (ZwidthOperator op : ops) std::printf(" %9s", operator_name(op));
+  std::printf(" %12s %12s\n", "CS bound", "PMI bound");
+  for (const ZwidthMethodResult& mr : r.methods) {
+    const ZwidthSweep& s = mr.headline_sweep();
+    char gains[64] = "-";
+    if (s.best >= 0) {
+      const ZwidthGains& g = s.points[s.best].gains;
+      std::snprintf(gains, sizeof gains, "(%g, %g, %g)", g.k_vc, g.b_vc, g.k_tooth);
+    }
+    std::printf("%-8s %10.0f %9.1f %14s", method_name(mr.method), mr.thesis_z_width_n_per_m,
+                mr.z_width_n_per_m(), gains);
+    for (const ZwidthSweep& sw : mr.sweeps) std::printf(" %9.1f", sw.z_width_n_per_m());
+    std::printf(" %12.1f %12.1f\n", mr.colgate_schenkel_max_stiffness_n_per_m,
+                mr.pmi_coupling_bound_n_per_m);
+  }
+  std::printf("ratio pmi/explicit %.2f (thesis 1.8), pmi-pd/explicit %.2f (thesis 9.5)\n",
+              r.ratio_pmi_over_explicit, r.ratio_pmipd_over_explicit);
+  if (!r.experiment.sensitivity) return;
+  std::printf("\nsensitivity at each method's best point (force operator unless noted):\n");
+  for (const ZwidthMethodResult& mr : r.methods) {
+    for (const ZwidthSensitivityResult& v : mr.sensitivity) {
+      std::printf("  %-8s %-28s stable %d passive %d Z-width %8.1f N/m\n", method_name(mr.method),
+                  v.variant.c_str(), v.point.stable, v.point.passive, v.point.z_width_n_per_m);
+    }
+  }
 }
 
 void run_zwidth(const ZwidthOptions& o) {
@@ -284,19 +240,22 @@ void run_zwidth(const ZwidthOptions& o) {
     throw InputError("--push: expected a force in (0, 20] N, got " + std::to_string(o.push_n));
   }
   check_output_paths({{"--json", o.json}});
-  std::vector<Method> methods;
+  ZwidthExperiment e;
+  e.methods.clear();
   for (const std::string& m : o.methods) {
     try {
-      methods.push_back(parse_method(m));
+      e.methods.push_back(parse_method(m));
     } catch (const std::exception&) {
       throw InputError("--methods: expected explicit, pmi or pmi-pd, got '" + m + "'");
     }
   }
-  std::vector<ZwidthOperator> ops;
-  for (const std::string& s : o.operators) ops.push_back(parse_operator(s));
-  if (methods.empty() || ops.empty()) throw InputError("--methods/--operators: empty list");
+  e.operators.clear();
+  for (const std::string& s : o.operators) e.operators.push_back(parse_operator(s));
+  if (e.methods.empty() || e.operators.empty()) {
+    throw InputError("--methods/--operators: empty list");
+  }
 
-  ZwidthScenario sc;
+  ZwidthScenario& sc = e.scenario;
   sc.testbed = parse_testbed(o.testbed);
   sc.tick = o.tick_ms * 1e-3;
   sc.hold_s = o.hold_s;
@@ -326,15 +285,14 @@ void run_zwidth(const ZwidthOptions& o) {
   }
   sc.grip_detector = o.grip_detector;
   if (o.proxy_damping >= 0.0) {
-    if (!std::isfinite(o.proxy_damping)) throw InputError("--proxy-damping: expected a finite value");
+    if (!std::isfinite(o.proxy_damping))
+      throw InputError("--proxy-damping: expected a finite value");
     sc.proxy_damping_rule = false;
     sc.proxy.damping_lin = o.proxy_damping;
   }
-  const int threads = o.threads > 0
-                          ? o.threads
-                          : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  ZwidthGrid grid = o.quick ? quick_grid() : full_grid();
-  ZwidthGrid small = o.quick ? quick_grid() : other_grid();
+  e.threads = o.threads > 0 ? o.threads
+                            : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  if (o.quick) e.grid = e.other_grid = zwidth_quick_grid();
   for (const auto* v : {&o.k_vc, &o.b_vc, &o.k_tooth}) {
     for (double x : *v) {
       if (!(x >= 0.0) || !std::isfinite(x)) {
@@ -343,183 +301,21 @@ void run_zwidth(const ZwidthOptions& o) {
       }
     }
   }
-  if (!o.k_vc.empty()) grid.k_vc = small.k_vc = o.k_vc;
-  if (!o.b_vc.empty()) grid.b_vc = small.b_vc = o.b_vc;
-  if (!o.k_tooth.empty()) grid.k_tooth = small.k_tooth = o.k_tooth;
-  const double b_d = testbed_tip_damping(sc);
-  const double delta = testbed_tip_quantum(sc);
+  if (!o.k_vc.empty()) e.grid.k_vc = e.other_grid.k_vc = o.k_vc;
+  if (!o.b_vc.empty()) e.grid.b_vc = e.other_grid.b_vc = o.b_vc;
+  if (!o.k_tooth.empty()) e.grid.k_tooth = e.other_grid.k_tooth = o.k_tooth;
+  e.sensitivity = o.sensitivity;
+  e.traces = !o.out.empty();
 
-  // The strictest operator (force) on the full grid, the others on the small grid.
-  std::vector<ZwidthSweep> force_sweeps;
-  std::vector<std::vector<ZwidthSweep>> per_op(ops.size());
-  for (std::size_t k = 0; k < ops.size(); ++k) {
-    const bool strict = ops[k] == ZwidthOperator::kForce;
-    const std::string label = operator_name(ops[k]);
-    per_op[k] = run_zwidth_sweep(methods, {ops[k]}, strict ? grid : small, sc, threads,
-                                 [&](int d, int t) { progress_bar(label.c_str(), d, t); });
-    if (strict) force_sweeps = per_op[k];
-  }
-
-  nlohmann::json out;
-  out["testbed"] = testbed_name(sc.testbed);
-  out["tick_s"] = sc.tick;
-  out["hold_s"] = sc.hold_s;
-  out["tap_speeds_m_s"] = sc.tap_speeds_m_s;
-  out["push_force_n"] = sc.push_force_n;
-  out["observer_gain_per_s"] = sc.observer_gain;
-  out["observer_input_matched"] = sc.observer_input_matched;
-  out["grasp_mass_scale"] = sc.grasp_mass_scale;
-  out["grip_detector"] = sc.grip_detector;
-  out["proxy_damping_rule"] = sc.proxy_damping_rule;
-  out["proxy_damping_n_s_per_m"] = sc.proxy.damping_lin;
-  out["tip_radius_m"] = sc.tip_radius_m;
-  out["voxel_size_m"] = sc.voxel_size_m;
-  out["device_tip_damping_n_s_per_m"] = b_d;
-  out["device_tip_quantum_m"] = delta;
-  out["grid"] = {{"k_vc_n_per_m", grid.k_vc},
-                 {"b_vc_n_s_per_m", grid.b_vc},
-                 {"k_tooth_n_per_m", grid.k_tooth}};
-  out["grid_other_operators"] = {{"k_vc_n_per_m", small.k_vc},
-                                 {"b_vc_n_s_per_m", small.b_vc},
-                                 {"k_tooth_n_per_m", small.k_tooth}};
-  std::printf(
-      "testbed %s, T = %.3g ms, device damping at the tip b_d = %.4g N s/m, tip encoder "
-      "quantum %.3g mm\n",
-      testbed_name(sc.testbed), sc.tick * 1e3, b_d, delta * 1e3);
-  std::printf("%-8s %10s %24s", "method", "thesis", "Z-width [N/m] (gains)");
-  for (ZwidthOperator op : ops) std::printf(" %9s", operator_name(op));
-  std::printf(" %12s %12s\n", "CS bound", "PMI bound");
-  std::vector<double> strict_values;
-  std::vector<std::vector<double>> op_values(ops.size());
-  for (std::size_t mi = 0; mi < methods.size(); ++mi) {
-    const Method m = methods[mi];
-    nlohmann::json mj;
-    const ZwidthSweep* strict = nullptr;
-    for (std::size_t k = 0; k < ops.size(); ++k) {
-      mj["operators"][operator_name(ops[k])] = sweep_json(per_op[k][mi]);
-      op_values[k].push_back(per_op[k][mi].z_width_n_per_m());
-      if (ops[k] == ZwidthOperator::kForce) strict = &per_op[k][mi];
-    }
-    if (strict == nullptr) strict = &per_op[0][mi];
-    const double z = strict->z_width_n_per_m();
-    strict_values.push_back(z);
-    mj["z_width_n_per_m"] = z;
-    mj["strictest_operator"] = operator_name(strict->op);
-    mj["gains"] = strict->best >= 0 ? gains_json(strict->points[strict->best].gains)
-                                    : nlohmann::json(nullptr);
-    mj["thesis_z_width_n_per_m"] = thesis_value(m);
-    const double bvc = strict->best >= 0 ? strict->points[strict->best].gains.b_vc : 0.0;
-    const double cs = colgate_schenkel_max_stiffness(b_d, bvc, sc.tick);
-    const double pb = pmi_coupling_max_stiffness(b_d, bvc, sc.tick, sc.tick);
-    mj["colgate_schenkel_max_stiffness_n_per_m"] = cs;
-    mj["pmi_coupling_bound_n_per_m"] = pb;
-    out["methods"][method_name(m)] = mj;
-    char gains[64] = "-";
-    if (strict->best >= 0) {
-      const ZwidthGains& g = strict->points[strict->best].gains;
-      std::snprintf(gains, sizeof gains, "(%g, %g, %g)", g.k_vc, g.b_vc, g.k_tooth);
-    }
-    std::printf("%-8s %10.0f %9.1f %14s", method_name(m), thesis_value(m), z, gains);
-    for (std::size_t k = 0; k < ops.size(); ++k) std::printf(" %9.1f", op_values[k].back());
-    std::printf(" %12.1f %12.1f\n", cs, pb);
-  }
-  auto value_of = [&](Method m) {
-    for (std::size_t i = 0; i < methods.size(); ++i) {
-      if (methods[i] == m) return strict_values[i];
-    }
-    return std::nan("");
-  };
-  const double e = value_of(Method::kExplicitVc);
-  const double r1 = e > 0 ? value_of(Method::kPmiVc) / e : std::nan("");
-  const double r2 = e > 0 ? value_of(Method::kPmiPd) / e : std::nan("");
-  out["ratio_pmi_over_explicit"] = std::isfinite(r1) ? nlohmann::json(r1) : nlohmann::json(nullptr);
-  out["ratio_pmipd_over_explicit"] =
-      std::isfinite(r2) ? nlohmann::json(r2) : nlohmann::json(nullptr);
-  std::printf("ratio pmi/explicit %.2f (thesis 1.8), pmi-pd/explicit %.2f (thesis 9.5)\n", r1, r2);
-
-  // Sensitivity at each method's best point under the force operator (hand: grip operator).
-  if (o.sensitivity) {
-    struct Variant {
-      std::string name;
-      ZwidthOperator op;
-      std::function<void(ZwidthScenario&)> apply;
-    };
-    const std::vector<Variant> variants = {
-        {"nominal", ZwidthOperator::kForce, [](ZwidthScenario&) {}},
-        {"hand_low (grip, Z_h x0.5)", ZwidthOperator::kGrip,
-         [](ZwidthScenario& s) {
-           s.hand.k_lin *= 0.5;
-           s.hand.b_lin *= 0.5;
-           s.hand.mass *= 0.5;
-         }},
-        {"hand_high (grip, Z_h x2)", ZwidthOperator::kGrip,
-         [](ZwidthScenario& s) {
-           s.hand.k_lin *= 2.0;
-           s.hand.b_lin *= 2.0;
-           s.hand.mass *= 2.0;
-         }},
-        {"jitter +-0.2 T", ZwidthOperator::kForce,
-         [](ZwidthScenario& s) { s.jitter_half_width = 0.2 * s.tick; }},
-        {"observer L = 100/s", ZwidthOperator::kForce,
-         [](ZwidthScenario& s) { s.observer_gain = 100.0; }},
-        {"observer L = 500/s", ZwidthOperator::kForce,
-         [](ZwidthScenario& s) { s.observer_gain = 500.0; }},
-        {"observer L = 900/s", ZwidthOperator::kForce,
-         [](ZwidthScenario& s) { s.observer_gain = 900.0; }},
-        {"observer input unmatched (thesis)", ZwidthOperator::kForce,
-         [](ZwidthScenario& s) { s.observer_input_matched = false; }},
-        {"model -20 %", ZwidthOperator::kForce,
-         [](ZwidthScenario& s) {
-           s.model_mass_scale = 0.8;
-           s.model_damping_scale = 0.8;
-         }},
-        {"model +20 %", ZwidthOperator::kForce,
-         [](ZwidthScenario& s) {
-           s.model_mass_scale = 1.2;
-           s.model_damping_scale = 1.2;
-         }},
-        {"4 kHz", ZwidthOperator::kForce, [](ZwidthScenario& s) { s.tick = 0.25e-3; }},
-    };
-    std::printf("\nsensitivity at each method's best point (force operator unless noted):\n");
-    for (std::size_t mi = 0; mi < methods.size(); ++mi) {
-      const ZwidthSweep& s = force_sweeps.empty() ? per_op[0][mi] : force_sweeps[mi];
-      if (s.best < 0) continue;
-      const ZwidthGains g = s.points[s.best].gains;
-      for (std::size_t vi = 0; vi < variants.size(); ++vi) {
-        ZwidthScenario v = sc;
-        variants[vi].apply(v);
-        const ZwidthPoint p = run_zwidth_point(methods[mi], variants[vi].op, g, v);
-        std::printf("  %-8s %-28s stable %d passive %d Z-width %8.1f N/m\n",
-                    method_name(methods[mi]), variants[vi].name.c_str(), p.stable, p.passive,
-                    p.z_width_n_per_m);
-        out["methods"][method_name(methods[mi])]["sensitivity"][variants[vi].name] = {
-            {"operator", operator_name(variants[vi].op)},
-            {"stable", p.stable},
-            {"passive", p.passive},
-            {"z_width_n_per_m", p.z_width_n_per_m}};
-      }
-    }
-  }
-
+  const ZwidthExperimentResult r = run_zwidth_experiment(
+      e,
+      [](ZwidthOperator op, int done, int total) { progress_bar(operator_name(op), done, total); });
+  print_summary(r);
   if (!o.out.empty()) {
-    std::vector<std::string> names;
-    for (ZwidthOperator op : ops) names.push_back(operator_name(op));
-    write_plots(o.out, force_sweeps.empty() ? per_op[0] : force_sweeps,
-                force_sweeps.empty() ? small : grid, sc, op_values, names);
+    write_plots(o.out, r);
+    if (r.has_grip_traces) write_grip_detector_plot(o.out, r);
   }
-  if (!o.out.empty() && sc.grip_detector) {
-    // At the best release point of PMI + PD with the detector (if release was run for it).
-    for (std::size_t k = 0; k < ops.size(); ++k) {
-      if (ops[k] != ZwidthOperator::kRelease) continue;
-      for (std::size_t mi = 0; mi < methods.size(); ++mi) {
-        const ZwidthSweep& rs = per_op[k][mi];
-        if (methods[mi] == Method::kPmiPd && rs.best >= 0) {
-          write_grip_detector_plot(o.out, sc, rs.points[rs.best].gains);
-        }
-      }
-    }
-  }
-  if (!o.json.empty()) write_json(o.json, out);
+  if (!o.json.empty()) write_json(o.json, zwidth_experiment_json(r));
 }
 
 void setup_zwidth(CLI::App& app) {

@@ -5,10 +5,10 @@
 #include <numbers>
 #include <string>
 
+#include "plant/mujoco_phantom.h"
+#include "plant/phantom_mjcf.h"
 #include "reference/core/io.h"
 #include "reference/phantom/phantom_model.h"
-#include "validation/mujoco_phantom.h"
-#include "validation/phantom_mjcf.h"
 
 namespace dentsim {
 

@@ -1,5 +1,5 @@
 // The simulated Phantom Premium 1.5/6DoF: the MuJoCo plant generated from the device model file
-// (validation/phantom_mjcf.h, one source of truth) wrapped for SimulatedPhantom, and the device
+// (plant/phantom_mjcf.h, one source of truth) wrapped for SimulatedPhantom, and the device
 // configuration the model file implies (encoder resolution, torque limits).
 //
 // Device joint j (q1 yaw, q2 upper arm, q3 absolute forearm, q4..q6 gimbal) is the actuated tree
@@ -10,8 +10,8 @@
 // friction and limits are those of the model file.
 #pragma once
 
-#include "device/mujoco_plant.h"
 #include "device/simulated_phantom.h"
+#include "plant/mujoco_plant.h"
 #include "reference/phantom/phantom_params.h"
 
 namespace dentsim {

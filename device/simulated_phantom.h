@@ -39,9 +39,9 @@
 #include <vector>
 
 #include "device/device.h"
-#include "device/mujoco_plant.h"
 #include "device/scripted_hand.h"
 #include "device/velocity_estimator.h"
+#include "plant/mujoco_plant.h"
 
 namespace dentsim {
 

@@ -5,8 +5,8 @@
 #include <limits>
 #include <random>
 
+#include "plant/mujoco_phantom.h"
 #include "reference/phantom/phantom_model.h"
-#include "validation/mujoco_phantom.h"
 
 namespace dentsim {
 

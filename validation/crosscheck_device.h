@@ -1,5 +1,5 @@
 // Cross-check of the analytic Phantom model (reference/phantom/phantom_model.h) against its MuJoCo
-// 2.2.2 model (validation/mujoco_phantom.h), both built from one device model file (issue #3).
+// 2.2.2 model (plant/mujoco_phantom.h), both built from one device model file (issue #3).
 //
 // Static part: at `samples` random states (q uniform in the joint-limit box, qd uniform in
 // +-qd_max) compare M, C qd ("bias"), g ("gravity"), the tip pose and the tool Jacobian J_t
@@ -20,8 +20,8 @@
 #include <cstdint>
 #include <nlohmann/json.hpp>
 
+#include "plant/phantom_mjcf.h"
 #include "reference/phantom/phantom_params.h"
-#include "validation/phantom_mjcf.h"
 
 namespace dentsim {
 

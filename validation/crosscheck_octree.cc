@@ -223,4 +223,43 @@ OctreeCrosscheckResult crosscheck_octree(const OctreeCrosscheckOptions& options)
   return result;
 }
 
+nlohmann::json octree_memory_table_json() {
+  nlohmann::json rows = nlohmann::json::array();
+  for (int n = 32; n <= 512; n *= 2) {
+    int levels = 0;
+    while ((1 << levels) < n) ++levels;
+    const std::size_t masks = FullOctree::internal_node_count(levels);
+    const std::size_t total = FullOctree::memory_bytes_for(n);
+    const std::size_t nn = static_cast<std::size_t>(n);
+    rows.push_back({{"n", n},
+                    {"levels", levels},
+                    {"internal_nodes", masks},
+                    {"mask_bytes", masks},
+                    {"leaf_bytes", nn * nn * nn},
+                    {"octree_bytes", total},
+                    {"neighbor_code_bytes", nn * nn * nn},
+                    {"drill_work_bytes", nn * nn * nn * sizeof(double)}});
+  }
+  return rows;
+}
+
+nlohmann::json crosscheck_octree_json(const OctreeCrosscheckOptions& options,
+                                      const OctreeCrosscheckResult& r) {
+  nlohmann::json by_placement = nlohmann::json::object();
+  for (int p = 0; p < static_cast<int>(SpherePlacement::kCount); ++p) {
+    by_placement[sphere_placement_name(static_cast<SpherePlacement>(p))] = r.by_placement[p];
+  }
+  return {{"n", options.n},
+          {"seed", options.seed},
+          {"remove_every", options.remove_every},
+          {"queries", r.queries},
+          {"mismatches", r.mismatches},
+          {"nonempty_queries", r.nonempty_queries},
+          {"voxels_matched", r.voxels_matched},
+          {"removals", r.removals},
+          {"by_placement", by_placement},
+          {"first_mismatch", r.first_mismatch},
+          {"memory_per_resolution", octree_memory_table_json()}};
+}
+
 }  // namespace dentsim

@@ -15,6 +15,7 @@
 
 #include <array>
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -65,5 +66,15 @@ void brute_force_sphere(const VoxelGrid& grid, const Vec3& c, double rho,
                         std::vector<std::size_t>* out);
 
 OctreeCrosscheckResult crosscheck_octree(const OctreeCrosscheckOptions& options);
+
+// The memory of the full octree per resolution n = 32, 64, ..., 512 (docs/tooth_octree.md): per
+// row n, levels, internal_nodes, mask_bytes, leaf_bytes, octree_bytes, neighbor_code_bytes and
+// drill_work_bytes (one double per voxel) [bytes].
+nlohmann::json octree_memory_table_json();
+
+// `dentsim crosscheck octree --json`: the options, the counts, the placements, the first mismatch
+// and the memory table.
+nlohmann::json crosscheck_octree_json(const OctreeCrosscheckOptions& options,
+                                      const OctreeCrosscheckResult& result);
 
 }  // namespace dentsim

@@ -10,9 +10,10 @@
 #include <thread>
 
 #include "device/closed_loop.h"
-#include "device/mujoco_plant.h"
 #include "device/phantom_device.h"
 #include "device/simulated_phantom.h"
+#include "plant/mujoco_plant.h"
+#include "plant/phantom_mjcf.h"
 #include "reference/core/io.h"
 #include "reference/grasp_mass_model.h"
 #include "reference/phantom/phantom_model.h"
@@ -21,7 +22,6 @@
 #include "reference/tools.h"
 #include "reference/tooth/collision.h"
 #include "reference/tooth/tooth_contacts.h"
-#include "validation/phantom_mjcf.h"
 
 namespace dentsim {
 

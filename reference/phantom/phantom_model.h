@@ -9,7 +9,7 @@
 // constant 8x6 map of phantom_tree_map(): the elbow angle theta_2 = q3 - q2 and the parallel-link
 // angle theta_4 = q2 - q3 close the parallelogram, so the closed chain is exact in q (PHANTOM.md:
 // M_red = G^T M_tree G). The same tree (body placements, axes, inertias) generates the MJCF
-// (validation/phantom_mjcf.h), so the two models agree to round-off by construction.
+// (plant/phantom_mjcf.h), so the two models agree to round-off by construction.
 //
 // Dynamics (device_model.h, thesis (2.1)):
 //     M(q) qdd + C(q, qd) qd + g(q) + tau_f(qd) = tau + f_h

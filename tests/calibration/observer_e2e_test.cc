@@ -1,7 +1,7 @@
 // End to end (issue #5, "the observer with the fitted model estimates the hand force as well as
 // with the true model and much better than with the unfitted defaults"): a simulated (MuJoCo)
 // Phantom built from a perturbed model (the truth) is excited and logged, the log is fitted, and
-// the momentum observer (device/observer_report.h) runs on the same simulated device with the
+// the momentum observer (validation/observer_report.h) runs on the same simulated device with the
 // true, the fitted and the default (unfitted) model. docs/calibration.md has the numbers and the
 // CLI commands that reproduce them.
 #include <gtest/gtest.h>
@@ -13,12 +13,12 @@
 
 #include "calibration/excitation.h"
 #include "calibration/fit.h"
-#include "device/observer_report.h"
 #include "device/phantom_device.h"
 #include "device/simulated_phantom.h"
 #include "reference/phantom/phantom_model.h"
 #include "reference/phantom/phantom_params.h"
 #include "tests/calibration/truth_model.h"
+#include "validation/observer_report.h"
 
 namespace dentsim {
 namespace {

@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <numbers>
 
-#include "device/mujoco_plant.h"
+#include "plant/mujoco_plant.h"
 #include "reference/phantom/phantom_model.h"
 
 namespace dentsim {

@@ -1,11 +1,11 @@
 // Small MuJoCo plants for the simulated-device tests (independent of the Phantom model in
-// validation/): a 1-DoF wheel with a closed-form response and a 6-hinge serial arm shaped like
+// plant/): a 1-DoF wheel with a closed-form response and a 6-hinge serial arm shaped like
 // the Phantom (yaw, shoulder, elbow, 3-axis gimbal with an offset stylus mass).
 #pragma once
 
 #include <string>
 
-#include "device/mujoco_plant.h"
+#include "plant/mujoco_plant.h"
 
 namespace dentsim::testing {
 

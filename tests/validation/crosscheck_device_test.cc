@@ -1,5 +1,5 @@
-// The analytic Phantom model against MuJoCo 2.2.2 (validation/crosscheck_device.h), the MJCF
-// generated from the model file, and `dentsim crosscheck device --json`.
+// The analytic Phantom model against MuJoCo 2.2.2 (validation/crosscheck_device.h) and `dentsim
+// crosscheck device --json` (the MJCF generator itself: tests/plant/phantom_mjcf_test.cc).
 // Tolerance policy (docs/phantom.md): static quantities agree to 1e-9 relative (max-norm of the
 // difference over max-norm of the reference; measured ~1e-14); each reference is guarded to be
 // a real signal; the 1 s trajectory (Coulomb-free, both models gravity-compensated) diverges by
@@ -18,8 +18,6 @@
 #include "reference/core/io.h"
 #include "reference/phantom/phantom_model.h"
 #include "tests/support/stress.h"
-#include "validation/mujoco_phantom.h"
-#include "validation/phantom_mjcf.h"
 
 namespace dentsim {
 namespace {
@@ -100,56 +98,6 @@ TEST(CrosscheckDeviceStress, RandomDeviceModelsAgreeToRoundOff) {
     }
   }
   std::printf("%d random models: worst max_rel %.3e\n", models, worst);
-}
-
-TEST(PhantomMjcf, GeneratedFromTheModelFile) {
-  PhantomParams p = default_phantom_params();
-  p.name = "unit <7> -- & --> test";  // must not break the XML comment it is written into
-  p.forearm.mass_kg = 0.031;
-  p.damping_n_m_s_per_rad(2) = 0.0042;
-  p.armature_kg_m2(0) = 0.00021;
-  MujocoPhantom mj(p);
-  const mjModel* m = mj.model();
-  EXPECT_EQ(m->nv, 8);
-  EXPECT_EQ(m->neq, 2);
-  EXPECT_EQ(m->nu, 6);
-  const int forearm = mj_name2id(m, mjOBJ_BODY, "forearm");
-  ASSERT_GE(forearm, 0);
-  EXPECT_EQ(m->body_mass[forearm], 0.031);
-  const int q3 = mj_name2id(m, mjOBJ_JOINT, "q3");
-  EXPECT_EQ(m->dof_damping[m->jnt_dofadr[q3]], 0.0042);
-  const int q1 = mj_name2id(m, mjOBJ_JOINT, "q1");
-  EXPECT_EQ(m->dof_armature[m->jnt_dofadr[q1]], 0.00021);
-  EXPECT_EQ(m->jnt_limited[q1], 1);
-  EXPECT_EQ(m->jnt_range[2 * q1 + 1], p.q_max_rad(0));
-  const int tau6 = mj_name2id(m, mjOBJ_ACTUATOR, "tau6");
-  EXPECT_EQ(m->actuator_ctrlrange[2 * tau6 + 1], p.torque_limit_n_m(5));
-  // set_state closes the chain exactly and reads back q.
-  const Vec6 q = (Vec6() << 0.1, 0.3, 0.2, 0.4, -0.2, 0.5).finished();
-  mj.set_state(q, Vec6::Zero());
-  EXPECT_EQ(mj.q(), q);
-  EXPECT_LT(mj.closure_error(), 1e-15);
-}
-
-// Holding gravity-compensating torques, MuJoCo's closed chain stays put and closed. MuJoCo's
-// equalities are soft: under the static gravity load the closure sags by a small steady-state
-// deflection (measured 4.5e-8 rad with impedance 0.9999 and time constant 2 ms); bounded at 2e-7.
-TEST(PhantomMjcf, GravityCompensatedDeviceStaysClosedAndAtRest) {
-  PhantomParams p = default_phantom_params();
-  PhantomMjcfOptions o;
-  o.joint_limits = false;
-  MujocoPhantom mj(p, o);
-  const PhantomModelD model(p);
-  const Vec6 q = (Vec6() << 0.2, 0.35, 0.3, 0.0, 0.0, 0.0).finished();
-  mj.set_state(q, Vec6::Zero());
-  for (int k = 0; k < 1000; ++k) {  // 0.1 s
-    mj.set_torque(model.g(mj.q()));
-    mj.step();
-  }
-  std::printf("drift %.3e rad, closure %.3e rad\n", (mj.q() - q).cwiseAbs().maxCoeff(),
-              mj.closure_error());
-  EXPECT_LT((mj.q() - q).cwiseAbs().maxCoeff(), 1e-6);
-  EXPECT_LT(mj.closure_error(), 2e-7);
 }
 
 TEST(CrosscheckDeviceCli, WritesTheContractJson) {

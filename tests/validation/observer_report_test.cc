@@ -1,9 +1,9 @@
-// The observer on the simulated Phantom (device/observer_report.h). With exact sensing and the
+// The observer on the simulated Phantom (validation/observer_report.h). With exact sensing and the
 // true model the harness must reproduce the observer's theory: steady estimate exact, response the
 // first-order lag 1/L. With the real sensing (quantised encoders, estimated velocity) and
 // stiction the steady error is bounded by what no model sees (f_c), and the 20 % model error's
 // effect in motion is measured and reported.
-#include "device/observer_report.h"
+#include "validation/observer_report.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "validation/mujoco_phantom.h"
+#include "plant/mujoco_phantom.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "device/observer_report.h"
+#include "validation/observer_report.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "device/mujoco_plant.h"
+#include "plant/mujoco_plant.h"
 
 #include <mujoco/mujoco.h>
 

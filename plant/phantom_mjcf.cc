@@ -1,4 +1,4 @@
-#include "validation/phantom_mjcf.h"
+#include "plant/phantom_mjcf.h"
 
 #include <Eigen/Geometry>
 #include <cstdio>

@@ -1,4 +1,4 @@
-// The MuJoCo 2.2.2 model of the Phantom (validation/phantom_mjcf.h) loaded and wrapped: RAII
+// The MuJoCo 2.2.2 model of the Phantom (plant/phantom_mjcf.h) loaded and wrapped: RAII
 // ownership of mjModel/mjData, and the reduction of tree quantities to the device coordinates
 // q = (q1..q6) through the constant map theta = G q (phantom_tree_map(), PHANTOM.md):
 //     M_red = G^T M_tree G,  bias_red = G^T qfrc_bias,  J_red = J_tree G.
@@ -10,9 +10,9 @@
 
 #include <string>
 
+#include "plant/phantom_mjcf.h"
 #include "reference/core/types.h"
 #include "reference/phantom/phantom_params.h"
-#include "validation/phantom_mjcf.h"
 
 namespace dentsim {
 
