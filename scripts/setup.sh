@@ -7,6 +7,7 @@ PACKAGES=(
   build-essential cmake ccache pkg-config
   libmujoco-dev libqhull-dev libeigen3-dev libceres-dev libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev libfmt-dev libpng-dev libcairo2-dev
+  libgdcm-dev libnifti2-dev libteem-dev
 )
 
 missing=()
