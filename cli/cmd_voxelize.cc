@@ -21,6 +21,7 @@
 #include "reference/tooth/procedural_molar.h"
 #include "reference/tooth/render_png.h"
 #include "reference/tooth/volume.h"
+#include "reference/tooth/volume_write.h"
 #include "reference/tooth/voxelize.h"
 
 namespace dentsim::cli {
@@ -37,6 +38,9 @@ struct Options {
   std::string png;
   int png_size = 512;
   std::string material_thresholds;  // volume input: "enamel=LO:HI,dentin=LO:HI"
+  std::string write_volume;         // write a synthetic scan of the result here
+  double scan_spacing_mm = 0.1;
+  double scan_noise = 60;
 };
 
 nlohmann::json vec_mm(const Vec3& v) { return {v.x() * 1e3, v.y() * 1e3, v.z() * 1e3}; }
@@ -68,6 +72,8 @@ void run(const Options& o) {
     throw InputError("volume '" + o.mesh + "' carries its voxel spacing: --scale and --size-mm "
                      "are for meshes and the procedural molar");
   }
+  if (!(o.scan_spacing_mm > 0)) throw InputError("--scan-spacing-mm: expected a spacing > 0 (mm)");
+  if (!(o.scan_noise >= 0)) throw InputError("--scan-noise: expected a standard deviation >= 0");
   VolumeToothOptions vto;
   if (!o.material_thresholds.empty()) {
     vto.automatic_thresholds = false;
@@ -186,6 +192,15 @@ void run(const Options& o) {
     j["png"] = o.png;
     t_png = ms_since(t0);
   }
+  if (!o.write_volume.empty()) {
+    // A synthetic scan of this tooth (reference/tooth/volume_write.h), seed 1.
+    const ScanVolume scan = render_scan(grid, Vec3::Constant(o.scan_spacing_mm * 1e-3), o.scan_noise, 1);
+    write_volume(scan, o.write_volume);
+    j["written_volume"] = {{"path", o.write_volume},
+                           {"dims", scan.dims},
+                           {"spacing_mm", o.scan_spacing_mm},
+                           {"noise", o.scan_noise}};
+  }
   // The full octree of the collision stage over this grid (it takes the grid over).
   const auto t_octree = std::chrono::steady_clock::now();
   const FullOctree octree(std::move(grid));
@@ -218,6 +233,14 @@ void setup_voxelize(CLI::App& app) {
                   "Enamel thickness over the crown top for meshes, mm (default 2.5)");
   sub->add_option("--material-thresholds", o->material_thresholds,
                   "Volume: intensity ranges enamel=LO:HI,dentin=LO:HI (default: three-class Otsu)");
+  sub->add_option("--write-volume", o->write_volume,
+                  "Also write a synthetic CT scan of the result: .nii(.gz), .nrrd/.nhdr or a "
+                  "DICOM folder");
+  sub->add_option("--scan-spacing-mm", o->scan_spacing_mm,
+                  "Sample spacing of --write-volume, mm (default 0.1)");
+  sub->add_option("--scan-noise", o->scan_noise,
+                  "Gaussian noise of --write-volume, intensity units (default 60; enamel 2200, "
+                  "dentin 1200, pulp 100, air 0)");
   sub->add_option("--json", o->json, "Write the report here (JSON)")->required();
   sub->add_option("--png", o->png, "Write a shaded picture (whole tooth and cut-away) here");
   sub->add_option("--png-size", o->png_size, "Picture panel size in pixels (default 512)");

@@ -33,7 +33,7 @@ class VolumeCli : public ::testing::Test {
     // 0.1 mm isotropic, axis-aligned: enough for 128^3 (h = 0.08 mm).
     const ScanVolume v =
         testing::render_sphere(LayeredSphere{}, Vec3(0.1e-3, 0.1e-3, 0.1e-3), Mat3::Identity(), 5);
-    testing::write_nifti(v, path("scan.nii.gz"));
+    write_nifti(v, path("scan.nii.gz"));
   }
   static void TearDownTestSuite() { fs::remove_all(dir_); }
   static std::string path(const std::string& name) { return (dir_ / name).string(); }
@@ -70,6 +70,28 @@ TEST_F(VolumeCli, AutomaticAndGivenThresholds) {
       EXPECT_EQ(j["thresholds"]["dentin"], nlohmann::json::array({650.0, 1699.9}));
     }
     EXPECT_GT(fs::file_size(path("v.png")), 1000u);
+  }
+}
+
+// The procedural molar written as a synthetic CT (a DICOM series; 0.15 mm, noise 60) and read back:
+// each layer's volume within 5 % of the molar's own (measured: enamel +0.9 %, dentin +0.3 %,
+// pulp -2.2 %; the pulp canals narrow to ~2 samples near the apices).
+TEST_F(VolumeCli, ProceduralMolarThroughASyntheticScan) {
+  const auto a = run_dentsim("voxelize --procedural --resolution 128 --json " + path("p.json") +
+                             " --write-volume " + path("molar_ct") + " --scan-spacing-mm 0.15");
+  ASSERT_EQ(a.status, 0) << a.output;
+  const auto b = run_dentsim("voxelize " + path("molar_ct") + " --resolution 128 --json " +
+                             path("c.json"));
+  ASSERT_EQ(b.status, 0) << b.output;
+  const auto p = nlohmann::json::parse(read_file(path("p.json")));
+  const auto c = nlohmann::json::parse(read_file(path("c.json")));
+  EXPECT_EQ(c["volume"]["format"], "DICOM");
+  EXPECT_EQ(c["volume"]["dims"], p["written_volume"]["dims"]);
+  for (const char* m : {"enamel", "dentin", "pulp"}) {
+    EXPECT_NEAR(c["volume_mm3_by_material"][m].get<double>() /
+                    p["volume_mm3_by_material"][m].get<double>(),
+                1.0, 0.05)
+        << m;
   }
 }
 

@@ -1,18 +1,11 @@
 // Synthetic scan volumes for the volume tests (issue #21): a layered sphere (enamel shell, dentin,
 // pulp) sampled like a CT: each sample is the mean intensity over its own box (partial volume,
 // 4^3 sub-samples where the box meets a layer boundary), plus Gaussian noise; written as NIfTI,
-// NRRD and a DICOM series through the same libraries the readers use.
+// NRRD and a DICOM series by reference/tooth/volume_write.h (the same libraries the readers use).
 //
 // Units: lengths in metres in the structs; the files store millimetres (DICOM's unit, and the
 // unit the NIfTI/NRRD headers name).
 #pragma once
-
-#include <gdcmAttribute.h>
-#include <gdcmImageWriter.h>
-#include <gdcmTrace.h>
-#include <gdcmUIDGenerator.h>
-#include <nifti2_io.h>
-#include <teem/nrrd.h>
 
 #include <Eigen/Geometry>
 #include <cmath>
@@ -27,6 +20,7 @@
 #include <vector>
 
 #include "reference/tooth/volume.h"
+#include "reference/tooth/volume_write.h"
 
 namespace dentsim::testing {
 
@@ -92,105 +86,6 @@ inline ScanVolume render_sphere(const LayeredSphere& s, const Vec3& spacing, con
 
 inline Mat3 rotation(double angle_rad, const Vec3& axis) {
   return Eigen::AngleAxisd(angle_rad, axis.normalized()).toRotationMatrix();
-}
-
-// NIfTI-1 (float32, sform in mm); .nii.gz is gzip-compressed by nifticlib.
-inline void write_nifti(const ScanVolume& v, const std::string& path) {
-  const int64_t dims[8] = {3, v.dims[0], v.dims[1], v.dims[2], 1, 1, 1, 1};
-  nifti_image* nim = nifti_make_new_nim(dims, DT_FLOAT32, 1);
-  std::memcpy(nim->data, v.values.data(), v.values.size() * sizeof(float));
-  nim->dx = nim->pixdim[1] = v.spacing[0] * 1e3;
-  nim->dy = nim->pixdim[2] = v.spacing[1] * 1e3;
-  nim->dz = nim->pixdim[3] = v.spacing[2] * 1e3;
-  nim->xyz_units = NIFTI_UNITS_MM;
-  nim->qform_code = 0;
-  nim->sform_code = NIFTI_XFORM_SCANNER_ANAT;
-  for (int r = 0; r < 4; ++r) {
-    for (int c = 0; c < 4; ++c) nim->sto_xyz.m[r][c] = r == 3 ? (c == 3 ? 1.0 : 0.0) : 0.0;
-  }
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) nim->sto_xyz.m[r][c] = v.direction(r, c) * v.spacing[c] * 1e3;
-    nim->sto_xyz.m[r][3] = v.origin[r] * 1e3;
-  }
-  nim->sto_ijk = nifti_dmat44_inverse(nim->sto_xyz);
-  if (nifti_set_filenames(nim, path.c_str(), 0, 1) != 0) throw std::runtime_error("nifti names");
-  nifti_image_write(nim);
-  nifti_image_free(nim);
-}
-
-// NRRD (int16 samples), space directions and origin in mm;
-// `.nhdr` writes a detached header beside a raw data file.
-inline void write_nrrd(const ScanVolume& v, const std::string& path) {
-  std::vector<std::int16_t> data(v.values.size());
-  for (std::size_t i = 0; i < data.size(); ++i) data[i] = static_cast<std::int16_t>(v.values[i]);
-  Nrrd* n = nrrdNew();
-  if (nrrdWrap_va(n, data.data(), nrrdTypeShort, 3, static_cast<size_t>(v.dims[0]),
-                  static_cast<size_t>(v.dims[1]), static_cast<size_t>(v.dims[2])) != 0) {
-    throw std::runtime_error("nrrdWrap");
-  }
-  nrrdSpaceDimensionSet(n, 3);
-  double o[3], d[3][3];
-  for (int r = 0; r < 3; ++r) {
-    o[r] = v.origin[r] * 1e3;
-    for (int c = 0; c < 3; ++c) d[c][r] = v.direction(r, c) * v.spacing[c] * 1e3;
-    n->spaceUnits[r] = airStrdup("mm");
-  }
-  nrrdSpaceOriginSet(n, o);
-  nrrdAxisInfoSet_va(n, nrrdAxisInfoSpaceDirection, d[0], d[1], d[2]);
-  if (nrrdSave(path.c_str(), n, nullptr) != 0) throw std::runtime_error("nrrdSave " + path);
-  nrrdNix(n);  // the data belongs to `data`
-}
-
-// A DICOM CT series: one file per k-slice, int16 stored as HU + 1024 with RescaleIntercept -1024.
-inline void write_dicom_series(const ScanVolume& v, const std::string& folder) {
-  std::filesystem::create_directories(folder);
-  gdcm::Trace::WarningOff();  // the writer warns about attributes it fills in itself
-  gdcm::UIDGenerator uid;
-  const std::string study = uid.Generate(), series = uid.Generate();
-  const Vec3 row = v.direction.col(0), col = v.direction.col(1);
-  for (int k = 0; k < v.dims[2]; ++k) {
-    gdcm::ImageWriter w;
-    gdcm::Image& im = w.GetImage();
-    im.SetNumberOfDimensions(2);
-    im.SetDimension(0, v.dims[0]);
-    im.SetDimension(1, v.dims[1]);
-    im.SetSpacing(0, v.spacing[0] * 1e3);
-    im.SetSpacing(1, v.spacing[1] * 1e3);
-    im.SetSpacing(2, v.spacing[2] * 1e3);
-    const Vec3 ipp = 1e3 * v.position(Vec3(0, 0, k));
-    for (int r = 0; r < 3; ++r) im.SetOrigin(r, ipp[r]);
-    const double dc[6] = {row[0], row[1], row[2], col[0], col[1], col[2]};
-    im.SetDirectionCosines(dc);
-    im.SetPixelFormat(gdcm::PixelFormat::INT16);
-    im.SetPhotometricInterpretation(gdcm::PhotometricInterpretation::MONOCHROME2);
-    im.SetIntercept(-1024);
-    im.SetSlope(1);
-    std::vector<std::int16_t> px(static_cast<std::size_t>(v.dims[0]) * v.dims[1]);
-    for (int j = 0; j < v.dims[1]; ++j) {
-      for (int i = 0; i < v.dims[0]; ++i) {
-        px[i + static_cast<std::size_t>(v.dims[0]) * j] =
-            static_cast<std::int16_t>(v.values[v.index(i, j, k)] + 1024);
-      }
-    }
-    gdcm::DataElement pixel(gdcm::Tag(0x7fe0, 0x0010));
-    pixel.SetByteValue(reinterpret_cast<const char*>(px.data()),
-                       static_cast<std::uint32_t>(px.size() * sizeof(std::int16_t)));
-    im.SetDataElement(pixel);
-    gdcm::DataSet& ds = w.GetFile().GetDataSet();
-    gdcm::Attribute<0x0008, 0x0016> sop_class;
-    sop_class.SetValue("1.2.840.10008.5.1.4.1.1.2");  // CT Image Storage
-    ds.Replace(sop_class.GetAsDataElement());
-    gdcm::Attribute<0x0020, 0x000d> study_uid;
-    study_uid.SetValue(study);
-    ds.Replace(study_uid.GetAsDataElement());
-    gdcm::Attribute<0x0020, 0x000e> series_uid;
-    series_uid.SetValue(series);
-    ds.Replace(series_uid.GetAsDataElement());
-    char name[32];
-    std::snprintf(name, sizeof name, "slice%04d.dcm", k);
-    w.SetFileName((std::filesystem::path(folder) / name).string().c_str());
-    if (!w.Write()) throw std::runtime_error("gdcm write " + folder);
-  }
 }
 
 }  // namespace dentsim::testing

@@ -108,21 +108,21 @@ class VolumeFiles : public ::testing::Test {
 TEST_F(VolumeFiles, NiftiGzObliqueAnisotropic) {
   const ScanVolume v = testing::render_sphere(LayeredSphere{}, Vec3(0.08e-3, 0.08e-3, 0.125e-3),
                                               testing::rotation(0.5, Vec3(1, 1, 0)));
-  testing::write_nifti(v, path("sphere.nii.gz"));
+  write_nifti(v, path("sphere.nii.gz"));
   check_round_trip_and_volumes(v, path("sphere.nii.gz"), "NIfTI-1");
 }
 
 TEST_F(VolumeFiles, NrrdAxisAligned) {
   const ScanVolume v = testing::render_sphere(LayeredSphere{}, Vec3(0.1e-3, 0.09e-3, 0.11e-3),
                                               Mat3::Identity(), 7);
-  testing::write_nrrd(v, path("sphere.nrrd"));
+  write_nrrd(v, path("sphere.nrrd"));
   check_round_trip_and_volumes(v, path("sphere.nrrd"), "NRRD");
 }
 
 TEST_F(VolumeFiles, DicomSeriesOblique) {
   const ScanVolume v = testing::render_sphere(LayeredSphere{}, Vec3(0.09e-3, 0.09e-3, 0.15e-3),
                                               testing::rotation(0.35, Vec3(1, 0, 0)), 11);
-  testing::write_dicom_series(v, path("series"));
+  write_dicom_series(v, path("series"));
   check_round_trip_and_volumes(v, path("series"), "DICOM");
 }
 
@@ -131,8 +131,8 @@ TEST_F(VolumeFiles, NhdrAndNiiSmallRoundTrip) {
   s.noise = 0;
   const ScanVolume v =
       testing::render_sphere(s, Vec3(0.4e-3, 0.5e-3, 0.6e-3), testing::rotation(1.0, Vec3(0, 1, 2)));
-  testing::write_nrrd(v, path("small.nhdr"));
-  testing::write_nifti(v, path("small.nii"));
+  write_nrrd(v, path("small.nhdr"));
+  write_nifti(v, path("small.nii"));
   for (const char* f : {"small.nhdr", "small.nii"}) {
     const ScanVolume r = load_volume(path(f));
     EXPECT_EQ(r.dims, v.dims) << f;
@@ -256,11 +256,11 @@ TEST_F(VolumeFiles, BadInputNamesTheFileAndTheProblem) {
   // A series with a slice missing in the middle, and one with a stray file.
   LayeredSphere s;
   const ScanVolume v = testing::render_sphere(s, Vec3(1e-3, 1e-3, 1e-3), Mat3::Identity());
-  testing::write_dicom_series(v, path("gap"));
+  write_dicom_series(v, path("gap"));
   fs::remove(path("gap/slice0005.dcm"));
   EXPECT_THAT(message_of([&] { load_volume(path("gap")); }),
               HasSubstr("slice0006.dcm: 2.000000 mm from " + path("gap/slice0004.dcm")));
-  testing::write_dicom_series(v, path("stray"));
+  write_dicom_series(v, path("stray"));
   std::ofstream(path("stray/notes.txt")) << "scanned on Tuesday";
   EXPECT_THAT(message_of([&] { load_volume(path("stray")); }),
               HasSubstr(path("stray/notes.txt") + ": not a readable DICOM image"));
