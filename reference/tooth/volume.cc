@@ -348,7 +348,7 @@ VoxelGrid build_volume_tooth(const ScanVolume& volume, const VolumeToothOptions&
   const Mask near_empty = dilate_cube(is_empty, n, r);
   const double cut = 0.5 * (rep.class_means[2] + rep.class_means[0]);
   for (std::size_t x = 0; x < grid.voxels.size(); ++x) {
-    if (grid.voxels[x] == kDentin && near_enamel[x] && near_empty[x]) {
+    if (options.partial_volume_rule && grid.voxels[x] == kDentin && near_enamel[x] && near_empty[x]) {
       grid.voxels[x] = value[x] >= cut ? kEnamel : kEmpty;
       ++rep.partial_volume_voxels;
     }

@@ -103,6 +103,7 @@ struct VolumeToothOptions {
   bool automatic_thresholds = true;
   MaterialThresholds thresholds;  // used when !automatic_thresholds
   int min_island_voxels = 64;     // step 5
+  bool partial_volume_rule = true;  // step 4 (off only to measure what it does)
 };
 
 struct VolumeToothReport {

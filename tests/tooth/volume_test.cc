@@ -142,6 +142,24 @@ TEST_F(VolumeFiles, NhdrAndNiiSmallRoundTrip) {
   }
 }
 
+// Step 4 matters: without it the enamel/air edge leaves a dentin skin on the enamel.
+TEST(VolumeStages, PartialVolumeRuleRemovesTheDentinSkin) {
+  const LayeredSphere s;
+  const ScanVolume v = testing::render_sphere(s, Vec3(0.1e-3, 0.1e-3, 0.1e-3), Mat3::Identity(), 9);
+  double dentin[2];
+  for (int rule = 0; rule < 2; ++rule) {
+    VolumeToothOptions opt;
+    opt.resolution = 128;
+    opt.partial_volume_rule = rule == 1;
+    const VoxelGrid g = build_volume_tooth(v, opt);
+    dentin[rule] = count_materials(g)[kDentin] * g.voxel_volume() / s.dentin_volume() - 1.0;
+  }
+  std::printf("dentin error at 128^3, 0.1 mm: %+.2f %% without the rule, %+.2f %% with it\n",
+              100 * dentin[0], 100 * dentin[1]);
+  EXPECT_GT(dentin[0], 0.05);
+  EXPECT_LT(std::abs(dentin[1]), 0.02);
+}
+
 TEST(VolumeStages, OtsuSeparatesThreeLevels) {
   // 5000 samples at 0, 300 at 10, 200 at 20: any threshold pair between the levels separates
   // them; Otsu's must.
