@@ -204,25 +204,28 @@ double sample_trilinear(const ScanVolume& v, const Vec3& p, double outside) {
   return acc;
 }
 
-Vec3 enamel_axis(const VoxelGrid& grid) {
-  Vec3 solid = Vec3::Zero(), enamel = Vec3::Zero();
-  long ns = 0, ne = 0;
+Vec3 solid_centroid(const VoxelGrid& grid) {
+  Vec3 sum = Vec3::Zero();
+  long n = 0;
   for (int k = 0; k < grid.n; ++k) {
     for (int j = 0; j < grid.n; ++j) {
       for (int i = 0; i < grid.n; ++i) {
-        const std::uint8_t m = grid.at(i, j, k);
-        if (m == kEmpty) continue;
-        solid += grid.center(i, j, k);
-        ++ns;
-        if (m == kEnamel) {
-          enamel += grid.center(i, j, k);
-          ++ne;
-        }
+        if (!grid.solid(i, j, k)) continue;
+        sum += grid.center(i, j, k);
+        ++n;
       }
     }
   }
-  if (ns == 0 || ne == 0) return Vec3::UnitZ();
-  const Vec3 d = enamel / double(ne) - solid / double(ns);
+  return n > 0 ? Vec3(sum / double(n)) : Vec3::Zero();
+}
+
+Vec3 enamel_axis(const VoxelGrid& grid) {
+  VoxelGrid enamel = grid;
+  for (std::uint8_t& m : enamel.voxels) m = m == kEnamel ? 1 : 0;
+  if (std::find(enamel.voxels.begin(), enamel.voxels.end(), 1) == enamel.voxels.end()) {
+    return Vec3::UnitZ();
+  }
+  const Vec3 d = solid_centroid(enamel) - solid_centroid(grid);
   if (d.norm() < grid.voxel_size) return Vec3::UnitZ();
   Eigen::Index a = 0;
   d.cwiseAbs().maxCoeff(&a);

@@ -120,6 +120,9 @@ struct VolumeToothReport {
 VoxelGrid build_volume_tooth(const ScanVolume& volume, const VolumeToothOptions& options,
                              VolumeToothReport* report = nullptr);
 
+// Mean centre of the solid voxels [m] (zero for an empty grid).
+Vec3 solid_centroid(const VoxelGrid& grid);
+
 // The crown's direction for pictures: from the solid's centroid towards the enamel's, snapped to
 // the nearest grid axis (+z when the enamel is centred, e.g. a layered sphere).
 Vec3 enamel_axis(const VoxelGrid& grid);

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "reference/core/io.h"
+#include "tests/support/input_error.h"
 #include "reference/tooth/mesh_ply.h"
 #include "reference/tooth/voxelize.h"
 
@@ -27,15 +28,6 @@ namespace dentsim {
 namespace {
 
 using ::testing::HasSubstr;
-
-std::string message_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(no InputError)";
-}
 
 // A UV sphere of radius r: `seg` longitudes, `rings` latitudes; quads between rings (written as
 // 4-gons), triangles at the poles, wound counter-clockwise seen from outside.
@@ -181,20 +173,20 @@ TEST(MeshPly, VoxelisedSphereWithinTwoPercent) {
 
 TEST(MeshPly, BadFilesNameTheLineOrElement) {
   const Poly p = uv_sphere(1.0, 8, 4);
-  EXPECT_THAT(message_of([] { parse_ply("solid x\n", "x.ply"); }),
+  EXPECT_THAT(testing::input_error_of([] { parse_ply("solid x\n", "x.ply"); }),
               HasSubstr("PLY 'x.ply' line 1: expected 'ply' as the first line"));
-  EXPECT_THAT(message_of([] { parse_ply("ply\nformat ascii 1.0\nelement vertex 3\n", "h.ply"); }),
+  EXPECT_THAT(testing::input_error_of([] { parse_ply("ply\nformat ascii 1.0\nelement vertex 3\n", "h.ply"); }),
               HasSubstr("PLY 'h.ply' line 3: the file ends in the header; expected 'end_header'"));
-  EXPECT_THAT(message_of([] { parse_ply("ply\nformat ascii 1.0\nbogus 1\nend_header\n", "k.ply"); }),
+  EXPECT_THAT(testing::input_error_of([] { parse_ply("ply\nformat ascii 1.0\nbogus 1\nend_header\n", "k.ply"); }),
               HasSubstr("line 3: unknown header keyword 'bogus'"));
-  EXPECT_THAT(message_of([] { parse_ply("ply\nformat ascii 2.0\nend_header\n", "v.ply"); }),
+  EXPECT_THAT(testing::input_error_of([] { parse_ply("ply\nformat ascii 2.0\nend_header\n", "v.ply"); }),
               HasSubstr("line 2: format version '2.0'; expected 1.0"));
-  EXPECT_THAT(message_of([] {
+  EXPECT_THAT(testing::input_error_of([] {
                 parse_ply("ply\nformat ascii 1.0\nelement vertex 1\nproperty quad x\nend_header\n",
                           "t.ply");
               }),
               HasSubstr("line 4: property type 'quad' is not a PLY type"));
-  EXPECT_THAT(message_of([] {
+  EXPECT_THAT(testing::input_error_of([] {
                 parse_ply("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n",
                           "n.ply");
               }),
@@ -202,26 +194,26 @@ TEST(MeshPly, BadFilesNameTheLineOrElement) {
   // Body errors.
   std::string ascii = ascii_ply(p);
   const std::string bad_number = std::string(ascii).replace(ascii.find("230"), 3, "2x0");
-  EXPECT_THAT(message_of([&] { parse_ply(bad_number, "c.ply"); }),
+  EXPECT_THAT(testing::input_error_of([&] { parse_ply(bad_number, "c.ply"); }),
               HasSubstr("PLY 'c.ply' vertex 0 (line 14): property 'red': expected a number, found '2x0'"));
   // The last face (31) is on line 13 + 26 vertices + 32 faces = 71.
   const std::string head = ascii.substr(0, ascii.rfind('\n', ascii.size() - 2) + 1);
-  EXPECT_THAT(message_of([&] { parse_ply(head + "3 0 1 99\n", "i.ply"); }),
+  EXPECT_THAT(testing::input_error_of([&] { parse_ply(head + "3 0 1 99\n", "i.ply"); }),
               HasSubstr("PLY 'i.ply' face 31 (line 71): vertex index 99 out of range 0..25"));
-  EXPECT_THAT(message_of([&] { parse_ply(head + "2 0 1\n", "2.ply"); }),
+  EXPECT_THAT(testing::input_error_of([&] { parse_ply(head + "2 0 1\n", "2.ply"); }),
               HasSubstr("face 31 (line 71): a face with 2 vertices; expected at least 3"));
-  EXPECT_THAT(message_of([&] { parse_ply(head + "3 0 1 2 7\n", "x.ply"); }),
+  EXPECT_THAT(testing::input_error_of([&] { parse_ply(head + "3 0 1 2 7\n", "x.ply"); }),
               HasSubstr("face 31 (line 71): unexpected '7' after the last property"));
-  EXPECT_THAT(message_of([&] { parse_ply(head, "e.ply"); }),
+  EXPECT_THAT(testing::input_error_of([&] { parse_ply(head, "e.ply"); }),
               HasSubstr("face 31 of 32: the file ends; expected one line per face"));
   const std::string bin = binary_le_ply(p);
-  EXPECT_THAT(message_of([&] { parse_ply(bin.substr(0, bin.size() - 3), "cut.ply"); }),
+  EXPECT_THAT(testing::input_error_of([&] { parse_ply(bin.substr(0, bin.size() - 3), "cut.ply"); }),
               HasSubstr("PLY 'cut.ply' face 31 of 32: the file ends in property 'vertex_indices'"));
   // A face with a missing neighbour: the surface is open (mesh.cc's validation, named).
   std::string open = head;
   open.replace(open.find("element face 32"), 15, "element face 31");
-  EXPECT_THAT(message_of([&] { parse_ply(open, "o.ply"); }), HasSubstr("o.ply"));
-  EXPECT_THAT(message_of([&] { parse_ply(open, "o.ply"); }), HasSubstr("boundary edges"));
+  EXPECT_THAT(testing::input_error_of([&] { parse_ply(open, "o.ply"); }), HasSubstr("o.ply"));
+  EXPECT_THAT(testing::input_error_of([&] { parse_ply(open, "o.ply"); }), HasSubstr("boundary edges"));
 }
 
 }  // namespace

@@ -19,6 +19,7 @@
 #include <random>
 
 #include "reference/core/io.h"
+#include "tests/support/input_error.h"
 #include "reference/tooth/voxelize.h"
 #include "tests/tooth/volume_synth.h"
 
@@ -28,15 +29,6 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 using testing::LayeredSphere;
-
-std::string message_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(no InputError)";
-}
 
 class VolumeFiles : public ::testing::Test {
  protected:
@@ -87,19 +79,7 @@ class VolumeFiles : public ::testing::Test {
     EXPECT_NEAR(dentin / s.dentin_volume(), 1.0, 0.05);
     EXPECT_NEAR(pulp / s.pulp_volume(), 1.0, 0.05);
     // The solid's centroid is the sphere's centre (to a voxel): origin, spacing and axes agree.
-    Vec3 c = Vec3::Zero();
-    long n = 0;
-    for (int k = 0; k < g.n; ++k) {
-      for (int j = 0; j < g.n; ++j) {
-        for (int i = 0; i < g.n; ++i) {
-          if (g.solid(i, j, k)) {
-            c += g.center(i, j, k);
-            ++n;
-          }
-        }
-      }
-    }
-    EXPECT_LT((c / double(n) - s.center).norm(), g.voxel_size);
+    EXPECT_LT((solid_centroid(g) - s.center).norm(), g.voxel_size);
   }
 
   fs::path dir_;
@@ -171,9 +151,9 @@ TEST(VolumeStages, OtsuSeparatesThreeLevels) {
   EXPECT_EQ(classify_intensity(t, 0.0), kEmpty);
   EXPECT_EQ(classify_intensity(t, 10.0), kDentin);
   EXPECT_EQ(classify_intensity(t, 20.0), kEnamel);
-  EXPECT_THAT(message_of([] { otsu_three_class(std::vector<float>(10, 3.0f)); }),
+  EXPECT_THAT(testing::input_error_of([] { otsu_three_class(std::vector<float>(10, 3.0f)); }),
               HasSubstr("uniform"));
-  EXPECT_THAT(message_of([] { otsu_three_class({1.0f, 2.0f, 1.0f}); }),
+  EXPECT_THAT(testing::input_error_of([] { otsu_three_class({1.0f, 2.0f, 1.0f}); }),
               HasSubstr("fewer than three"));
 }
 
@@ -185,15 +165,15 @@ TEST(VolumeStages, ThresholdFlag) {
   EXPECT_EQ(t.enamel_lo, 1700.5);
   EXPECT_EQ(t.enamel_hi, 4000);
   EXPECT_EQ(classify_intensity(t, 1700.2), kEmpty);
-  EXPECT_THAT(message_of([] { parse_material_thresholds("enamel=1:2", "--f"); }),
+  EXPECT_THAT(testing::input_error_of([] { parse_material_thresholds("enamel=1:2", "--f"); }),
               HasSubstr("expected both enamel=LO:HI and dentin=LO:HI"));
-  EXPECT_THAT(message_of([] { parse_material_thresholds("enamel=1:5,dentin=4:6", "--f"); }),
+  EXPECT_THAT(testing::input_error_of([] { parse_material_thresholds("enamel=1:5,dentin=4:6", "--f"); }),
               HasSubstr("overlap"));
-  EXPECT_THAT(message_of([] { parse_material_thresholds("enamel=x:5,dentin=6:7", "--f"); }),
+  EXPECT_THAT(testing::input_error_of([] { parse_material_thresholds("enamel=x:5,dentin=6:7", "--f"); }),
               HasSubstr("'x' is not a number"));
-  EXPECT_THAT(message_of([] { parse_material_thresholds("enamel=5:1,dentin=6:7", "--f"); }),
+  EXPECT_THAT(testing::input_error_of([] { parse_material_thresholds("enamel=5:1,dentin=6:7", "--f"); }),
               HasSubstr("LO <= HI"));
-  EXPECT_THAT(message_of([] { parse_material_thresholds("pulp=1:2,dentin=6:7", "--f"); }),
+  EXPECT_THAT(testing::input_error_of([] { parse_material_thresholds("pulp=1:2,dentin=6:7", "--f"); }),
               HasSubstr("expected enamel or dentin"));
 }
 
@@ -242,47 +222,60 @@ TEST(VolumeStages, IslandsTakeTheirNeighboursClass) {
   EXPECT_EQ(counts[kEnamel], 0);
 }
 
+// NRRD "spacings" without units: millimetres, said in the note.
+TEST_F(VolumeFiles, UnitlessSpacingIsMillimetres) {
+  std::ofstream(path("plain.nrrd")) << "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\n"
+                                       "spacings: 0.5 0.25 2\nencoding: ascii\n\n1 2 3 4 5 6 7 8\n";
+  std::string note;
+  const ScanVolume v = load_nrrd(path("plain.nrrd"), &note);
+  EXPECT_EQ(v.spacing, Vec3(0.5e-3, 0.25e-3, 2e-3));
+  EXPECT_EQ(v.direction, Mat3::Identity());
+  EXPECT_EQ(v.values, std::vector<float>({1, 2, 3, 4, 5, 6, 7, 8}));
+  EXPECT_THAT(note, HasSubstr("no length unit"));
+  EXPECT_THAT(note, HasSubstr("taking millimetres"));
+}
+
 TEST_F(VolumeFiles, BadInputNamesTheFileAndTheProblem) {
   {
     std::ofstream(path("junk.nii")) << "not a nifti file at all";
-    EXPECT_THAT(message_of([&] { load_volume(path("junk.nii")); }),
+    EXPECT_THAT(testing::input_error_of([&] { load_volume(path("junk.nii")); }),
                 HasSubstr(path("junk.nii") + ": not a readable NIfTI"));
   }
-  EXPECT_THAT(message_of([&] { load_volume(path("missing.nii.gz")); }),
+  EXPECT_THAT(testing::input_error_of([&] { load_volume(path("missing.nii.gz")); }),
               HasSubstr(path("missing.nii.gz") + ": cannot open"));
   {
     std::ofstream(path("bad.nrrd")) << "NRRD0004\ntype: float\ndimension: 3\nsizes: 4 4\n\n";
-    const std::string m = message_of([&] { load_volume(path("bad.nrrd")); });
+    const std::string m = testing::input_error_of([&] { load_volume(path("bad.nrrd")); });
     EXPECT_THAT(m, HasSubstr(path("bad.nrrd") + ": not a readable NRRD volume"));
     EXPECT_THAT(m, HasSubstr("sizes"));
   }
   {
     std::ofstream(path("flat.nrrd")) << "NRRD0004\ntype: uchar\ndimension: 2\nsizes: 2 2\n"
                                         "encoding: ascii\n\n1 2 3 4\n";
-    EXPECT_THAT(message_of([&] { load_volume(path("flat.nrrd")); }),
+    EXPECT_THAT(testing::input_error_of([&] { load_volume(path("flat.nrrd")); }),
                 HasSubstr("header dimension 2; expected 3"));
   }
   {
     std::ofstream(path("nospace.nrrd")) << "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\n"
                                            "encoding: ascii\n\n1 2 3 4 5 6 7 8\n";
-    EXPECT_THAT(message_of([&] { load_volume(path("nospace.nrrd")); }),
+    EXPECT_THAT(testing::input_error_of([&] { load_volume(path("nospace.nrrd")); }),
                 HasSubstr("neither \"space directions\" nor \"spacings\""));
   }
   fs::create_directories(path("empty"));
-  EXPECT_THAT(message_of([&] { load_volume(path("empty")); }),
+  EXPECT_THAT(testing::input_error_of([&] { load_volume(path("empty")); }),
               HasSubstr("0 DICOM file(s); expected a series of at least 2 slices"));
   // A series with a slice missing in the middle, and one with a stray file.
   LayeredSphere s;
   const ScanVolume v = testing::render_sphere(s, Vec3(1e-3, 1e-3, 1e-3), Mat3::Identity());
   write_dicom_series(v, path("gap"));
   fs::remove(path("gap/slice0005.dcm"));
-  EXPECT_THAT(message_of([&] { load_volume(path("gap")); }),
+  EXPECT_THAT(testing::input_error_of([&] { load_volume(path("gap")); }),
               HasSubstr("slice0006.dcm: 2.000000 mm from " + path("gap/slice0004.dcm")));
   write_dicom_series(v, path("stray"));
   std::ofstream(path("stray/notes.txt")) << "scanned on Tuesday";
-  EXPECT_THAT(message_of([&] { load_volume(path("stray")); }),
+  EXPECT_THAT(testing::input_error_of([&] { load_volume(path("stray")); }),
               HasSubstr(path("stray/notes.txt") + ": not a readable DICOM image"));
-  EXPECT_THAT(message_of([&] { load_volume(path("x.vtk")); }),
+  EXPECT_THAT(testing::input_error_of([&] { load_volume(path("x.vtk")); }),
               HasSubstr("unknown volume format"));
 }
 
