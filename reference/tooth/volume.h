@@ -12,7 +12,8 @@
 //     t1 < t2 maximising the between-class variance sum_c w_c mu_c^2 of background (< t1),
 //     dentin [t1, t2) and enamel (>= t2); or the user's ranges (`enamel=LO:HI,dentin=LO:HI`).
 //  2. Grid: N^3 cubic voxels, axis-aligned in the scanner frame, around the bounding box of the
-//     samples classed solid (two empty voxels per side, make_grid of voxelize.h).
+//     largest 6-connected component of samples classed solid (so speckle does not widen it; two
+//     empty voxels per side, make_grid of voxelize.h).
 //  3. Resampling: each cubic voxel centre takes the trilinearly interpolated intensity of the 8
 //     surrounding samples (outside the sampled lattice: the background class mean), then its class.
 //     Trilinear interpolation is exact on linear ramps, so a partial-volume edge (a ramp between
