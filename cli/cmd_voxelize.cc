@@ -1,8 +1,10 @@
-// `dentsim voxelize MESH|--procedural --resolution N [--size-mm S | --scale K] --json FILE
-//  [--png FILE]`: builds the voxel tooth (reference/tooth/voxelize.h, procedural_molar.h) and
-// reports it (issue #4). JSON keys (a contract): voxels_by_material (material name -> count),
-// volume_mm3 (solid), mesh_volume_mm3 (mesh input only), resolution, voxel_size_mm, octree_bytes,
-// timing_ms (total wall time of the job); plus the echo of the scale and the mesh repairs.
+// `dentsim voxelize MESH|VOLUME|--procedural --resolution N [--size-mm S | --scale K] --json FILE
+//  [--png FILE] [--material-thresholds enamel=LO:HI,dentin=LO:HI]`: builds the voxel tooth
+// (reference/tooth/voxelize.h, procedural_molar.h, volume.h) and reports it (issues #4, #21).
+// JSON keys (a contract): voxels_by_material and volume_mm3_by_material (material name -> count,
+// mm^3), volume_mm3 (solid), mesh_volume_mm3 (mesh input only), thresholds (volume input only),
+// resolution, voxel_size_mm, octree_bytes, timing_ms (total wall time of the job); plus the echo
+// of the scale and the mesh repairs, or of the volume's geometry and segmentation.
 #include <chrono>
 #include <cstdio>
 #include <memory>
@@ -19,6 +21,8 @@
 #include "reference/tooth/octree.h"
 #include "reference/tooth/procedural_molar.h"
 #include "reference/tooth/render_png.h"
+#include "reference/tooth/volume.h"
+#include "reference/tooth/volume_write.h"
 #include "reference/tooth/voxelize.h"
 
 namespace dentsim::cli {
@@ -34,6 +38,10 @@ struct Options {
   std::string json;
   std::string png;
   int png_size = 512;
+  std::string material_thresholds;  // volume input: "enamel=LO:HI,dentin=LO:HI"
+  std::string write_volume;         // write a synthetic scan of the result here
+  double scan_spacing_mm = 0.1;
+  double scan_noise = 60;
 };
 
 nlohmann::json vec_mm(const Vec3& v) { return {v.x() * 1e3, v.y() * 1e3, v.z() * 1e3}; }
@@ -55,6 +63,23 @@ void run(const Options& o) {
   }
   if (!(o.enamel_mm >= 0)) throw InputError("--enamel-mm: expected a thickness >= 0 (mm)");
   if (o.png_size < 8 || o.png_size > 4096) throw InputError("--png-size: expected 8..4096 pixels");
+  const bool volume = !o.mesh.empty() && is_volume_path(o.mesh);
+  if (!o.material_thresholds.empty() && !volume) {
+    throw InputError("--material-thresholds: only for a scan volume (DICOM folder, .nii, .nii.gz, "
+                     ".nrrd, .nhdr); '" + (o.mesh.empty() ? std::string("--procedural") : o.mesh) +
+                     "' is not one");
+  }
+  if (volume && (o.scale || o.size_mm)) {
+    throw InputError("volume '" + o.mesh + "' carries its voxel spacing: --scale and --size-mm "
+                     "are for meshes and the procedural molar");
+  }
+  if (!(o.scan_spacing_mm > 0)) throw InputError("--scan-spacing-mm: expected a spacing > 0 (mm)");
+  if (!(o.scan_noise >= 0)) throw InputError("--scan-noise: expected a standard deviation >= 0");
+  VolumeToothOptions vto;
+  if (!o.material_thresholds.empty()) {
+    vto.automatic_thresholds = false;
+    vto.thresholds = parse_material_thresholds(o.material_thresholds, "--material-thresholds");
+  }
   check_output_paths({{"--json", o.json}, {"--png", o.png}}, {{"MESH", o.mesh}});
   // Voxelising at 1024^3 takes about a minute: say so on stderr every few seconds, terminal or not.
   const Heartbeat heartbeat("dentsim voxelize: voxelizing at " + std::to_string(o.resolution) +
@@ -74,6 +99,38 @@ void run(const Options& o) {
     j["size_mm"] = vec_mm(molar_bounds(p).extent());
     grid = voxelize_procedural_molar(p, o.resolution, &rep);
     j["enamel_cusp_mm"] = p.enamel_cusp_m * p.scale * 1e3;
+  } else if (volume) {
+    std::string unit_note;
+    const ScanVolume v = load_volume(o.mesh, &unit_note);
+    if (!unit_note.empty()) std::fprintf(stderr, "dentsim voxelize: WARNING: %s\n", unit_note.c_str());
+    t_load = ms_since(t_vox);
+    vto.resolution = o.resolution;
+    VolumeToothReport vr;
+    grid = build_volume_tooth(v, vto, &vr);
+    rep.crown.axis = enamel_axis(grid);
+    const MaterialThresholds& t = vr.thresholds;
+    j["source"] = o.mesh;
+    j["volume"] = {{"format", v.format},
+                   {"dims", v.dims},
+                   {"spacing_mm", vec_mm(v.spacing)},
+                   {"origin_mm", vec_mm(v.origin)},
+                   {"direction_columns",
+                    {{v.direction(0, 0), v.direction(1, 0), v.direction(2, 0)},
+                     {v.direction(0, 1), v.direction(1, 1), v.direction(2, 1)},
+                     {v.direction(0, 2), v.direction(1, 2), v.direction(2, 2)}}},
+                   {"unit_note", unit_note}};
+    j["thresholds"] = {{"method", t.automatic ? "otsu-3-class" : "--material-thresholds"},
+                       {"enamel", {t.enamel_lo, t.enamel_hi}},
+                       {"dentin", {t.dentin_lo, t.dentin_hi}}};
+    j["class_means"] = {{"background", vr.class_means[0]},
+                        {"dentin", vr.class_means[1]},
+                        {"enamel", vr.class_means[2]}};
+    j["segmentation"] = {{"interpolation", "trilinear"},
+                         {"partial_volume_voxels", vr.partial_volume_voxels},
+                         {"partial_volume_radius_voxels", vr.interpolation_radius_voxels},
+                         {"island_components", vr.island_components},
+                         {"island_voxels", vr.island_voxels},
+                         {"min_island_voxels", vto.min_island_voxels}};
   } else {
     if (!o.scale && !o.size_mm) {
       throw InputError("mesh '" + o.mesh +
@@ -112,12 +169,16 @@ void run(const Options& o) {
 
   const auto counts = count_materials(grid);
   nlohmann::json by_material = nlohmann::json::object();
+  nlohmann::json mm3_by_material = nlohmann::json::object();
   long solid = 0;
   for (int m = kEnamel; m < kMaterialCount; ++m) {
-    by_material[material_properties(static_cast<std::uint8_t>(m)).name] = counts[m];
+    const char* name = material_properties(static_cast<std::uint8_t>(m)).name;
+    by_material[name] = counts[m];
+    mm3_by_material[name] = counts[m] * grid.voxel_volume() * 1e9;
     solid += counts[m];
   }
   j["voxels_by_material"] = by_material;
+  j["volume_mm3_by_material"] = mm3_by_material;
   j["volume_mm3"] = solid * grid.voxel_volume() * 1e9;
   j["resolution"] = grid.n;
   j["voxel_size_mm"] = grid.voxel_size * 1e3;
@@ -136,6 +197,15 @@ void run(const Options& o) {
     j["png"] = o.png;
     t_png = ms_since(t0);
   }
+  if (!o.write_volume.empty()) {
+    // A synthetic scan of this tooth (reference/tooth/volume_write.h), seed 1.
+    const ScanVolume scan = render_scan(grid, Vec3::Constant(o.scan_spacing_mm * 1e-3), o.scan_noise, 1);
+    write_volume(scan, o.write_volume);
+    j["written_volume"] = {{"path", o.write_volume},
+                           {"dims", scan.dims},
+                           {"spacing_mm", o.scan_spacing_mm},
+                           {"noise", o.scan_noise}};
+  }
   // The full octree of the collision stage over this grid (it takes the grid over).
   const auto t_octree = std::chrono::steady_clock::now();
   const FullOctree octree(std::move(grid));
@@ -151,9 +221,11 @@ void setup_voxelize(CLI::App& app) {
   auto o = std::make_shared<Options>();
   CLI::App* sub = app.add_subcommand(
       "voxelize",
-      "Build the voxel tooth from a mesh (STL/OBJ) or the procedural molar and report it");
+      "Build the voxel tooth from a mesh (STL/OBJ/PLY), a scan volume (DICOM/NIfTI/NRRD) or the "
+      "procedural molar and report it");
   sub->add_option("mesh", o->mesh,
-                  "Tooth mesh: .stl (binary or ASCII) or .obj (group Nerve = pulp)");
+                  "Tooth mesh: .stl (binary or ASCII), .obj (group Nerve = pulp), .ply; or scan "
+                  "volume: DICOM series folder, .nii, .nii.gz, .nrrd, .nhdr");
   sub->add_flag("--procedural", o->procedural, "Use the built-in procedural lower first molar");
   sub->add_option("--resolution", o->resolution, "Voxels per axis N (power of two, 32..1024)")
       ->required();
@@ -167,6 +239,16 @@ void setup_voxelize(CLI::App& app) {
   sub->add_option("--enamel-mm", o->enamel_mm,
                   "Enamel thickness over the crown top for meshes, mm (default 2.5)")
       ->check(finite_range(0.0, 10.0));
+  sub->add_option("--material-thresholds", o->material_thresholds,
+                  "Volume: intensity ranges enamel=LO:HI,dentin=LO:HI (default: three-class Otsu)");
+  sub->add_option("--write-volume", o->write_volume,
+                  "Also write a synthetic CT scan of the result: .nii(.gz), .nrrd/.nhdr or a "
+                  "DICOM folder");
+  sub->add_option("--scan-spacing-mm", o->scan_spacing_mm,
+                  "Sample spacing of --write-volume, mm (default 0.1)");
+  sub->add_option("--scan-noise", o->scan_noise,
+                  "Gaussian noise of --write-volume, intensity units (default 60; enamel 2200, "
+                  "dentin 1200, pulp 100, air 0)");
   sub->add_option("--json", o->json, "Write the report here (JSON)")->required();
   sub->add_option("--png", o->png, "Write a shaded picture (whole tooth and cut-away) here");
   sub->add_option("--png-size", o->png_size, "Picture panel size in pixels (default 512)");

@@ -97,6 +97,20 @@ Scene load_scene(const std::string& name_or_path) {
   return parse_scene(read_file(name_or_path), name_or_path);
 }
 
+ToothSource tooth_source(const SceneTooth& tooth) {
+  ToothSource t;
+  t.source = tooth.source;
+  t.path = tooth.source == "volume" ? tooth.volume_path : tooth.mesh_path;
+  t.mesh_scale = tooth.mesh_scale;
+  t.size_mm = tooth.size_mm;
+  t.resolution = tooth.resolution;
+  t.automatic_thresholds = tooth.material_thresholds.empty();
+  if (!t.automatic_thresholds) {
+    t.thresholds = parse_material_thresholds(tooth.material_thresholds, "tooth.material_thresholds");
+  }
+  return t;
+}
+
 Scene parse_scene(const std::string& text, const std::string& origin) {
   const JsonReader rd(origin);
   const JsonReader::Json doc = rd.parse(text);
@@ -121,10 +135,30 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   // Tooth.
   const auto& t = rd.object(doc, "", "tooth");
   rd.only_keys(t, "tooth", {"source", "mesh", "mesh_scale_m_per_unit", "size_mm", "resolution",
-                            "k_tooth_n_per_m", "b_tooth_n_s_per_m", "anchor_offset_mm"});
+                            "k_tooth_n_per_m", "b_tooth_n_s_per_m", "anchor_offset_mm", "volume",
+                            "material_thresholds"});
   s.tooth.source = rd.string(t, "tooth", "source", "procedural");
-  if (s.tooth.source != "procedural" && s.tooth.source != "mesh") {
-    rd.fail("tooth.source", "expected \"procedural\" or \"mesh\", got \"" + s.tooth.source + "\"");
+  if (s.tooth.source != "procedural" && s.tooth.source != "mesh" && s.tooth.source != "volume") {
+    rd.fail("tooth.source", "expected \"procedural\", \"mesh\" or \"volume\", got \"" +
+                                s.tooth.source + "\"");
+  }
+  // A scan volume (issue #21): a DICOM folder, .nii(.gz) or .nrrd/.nhdr, relative to the scene
+  // file; optional "material_thresholds": "enamel=LO:HI,dentin=LO:HI" (default automatic).
+  if (s.tooth.source == "volume") {
+    s.tooth.volume_path = rd.string(t, "tooth", "volume");
+    if (!std::filesystem::path(s.tooth.volume_path).is_absolute() &&
+        std::filesystem::exists(origin)) {
+      s.tooth.volume_path =
+          (std::filesystem::path(origin).parent_path() / s.tooth.volume_path).string();
+    }
+    s.tooth.material_thresholds = rd.string(t, "tooth", "material_thresholds", "");
+    if (!s.tooth.material_thresholds.empty()) {
+      parse_material_thresholds(s.tooth.material_thresholds,
+                                origin + ": tooth.material_thresholds");
+    }
+  } else if (t.contains("volume") || t.contains("material_thresholds")) {
+    rd.fail(t.contains("volume") ? "tooth.volume" : "tooth.material_thresholds",
+            "only allowed with \"source\": \"volume\"");
   }
   if (s.tooth.source == "mesh") {
     s.tooth.mesh_path = rd.string(t, "tooth", "mesh");

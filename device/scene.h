@@ -19,12 +19,15 @@
 #include "device/scripted_hand.h"
 #include "reference/core/params.h"
 #include "reference/core/types.h"
+#include "reference/tooth/tooth_source.h"
 
 namespace dentsim {
 
 struct SceneTooth {
-  std::string source = "procedural";   // "procedural" or "mesh"
-  std::string mesh_path;               // for source = mesh (STL / OBJ)
+  std::string source = "procedural";   // "procedural", "mesh" or "volume"
+  std::string mesh_path;               // for source = mesh (STL / OBJ / PLY)
+  std::string volume_path;             // for source = volume (DICOM folder, NIfTI, NRRD)
+  std::string material_thresholds;     // volume: "enamel=LO:HI,dentin=LO:HI"; empty = automatic
   double mesh_scale = 0.0;             // metres per mesh unit (mesh); 0 = use size_mm
   double size_mm = 0.0;                // target largest extent [mm] (mesh); 0 = use scale
   int resolution = 128;                // voxels per axis (power of two, 32..512)
@@ -84,6 +87,9 @@ struct Scene {
   HandImpedance hand;
   std::vector<SceneHandKey> script;
 };
+
+// The tooth description reference/tooth/tooth_source.h builds the voxel tooth from.
+ToothSource tooth_source(const SceneTooth& tooth);
 
 // Parses and validates a scene; `origin` names it in errors.
 Scene parse_scene(const std::string& text, const std::string& origin);

@@ -28,17 +28,7 @@
 namespace dentsim {
 namespace {
 
-VoxelGrid build_tooth(const SceneTooth& t) {
-  if (t.source == "procedural") {
-    return voxelize_procedural_molar(MolarParams{}, t.resolution);
-  }
-  LoadedMesh loaded = load_mesh(t.mesh_path);
-  const double k = t.mesh_scale > 0.0 ? t.mesh_scale : scale_for_size(loaded.mesh, 1e-3 * t.size_mm);
-  scale_mesh(loaded.mesh, k);
-  VoxelizeOptions opt;
-  opt.resolution = t.resolution;
-  return voxelize_mesh(loaded.mesh, opt);
-}
+VoxelGrid build_tooth(const SceneTooth& t) { return build_tooth_grid(tooth_source(t)); }
 
 // The top of the occlusal surface near the crown's axis: the highest solid voxel top among the
 // columns within 1.5 mm (at least one voxel) of the solid's centroid in x, y.

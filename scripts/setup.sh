@@ -10,6 +10,7 @@ PACKAGES=(
   # benchmark-only (bench/tooth_bench.cc compares the tooth query; the build works without them)
   libopenvdb-dev libboost-dev liboctomap-dev
   clang libclang-rt-14-dev  # the fuzz flavour: clang with libFuzzer (scripts/build.sh fuzz)
+  libgdcm-dev libnifti2-dev libteem-dev
 )
 
 missing=()

@@ -12,6 +12,7 @@
 #include <unordered_map>
 
 #include "reference/core/io.h"
+#include "reference/tooth/mesh_ply.h"
 
 namespace dentsim {
 namespace {
@@ -468,8 +469,9 @@ LoadedMesh load_mesh(const std::string& path) {
       path.find_last_of('.') == std::string::npos ? path.size() : path.find_last_of('.')));
   if (ext == ".stl") return parse_stl(read_file(path), path);
   if (ext == ".obj") return parse_obj(read_file(path), path);
+  if (ext == ".ply") return parse_ply(read_file(path), path);
   throw InputError("mesh '" + path + "': unknown extension '" + ext +
-                   "'; expected .stl (binary or ASCII) or .obj");
+                   "'; expected .stl (binary or ASCII), .obj or .ply");
 }
 
 Aabb mesh_bounds(const TriangleMesh& mesh) {

@@ -187,8 +187,8 @@ TEST(Mesh, ObjErrorsNameTheLine) {
               HasSubstr("line 4: face vertex '7' is not a vertex index in 1..3"));
   EXPECT_THAT(message_of([] { parse_obj("v 0 0 0\nv 1 0 0\nf 1 2\n", "bad.obj"); }),
               HasSubstr("line 3: face has 2 vertices; expected 3 or more"));
-  EXPECT_THAT(message_of([] { load_mesh("/nonexistent/tooth.ply"); }),
-              HasSubstr("unknown extension '.ply'; expected .stl (binary or ASCII) or .obj"));
+  EXPECT_THAT(message_of([] { load_mesh("/nonexistent/tooth.off"); }),
+              HasSubstr("unknown extension '.off'; expected .stl (binary or ASCII), .obj or .ply"));
   EXPECT_THAT(message_of([] { load_mesh("/nonexistent/tooth.stl"); }),
               HasSubstr("cannot read '/nonexistent/tooth.stl'"));
 }

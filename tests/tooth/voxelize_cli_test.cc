@@ -143,7 +143,7 @@ TEST_F(VoxelizeCli, BadInputExitsTwoAndLeavesTheOutputAlone) {
       {"--procedural --resolution 100 --json " + out, "resolution 100: expected a power of two"},
       {"--procedural --resolution 32 --size-mm -3 --json " + out, "--size-mm"},
       {path("missing.obj") + " --resolution 32 --scale 1e-3 --json " + out, "cannot read"},
-      {path("tooth.ply") + " --resolution 32 --scale 1e-3 --json " + out, "unknown extension"},
+      {path("tooth.off") + " --resolution 32 --scale 1e-3 --json " + out, "unknown extension"},
       {"--procedural --resolution 32 --size-mm 10 --scale 2 --json " + out, "excludes"},
   };
   for (const Case& c : cases) {
