@@ -8,9 +8,25 @@
 
 namespace dentsim {
 
+ContactModel parse_contact_model(const std::string& name) {
+  if (name == "faces") return ContactModel::kFaces;
+  if (name == "sdf") return ContactModel::kSurfaceProxy;
+  throw InputError("contact model '" + name + "': expected \"sdf\" (the default) or \"faces\"");
+}
+
+const char* contact_model_name(ContactModel model) {
+  return model == ContactModel::kFaces ? "faces" : "sdf";
+}
+
 ToothContactProvider::ToothContactProvider(VoxelTooth& tooth, ToolTip tip, double k_tooth,
-                                           double b_tooth, const DrillParams* drill)
-    : tooth_(tooth), tip_(tip), k_tooth_(k_tooth), b_tooth_(b_tooth) {
+                                           double b_tooth, const DrillParams* drill,
+                                           ContactModel model)
+    : tooth_(tooth),
+      tip_(tip),
+      k_tooth_(k_tooth),
+      b_tooth_(b_tooth),
+      model_(model),
+      surface_(tip.radius, tooth.grid().voxel_size) {
   if (!(tip_.radius > 0.0) || !std::isfinite(tip_.radius)) {
     throw InputError("tool tip: radius = " + std::to_string(tip_.radius) +
                      ", expected a finite value > 0 [m]");
@@ -26,17 +42,59 @@ ToothContactProvider::ToothContactProvider(VoxelTooth& tooth, ToolTip tip, doubl
     drill_state_ = make_drill_state(tooth_);
   }
   voxels_.reserve(kContactCapacity);
+  drill_contacts_.reserve(kContactCapacity);
+  drill_voxels_.reserve(kContactCapacity);
 }
 
 bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out) {
   out.clear();
   voxels_.clear();
-  return collide_tool_tip(tooth_, proxy, tip_, k_tooth_, b_tooth_, &scratch_, &out, &voxels_,
-                          std::min(out.capacity(), voxels_.capacity()));
+  if (model_ == ContactModel::kFaces) {
+    return collide_tool_tip(tooth_, proxy, tip_, k_tooth_, b_tooth_, &scratch_, &out, &voxels_,
+                            std::min(out.capacity(), voxels_.capacity()));
+  }
+  drill_contacts_.clear();
+  drill_voxels_.clear();
+  const Vec3 c = proxy.x + proxy.R * tip_.offset_body;
+  const Vec3& g = surface_.update(tooth_, c);
+  Contact contact;
+  if (!surface_proxy_contact(tooth_, proxy, tip_, g, k_tooth_, b_tooth_, &contact)) return true;
+  if (out.capacity() < 1) return false;
+  out.push_back(contact);
+  if (!drills_) return true;
+  // The voxels the bur at g cuts: solid voxels within rho + h of g on the pushed side.
+  scratch_.candidates.clear();
+  tooth_.octree.query_sphere(g, tip_.radius + tooth_.grid().voxel_size, &scratch_.candidates);
+  const VoxelGrid& grid = tooth_.grid();
+  const std::size_t n = static_cast<std::size_t>(grid.n);
+  for (const std::size_t v : scratch_.candidates) {
+    const Vec3 p = grid.center(static_cast<int>(v % n), static_cast<int>((v / n) % n),
+                               static_cast<int>(v / (n * n)));
+    const Vec3 to = p - g;
+    const double len = to.norm();
+    const double cosine = len > 0.0 ? -contact.n.dot(to) / len : 1.0;
+    if (!(cosine > 0.0)) continue;
+    if (drill_contacts_.size() >= drill_contacts_.capacity()) break;  // the nearest suffice
+    Contact share = contact;  // the contact's force K delta, shared with weight `cosine`
+    share.material = grid.voxels[v];
+    share.weight = cosine;
+    drill_contacts_.push_back(share);
+    drill_voxels_.push_back(v);
+  }
+  return true;
 }
 
 int ToothContactProvider::drill(std::span<const Contact> contacts, double T) {
-  if (!drills_ || contacts.empty() || contacts.size() != voxels_.size()) return 0;
+  if (!drills_ || contacts.empty()) return 0;
+  if (model_ == ContactModel::kSurfaceProxy) {
+    if (drill_contacts_.empty()) return 0;
+    const int removed = drill_tick(drill_contacts_, drill_voxels_, tip_, drill_params_, T,
+                                   &tooth_, &drill_state_);
+    drill_contacts_.clear();
+    drill_voxels_.clear();
+    return removed;
+  }
+  if (contacts.size() != voxels_.size()) return 0;
   return drill_tick(contacts, voxels_, tip_, drill_params_, T, &tooth_, &drill_state_);
 }
 

@@ -1,17 +1,32 @@
 // The voxel tooth as the tick's collision and drilling stages: a ContactProvider
-// (reference/core/contact_provider.h) over collide_tool_tip (reference/tooth/collision.h). It keeps
-// the voxel index of every contact of the last query so that drilling
-// (reference/tooth/drilling.h) can run on the same set after the solve.
+// (reference/core/contact_provider.h) with two contact models (scene key tooth.contact_model):
+// - kFaces ("faces", the thesis): collide_tool_tip (reference/tooth/collision.h);
+// - kSurfaceProxy ("sdf", beyond the thesis, the default): the surface proxy on the exact signed
+//   distance of reference/tooth/sdf.h, one contact between the tool's sphere and the proxy.
+// The constructor defaults to kFaces (validation/zwidth.cc renders its wall with it); scenes
+// default to "sdf" (device/scene.h).
+// It keeps the voxels of the last query so that drilling (reference/tooth/drilling.h) can run on
+// the same set after the solve: for kFaces the voxel of every contact; for kSurfaceProxy the solid
+// voxels within rho + h of the proxy centre g that face the push (docs/derivations/sdf_contact.md
+// "Drilling"), each sharing the contact's force with weight cos(angle to -n).
 #pragma once
 
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "reference/core/contact_provider.h"
 #include "reference/tooth/collision.h"
 #include "reference/tooth/drilling.h"
+#include "reference/tooth/sdf.h"
 
 namespace dentsim {
+
+enum class ContactModel { kFaces, kSurfaceProxy };
+
+// "faces" / "sdf"; throws InputError naming the value otherwise.
+ContactModel parse_contact_model(const std::string& name);
+const char* contact_model_name(ContactModel model);
 
 class ToothContactProvider : public ContactProvider {
  public:
@@ -20,13 +35,17 @@ class ToothContactProvider : public ContactProvider {
   // `drill` set the tool cuts the tooth (DrillParams validated here: InputError). Throws
   // InputError for a non-positive or non-finite tip radius.
   ToothContactProvider(VoxelTooth& tooth, ToolTip tip, double k_tooth, double b_tooth,
-                       const DrillParams* drill = nullptr);
+                       const DrillParams* drill = nullptr,
+                       ContactModel model = ContactModel::kFaces);
 
   bool contacts(const Pose& proxy, std::vector<Contact>& out) override;
   bool drills() const override { return drills_; }
   int drill(std::span<const Contact> contacts, double T) override;
 
-  // Flat voxel index of each contact of the last query (parallel to its contact set).
+  ContactModel model() const { return model_; }
+  // The surface proxy (kSurfaceProxy; its g() is the rendered tip centre).
+  const SurfaceProxy& surface_proxy() const { return surface_; }
+  // Flat voxel index of each contact of the last query (parallel to its contact set; kFaces).
   const std::vector<std::size_t>& contact_voxels() const { return voxels_; }
   const ToolTip& tip() const { return tip_; }
   const DrillState& drill_state() const { return drill_state_; }
@@ -40,6 +59,10 @@ class ToothContactProvider : public ContactProvider {
   DrillState drill_state_;
   CollisionScratch scratch_;
   std::vector<std::size_t> voxels_;
+  ContactModel model_;
+  SurfaceProxy surface_;
+  std::vector<Contact> drill_contacts_;  // kSurfaceProxy: the drilled voxels' force shares
+  std::vector<std::size_t> drill_voxels_;
 };
 
 }  // namespace dentsim
