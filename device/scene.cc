@@ -105,7 +105,8 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   // Tooth.
   const auto& t = rd.object(doc, "", "tooth");
   rd.only_keys(t, "tooth", {"source", "mesh", "mesh_scale_m_per_unit", "size_mm", "resolution",
-                            "k_tooth_n_per_m", "b_tooth_n_s_per_m", "anchor_offset_mm"});
+                            "k_tooth_n_per_m", "b_tooth_n_s_per_m", "anchor_offset_mm",
+                            "contact_model"});
   s.tooth.source = rd.string(t, "tooth", "source", "procedural");
   if (s.tooth.source != "procedural" && s.tooth.source != "mesh") {
     rd.fail("tooth.source", "expected \"procedural\" or \"mesh\", got \"" + s.tooth.source + "\"");
@@ -138,6 +139,11 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   s.tooth.b_tooth = rd.number(t, "tooth", "b_tooth_n_s_per_m", 0.0);
   rd.non_negative("tooth.b_tooth_n_s_per_m", s.tooth.b_tooth);
   s.tooth.anchor_offset = 1e-3 * rd.vec3(t, "tooth", "anchor_offset_mm", Vec3(0, 0, -6));
+  s.tooth.contact_model = rd.string(t, "tooth", "contact_model", "sdf");
+  if (s.tooth.contact_model != "sdf" && s.tooth.contact_model != "faces") {
+    rd.fail("tooth.contact_model",
+            "expected \"sdf\" (the default) or \"faces\" (got \"" + s.tooth.contact_model + "\")");
+  }
 
   // Tool.
   const auto& tl = rd.object(doc, "", "tool");

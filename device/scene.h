@@ -31,6 +31,9 @@ struct SceneTooth {
   double k_tooth = 3000.0;             // K_tooth [N/m] (scaled per material)
   double b_tooth = 0.0;                // B_tooth [N s/m]
   Vec3 anchor_offset = Vec3(0.0, 0.0, -0.006);  // [m] anchor relative to the home tip position
+  // "sdf" (surface proxy on the signed distance, reference/tooth/sdf.h: never tunnels; the
+  // default) or "faces" (the thesis's face model, reference/tooth/collision.h).
+  std::string contact_model = "sdf";
 };
 
 struct SceneTool {

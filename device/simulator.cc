@@ -127,7 +127,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   drill.bur_speed_rad_s = scene.tool.bur_speed_rpm * 2.0 * std::numbers::pi / 60.0;
   drill.cutting_coefficient = scene.tool.cutting_coefficient;
   ToothContactProvider contacts(tooth, tip, scene.tooth.k_tooth, scene.tooth.b_tooth,
-                                scene.tool.drills() ? &drill : nullptr);
+                                scene.tool.drills() ? &drill : nullptr,
+                                parse_contact_model(scene.tooth.contact_model));
 
   // Hand.
   std::vector<HandKeyframe> keys;

@@ -18,7 +18,7 @@ DrillState make_drill_state(const VoxelTooth& tooth) {
 double removal_threshold_j(std::uint8_t material, double voxel_size) {
   if (material == kEmpty || material >= kMaterialCount) {
     throw InputError("removal_threshold_j: material id " + std::to_string(material) +
-                     ", expected 1 (enamel), 2 (dentin) or 3 (pulp)");
+                     ", expected 1 (enamel), 2 (dentin), 3 (pulp) or 4 (caries)");
   }
   constexpr double kJoulePerMm3ToJoulePerM3 = 1e9;
   return material_properties(material).removal_energy_j_per_mm3 * kJoulePerMm3ToJoulePerM3 *
