@@ -59,6 +59,9 @@ struct SceneMethod {
   // > 0: the pipeline's device model carries this fraction of the hand's mass and inertia at the
   // tip while it grips (reference/grasp_mass_model.h); 0 = the device alone.
   double grasp_mass_scale = 0.0;
+  // With grasp_mass_scale > 0: a grip detector (reference/grip_detector.h) decides tick by tick
+  // whether the hand grips (the model carries its mass) or has let go (the device alone).
+  bool grip_detector = false;
   FrictionParams friction;
   ProxyParams proxy;
 };

@@ -170,7 +170,12 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   // it the decomposition's feed-forward closes a loop through the velocity filter's lag.
   pc.observer_input = matched_observer_input(device.capabilities());
   pc.torque_limit = params.torque_limit_n_m;
-  ReferencePipeline pipeline(belief, pc);
+  // With the grip detector the pipeline holds the device alone and the detector switches to the
+  // grasp model while the hand grips (reference/tick.h PipelineConfig::grasp_model).
+  if (scene.method.grip_detector) pc.grasp_model = grasp.get();
+  ReferencePipeline pipeline(scene.method.grip_detector ? static_cast<const SixDofDeviceModel&>(model)
+                                                        : belief,
+                             pc);
   ClosedLoop loop(device, pipeline, contacts);
 
   CollisionScratch scratch;

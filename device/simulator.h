@@ -78,7 +78,7 @@ struct RunResult {
   double virtual_energy_generated_j = 0.0;
   double hand_work_j = 0.0;                 // W_h at the end
   double hand_work_min_j = 0.0;             // min over the run of W_h(t) (<= 0)
-  std::array<double, 4> removed_volume_mm3{};  // per Material id (0 unused)
+  std::array<double, kMaterialCount> removed_volume_mm3{};  // per Material id (0 unused)
   double removed_volume_total_mm3 = 0.0;
   std::vector<std::pair<std::string, StageStats>> timing;  // stages, "tick", "device_simulation"
   std::vector<std::string> faults;

@@ -64,6 +64,15 @@ int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> c
     const int i = static_cast<int>(v % n);
     const int j = static_cast<int>((v / n) % n);
     const int k = static_cast<int>(v / (static_cast<std::size_t>(n) * n));
+    if (!state->pulp_exposed) {
+      bool opens = material == kPulp;
+      for (int f = 0; f < 6 && !opens; ++f) {
+        int nb[3] = {i, j, k};
+        nb[face_axis(f)] += face_sign(f);
+        opens = grid.at(nb[0], nb[1], nb[2]) == kPulp;
+      }
+      state->pulp_exposed = opens;
+    }
     tooth->octree.remove_voxel(i, j, k);
     reencode_local(tooth->octree.grid(), i, j, k, &tooth->codes);
     state->work_j[v] = 0.0;

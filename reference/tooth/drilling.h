@@ -41,6 +41,10 @@ struct DrillState {
   std::vector<double> work_j;                                 // accumulated work per voxel [J]
   std::array<std::int64_t, kMaterialCount> removed_voxels{};  // count per material id
   double voxel_volume_m3 = 0.0;                               // h^3
+  // Set by the first removal that opens the pulp: a pulp voxel removed, or a removed voxel
+  // face-adjacent to a pulp voxel (the chamber is then open to the cavity). The loop owner
+  // stamps the time (report.json pulp_exposed_at_s).
+  bool pulp_exposed = false;
 
   // Removed volume of material m [m^3].
   double removed_volume_m3(int m) const { return voxel_volume_m3 * removed_voxels[m]; }

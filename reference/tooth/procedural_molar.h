@@ -44,13 +44,13 @@ struct MolarParams {
   // the depth rule leaves more than t_cusp of enamel under a tip; 2.2 mm gives the anatomical
   // ~2.5 mm there (tested) and 1.6 mm laterally at mid-crown.
   double enamel_cusp_m = 2.2e-3;
-  // A carious lesion (material kCaries) under the central fossa: the solid, non-pulp voxels
-  // inside the ellipsoid of these semi-axes whose top touches the groove floor at
-  // (caries_x_m, 0). An occlusal lesion that has crossed the enamel into dentin, as a dentist
-  // drills it out (the drill scene passes through it). Off with caries_lesion = false.
+  // A carious lesion (material kCaries) in the distal part of the central groove: the solid,
+  // non-pulp voxels inside the ellipsoid of these semi-axes whose top touches the groove floor at
+  // (caries_x_m, 0): an occlusal lesion that has crossed the enamel into dentin. The drill scene
+  // cuts sound enamel and dentin mesial of it. Off with caries_lesion = false.
   bool caries_lesion = true;
-  double caries_x_m = 0.5e-3;
-  Vec3 caries_radii_m = Vec3(1.5e-3, 1.0e-3, 1.6e-3);
+  double caries_x_m = 3.0e-3;
+  Vec3 caries_radii_m = Vec3(1.0e-3, 0.8e-3, 1.2e-3);
 };
 
 // Whether the point p (metres, frame above) is inside the tooth / inside the pulp.

@@ -280,7 +280,7 @@ TEST(RenderVoxels, ACubeShowsThreeShadedFaces) {
 namespace dentsim {
 namespace {
 
-TEST(ProceduralMolar, CariesLesionUnderTheFossaOpensIntoTheGrooveAndReachesDentin) {
+TEST(ProceduralMolar, CariesLesionInTheGrooveOpensIntoItAndReachesDentin) {
   MolarParams params;
   const VoxelGrid& g = molar128();
   const NeighborCodes codes = encode_neighbors(g);
@@ -298,10 +298,10 @@ TEST(ProceduralMolar, CariesLesionUnderTheFossaOpensIntoTheGrooveAndReachesDenti
   }
   std::printf("caries: %ld voxels (%.2f mm^3), %ld exposed, %ld over dentin\n", caries,
               caries * g.voxel_volume() * 1e9, exposed, dentin_below);
-  // The ellipsoid holds 4/3 pi 1.5 x 1.0 x 1.6 mm^3 = 10.1 mm^3, part of it above the groove
+  // The ellipsoid holds 4/3 pi 1.0 x 0.8 x 1.2 mm^3 = 4.02 mm^3, part of it above the groove
   // floor's sides (empty): between a quarter and all of it is solid.
-  EXPECT_GT(caries * g.voxel_volume(), 2.5e-9);
-  EXPECT_LT(caries * g.voxel_volume(), 10.1e-9);
+  EXPECT_GT(caries * g.voxel_volume(), 1.0e-9);
+  EXPECT_LT(caries * g.voxel_volume(), 4.03e-9);
   EXPECT_GT(exposed, 0);
   EXPECT_GT(dentin_below, 0);
   // Off: no caries voxel at all.
