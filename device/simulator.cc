@@ -295,6 +295,9 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
         contacts.drills() ? contacts.drill_state().removed_volume_m3(m) * 1e9 : 0.0;
     res.removed_volume_total_mm3 += res.removed_volume_mm3[m];
   }
+  res.tick_s = T;
+  if (contacts.pulp_exposed_tick() > 0) res.pulp_exposed_at_s = contacts.pulp_exposed_tick() * T;
+  res.drill_log = contacts.drill_log();
   for (int s = 0; s < kStageCount; ++s) {
     res.timing.emplace_back(tick_stage_name(s), stats_of(stage_us[s]));
   }

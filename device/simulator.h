@@ -30,10 +30,12 @@
 
 #include <array>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "device/scene.h"
+#include "reference/tooth/tooth_contacts.h"
 #include "reference/tooth/voxel_grid.h"
 
 namespace dentsim {
@@ -80,6 +82,11 @@ struct RunResult {
   double hand_work_min_j = 0.0;             // min over the run of W_h(t) (<= 0)
   std::array<double, kMaterialCount> removed_volume_mm3{};  // per Material id (0 unused)
   double removed_volume_total_mm3 = 0.0;
+  // Scene time at the end of the tick whose drilling first opened the pulp (nominal ticks of
+  // 1/tick_hz); empty if it never did.
+  std::optional<double> pulp_exposed_at_s;
+  std::vector<DrillRecord> drill_log;       // every drilling tick (reference/tooth/tooth_contacts.h)
+  double tick_s = 0.0;                      // nominal tick 1/tick_hz [s]
   std::vector<std::pair<std::string, StageStats>> timing;  // stages, "tick", "device_simulation"
   std::vector<std::string> faults;
   double observer_rms_error_n = 0.0;        // |F1_hat - F_hand| (force part), RMS over the run

@@ -7,6 +7,17 @@
 #include "reference/core/io.h"
 
 namespace dentsim {
+namespace {
+
+std::uint8_t heaviest_material(std::span<const Contact> contacts) {
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < contacts.size(); ++i) {
+    if (contacts[i].weight > contacts[best].weight) best = i;
+  }
+  return contacts[best].material;
+}
+
+}  // namespace
 
 ContactModel parse_contact_model(const std::string& name) {
   if (name == "faces") return ContactModel::kFaces;
@@ -40,6 +51,7 @@ ToothContactProvider::ToothContactProvider(VoxelTooth& tooth, ToolTip tip, doubl
     drills_ = true;
     drill_params_ = *drill;
     drill_state_ = make_drill_state(tooth_);
+    drill_log_.reserve(kDrillLogCapacity);
   }
   voxels_.reserve(kContactCapacity);
   drill_contacts_.reserve(kContactCapacity);
@@ -47,6 +59,7 @@ ToothContactProvider::ToothContactProvider(VoxelTooth& tooth, ToolTip tip, doubl
 }
 
 bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out) {
+  ++ticks_;
   out.clear();
   voxels_.clear();
   if (model_ == ContactModel::kFaces) {
@@ -86,16 +99,55 @@ bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out
 
 int ToothContactProvider::drill(std::span<const Contact> contacts, double T) {
   if (!drills_ || contacts.empty()) return 0;
+  const std::array<std::int64_t, kMaterialCount> removed_before = drill_state_.removed_voxels;
+  const bool pulp_before = drill_state_.pulp_exposed;
+  int removed = 0;
+  std::uint8_t material = kEmpty;  // the material under the bur: the heaviest cut share's
   if (model_ == ContactModel::kSurfaceProxy) {
     if (drill_contacts_.empty()) return 0;
-    const int removed = drill_tick(drill_contacts_, drill_voxels_, tip_, drill_params_, T,
-                                   &tooth_, &drill_state_);
+    material = heaviest_material(drill_contacts_);
+    removed = drill_tick(drill_contacts_, drill_voxels_, tip_, drill_params_, T, &tooth_,
+                         &drill_state_);
     drill_contacts_.clear();
     drill_voxels_.clear();
-    return removed;
+  } else {
+    if (contacts.size() != voxels_.size()) return 0;
+    material = heaviest_material(contacts);
+    removed = drill_tick(contacts, voxels_, tip_, drill_params_, T, &tooth_, &drill_state_);
   }
-  if (contacts.size() != voxels_.size()) return 0;
-  return drill_tick(contacts, voxels_, tip_, drill_params_, T, &tooth_, &drill_state_);
+  record_drill(contacts, material, removed_before, pulp_before);
+  return removed;
+}
+
+void ToothContactProvider::record_drill(
+    std::span<const Contact> contacts, std::uint8_t material,
+    const std::array<std::int64_t, kMaterialCount>& removed_before, bool pulp_before) {
+  if (drill_state_.pulp_exposed && !pulp_before) pulp_exposed_tick_ = ticks_;
+  if (drill_log_.size() >= drill_log_.capacity()) return;  // full: never grow in the tick
+  DrillRecord rec;
+  rec.tick = ticks_;
+  std::size_t heaviest = 0;
+  for (std::size_t i = 1; i < contacts.size(); ++i) {
+    if (contacts[i].weight > contacts[heaviest].weight) heaviest = i;
+  }
+  const double z = contacts[heaviest].x_o.z();
+  if (!have_surface_z_) {
+    have_surface_z_ = true;
+    first_surface_z_ = z;
+  }
+  rec.depth_m = first_surface_z_ - z;
+  double total_weight = 0.0;
+  Vec3 f = Vec3::Zero();
+  for (const Contact& ct : contacts) {
+    total_weight += ct.weight;
+    f += ct.weight * ct.stiffness * ct.depth * ct.n;
+  }
+  rec.force_n = total_weight > 0.0 ? f.norm() / total_weight : 0.0;
+  rec.material = material;
+  for (int m = 0; m < kMaterialCount; ++m) {
+    rec.removed[m] = static_cast<int>(drill_state_.removed_voxels[m] - removed_before[m]);
+  }
+  drill_log_.push_back(rec);
 }
 
 }  // namespace dentsim

@@ -11,7 +11,10 @@
 // "Drilling"), each sharing the contact's force with weight cos(angle to -n).
 #pragma once
 
+#include <array>
 #include <cstddef>
+#include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -23,6 +26,18 @@
 namespace dentsim {
 
 enum class ContactModel { kFaces, kSurfaceProxy };
+
+// One drilling tick as the provider saw it (for the drill plot and report.json).
+struct DrillRecord {
+  long tick = 0;            // 1-based index of the contacts() call (the servo tick)
+  double depth_m = 0.0;     // how far the cut surface point x_o is below the first one's (world z)
+  double force_n = 0.0;     // |blended penalty force| of the tick's set
+  std::uint8_t material = 0;  // material under the bur (the heaviest cut share's)
+  std::array<int, kMaterialCount> removed{};  // voxels removed this tick per material
+};
+
+// Capacity of the drill log (preallocated; recording stops when full): 2 min at 1 kHz.
+inline constexpr std::size_t kDrillLogCapacity = 120000;
 
 // "faces" / "sdf"; throws InputError naming the value otherwise.
 ContactModel parse_contact_model(const std::string& name);
@@ -49,6 +64,10 @@ class ToothContactProvider : public ContactProvider {
   const std::vector<std::size_t>& contact_voxels() const { return voxels_; }
   const ToolTip& tip() const { return tip_; }
   const DrillState& drill_state() const { return drill_state_; }
+  // Drilling ticks so far (empty unless the tool drills), and the tick (1-based contacts() call)
+  // whose drilling first opened the pulp (0: not yet; DrillState::pulp_exposed).
+  const std::vector<DrillRecord>& drill_log() const { return drill_log_; }
+  long pulp_exposed_tick() const { return pulp_exposed_tick_; }
 
  private:
   VoxelTooth& tooth_;
@@ -63,6 +82,15 @@ class ToothContactProvider : public ContactProvider {
   SurfaceProxy surface_;
   std::vector<Contact> drill_contacts_;  // kSurfaceProxy: the drilled voxels' force shares
   std::vector<std::size_t> drill_voxels_;
+  long ticks_ = 0;  // contacts() calls
+  long pulp_exposed_tick_ = 0;
+  bool have_surface_z_ = false;
+  double first_surface_z_ = 0.0;
+  std::vector<DrillRecord> drill_log_;
+
+  void record_drill(std::span<const Contact> contacts, std::uint8_t material,
+                    const std::array<std::int64_t, kMaterialCount>& removed_before,
+                    bool pulp_before);
 };
 
 }  // namespace dentsim

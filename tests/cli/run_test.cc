@@ -108,6 +108,11 @@ TEST(RunCli, DrillRemovesTooth) {
               1e-9);
   // Drilling starts at the occlusal surface: enamel goes first.
   EXPECT_GT(v.at("enamel").get<double>(), 0.0);
+  // The first 3 s cut enamel only and do not open the pulp (the full 5 s reach dentin,
+  // docs/scenes.md).
+  EXPECT_EQ(v.at("pulp").get<double>(), 0.0);
+  ASSERT_TRUE(r.contains("pulp_exposed_at_s"));
+  EXPECT_TRUE(r.at("pulp_exposed_at_s").is_null());
 }
 
 TEST(RunCli, BadInputExitsTwoWithOneLine) {

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -155,6 +156,67 @@ TEST(SurfaceProxy, FlatFaceContactIsTheToolsDepthAndSlidesWithoutRipple) {
     EXPECT_NEAR(out[0].n.z(), 1.0, 1e-12);
     EXPECT_NEAR((blended_contact_force(out) - Vec3(0, 0, kK * depth)).norm(), 0.0, 1e-9);
   }
+}
+
+TEST(SurfaceProxy, DrillingGoesThroughTheLayersInOrderAndOpensThePulp) {
+  // A layered slab on 64^3 (h = 0.1 mm): enamel 2.6-3.2 mm, dentin 1.6-2.6 mm, pulp below.
+  VoxelGrid g(64, Vec3::Zero(), kSide / 64);
+  for (int k = 0; k < 64; ++k) {
+    for (int j = 0; j < 64; ++j) {
+      for (int i = 0; i < 64; ++i) {
+        const double z = g.center(i, j, k).z();
+        if (z < 3.2e-3) g.set(i, j, k, z > 2.6e-3 ? kEnamel : z > 1.6e-3 ? kDentin : kPulp);
+      }
+    }
+  }
+  VoxelTooth tooth(std::move(g));
+  DrillParams drill;
+  drill.bur_speed_rad_s *= 20.0;  // a fast bur so that 1500 ticks reach the pulp
+  ToothContactProvider provider(tooth, ToolTip{kRho, Vec3::Zero()}, kK, 0.0, &drill,
+                                ContactModel::kSurfaceProxy);
+  std::vector<Contact> out;
+  out.reserve(kContactCapacity);
+  Pose pose;
+  for (int tick = 0; tick < 1500; ++tick) {
+    // The tool's centre is led down from 0.2 mm above the touching height at 2 um per tick.
+    pose.x = Vec3(3.2e-3, 3.2e-3, 3.2e-3 + kRho + 0.2e-3 - 2e-6 * tick);
+    ASSERT_TRUE(provider.contacts(pose, out));
+    // The proxy stays clear of what is left (the bur never sinks into the tooth).
+    ASSERT_GE(signed_distance(tooth, provider.surface_proxy().g(), 1.0).phi,
+              kRho - provider.surface_proxy().skin());
+    if (!out.empty()) provider.drill(out, 1e-3);
+  }
+  const std::vector<DrillRecord>& log = provider.drill_log();
+  ASSERT_FALSE(log.empty());
+  // The material under the bur goes enamel, dentin, pulp with depth (at a boundary both are
+  // under the bur, so compare the mean depth per material), and dentin first shows once the cut
+  // passed the 0.6 mm of enamel (less two voxels: the bur's cap reaches ahead).
+  std::array<long, kMaterialCount> seen{};
+  std::array<double, kMaterialCount> depth_sum{};
+  double first_dentin = -1.0;
+  for (const DrillRecord& r : log) {
+    ++seen[r.material];
+    depth_sum[r.material] += r.depth_m;
+    if (r.material == kDentin && first_dentin < 0.0) first_dentin = r.depth_m;
+  }
+  ASSERT_GT(seen[kEnamel], 0);
+  ASSERT_GT(seen[kDentin], 0);
+  ASSERT_GT(seen[kPulp], 0);
+  const auto mean = [&](int m) { return depth_sum[m] / seen[m]; };
+  EXPECT_LT(mean(kEnamel), mean(kDentin));
+  EXPECT_LT(mean(kDentin), mean(kPulp));
+  EXPECT_GE(first_dentin, 0.6e-3 - 2 * tooth.grid().voxel_size);
+  const DrillState& st = provider.drill_state();
+  EXPECT_GT(st.removed_voxels[kEnamel], 0);
+  EXPECT_GT(st.removed_voxels[kDentin], 0);
+  EXPECT_TRUE(st.pulp_exposed);
+  // The pulp opened on a logged tick, once the cut had passed the 1.6 mm of enamel and dentin.
+  const long opened = provider.pulp_exposed_tick();
+  ASSERT_GT(opened, 0);
+  const auto at = std::find_if(log.begin(), log.end(),
+                               [&](const DrillRecord& r) { return r.tick == opened; });
+  ASSERT_NE(at, log.end());
+  EXPECT_GE(at->depth_m, 1.6e-3 - 2 * tooth.grid().voxel_size);
 }
 
 TEST(ContactModel, ParsesTheSceneNames) {
