@@ -38,8 +38,7 @@ void setup_crosscheck_contact(CLI::App& app) {
   sub->add_option("--data-dir", opt->check.data_dir,
                   "Directory with molar-cc0.stl and chai3d-tooth.obj ('' = procedural molar only)")
       ->capture_default_str();
-  sub->add_option("--tip-radius-mm", opt->tip_radius_mm, "Tip radius [mm]")
-      ->capture_default_str();
+  sub->add_option("--tip-radius-mm", opt->tip_radius_mm, "Tip radius [mm]")->capture_default_str();
   sub->add_option("--k-tooth", opt->check.k_tooth, "K_tooth [N/m]")->capture_default_str();
   sub->add_option("--seed", opt->check.seed, "Random seed (std::mt19937_64)")
       ->capture_default_str();

@@ -20,8 +20,8 @@
 namespace dentsim {
 namespace {
 
-constexpr double kAlpha = 0.5;         // relaxation gain of the quasi-static probe
-constexpr double kMaxStepM = 0.1e-3;   // a hand at 0.1 m/s, 1 ms ticks
+constexpr double kAlpha = 0.5;        // relaxation gain of the quasi-static probe
+constexpr double kMaxStepM = 0.1e-3;  // a hand at 0.1 m/s, 1 ms ticks
 constexpr double kSlideStepM = 0.02e-3;
 constexpr double kStartGapM = 0.3e-3;  // start this far outside the tip's touching distance
 constexpr double kSphereRadiusM = 5e-3;
@@ -68,8 +68,7 @@ std::vector<Probe> draw_probes(const VoxelTooth& tooth, int count, double rho,
   std::uniform_int_distribution<std::size_t> pick(0, faces.size() - 1);
   const std::size_t n = static_cast<std::size_t>(g.n);
   std::vector<Probe> out;
-  for (int attempt = 0; static_cast<int>(out.size()) < count && attempt < 100 * count;
-       ++attempt) {
+  for (int attempt = 0; static_cast<int>(out.size()) < count && attempt < 100 * count; ++attempt) {
     const std::uint64_t e = faces[pick(rng)];
     const std::size_t v = e / 8;
     const int f = static_cast<int>(e % 8);
@@ -100,8 +99,7 @@ struct ProbeOutcome {
 ProbeOutcome run_probe(VoxelTooth& tooth, ContactModel model, const Probe& probe, double force,
                        const ContactCrosscheckOptions& o) {
   const double rho = o.tip_radius_m;
-  ToothContactProvider provider(tooth, ToolTip{rho, Vec3::Zero()}, o.k_tooth, 0.0, nullptr,
-                                model);
+  ToothContactProvider provider(tooth, ToolTip{rho, Vec3::Zero()}, o.k_tooth, 0.0, nullptr, model);
   std::vector<Contact> contacts;
   contacts.reserve(kContactCapacity);
   Pose pose;
@@ -145,8 +143,7 @@ VoxelTooth make_sphere(double h, Vec3* centre) {
 double sliding_ripple(VoxelTooth& sphere, const Vec3& centre, ContactModel model, double force,
                       const ContactCrosscheckOptions& o) {
   const double rho = o.tip_radius_m;
-  ToothContactProvider provider(sphere, ToolTip{rho, Vec3::Zero()}, o.k_tooth, 0.0, nullptr,
-                                model);
+  ToothContactProvider provider(sphere, ToolTip{rho, Vec3::Zero()}, o.k_tooth, 0.0, nullptr, model);
   std::vector<Contact> contacts;
   contacts.reserve(kContactCapacity);
   const double azimuth = 20.0 * std::numbers::pi / 180.0;
@@ -188,7 +185,8 @@ ContactCrosscheckResult crosscheck_contact(const ContactCrosscheckOptions& o) {
     for (const char* file : {"molar-cc0.stl", "chai3d-tooth.obj"}) {
       const std::string path = o.data_dir + "/" + file;
       if (!std::filesystem::exists(path)) {
-        throw InputError("--data-dir: " + path + " not found (expected the meshes of "
+        throw InputError("--data-dir: " + path +
+                         " not found (expected the meshes of "
                          "../shared/data; --data-dir '' sweeps the procedural molar only)");
       }
       meshes.push_back(path);

@@ -13,8 +13,8 @@ namespace {
 
 // Squared distance from x to the box of cells [i0, i1) x [j0, j1) x [k0, k1), and its nearest
 // point.
-double box_distance2(const VoxelGrid& grid, const int lo_idx[3], const int hi_idx[3],
-                     const Vec3& x, Vec3* nearest) {
+double box_distance2(const VoxelGrid& grid, const int lo_idx[3], const int hi_idx[3], const Vec3& x,
+                     Vec3* nearest) {
   double d2 = 0.0;
   for (int a = 0; a < 3; ++a) {
     const double lo = grid.origin[a] + grid.voxel_size * lo_idx[a];
@@ -158,8 +158,9 @@ Vec3 distance_gradient(const VoxelTooth& tooth, const Vec3& x, const SignedDista
   if (len > 0.0) return gap / len;
   const VoxelGrid& grid = tooth.grid();
   const std::size_t n = static_cast<std::size_t>(grid.n);
-  const Vec3 centre = grid.center(static_cast<int>(sd.voxel % n), static_cast<int>((sd.voxel / n) % n),
-                                  static_cast<int>(sd.voxel / (n * n)));
+  const Vec3 centre =
+      grid.center(static_cast<int>(sd.voxel % n), static_cast<int>((sd.voxel / n) % n),
+                  static_cast<int>(sd.voxel / (n * n)));
   const Vec3 out = x - centre;
   return out.norm() > 0.0 ? Vec3(out.normalized()) : Vec3::UnitZ();
 }

@@ -58,9 +58,9 @@ SignedDistance signed_distance(const VoxelTooth& tooth, const Vec3& x, double re
 // direction from the centre of `voxel` to x.
 Vec3 distance_gradient(const VoxelTooth& tooth, const Vec3& x, const SignedDistance& sd);
 
-inline constexpr int kSurfaceProxySlides = 4;      // slides per tick (step 3)
-inline constexpr int kSurfaceProxyPushOuts = 16;   // push-out iterations (step 1)
-inline constexpr int kSurfaceProxySweepSteps = 64; // conservative-advancement steps per segment
+inline constexpr int kSurfaceProxySlides = 4;       // slides per tick (step 3)
+inline constexpr int kSurfaceProxyPushOuts = 16;    // push-out iterations (step 1)
+inline constexpr int kSurfaceProxySweepSteps = 64;  // conservative-advancement steps per segment
 
 // The surface proxy of one tip sphere on one tooth (state: g).
 class SurfaceProxy {

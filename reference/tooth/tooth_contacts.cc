@@ -45,8 +45,9 @@ ToothContactProvider::ToothContactProvider(VoxelTooth& tooth, ToolTip tip, doubl
   if (drill != nullptr) {
     if (!(drill->bur_speed_rad_s >= 0.0) || !(drill->cutting_coefficient >= 0.0) ||
         !std::isfinite(drill->bur_speed_rad_s) || !std::isfinite(drill->cutting_coefficient)) {
-      throw InputError("drill params: bur_speed_rad_s and cutting_coefficient must be finite and "
-                       ">= 0");
+      throw InputError(
+          "drill params: bur_speed_rad_s and cutting_coefficient must be finite and "
+          ">= 0");
     }
     drills_ = true;
     drill_params_ = *drill;
@@ -106,8 +107,8 @@ int ToothContactProvider::drill(std::span<const Contact> contacts, double T) {
   if (model_ == ContactModel::kSurfaceProxy) {
     if (drill_contacts_.empty()) return 0;
     material = heaviest_material(drill_contacts_);
-    removed = drill_tick(drill_contacts_, drill_voxels_, tip_, drill_params_, T, &tooth_,
-                         &drill_state_);
+    removed =
+        drill_tick(drill_contacts_, drill_voxels_, tip_, drill_params_, T, &tooth_, &drill_state_);
     drill_contacts_.clear();
     drill_voxels_.clear();
   } else {

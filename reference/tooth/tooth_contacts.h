@@ -29,10 +29,10 @@ enum class ContactModel { kFaces, kSurfaceProxy };
 
 // One drilling tick as the provider saw it (for the drill plot and report.json).
 struct DrillRecord {
-  long tick = 0;            // 1-based index of the contacts() call (the servo tick)
-  double depth_m = 0.0;     // how far the cut surface point x_o is below the first one's (world z)
-  double force_n = 0.0;     // |blended penalty force| of the tick's set
-  std::uint8_t material = 0;  // material under the bur (the heaviest cut share's)
+  long tick = 0;         // 1-based index of the contacts() call (the servo tick)
+  double depth_m = 0.0;  // how far the cut surface point x_o is below the first one's (world z)
+  double force_n = 0.0;  // |blended penalty force| of the tick's set
+  std::uint8_t material = 0;                  // material under the bur (the heaviest cut share's)
   std::array<int, kMaterialCount> removed{};  // voxels removed this tick per material
 };
 

@@ -19,8 +19,8 @@
 namespace dentsim {
 namespace {
 
-constexpr double kK = 3000.0;    // K_tooth [N/m]
-constexpr double kRho = 0.4e-3;  // explorer tip radius [m]
+constexpr double kK = 3000.0;     // K_tooth [N/m]
+constexpr double kRho = 0.4e-3;   // explorer tip radius [m]
 constexpr double kSide = 6.4e-3;  // grid edge [m]
 constexpr std::uint64_t kSeed = 4242;
 
@@ -79,7 +79,8 @@ TEST(SignedDistance, EqualsBruteForceInsideAndOutside) {
     const Vec3 x(u(rng), u(rng), u(rng));
     const SignedDistance sd = signed_distance(tooth, x, 1.0);
     ASSERT_TRUE(sd.found);
-    const int i = static_cast<int>(x.x() / g.voxel_size), j = static_cast<int>(x.y() / g.voxel_size),
+    const int i = static_cast<int>(x.x() / g.voxel_size),
+              j = static_cast<int>(x.y() / g.voxel_size),
               k = static_cast<int>(x.z() / g.voxel_size);
     if (g.solid(i, j, k)) {
       ++inside;
@@ -103,9 +104,8 @@ TEST(SignedDistance, EqualsBruteForceInsideAndOutside) {
 TEST(SurfaceProxy, NeverCrossesAWallOneVoxelThick) {
   // A wall x in [3.2, 3.3) mm (one voxel at 64^3: h = 0.1 mm); the tool moves from x = 2 mm to
   // x = 4.6 mm in steps from 0.05 mm to 3 mm (a step larger than the wall and the tip together).
-  const VoxelTooth tooth = make_tooth(64, [](const Vec3& p) {
-    return p.x() > 3.2e-3 && p.x() < 3.3e-3;
-  });
+  const VoxelTooth tooth =
+      make_tooth(64, [](const Vec3& p) { return p.x() > 3.2e-3 && p.x() < 3.3e-3; });
   for (const double step : {0.05e-3, 0.3e-3, 0.9e-3, 3e-3}) {
     SurfaceProxy proxy(kRho, tooth.grid().voxel_size);
     Vec3 c(2e-3, 3.2e-3, 3.2e-3);
@@ -213,8 +213,8 @@ TEST(SurfaceProxy, DrillingGoesThroughTheLayersInOrderAndOpensThePulp) {
   // The pulp opened on a logged tick, once the cut had passed the 1.6 mm of enamel and dentin.
   const long opened = provider.pulp_exposed_tick();
   ASSERT_GT(opened, 0);
-  const auto at = std::find_if(log.begin(), log.end(),
-                               [&](const DrillRecord& r) { return r.tick == opened; });
+  const auto at =
+      std::find_if(log.begin(), log.end(), [&](const DrillRecord& r) { return r.tick == opened; });
   ASSERT_NE(at, log.end());
   EXPECT_GE(at->depth_m, 1.6e-3 - 2 * tooth.grid().voxel_size);
 }
