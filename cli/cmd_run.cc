@@ -1,6 +1,8 @@
 // `dentsim run SCENE --out DIR`: the main job — the dental simulator on the embedded default
 // (simulated Phantom, voxel tooth, scripted hand). Writes DIR/report.json, DIR/timeseries.csv,
-// DIR/force_penetration.png, DIR/observer.png, DIR/tooth_before.png, DIR/tooth_after.png.
+// DIR/force_penetration.png, DIR/observer.png, DIR/tooth_before.png, DIR/tooth_after.png and,
+// when the tool drills, DIR/drill_depth.png.
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -60,6 +62,8 @@ nlohmann::json report_json(const Scene& scene, const RunResult& r) {
   for (int m = 1; m < kMaterialCount; ++m) rv[material_properties(m).name] = r.removed_volume_mm3[m];
   rv["total"] = r.removed_volume_total_mm3;
   j["removed_volume_mm3"] = rv;
+  j["pulp_exposed_at_s"] =
+      r.pulp_exposed_at_s ? nlohmann::json(*r.pulp_exposed_at_s) : nlohmann::json(nullptr);
   nlohmann::json tj;
   for (const auto& [name, s] : r.timing) {
     tj[name] = {{"median", s.median_us}, {"p99", s.p99_us}, {"max", s.max_us}};
@@ -92,7 +96,51 @@ std::string csv_of(const RunResult& r) {
   return s.str();
 }
 
+// DIR/drill_depth.png (drilling scenes): the contact force and the removal rate against the
+// depth of the cut below its first contact, one colour per material under the bur. The rate is
+// the removed volume over a moving window of 100 drilling ticks.
+void write_drill_plot(const RunResult& r, const std::string& dir) {
+  if (r.drill_log.empty()) return;
+  constexpr std::size_t kWindow = 100;
+  const double voxel_mm3 = r.tooth_before.voxel_volume() * 1e9;
+  std::vector<double> removed_mm3;
+  for (const DrillRecord& d : r.drill_log) {
+    int n = 0;
+    for (const int c : d.removed) n += c;
+    removed_mm3.push_back(n * voxel_mm3);
+  }
+  plot::Figure force{"Drilling: contact force against depth (colour: material under the bur)",
+                     "depth below the first contact [mm]", "force [N]", {}, false, false};
+  plot::Figure rate{"Drilling: removal rate against depth (moving window of 100 ticks)",
+                    "depth below the first contact [mm]", "removal rate [mm^3/s]", {}, false,
+                    false};
+  double window_sum = 0.0;
+  std::vector<double> rates;
+  for (std::size_t i = 0; i < r.drill_log.size(); ++i) {
+    window_sum += removed_mm3[i];
+    if (i >= kWindow) window_sum -= removed_mm3[i - kWindow];
+    const double ticks = static_cast<double>(std::min(i + 1, kWindow));
+    rates.push_back(window_sum / (ticks * r.tick_s));
+  }
+  for (int m = 1; m < kMaterialCount; ++m) {
+    plot::Series fs{material_properties(m).name, {}, {}, true, m - 1, false};
+    plot::Series rs{material_properties(m).name, {}, {}, true, m - 1, false};
+    for (std::size_t i = 0; i < r.drill_log.size(); ++i) {
+      if (r.drill_log[i].material != m) continue;
+      fs.x.push_back(r.drill_log[i].depth_m * 1e3);
+      fs.y.push_back(r.drill_log[i].force_n);
+      rs.x.push_back(r.drill_log[i].depth_m * 1e3);
+      rs.y.push_back(rates[i]);
+    }
+    if (fs.x.empty()) continue;
+    force.series.push_back(std::move(fs));
+    rate.series.push_back(std::move(rs));
+  }
+  plot::write_png({force, rate}, dir + "/drill_depth.png", 1, 900, 360);
+}
+
 void write_plots(const RunResult& r, const std::string& dir) {
+  write_drill_plot(r, dir);
   std::vector<double> t, fc, fd, pen, dpen, e, wh;
   std::vector<double> hx, hz, ox, oz;
   for (const RunSample& x : r.series) {
@@ -203,7 +251,8 @@ void run(const RunCliOptions& o) {
   }
   std::printf("  faults: %s\n", r.faults.empty() ? "none" : r.faults.front().c_str());
   std::printf("  outputs in %s/: report.json timeseries.csv force_penetration.png observer.png "
-              "tooth_before.png tooth_after.png\n", o.out.c_str());
+              "tooth_before.png tooth_after.png%s\n",
+              o.out.c_str(), r.drill_log.empty() ? "" : " drill_depth.png");
   if (!r.faults.empty()) throw std::runtime_error("the device faulted (safe stop): " + r.faults.front());
 }
 

@@ -28,62 +28,94 @@ constexpr const char* kWhyStiffness = "far beyond any stable haptic gain";
 
 // Built-in scenes. Positions in the hand script are offsets from the tooth's anchor (the top of
 // the occlusal surface near the crown axis) in mm; the tool tip starts at the device's home pose,
-// 6 mm above the anchor. Gains: the thesis's PMI + passive decomposition setting (K_vc = 700 N/m,
-// K_tooth = 3000 N/m, the average stiffness of a real tooth, §4.2). The observer gain L = 30 /s:
-// with the Phantom's quantised encoders (velocity noise ~ quantum / T) L = 100 /s drives the
-// decomposition feed-forward into a limit cycle in free space (docs/scenes.md shows the runs).
+// 6 mm above the anchor. Gains (docs/results/zwidth.md, the headline row "pmi-pd + hand mass +
+// grip detector": Z-width 6107 N/m at K_vc = 1200 N/m, b_vc = 4 N s/m, K_tooth = 12000 N/m, stable
+// and passive under the force, grip and release operators): PMI + passive decomposition with the
+// hand's mass in the model and the grip detector. The observer gain L = 30 /s: with the Phantom's
+// quantised encoders (velocity noise ~ quantum / T) L = 100 /s drives the decomposition
+// feed-forward into a limit cycle in free space (docs/scenes.md shows the runs). Contact: the
+// surface proxy (tooth.contact_model "sdf", reference/tooth/sdf.h). Forces a dentist uses: an
+// explorer 0.5-2 N, a handpiece 0.3-1.5 N (docs/scenes.md cites them).
 constexpr const char* kProbeScene = R"json({
   "dentsim_scene": 1,
   "name": "probe",
   "description": "Explorer probe: approach the molar, slide along the lingual cusp ridge pressing lightly, retract.",
   "duration_s": 5.0,
   "tick_hz": 1000,
-  "tooth": {"source": "procedural", "resolution": 128, "k_tooth_n_per_m": 3000, "b_tooth_n_s_per_m": 5.0,
-            "anchor_offset_mm": [0, 0, -6]},
+  "tooth": {"source": "procedural", "resolution": 128, "k_tooth_n_per_m": 12000, "b_tooth_n_s_per_m": 5.0,
+            "anchor_offset_mm": [0, 0, -6], "contact_model": "sdf"},
   "tool": {"preset": "explorer", "bur_radius_mm": 0.4, "bur_speed_rpm": 0},
   "device": {"type": "simulated-phantom", "jitter_us": 0, "quantize": true, "saturate": true},
-  "method": {"name": "pmi-pd", "k_vc_n_per_m": 700, "b_vc_n_s_per_m": 0.3, "k_vc_ang_n_m_per_rad": 0.3,
-             "b_vc_ang_n_m_s_per_rad": 0.001, "observer_gain_per_s": 30, "friction_mu": 0.2},
+  "method": {"name": "pmi-pd", "k_vc_n_per_m": 1200, "b_vc_n_s_per_m": 4, "k_vc_ang_n_m_per_rad": 0.3,
+             "b_vc_ang_n_m_s_per_rad": 0.001, "observer_gain_per_s": 30, "friction_mu": 0.2,
+             "grasp_mass_scale": 1.0, "grip_detector": true},
   "proxy": {"mass_kg": 0.05, "inertia_kg_m2": 1e-5, "damping_n_s_per_m": 0.0, "damping_ang_n_m_s_per_rad": 0.0},
   "hand": {"script": [
     {"t_s": 0.0, "offset_mm": [0, 0, 6],     "force_n": [0, 0, 0],    "phase": "approach"},
-    {"t_s": 1.0, "offset_mm": [-2, 2.5, 2],  "force_n": [0, 0, -0.3], "phase": "approach"},
+    {"t_s": 1.0, "offset_mm": [-2, 2.5, 2],  "force_n": [0, 0, -0.5], "phase": "approach"},
     {"t_s": 1.5, "offset_mm": [-2, 2.5, 1],  "force_n": [0, 0, -0.5], "phase": "probe"},
     {"t_s": 3.5, "offset_mm": [2, 2.5, 1],   "force_n": [0, 0, -0.5], "phase": "probe"},
     {"t_s": 4.0, "offset_mm": [2, 2.5, 6],   "force_n": [0, 0, 0],    "phase": "retract"}
   ]}
 })json";
 
+// Across the central (mesiodistal) fissure, buccal to lingual, where the face model let the
+// explorer fall into the tooth (issue #16).
+constexpr const char* kProbeGrooveScene = R"json({
+  "dentsim_scene": 1,
+  "name": "probe-groove",
+  "description": "Explorer across the central fissure: approach, slide buccal to lingual over the groove pressing 0.5 N, retract.",
+  "duration_s": 5.0,
+  "tick_hz": 1000,
+  "tooth": {"source": "procedural", "resolution": 128, "k_tooth_n_per_m": 12000, "b_tooth_n_s_per_m": 5.0,
+            "anchor_offset_mm": [0, 0, -6], "contact_model": "sdf"},
+  "tool": {"preset": "explorer", "bur_radius_mm": 0.4, "bur_speed_rpm": 0},
+  "device": {"type": "simulated-phantom", "jitter_us": 0, "quantize": true, "saturate": true},
+  "method": {"name": "pmi-pd", "k_vc_n_per_m": 1200, "b_vc_n_s_per_m": 4, "k_vc_ang_n_m_per_rad": 0.3,
+             "b_vc_ang_n_m_s_per_rad": 0.001, "observer_gain_per_s": 30, "friction_mu": 0.2,
+             "grasp_mass_scale": 1.0, "grip_detector": true},
+  "proxy": {"mass_kg": 0.05, "inertia_kg_m2": 1e-5, "damping_n_s_per_m": 0.0, "damping_ang_n_m_s_per_rad": 0.0},
+  "hand": {"script": [
+    {"t_s": 0.0, "offset_mm": [0.5, 0, 6],    "force_n": [0, 0, 0],    "phase": "approach"},
+    {"t_s": 1.0, "offset_mm": [0.5, -3, 3],   "force_n": [0, 0, -0.3], "phase": "approach"},
+    {"t_s": 1.5, "offset_mm": [0.5, -3, 2],   "force_n": [0, 0, -0.5], "phase": "probe"},
+    {"t_s": 3.5, "offset_mm": [0.5, 3, 2],    "force_n": [0, 0, -0.5], "phase": "probe"},
+    {"t_s": 4.0, "offset_mm": [0.5, 3, 6],    "force_n": [0, 0, 0],    "phase": "retract"}
+  ]}
+})json";
+
 constexpr const char* kDrillScene = R"json({
   "dentsim_scene": 1,
   "name": "drill",
-  "description": "High-speed handpiece: approach the molar, drill a cavity along a short occlusal path, retract.",
+  "description": "High-speed handpiece: approach the molar, drill into the carious fossa through enamel into dentin, retract.",
   "duration_s": 5.0,
   "tick_hz": 1000,
-  "tooth": {"source": "procedural", "resolution": 128, "k_tooth_n_per_m": 3000, "b_tooth_n_s_per_m": 5.0,
-            "anchor_offset_mm": [0, 0, -6]},
+  "tooth": {"source": "procedural", "resolution": 128, "k_tooth_n_per_m": 12000, "b_tooth_n_s_per_m": 5.0,
+            "anchor_offset_mm": [0, 0, -6], "contact_model": "sdf"},
   "tool": {"preset": "handpiece", "bur_radius_mm": 0.5, "bur_speed_rpm": 300000, "cutting_coefficient": 0.5},
   "device": {"type": "simulated-phantom", "jitter_us": 0, "quantize": true, "saturate": true},
-  "method": {"name": "pmi-pd", "k_vc_n_per_m": 700, "b_vc_n_s_per_m": 0.3, "k_vc_ang_n_m_per_rad": 0.3,
-             "b_vc_ang_n_m_s_per_rad": 0.001, "observer_gain_per_s": 30, "friction_mu": 0.1},
+  "method": {"name": "pmi-pd", "k_vc_n_per_m": 1200, "b_vc_n_s_per_m": 4, "k_vc_ang_n_m_per_rad": 0.3,
+             "b_vc_ang_n_m_s_per_rad": 0.001, "observer_gain_per_s": 30, "friction_mu": 0.1,
+             "grasp_mass_scale": 1.0, "grip_detector": true},
   "proxy": {"mass_kg": 0.05, "inertia_kg_m2": 1e-5, "damping_n_s_per_m": 0.0, "damping_ang_n_m_s_per_rad": 0.0},
   "hand": {"script": [
     {"t_s": 0.0, "offset_mm": [0, 0, 6],    "force_n": [0, 0, 0],    "phase": "approach"},
     {"t_s": 1.0, "offset_mm": [-1, 0, 0.5], "force_n": [0, 0, -0.3], "phase": "approach"},
-    {"t_s": 1.5, "offset_mm": [-1, 0, -0.3], "force_n": [0, 0, -0.4], "phase": "drill"},
-    {"t_s": 3.5, "offset_mm": [1, 0, -0.6],  "force_n": [0, 0, -0.4], "phase": "drill"},
+    {"t_s": 1.5, "offset_mm": [-1, 0, -0.3], "force_n": [0, 0, -0.8], "phase": "drill"},
+    {"t_s": 3.5, "offset_mm": [1, 0, -0.6],  "force_n": [0, 0, -0.8], "phase": "drill"},
     {"t_s": 4.2, "offset_mm": [1, 0, 6],     "force_n": [0, 0, 0],    "phase": "retract"}
   ]}
 })json";
 
 }  // namespace
 
-std::vector<std::string> builtin_scene_names() { return {"probe", "drill"}; }
+std::vector<std::string> builtin_scene_names() { return {"probe", "probe-groove", "drill"}; }
 
 std::string builtin_scene_text(const std::string& name) {
   if (name == "probe") return kProbeScene;
+  if (name == "probe-groove") return kProbeGrooveScene;
   if (name == "drill") return kDrillScene;
-  throw InputError("unknown built-in scene '" + name + "' (built-in: probe, drill)");
+  throw InputError("unknown built-in scene '" + name + "' (built-in: probe, probe-groove, drill)");
 }
 
 Scene load_scene(const std::string& name_or_path) {
@@ -92,7 +124,7 @@ Scene load_scene(const std::string& name_or_path) {
   }
   if (!std::filesystem::exists(name_or_path)) {
     throw InputError("scene '" + name_or_path +
-                     "' is neither a built-in scene (probe, drill) nor a readable file");
+                     "' is neither a built-in scene (probe, probe-groove, drill) nor a readable file");
   }
   return parse_scene(read_file(name_or_path), name_or_path);
 }
@@ -136,7 +168,7 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   const auto& t = rd.object(doc, "", "tooth");
   rd.only_keys(t, "tooth", {"source", "mesh", "mesh_scale_m_per_unit", "size_mm", "resolution",
                             "k_tooth_n_per_m", "b_tooth_n_s_per_m", "anchor_offset_mm", "volume",
-                            "material_thresholds"});
+                            "material_thresholds", "contact_model"});
   s.tooth.source = rd.string(t, "tooth", "source", "procedural");
   if (s.tooth.source != "procedural" && s.tooth.source != "mesh" && s.tooth.source != "volume") {
     rd.fail("tooth.source", "expected \"procedural\", \"mesh\" or \"volume\", got \"" +
@@ -195,6 +227,11 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   s.tooth.anchor_offset = 1e-3 * rd.vec3(t, "tooth", "anchor_offset_mm", Vec3(0, 0, -6));
   rd.at_most("tooth.anchor_offset_mm", 1e3 * s.tooth.anchor_offset.cwiseAbs().maxCoeff(),
              kMaxOffsetMm, "every component, inside the device's workspace");
+  s.tooth.contact_model = rd.string(t, "tooth", "contact_model", "sdf");
+  if (s.tooth.contact_model != "sdf" && s.tooth.contact_model != "faces") {
+    rd.fail("tooth.contact_model",
+            "expected \"sdf\" (the default) or \"faces\" (got \"" + s.tooth.contact_model + "\")");
+  }
 
   // Tool.
   const auto& tl = rd.object(doc, "", "tool");

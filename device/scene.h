@@ -3,7 +3,7 @@
 // A scene is a JSON document, versioned by "dentsim_scene": 1, naming the tooth, the tool, the
 // device, the rendering method and gains, the proxy, the scripted hand, the duration and the tick
 // rate. Every field is validated on load; errors name the file (or built-in scene) and the field
-// path, and unknown fields are errors. Built-in scenes (`probe`, `drill`) ship inside the binary
+// path, and unknown fields are errors. Built-in scenes (`probe`, `probe-groove`, `drill`) ship inside the binary
 // (builtin_scene_text) so the simulator runs with no data file.
 //
 // Placement: the tooth is voxelised in its own frame and translated so that its "anchor" — the
@@ -34,6 +34,9 @@ struct SceneTooth {
   double k_tooth = 3000.0;             // K_tooth [N/m] (scaled per material)
   double b_tooth = 0.0;                // B_tooth [N s/m]
   Vec3 anchor_offset = Vec3(0.0, 0.0, -0.006);  // [m] anchor relative to the home tip position
+  // "sdf" (surface proxy on the signed distance, reference/tooth/sdf.h: never tunnels; the
+  // default) or "faces" (the thesis's face model, reference/tooth/collision.h).
+  std::string contact_model = "sdf";
 };
 
 struct SceneTool {

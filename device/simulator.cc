@@ -130,14 +130,16 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   drill.bur_speed_rad_s = scene.tool.bur_speed_rpm * 2.0 * std::numbers::pi / 60.0;
   drill.cutting_coefficient = scene.tool.cutting_coefficient;
   const DrillParams* drilling = scene.tool.drills() ? &drill : nullptr;
-  const bool fast_path = options.pipeline == "fast";
-  if (fast_path) {
+  const ContactModel contact_model = parse_contact_model(scene.tooth.contact_model);
+  // The fast pipeline's tooth is the fast twin of the face model; the surface-proxy ("sdf")
+  // model has no fast twin yet, so both pipelines use the reference provider for it.
+  if (options.pipeline == "fast" && contact_model == ContactModel::kFaces) {
     g.brick = std::make_unique<fast::BrickTooth>(*g.tooth);
     g.contacts = std::make_unique<fast::ToothContactProvider>(*g.brick, g.tip, g.k_tooth, g.b_tooth,
                                                               drilling);
   } else {
-    g.contacts =
-        std::make_unique<ToothContactProvider>(*g.tooth, g.tip, g.k_tooth, g.b_tooth, drilling);
+    g.contacts = std::make_unique<ToothContactProvider>(*g.tooth, g.tip, g.k_tooth, g.b_tooth,
+                                                        drilling, contact_model);
   }
 
   // Hand.
@@ -323,6 +325,9 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
         contacts.drills() ? contacts.drill_state().removed_volume_m3(m) * 1e9 : 0.0;
     res.removed_volume_total_mm3 += res.removed_volume_mm3[m];
   }
+  res.tick_s = T;
+  if (contacts.pulp_exposed_tick() > 0) res.pulp_exposed_at_s = contacts.pulp_exposed_tick() * T;
+  res.drill_log = contacts.drill_log();
   for (int s = 0; s < kStageCount; ++s) {
     res.timing.emplace_back(tick_stage_name(s), stats_of(stage_us[s]));
   }

@@ -31,6 +31,7 @@
 #include <array>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -90,8 +91,13 @@ struct RunResult {
   double virtual_energy_generated_j = 0.0;
   double hand_work_j = 0.0;                 // W_h at the end
   double hand_work_min_j = 0.0;             // min over the run of W_h(t) (<= 0)
-  std::array<double, 4> removed_volume_mm3{};  // per Material id (0 unused)
+  std::array<double, kMaterialCount> removed_volume_mm3{};  // per Material id (0 unused)
   double removed_volume_total_mm3 = 0.0;
+  // Scene time at the end of the tick whose drilling first opened the pulp (nominal ticks of
+  // 1/tick_hz); empty if it never did.
+  std::optional<double> pulp_exposed_at_s;
+  std::vector<DrillRecord> drill_log;       // every drilling tick (reference/tooth/tooth_contacts.h)
+  double tick_s = 0.0;                      // nominal tick 1/tick_hz [s]
   std::vector<std::pair<std::string, StageStats>> timing;  // stages, "tick", "device_simulation"
   std::vector<std::string> faults;
   double observer_rms_error_n = 0.0;        // |F1_hat - F_hand| (force part), RMS over the run

@@ -29,6 +29,7 @@ int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> c
     const int i = static_cast<int>(v % n);
     const int j = static_cast<int>((v / n) % n);
     const int k = static_cast<int>(v / (static_cast<std::size_t>(n) * n));
+    if (!state->pulp_exposed) state->pulp_exposed = removal_opens_pulp(tooth->grid(), i, j, k);
     tooth->remove_voxel(i, j, k);
     state->work_j[v] = 0.0;
     ++state->removed_voxels[material];

@@ -42,11 +42,21 @@ void validate_drill_params(const DrillParams& params) {
 double removal_threshold_j(std::uint8_t material, double voxel_size) {
   if (material == kEmpty || material >= kMaterialCount) {
     throw InputError("removal_threshold_j: material id " + std::to_string(material) +
-                     ", expected 1 (enamel), 2 (dentin) or 3 (pulp)");
+                     ", expected 1 (enamel), 2 (dentin), 3 (pulp) or 4 (caries)");
   }
   constexpr double kJoulePerMm3ToJoulePerM3 = 1e9;
   return material_properties(material).removal_energy_j_per_mm3 * kJoulePerMm3ToJoulePerM3 *
          voxel_size * voxel_size * voxel_size;
+}
+
+bool removal_opens_pulp(const VoxelGrid& grid, int i, int j, int k) {
+  bool opens = grid.at(i, j, k) == kPulp;
+  for (int f = 0; f < 6 && !opens; ++f) {
+    int nb[3] = {i, j, k};
+    nb[face_axis(f)] += face_sign(f);
+    opens = grid.at(nb[0], nb[1], nb[2]) == kPulp;
+  }
+  return opens;
 }
 
 int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> contact_voxels,
@@ -78,6 +88,7 @@ int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> c
     const int i = static_cast<int>(v % n);
     const int j = static_cast<int>((v / n) % n);
     const int k = static_cast<int>(v / (static_cast<std::size_t>(n) * n));
+    if (!state->pulp_exposed) state->pulp_exposed = removal_opens_pulp(grid, i, j, k);
     tooth->octree.remove_voxel(i, j, k);
     reencode_local(tooth->octree.grid(), i, j, k, &tooth->codes);
     state->work_j[v] = 0.0;

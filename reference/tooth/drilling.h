@@ -41,6 +41,10 @@ struct DrillState {
   std::vector<double> work_j;                                 // accumulated work per voxel [J]
   std::array<std::int64_t, kMaterialCount> removed_voxels{};  // count per material id
   double voxel_volume_m3 = 0.0;                               // h^3
+  // Set by the first removal that opens the pulp: a pulp voxel removed, or a removed voxel
+  // face-adjacent to a pulp voxel (the chamber is then open to the cavity). The loop owner
+  // stamps the time (report.json pulp_exposed_at_s).
+  bool pulp_exposed = false;
 
   // Removed volume of material m [m^3].
   double removed_volume_m3(int m) const { return voxel_volume_m3 * removed_voxels[m]; }
@@ -69,6 +73,10 @@ double removal_threshold_j(std::uint8_t material, double voxel_size);
 // removes every contacted voxel whose work reached its threshold. Appends the removed flat indices
 // to `removed` if not null and returns their number. The contact set is stale afterwards. Throws
 // InputError if the vectors differ in length, T <= 0, or the params are negative.
+// Whether removing voxel (i, j, k) of `grid` (not yet removed) opens the pulp: the voxel is pulp
+// or has a pulp face neighbour (DrillState::pulp_exposed; the fast twin shares it).
+bool removal_opens_pulp(const VoxelGrid& grid, int i, int j, int k);
+
 int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> contact_voxels,
                const ToolTip& tip, const DrillParams& params, double T, VoxelTooth* tooth,
                DrillState* state, std::vector<std::size_t>* removed = nullptr);

@@ -13,11 +13,12 @@ enum Material : std::uint8_t {
   kEnamel = 1,
   kDentin = 2,
   kPulp = 3,
-  kMaterialCount = 4,
+  kCaries = 4,  // a carious lesion (demineralised enamel and dentin): softer, cut faster
+  kMaterialCount = 5,
 };
 
 struct MaterialProperties {
-  const char* name;                 // "enamel", "dentin", "pulp"
+  const char* name;                 // "enamel", "dentin", "pulp", "caries"
   double stiffness_scale;           // contact stiffness relative to the scene's K_tooth
   double damping_scale;             // contact damping relative to the scene's B_tooth
   double removal_energy_j_per_mm3;  // work per unit volume to remove it by drilling [J/mm^3]
@@ -25,7 +26,7 @@ struct MaterialProperties {
 };
 
 const MaterialProperties& material_properties(std::uint8_t material);
-// Parses a material name ("enamel", "dentin", "pulp"); throws dentsim::InputError otherwise.
+// Parses a material name ("enamel", "dentin", "pulp", "caries"); throws dentsim::InputError otherwise.
 Material parse_material(const std::string& name);
 
 }  // namespace dentsim

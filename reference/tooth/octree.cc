@@ -72,7 +72,8 @@ FullOctree::FullOctree(VoxelGrid grid) : grid_(std::move(grid)) {
   for (std::size_t v = 0; v < grid_.voxels.size(); ++v) {
     if (grid_.voxels[v] >= kMaterialCount) {
       throw InputError("voxel grid: voxel " + std::to_string(v) + " has material id " +
-                       std::to_string(grid_.voxels[v]) + ", expected 0..3");
+                       std::to_string(grid_.voxels[v]) + ", expected 0.." +
+                       std::to_string(kMaterialCount - 1));
     }
   }
   levels_ = log2_exact(n);

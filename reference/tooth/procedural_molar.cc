@@ -153,6 +153,20 @@ Aabb molar_bounds(const MolarParams& params) {
   return b;
 }
 
+bool molar_caries(const MolarParams& params, const Vec3& p) {
+  if (!params.caries_lesion) return false;
+  const Mm m = mm_of(params);
+  const double k = kMm * params.scale;
+  const double cx = params.caries_x_m / kMm;  // unscaled model millimetres
+  const Vec3 radii = params.caries_radii_m / kMm;
+  const Vec3 centre(cx, 0.0, occlusal_height(m, cx, 0.0) - radii.z());
+  const Vec3 q = p / k - centre;
+  const double s = (q.x() * q.x()) / (radii.x() * radii.x()) +
+                   (q.y() * q.y()) / (radii.y() * radii.y()) +
+                   (q.z() * q.z()) / (radii.z() * radii.z());
+  return s <= 1.0;
+}
+
 CrownFrame molar_crown_frame(const MolarParams& params) {
   CrownFrame c;
   c.axis = Vec3::UnitZ();
@@ -189,6 +203,18 @@ VoxelGrid voxelize_procedural_molar(const MolarParams& params, int resolution,
   }
   r.crown = molar_crown_frame(params);
   assign_materials(grid, pulp, r.crown, params.enamel_cusp_m * params.scale);
+  if (params.caries_lesion) {
+    for (int k = lo[2]; k <= hi[2]; ++k) {
+      for (int j = lo[1]; j <= hi[1]; ++j) {
+        for (int i = lo[0]; i <= hi[0]; ++i) {
+          const std::size_t x = grid.index(i, j, k);
+          if (grid.voxels[x] == kEnamel || grid.voxels[x] == kDentin) {
+            if (molar_caries(params, grid.center(i, j, k))) grid.voxels[x] = kCaries;
+          }
+        }
+      }
+    }
+  }
   r.pulp_voxels = count_materials(grid)[kPulp];
   if (report != nullptr) *report = r;
   return grid;

@@ -44,11 +44,20 @@ struct MolarParams {
   // the depth rule leaves more than t_cusp of enamel under a tip; 2.2 mm gives the anatomical
   // ~2.5 mm there (tested) and 1.6 mm laterally at mid-crown.
   double enamel_cusp_m = 2.2e-3;
+  // A carious lesion (material kCaries) in the distal part of the central groove: the solid,
+  // non-pulp voxels inside the ellipsoid of these semi-axes whose top touches the groove floor at
+  // (caries_x_m, 0): an occlusal lesion that has crossed the enamel into dentin. The drill scene
+  // cuts sound enamel and dentin mesial of it. Off with caries_lesion = false.
+  bool caries_lesion = true;
+  double caries_x_m = 3.0e-3;
+  Vec3 caries_radii_m = Vec3(1.0e-3, 0.8e-3, 1.2e-3);
 };
 
 // Whether the point p (metres, frame above) is inside the tooth / inside the pulp.
 bool molar_solid(const MolarParams& params, const Vec3& p);
 bool molar_pulp(const MolarParams& params, const Vec3& p);
+// Whether p lies in the caries lesion's ellipsoid (false when caries_lesion is off).
+bool molar_caries(const MolarParams& params, const Vec3& p);
 
 // Axis-aligned bounds of the solid (exact extents of the model's parts, before voxelisation).
 Aabb molar_bounds(const MolarParams& params);
@@ -57,7 +66,7 @@ Aabb molar_bounds(const MolarParams& params);
 CrownFrame molar_crown_frame(const MolarParams& params);
 
 // The procedural molar on an N^3 grid (N a power of two): solid and pulp sampled at the voxel
-// centres, enamel by depth (assign_materials). Deterministic: the same params give the same bytes.
+// centres, enamel by depth (assign_materials), then the caries lesion. Deterministic: the same params give the same bytes.
 VoxelGrid voxelize_procedural_molar(const MolarParams& params, int resolution,
                                     VoxelizeReport* report = nullptr);
 

@@ -1,8 +1,30 @@
 #include "reference/tooth/tooth_contacts.h"
 
 #include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "reference/core/io.h"
 
 namespace dentsim {
+
+std::uint8_t heaviest_material(std::span<const Contact> contacts) {
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < contacts.size(); ++i) {
+    if (contacts[i].weight > contacts[best].weight) best = i;
+  }
+  return contacts[best].material;
+}
+
+ContactModel parse_contact_model(const std::string& name) {
+  if (name == "faces") return ContactModel::kFaces;
+  if (name == "sdf") return ContactModel::kSurfaceProxy;
+  throw InputError("contact model '" + name + "': expected \"sdf\" (the default) or \"faces\"");
+}
+
+const char* contact_model_name(ContactModel model) {
+  return model == ContactModel::kFaces ? "faces" : "sdf";
+}
 
 ToothProviderBase::ToothProviderBase(const VoxelGrid& grid, ToolTip tip, double k_tooth,
                                      double b_tooth, const DrillParams* drill)
@@ -13,25 +35,117 @@ ToothProviderBase::ToothProviderBase(const VoxelGrid& grid, ToolTip tip, double 
     drills_ = true;
     drill_params_ = *drill;
     drill_state_ = make_drill_state(grid);
+    drill_log_.reserve(kDrillLogCapacity);
   }
   voxels_.reserve(kContactCapacity);
 }
 
 std::size_t ToothProviderBase::begin_query(std::vector<Contact>& out) {
+  ++ticks_;
   out.clear();
   voxels_.clear();
   return std::min(out.capacity(), voxels_.capacity());
 }
 
+ToothContactProvider::ToothContactProvider(VoxelTooth& tooth, ToolTip tip, double k_tooth,
+                                           double b_tooth, const DrillParams* drill,
+                                           ContactModel model)
+    : ToothProviderBase(tooth.grid(), tip, k_tooth, b_tooth, drill),
+      tooth_(tooth),
+      model_(model),
+      surface_(tip.radius, tooth.grid().voxel_size) {
+  drill_contacts_.reserve(kContactCapacity);
+  drill_voxels_.reserve(kContactCapacity);
+}
+
 bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out) {
   const std::size_t max_contacts = begin_query(out);
-  return collide_tool_tip(tooth_, proxy, tip_, k_tooth_, b_tooth_, &scratch_, &out, &voxels_,
-                          max_contacts);
+  if (model_ == ContactModel::kFaces) {
+    return collide_tool_tip(tooth_, proxy, tip_, k_tooth_, b_tooth_, &scratch_, &out, &voxels_,
+                            max_contacts);
+  }
+  drill_contacts_.clear();
+  drill_voxels_.clear();
+  const Vec3 c = proxy.x + proxy.R * tip_.offset_body;
+  const Vec3& g = surface_.update(tooth_, c);
+  Contact contact;
+  if (!surface_proxy_contact(tooth_, proxy, tip_, g, k_tooth_, b_tooth_, &contact)) return true;
+  if (out.capacity() < 1) return false;
+  out.push_back(contact);
+  if (!drills_) return true;
+  // The voxels the bur at g cuts: solid voxels within rho + h of g on the pushed side.
+  scratch_.candidates.clear();
+  tooth_.octree.query_sphere(g, tip_.radius + tooth_.grid().voxel_size, &scratch_.candidates);
+  const VoxelGrid& grid = tooth_.grid();
+  const std::size_t n = static_cast<std::size_t>(grid.n);
+  for (const std::size_t v : scratch_.candidates) {
+    const Vec3 p = grid.center(static_cast<int>(v % n), static_cast<int>((v / n) % n),
+                               static_cast<int>(v / (n * n)));
+    const Vec3 to = p - g;
+    const double len = to.norm();
+    const double cosine = len > 0.0 ? -contact.n.dot(to) / len : 1.0;
+    if (!(cosine > 0.0)) continue;
+    if (drill_contacts_.size() >= drill_contacts_.capacity()) break;  // the nearest suffice
+    Contact share = contact;  // the contact's force K delta, shared with weight `cosine`
+    share.material = grid.voxels[v];
+    share.weight = cosine;
+    drill_contacts_.push_back(share);
+    drill_voxels_.push_back(v);
+  }
+  return true;
 }
 
 int ToothContactProvider::drill(std::span<const Contact> contacts, double T) {
-  if (!can_drill(contacts)) return 0;
-  return drill_tick(contacts, voxels_, tip_, drill_params_, T, &tooth_, &drill_state_);
+  if (!drills_ || contacts.empty()) return 0;
+  const std::array<std::int64_t, kMaterialCount> removed_before = drill_state_.removed_voxels;
+  const bool pulp_before = drill_state_.pulp_exposed;
+  int removed = 0;
+  std::uint8_t material = kEmpty;  // the material under the bur: the heaviest cut share's
+  if (model_ == ContactModel::kSurfaceProxy) {
+    if (drill_contacts_.empty()) return 0;
+    material = heaviest_material(drill_contacts_);
+    removed =
+        drill_tick(drill_contacts_, drill_voxels_, tip_, drill_params_, T, &tooth_, &drill_state_);
+    drill_contacts_.clear();
+    drill_voxels_.clear();
+  } else {
+    if (!can_drill(contacts)) return 0;
+    material = heaviest_material(contacts);
+    removed = drill_tick(contacts, voxels_, tip_, drill_params_, T, &tooth_, &drill_state_);
+  }
+  record_drill(contacts, material, removed_before, pulp_before);
+  return removed;
+}
+
+void ToothProviderBase::record_drill(
+    std::span<const Contact> contacts, std::uint8_t material,
+    const std::array<std::int64_t, kMaterialCount>& removed_before, bool pulp_before) {
+  if (drill_state_.pulp_exposed && !pulp_before) pulp_exposed_tick_ = ticks_;
+  if (drill_log_.size() >= drill_log_.capacity()) return;  // full: never grow in the tick
+  DrillRecord rec;
+  rec.tick = ticks_;
+  std::size_t heaviest = 0;
+  for (std::size_t i = 1; i < contacts.size(); ++i) {
+    if (contacts[i].weight > contacts[heaviest].weight) heaviest = i;
+  }
+  const double z = contacts[heaviest].x_o.z();
+  if (!have_surface_z_) {
+    have_surface_z_ = true;
+    first_surface_z_ = z;
+  }
+  rec.depth_m = first_surface_z_ - z;
+  double total_weight = 0.0;
+  Vec3 f = Vec3::Zero();
+  for (const Contact& ct : contacts) {
+    total_weight += ct.weight;
+    f += ct.weight * ct.stiffness * ct.depth * ct.n;
+  }
+  rec.force_n = total_weight > 0.0 ? f.norm() / total_weight : 0.0;
+  rec.material = material;
+  for (int m = 0; m < kMaterialCount; ++m) {
+    rec.removed[m] = static_cast<int>(drill_state_.removed_voxels[m] - removed_before[m]);
+  }
+  drill_log_.push_back(rec);
 }
 
 }  // namespace dentsim

@@ -1,22 +1,52 @@
 // The voxel tooth as the tick's collision and drilling stages: a ContactProvider
-// (reference/core/contact_provider.h) over collide_tool_tip (reference/tooth/collision.h). It keeps
-// the voxel index of every contact of the last query so that drilling
-// (reference/tooth/drilling.h) can run on the same set after the solve.
+// (reference/core/contact_provider.h) with two contact models (scene key tooth.contact_model):
+// - kFaces ("faces", the thesis): collide_tool_tip (reference/tooth/collision.h);
+// - kSurfaceProxy ("sdf", beyond the thesis, the scenes' default): the surface proxy on the exact
+//   signed distance of reference/tooth/sdf.h, one contact between the tool's sphere and the proxy.
+// The constructor defaults to kFaces (validation/zwidth.cc renders its wall with it); scenes
+// default to "sdf" (device/scene.h).
+// It keeps the voxels of the last query so that drilling (reference/tooth/drilling.h) can run on
+// the same set after the solve: for kFaces the voxel of every contact; for kSurfaceProxy the solid
+// voxels within rho + h of the proxy centre g that face the push (docs/derivations/sdf_contact.md
+// "Drilling"), each sharing the contact's force with weight cos(angle to -n).
 #pragma once
 
+#include <array>
 #include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
 #include <vector>
 
 #include "reference/core/contact_provider.h"
 #include "reference/tooth/collision.h"
 #include "reference/tooth/drilling.h"
+#include "reference/tooth/sdf.h"
 
 namespace dentsim {
 
+enum class ContactModel { kFaces, kSurfaceProxy };
+
+// "faces" / "sdf"; throws InputError naming the value otherwise.
+ContactModel parse_contact_model(const std::string& name);
+const char* contact_model_name(ContactModel model);
+
+// One drilling tick as the provider saw it (for the drill plot and report.json).
+struct DrillRecord {
+  long tick = 0;         // 1-based index of the contacts() call (the servo tick)
+  double depth_m = 0.0;  // how far the cut surface point x_o is below the first one's (world z)
+  double force_n = 0.0;  // |blended penalty force| of the tick's set
+  std::uint8_t material = 0;                  // material under the bur (the heaviest cut share's)
+  std::array<int, kMaterialCount> removed{};  // voxels removed this tick per material
+};
+
+// Capacity of the drill log (preallocated; recording stops when full): 2 min at 1 kHz.
+inline constexpr std::size_t kDrillLogCapacity = 120000;
+
 // What the reference and the fast tooth providers (fast/tooth/tooth_contacts.h) share: the tip,
-// the scene's stiffness and damping, the drill parameters and state, and the voxel index of each
-// contact of the last query. The constructor validates the tip and the drill parameters
-// (InputError) and sizes the buffers, so the tick itself neither throws nor allocates.
+// the scene's stiffness and damping, the drill parameters and state, the voxel index of each
+// contact of the last query, and the drill log. The constructor validates the tip and the drill
+// parameters (InputError) and sizes the buffers, so the tick itself neither throws nor allocates.
 class ToothProviderBase : public ContactProvider {
  public:
   bool drills() const override { return drills_; }
@@ -24,18 +54,26 @@ class ToothProviderBase : public ContactProvider {
   const std::vector<std::size_t>& contact_voxels() const { return voxels_; }
   const ToolTip& tip() const { return tip_; }
   const DrillState& drill_state() const { return drill_state_; }
+  // Drilling ticks so far (empty unless the tool drills), and the tick (1-based contacts() call)
+  // whose drilling first opened the pulp (0: not yet; DrillState::pulp_exposed).
+  const std::vector<DrillRecord>& drill_log() const { return drill_log_; }
+  long pulp_exposed_tick() const { return pulp_exposed_tick_; }
 
  protected:
   // `grid`: the tooth's grid (sizes the drill state when `drill` is set).
   ToothProviderBase(const VoxelGrid& grid, ToolTip tip, double k_tooth, double b_tooth,
                     const DrillParams* drill);
-  // Clears `out` and the voxel list; returns the most members the query may report (the smaller
-  // capacity of the two, which never grow).
+  // Counts the tick, clears `out` and the voxel list; returns the most members the query may
+  // report (the smaller capacity of the two, which never grow).
   std::size_t begin_query(std::vector<Contact>& out);
   // Whether drill() has a set to cut: drilling on and `contacts` the last query's nonempty set.
   bool can_drill(std::span<const Contact> contacts) const {
     return drills_ && !contacts.empty() && contacts.size() == voxels_.size();
   }
+  // Appends the tick to the drill log (never beyond its capacity) and notes the pulp's opening.
+  void record_drill(std::span<const Contact> contacts, std::uint8_t material,
+                    const std::array<std::int64_t, kMaterialCount>& removed_before,
+                    bool pulp_before);
 
   ToolTip tip_;
   double k_tooth_, b_tooth_;
@@ -43,7 +81,15 @@ class ToothProviderBase : public ContactProvider {
   DrillParams drill_params_;
   DrillState drill_state_;
   std::vector<std::size_t> voxels_;
+  long ticks_ = 0;  // contacts() calls
+  long pulp_exposed_tick_ = 0;
+  bool have_surface_z_ = false;
+  double first_surface_z_ = 0.0;
+  std::vector<DrillRecord> drill_log_;
 };
+
+// The material under the bur: the heaviest member's.
+std::uint8_t heaviest_material(std::span<const Contact> contacts);
 
 class ToothContactProvider : public ToothProviderBase {
  public:
@@ -52,15 +98,23 @@ class ToothContactProvider : public ToothProviderBase {
   // `drill` set the tool cuts the tooth (DrillParams validated here: InputError). Throws
   // InputError for a non-positive or non-finite tip radius.
   ToothContactProvider(VoxelTooth& tooth, ToolTip tip, double k_tooth, double b_tooth,
-                       const DrillParams* drill = nullptr)
-      : ToothProviderBase(tooth.grid(), tip, k_tooth, b_tooth, drill), tooth_(tooth) {}
+                       const DrillParams* drill = nullptr,
+                       ContactModel model = ContactModel::kFaces);
 
   bool contacts(const Pose& proxy, std::vector<Contact>& out) override;
   int drill(std::span<const Contact> contacts, double T) override;
 
+  ContactModel model() const { return model_; }
+  // The surface proxy (kSurfaceProxy; its g() is the rendered tip centre).
+  const SurfaceProxy& surface_proxy() const { return surface_; }
+
  private:
   VoxelTooth& tooth_;
   CollisionScratch scratch_;
+  ContactModel model_;
+  SurfaceProxy surface_;
+  std::vector<Contact> drill_contacts_;  // kSurfaceProxy: the drilled voxels' force shares
+  std::vector<std::size_t> drill_voxels_;
 };
 
 }  // namespace dentsim

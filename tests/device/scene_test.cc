@@ -24,6 +24,23 @@ TEST(Scene, BuiltinScenesParse) {
   EXPECT_FALSE(load_scene("probe").tool.drills());
   EXPECT_EQ(load_scene("drill").method.method, Method::kPmiPd);
   EXPECT_DOUBLE_EQ(load_scene("drill").tool.bur_radius, 0.5e-3);
+  // Every built-in: the surface proxy, PMI + PD with the hand's mass and the grip detector at the
+  // Z-width headline's gains (docs/results/zwidth.md: K_vc 1200, b_vc 4, K_tooth 12000).
+  for (const std::string& name : builtin_scene_names()) {
+    const Scene s = load_scene(name);
+    EXPECT_EQ(s.tooth.contact_model, "sdf") << name;
+    EXPECT_EQ(s.method.method, Method::kPmiPd) << name;
+    EXPECT_TRUE(s.method.grip_detector) << name;
+    EXPECT_DOUBLE_EQ(s.method.grasp_mass_scale, 1.0) << name;
+    EXPECT_DOUBLE_EQ(s.method.coupling.k_lin, 1200.0) << name;
+    EXPECT_DOUBLE_EQ(s.method.coupling.b_lin, 4.0) << name;
+    EXPECT_DOUBLE_EQ(s.tooth.k_tooth, 12000.0) << name;
+  }
+  // A scene without the key gets the default model.
+  std::string text = builtin_scene_text("probe");
+  const std::string key = ", \"contact_model\": \"sdf\"";
+  text.erase(text.find(key), key.size());
+  EXPECT_EQ(parse_scene(text, "p.json").tooth.contact_model, "sdf");
 }
 
 // Replaces the first occurrence of `from` in the drill scene by `to` and returns the error text.
@@ -50,7 +67,7 @@ TEST(Scene, BadFieldsAreNamed) {
             std::string::npos);
   EXPECT_NE(error_of("\"name\": \"pmi-pd\"", "\"name\": \"rk4\"").find("method.name"),
             std::string::npos);
-  EXPECT_NE(error_of("\"k_tooth_n_per_m\": 3000", "\"k_toth_n_per_m\": 3000")
+  EXPECT_NE(error_of("\"k_tooth_n_per_m\": 12000", "\"k_toth_n_per_m\": 12000")
                 .find("tooth.k_toth_n_per_m: unknown field"),
             std::string::npos);
   EXPECT_NE(error_of("\"dentsim_scene\": 1", "\"dentsim_scene\": 7").find("dentsim_scene"),
@@ -63,9 +80,14 @@ TEST(Scene, BadFieldsAreNamed) {
   EXPECT_NE(error_of("\"observer_gain_per_s\": 30", "\"observer_gain_per_s\": 5000")
                 .find("method.observer_gain_per_s"),
             std::string::npos);
-  EXPECT_NE(error_of("\"observer_gain_per_s\": 30", "\"observer_gain_per_s\": 30, "
-                    "\"grasp_mass_scale\": -1")
+  EXPECT_NE(error_of("\"grasp_mass_scale\": 1.0", "\"grasp_mass_scale\": -1")
                 .find("method.grasp_mass_scale"),
+            std::string::npos);
+  EXPECT_EQ(error_of("\"contact_model\": \"sdf\"", "\"contact_model\": \"voxels\""),
+            "bad.json: tooth.contact_model: expected \"sdf\" (the default) or \"faces\" (got "
+            "\"voxels\")");
+  EXPECT_NE(error_of("\"grasp_mass_scale\": 1.0", "\"grasp_mass_scale\": 0")
+                .find("method.grip_detector: needs name \"pmi-pd\" and grasp_mass_scale > 0"),
             std::string::npos);
   EXPECT_NE(error_of("\"type\": \"simulated-phantom\"", "\"type\": \"omni\"").find("device.type"),
             std::string::npos);

@@ -188,6 +188,8 @@ TEST(Drilling, InvariantsUnderRandomDrilling) {
   Vec3 dir = Vec3(gauss(rng), gauss(rng), gauss(rng)).normalized();
   double radius = 1.4e-3 + kRho;
   long total_removed = 0;
+  bool pulp_opened = false;  // brute force: a removed voxel was pulp or touched pulp by a face
+  long pulp_opened_tick = -1;
   for (int tick = 0; tick < 1500; ++tick) {
     // The tip moves inward along a slowly turning ray, pressing 0.1 mm into what is left.
     if (tick % 100 == 0) {
@@ -202,7 +204,15 @@ TEST(Drilling, InvariantsUnderRandomDrilling) {
       ASSERT_FALSE(gone[v]) << "voxel " << v << " removed twice";
       ASSERT_NE(initial[v], kEmpty);
       gone[v] = true;
+      const int i = static_cast<int>(v % n), j = static_cast<int>((v / n) % n),
+                k = static_cast<int>(v / (n * n));
+      for (const auto& d : {std::array<int, 3>{0, 0, 0}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0},
+                            {0, -1, 0}, {0, 0, 1}, {0, 0, -1}}) {
+        if (g.at(i + d[0], j + d[1], k + d[2]) == kPulp) pulp_opened = true;
+      }
     }
+    if (pulp_opened && pulp_opened_tick < 0) pulp_opened_tick = tick;
+    ASSERT_EQ(state.pulp_exposed, pulp_opened) << "tick " << tick;
     // Removed voxels never come back; nothing else changes.
     const std::vector<std::uint8_t>& now = tooth.grid().voxels;
     for (std::size_t v = 0; v < now.size(); ++v) {
@@ -227,6 +237,8 @@ TEST(Drilling, InvariantsUnderRandomDrilling) {
               static_cast<long long>(state.removed_voxels[kPulp]), total_removed);
   EXPECT_GT(state.removed_voxels[kEnamel], 50);
   EXPECT_GT(state.removed_voxels[kDentin], 10);
+  std::printf("pulp opened at tick %ld\n", pulp_opened_tick);
+  EXPECT_GE(pulp_opened_tick, 0);  // the walk reaches the pulp (the flag is exercised)
 }
 
 TEST(Drilling, RejectsBadInput) {

@@ -12,6 +12,7 @@
 #include <tuple>
 
 #include "reference/tooth/materials.h"
+#include "reference/tooth/neighbors.h"
 #include "reference/tooth/render_png.h"
 
 namespace dentsim {
@@ -271,6 +272,42 @@ TEST(RenderVoxels, ACubeShowsThreeShadedFaces) {
   EXPECT_EQ(shades.size(), 3u);  // top and two side faces, each flat-shaded differently
   EXPECT_EQ(img.material[static_cast<std::size_t>(32) * img.width + 32], kDentin);
   EXPECT_EQ(img.material[0], kEmpty);
+}
+
+}  // namespace
+}  // namespace dentsim
+
+namespace dentsim {
+namespace {
+
+TEST(ProceduralMolar, CariesLesionInTheGrooveOpensIntoItAndReachesDentin) {
+  MolarParams params;
+  const VoxelGrid& g = molar128();
+  const NeighborCodes codes = encode_neighbors(g);
+  long caries = 0, exposed = 0, dentin_below = 0;
+  for (int k = 0; k < g.n; ++k) {
+    for (int j = 0; j < g.n; ++j) {
+      for (int i = 0; i < g.n; ++i) {
+        if (g.at(i, j, k) != kCaries) continue;
+        ++caries;
+        EXPECT_TRUE(molar_caries(params, g.center(i, j, k)));
+        if (codes.code[g.index(i, j, k)] != 0) ++exposed;
+        if (g.at(i, j, k - 1) == kDentin) ++dentin_below;  // the lesion's floor is dentin
+      }
+    }
+  }
+  std::printf("caries: %ld voxels (%.2f mm^3), %ld exposed, %ld over dentin\n", caries,
+              caries * g.voxel_volume() * 1e9, exposed, dentin_below);
+  // The ellipsoid holds 4/3 pi 1.0 x 0.8 x 1.2 mm^3 = 4.02 mm^3, part of it above the groove
+  // floor's sides (empty): between a quarter and all of it is solid.
+  EXPECT_GT(caries * g.voxel_volume(), 1.0e-9);
+  EXPECT_LT(caries * g.voxel_volume(), 4.03e-9);
+  EXPECT_GT(exposed, 0);
+  EXPECT_GT(dentin_below, 0);
+  // Off: no caries voxel at all.
+  params.caries_lesion = false;
+  const auto counts = count_materials(voxelize_procedural_molar(params, 64));
+  EXPECT_EQ(counts[kCaries], 0);
 }
 
 }  // namespace

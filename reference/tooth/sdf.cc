@@ -1,0 +1,262 @@
+// Signed distance to the voxel tooth and the surface proxy (reference/tooth/sdf.h; derivation in
+// docs/derivations/sdf_contact.md). Beyond the thesis.
+#include "reference/tooth/sdf.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "reference/tooth/materials.h"
+
+namespace dentsim {
+namespace {
+
+// Squared distance from x to the box of cells [i0, i1) x [j0, j1) x [k0, k1), and its nearest
+// point.
+double box_distance2(const VoxelGrid& grid, const int lo_idx[3], const int hi_idx[3], const Vec3& x,
+                     Vec3* nearest) {
+  double d2 = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    const double lo = grid.origin[a] + grid.voxel_size * lo_idx[a];
+    const double hi = grid.origin[a] + grid.voxel_size * hi_idx[a];
+    const double q = std::clamp(x[a], lo, hi);
+    if (nearest != nullptr) (*nearest)[a] = q;
+    d2 += (x[a] - q) * (x[a] - q);
+  }
+  return d2;
+}
+
+// The voxel holding x (floor of the grid coordinates); false outside the grid.
+bool voxel_of(const VoxelGrid& grid, const Vec3& x, int idx[3]) {
+  for (int a = 0; a < 3; ++a) {
+    const double u = std::floor((x[a] - grid.origin[a]) / grid.voxel_size);
+    if (!(u >= 0.0 && u < grid.n)) return false;
+    idx[a] = static_cast<int>(u);
+  }
+  return true;
+}
+
+// Outside: nearest point of the solid (union of solid voxel boxes) within `reach`, by a
+// depth-first octree descent pruning every node at distance >= the best so far.
+SignedDistance outside_distance(const FullOctree& octree, const Vec3& x, double reach) {
+  SignedDistance out;
+  out.phi = reach;
+  const VoxelGrid& grid = octree.grid();
+  const int n = grid.n;
+  if (n == 0 || !octree.occupied(0, 0, 0, 0)) return out;
+  double best2 = reach * reach;
+  const int L = octree.levels();
+  const int root_lo[3] = {0, 0, 0}, root_hi[3] = {n, n, n};
+  if (!(box_distance2(grid, root_lo, root_hi, x, nullptr) < best2)) return out;
+  struct Node {
+    int level, x, y, z;
+  };
+  std::array<Node, 8 * 11> stack;
+  int top = 0;
+  stack[top++] = {0, 0, 0, 0};
+  Vec3 q;
+  while (top > 0) {
+    const Node node = stack[--top];
+    if (node.level == L) {  // a leaf pushed by a single-voxel grid (L = 0)
+      const int lo[3] = {node.x, node.y, node.z}, hi[3] = {node.x + 1, node.y + 1, node.z + 1};
+      const double d2 = box_distance2(grid, lo, hi, x, &q);
+      if (d2 < best2) {
+        best2 = d2;
+        out.nearest = q;
+        out.voxel = grid.index(node.x, node.y, node.z);
+        out.found = true;
+      }
+      continue;
+    }
+    const int s_node = 1 << (L - node.level);
+    {
+      const int lo[3] = {node.x * s_node, node.y * s_node, node.z * s_node};
+      const int hi[3] = {lo[0] + s_node, lo[1] + s_node, lo[2] + s_node};
+      if (!(box_distance2(grid, lo, hi, x, nullptr) < best2)) continue;  // pruned since pushed
+    }
+    const std::uint8_t mask = octree.child_mask(node.level, node.x, node.y, node.z);
+    const int child_level = node.level + 1;
+    const int s = 1 << (L - child_level);
+    for (int child = 0; child < 8; ++child) {
+      if ((mask & (1u << child)) == 0) continue;
+      const int cx = 2 * node.x + (child & 1);
+      const int cy = 2 * node.y + ((child >> 1) & 1);
+      const int cz = 2 * node.z + ((child >> 2) & 1);
+      const int lo[3] = {cx * s, cy * s, cz * s}, hi[3] = {lo[0] + s, lo[1] + s, lo[2] + s};
+      const double d2 = box_distance2(grid, lo, hi, x, child_level == L ? &q : nullptr);
+      if (!(d2 < best2)) continue;
+      if (child_level == L) {
+        best2 = d2;
+        out.nearest = q;
+        out.voxel = grid.index(cx, cy, cz);
+        out.found = true;
+      } else {
+        stack[top++] = {child_level, cx, cy, cz};
+      }
+    }
+  }
+  if (out.found) out.phi = std::sqrt(best2);
+  return out;
+}
+
+// Inside solid voxel idx: nearest point of the complement (empty voxels and the outside of the
+// grid) within `reach`, by shells of Chebyshev radius m around idx. A voxel of shell m is at
+// least (m - 1) h away, so the search stops once (m - 1) h >= the best distance.
+SignedDistance inside_distance(const VoxelGrid& grid, const Vec3& x, const int idx[3],
+                               double reach) {
+  SignedDistance out;
+  out.found = true;
+  out.voxel = grid.index(idx[0], idx[1], idx[2]);
+  const double h = grid.voxel_size;
+  // The outside of the grid: the nearest of its six boundary planes.
+  double best = reach;
+  out.nearest = x;
+  int best_axis = 2, best_side = 1;
+  for (int a = 0; a < 3; ++a) {
+    const double to_lo = x[a] - grid.origin[a];
+    const double to_hi = grid.origin[a] + h * grid.n - x[a];
+    if (to_lo < best) best = to_lo, best_axis = a, best_side = -1;
+    if (to_hi < best) best = to_hi, best_axis = a, best_side = 1;
+  }
+  out.nearest[best_axis] += best_side * best;
+  for (int m = 1; (m - 1) * h < best; ++m) {
+    for (int dk = -m; dk <= m; ++dk) {
+      for (int dj = -m; dj <= m; ++dj) {
+        const bool face_kj = std::abs(dk) == m || std::abs(dj) == m;
+        for (int di = -m; di <= m; di += (face_kj ? 1 : 2 * m)) {
+          const int i = idx[0] + di, j = idx[1] + dj, k = idx[2] + dk;
+          if (!grid.inside(i, j, k) || grid.voxels[grid.index(i, j, k)] != kEmpty) continue;
+          const int lo[3] = {i, j, k}, hi[3] = {i + 1, j + 1, k + 1};
+          Vec3 q;
+          const double d = std::sqrt(box_distance2(grid, lo, hi, x, &q));
+          if (d < best) {
+            best = d;
+            out.nearest = q;
+          }
+        }
+      }
+    }
+  }
+  out.phi = -best;
+  return out;
+}
+
+}  // namespace
+
+SignedDistance signed_distance(const VoxelTooth& tooth, const Vec3& x, double reach) {
+  const VoxelGrid& grid = tooth.grid();
+  int idx[3];
+  if (voxel_of(grid, x, idx) && grid.voxels[grid.index(idx[0], idx[1], idx[2])] != kEmpty) {
+    return inside_distance(grid, x, idx, reach);
+  }
+  return outside_distance(tooth.octree, x, reach);
+}
+
+Vec3 distance_gradient(const VoxelTooth& tooth, const Vec3& x, const SignedDistance& sd) {
+  const Vec3 gap = sd.phi >= 0.0 ? Vec3(x - sd.nearest) : Vec3(sd.nearest - x);
+  const double len = gap.norm();
+  if (len > 0.0) return gap / len;
+  const VoxelGrid& grid = tooth.grid();
+  const std::size_t n = static_cast<std::size_t>(grid.n);
+  const Vec3 centre =
+      grid.center(static_cast<int>(sd.voxel % n), static_cast<int>((sd.voxel / n) % n),
+                  static_cast<int>(sd.voxel / (n * n)));
+  const Vec3 out = x - centre;
+  return out.norm() > 0.0 ? Vec3(out.normalized()) : Vec3::UnitZ();
+}
+
+SurfaceProxy::SurfaceProxy(double rho, double voxel_size)
+    : rho_(rho), skin_(std::min(0.25 * rho, 0.5 * voxel_size)), tol_(1e-9 * rho) {}
+
+double SurfaceProxy::push_out(const VoxelTooth& tooth, Vec3* x) const {
+  // Inside, the shortest way out may be long: search as far as the grid's extent.
+  const double far = tooth.grid().voxel_size * tooth.grid().n;
+  for (int it = 0; it < kSurfaceProxyPushOuts; ++it) {
+    const SignedDistance sd = signed_distance(tooth, *x, far);
+    if (!sd.found || sd.phi >= rho_) return (sd.found ? sd.phi : far) - rho_;
+    const Vec3 u = distance_gradient(tooth, *x, sd);
+    *x = sd.nearest + rho_ * u;  // the nearest surface point, then rho out along the normal
+  }
+  const SignedDistance sd = signed_distance(tooth, *x, rho_);
+  return sd.phi - rho_;
+}
+
+bool SurfaceProxy::sweep(const VoxelTooth& tooth, Vec3* from, const Vec3& to) const {
+  const double h = tooth.grid().voxel_size;
+  const double floor_phi = rho_ - skin_;  // A_skin = {phi >= rho - s}
+  for (int step = 0; step < kSurfaceProxySweepSteps; ++step) {
+    const Vec3 gap = to - *from;
+    const double left = gap.norm();
+    if (left <= tol_) {
+      *from = to;
+      return true;
+    }
+    const double reach = floor_phi + std::min(left, 4.0 * h) + skin_;
+    const SignedDistance sd = signed_distance(tooth, *from, reach);
+    const double clearance = sd.phi - floor_phi;  // a step this long stays in A_skin (SD1)
+    if (clearance >= left) {
+      // The end itself must be admissible too (it is, by SD1, within A_skin).
+      *from = to;
+      return true;
+    }
+    if (clearance <= 1e-3 * skin_) return false;  // touching: blocked
+    *from += (clearance / left) * gap;
+  }
+  return false;
+}
+
+const Vec3& SurfaceProxy::update(const VoxelTooth& tooth, const Vec3& c) {
+  if (!valid_) {
+    g_ = c;
+    valid_ = true;
+  }
+  // A proxy inside the tooth (the first call, or a caller that moved the tooth) leaves along
+  // the shortest way (step 1).
+  push_out(tooth, &g_);
+  Vec3 target = c;
+  for (int slide = 0; slide <= kSurfaceProxySlides; ++slide) {
+    Vec3 y = g_;
+    const bool reached = sweep(tooth, &y, target);
+    g_ = y;
+    push_out(tooth, &g_);  // back from the skin to phi >= rho, along the local normal
+    if (reached && (target - c).norm() <= tol_) break;  // the tool itself is admissible
+    // Blocked (or a slide target reached): slide towards c on the tangent plane at g.
+    const SignedDistance sd = signed_distance(tooth, g_, rho_ + skin_);
+    if (!sd.found) {
+      target = c;
+      continue;
+    }
+    const Vec3 n = distance_gradient(tooth, g_, sd);
+    const double behind = (c - g_).dot(n);
+    const Vec3 next = behind < 0.0 ? Vec3(c - behind * n) : c;
+    if ((next - g_).norm() <= tol_) break;  // g is the constrained nearest point
+    target = next;
+  }
+  return g_;
+}
+
+bool surface_proxy_contact(const VoxelTooth& tooth, const Pose& proxy, const ToolTip& tip,
+                           const Vec3& g, double k_tooth, double b_tooth, Contact* out) {
+  const Vec3 c = proxy.x + proxy.R * tip.offset_body;
+  const Vec3 gap = g - c;
+  const double depth = gap.norm();
+  if (!(depth > 1e-9 * tip.radius)) return false;
+  const Vec3 n = gap / depth;
+  const SignedDistance sd = signed_distance(tooth, g, 2.0 * tip.radius);
+  // The material under the proxy (enamel if, after a slide, no solid is within 2 rho of g).
+  std::uint8_t material = sd.found ? tooth.grid().voxels[sd.voxel] : std::uint8_t{kEmpty};
+  if (material == kEmpty) material = kEnamel;
+  const MaterialProperties& props = material_properties(material);
+  out->n = n;
+  out->x_o = g - tip.radius * n;
+  const Vec3 x_c = c - tip.radius * n;
+  out->r = proxy.R.transpose() * (x_c - proxy.x);
+  out->depth = n.dot(out->x_o - x_c);  // = |g - c|  (2.15)
+  out->stiffness = k_tooth * props.stiffness_scale;
+  out->damping = b_tooth * props.damping_scale;
+  out->weight = 1.0;
+  out->material = material;
+  return true;
+}
+
+}  // namespace dentsim

@@ -1,0 +1,100 @@
+// Contact that never tunnels: the exact signed distance to the voxel tooth and a surface proxy
+// (god-object) kept outside it (BEYOND THE THESIS: the thesis's model is the face model of
+// reference/tooth/collision.h; derivation in docs/derivations/sdf_contact.md).
+//
+// Frames and units: world frame {O}, metres. The solid S is the union of the closed boxes of the
+// solid voxels of the grid (reference/tooth/voxel_grid.h); the tip is a sphere of radius rho.
+//
+// Signed distance (exact, no stored field): phi(x) = dist(x, S) >= 0 for x outside S, and
+// phi(x) = -dist(x, complement of S) < 0 for x inside a solid voxel. |grad phi| = 1 almost
+// everywhere and phi is 1-Lipschitz: |phi(x) - phi(y)| <= |x - y| (SD1). Outside S it is found by
+// a nearest-box search in the octree (prune every node whose box is farther than the best so
+// far), so it is up to date under drilling with no update step: drilling edits the octree.
+//
+// Surface proxy g (the tip centre as rendered): the set of admissible tip centres is
+//   A = { x : phi(x) >= rho }   (the tip sphere does not overlap the solid).
+// Each tick, given the tool's tip centre c (the PMI proxy x_2 + R_2 o):
+//   1. push-out (shortest way): x = P(c), the point reached from c by x <- q + rho u, q the
+//      nearest point of S (outside: u = (x - q)/|x - q|) or of its complement (inside:
+//      u = (q - x)/|q - x|), repeated until phi(x) >= rho (a concave corner takes a few steps);
+//   2. swept test: g moves to x only if the segment g -> x stays in A_skin = {phi >= rho - s}
+//      (conservative advancement: from y, a step of phi(y) - (rho - s) along the segment stays in
+//      A_skin by (SD1)). Crossing a wall needs phi <= 0 on the way, and s < rho, so g never
+//      crosses material, whatever the tool's speed or the wall's thickness (one voxel included);
+//   3. if the segment is blocked (the shortest way came out on another side, or c jumped through
+//      a wall), g advances to where the sweep stopped, is pushed back into A, and slides: the next
+//      target is c projected onto the tangent plane at g (normal n = grad phi(g)); up to
+//      kSurfaceProxySlides slides per tick.
+// The contact is the spring between c and g: n = (g - c) / |g - c|, depth delta = |g - c|,
+// x_o = g - rho n (on the surface), x_c = c - rho n (the point of the tool's sphere deepest along
+// -n), so delta = n^T (x_o - x_c) as in (2.15); there is a contact iff g != c.
+//
+// Real-time: every query walks a fixed-size stack; nothing allocates or throws.
+#pragma once
+
+#include <cstddef>
+#include <limits>
+
+#include "reference/core/types.h"
+#include "reference/tooth/collision.h"
+
+namespace dentsim {
+
+// The nearest point of the solid (outside) or of its complement (inside) to a query point.
+struct SignedDistance {
+  double phi = std::numeric_limits<double>::infinity();  // signed distance [m]
+  Vec3 nearest = Vec3::Zero();  // nearest point of S (phi >= 0) or of the complement (phi < 0)
+  std::size_t voxel = 0;        // the solid voxel holding `nearest` (phi >= 0) or x (phi < 0)
+  bool found = false;           // false: phi >= `reach` (no solid within reach; phi = reach)
+};
+
+// phi(x) with the search limited to `reach` [m] (> 0): if no solid lies within reach of x,
+// returns found = false and phi = reach; inside, the depth is capped at -reach likewise
+// (found = true, nearest = x + reach * (direction of the grid's nearest outside)). Exact
+// otherwise.
+SignedDistance signed_distance(const VoxelTooth& tooth, const Vec3& x, double reach);
+
+// The outward unit normal at x from its nearest point (phi != 0); for phi == 0 (x on S) the
+// direction from the centre of `voxel` to x.
+Vec3 distance_gradient(const VoxelTooth& tooth, const Vec3& x, const SignedDistance& sd);
+
+inline constexpr int kSurfaceProxySlides = 4;       // slides per tick (step 3)
+inline constexpr int kSurfaceProxyPushOuts = 16;    // push-out iterations (step 1)
+inline constexpr int kSurfaceProxySweepSteps = 64;  // conservative-advancement steps per segment
+
+// The surface proxy of one tip sphere on one tooth (state: g).
+class SurfaceProxy {
+ public:
+  // rho [m] > 0 (checked by the owner). Skin s = min(0.25 rho, 0.5 h).
+  SurfaceProxy(double rho, double voxel_size);
+
+  // Steps 1-3 for the tool's tip centre c; returns g. The first call starts from g = c.
+  const Vec3& update(const VoxelTooth& tooth, const Vec3& c);
+  // Forgets g (the next update starts from c again).
+  void reset() { valid_ = false; }
+  const Vec3& g() const { return g_; }
+  bool valid() const { return valid_; }
+  double skin() const { return skin_; }
+
+  // Moves x into A along the shortest way (step 1); returns the final phi(x) - rho (>= 0 unless
+  // the iteration cap was hit, which the crosscheck counts as penetration).
+  double push_out(const VoxelTooth& tooth, Vec3* x) const;
+  // Conservative advancement from `from` towards `to` within A_skin; returns true if `to` was
+  // reached, else leaves *from at the last point reached.
+  bool sweep(const VoxelTooth& tooth, Vec3* from, const Vec3& to) const;
+
+ private:
+  double rho_;
+  double skin_;
+  double tol_;  // distance below which two points are the same [m]
+  bool valid_ = false;
+  Vec3 g_ = Vec3::Zero();
+};
+
+// The contact of the tool's sphere at tip centre c with surface proxy g (header comment); false
+// (and *out untouched) when g == c. k_tooth [N/m], b_tooth [N s/m] are scaled by the material of
+// the solid voxel nearest to g.
+bool surface_proxy_contact(const VoxelTooth& tooth, const Pose& proxy, const ToolTip& tip,
+                           const Vec3& g, double k_tooth, double b_tooth, Contact* out);
+
+}  // namespace dentsim

@@ -1,0 +1,230 @@
+// The surface-proxy contact (reference/tooth/sdf.h): the signed distance equals the brute force
+// over every voxel, the proxy never crosses a wall one voxel thick whatever the tool's step, a
+// proxy found inside leaves along the shortest way, the contact's depth on a flat face is the
+// tool's exact depth, and the provider's model switch (faces / sdf).
+#include "reference/tooth/sdf.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <random>
+
+#include "reference/core/io.h"
+#include "reference/tooth/tooth_contacts.h"
+
+namespace dentsim {
+namespace {
+
+constexpr double kK = 3000.0;     // K_tooth [N/m]
+constexpr double kRho = 0.4e-3;   // explorer tip radius [m]
+constexpr double kSide = 6.4e-3;  // grid edge [m]
+constexpr std::uint64_t kSeed = 4242;
+
+VoxelTooth make_tooth(int n, const std::function<bool(const Vec3&)>& inside) {
+  VoxelGrid g(n, Vec3::Zero(), kSide / n);
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        if (inside(g.center(i, j, k))) g.set(i, j, k, kEnamel);
+      }
+    }
+  }
+  return VoxelTooth(std::move(g));
+}
+
+// Brute force: the distance from x to the nearest box among the voxels with solid == want, and
+// (for want = empty) the outside of the grid.
+double brute_distance(const VoxelGrid& g, const Vec3& x, bool want_solid) {
+  double best = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < g.n; ++k) {
+    for (int j = 0; j < g.n; ++j) {
+      for (int i = 0; i < g.n; ++i) {
+        if (g.solid(i, j, k) != want_solid) continue;
+        double d2 = 0.0;
+        for (int a = 0; a < 3; ++a) {
+          const int idx[3] = {i, j, k};
+          const double lo = g.origin[a] + g.voxel_size * idx[a];
+          const double hi = lo + g.voxel_size;
+          const double q = std::clamp(x[a], lo, hi);
+          d2 += (x[a] - q) * (x[a] - q);
+        }
+        best = std::min(best, std::sqrt(d2));
+      }
+    }
+  }
+  if (!want_solid) {
+    for (int a = 0; a < 3; ++a) {
+      best = std::min(best, x[a] - g.origin[a]);
+      best = std::min(best, g.origin[a] + g.voxel_size * g.n - x[a]);
+    }
+  }
+  return best;
+}
+
+TEST(SignedDistance, EqualsBruteForceInsideAndOutside) {
+  // Random blobs on a 16^3 grid: three balls and a slab.
+  std::mt19937_64 rng(kSeed);
+  std::uniform_real_distribution<double> u(0.0, kSide);
+  const VoxelTooth tooth = make_tooth(16, [](const Vec3& p) {
+    return (p - Vec3(2e-3, 2e-3, 2e-3)).norm() < 1.5e-3 ||
+           (p - Vec3(4.5e-3, 3e-3, 4e-3)).norm() < 1.2e-3 || p.z() < 0.5e-3;
+  });
+  const VoxelGrid& g = tooth.grid();
+  int inside = 0, outside = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const Vec3 x(u(rng), u(rng), u(rng));
+    const SignedDistance sd = signed_distance(tooth, x, 1.0);
+    ASSERT_TRUE(sd.found);
+    const int i = static_cast<int>(x.x() / g.voxel_size),
+              j = static_cast<int>(x.y() / g.voxel_size),
+              k = static_cast<int>(x.z() / g.voxel_size);
+    if (g.solid(i, j, k)) {
+      ++inside;
+      EXPECT_NEAR(sd.phi, -brute_distance(g, x, false), 1e-15);
+      EXPECT_NEAR((sd.nearest - x).norm(), -sd.phi, 1e-15);
+    } else {
+      ++outside;
+      EXPECT_NEAR(sd.phi, brute_distance(g, x, true), 1e-15);
+      EXPECT_NEAR((sd.nearest - x).norm(), sd.phi, 1e-15);
+      EXPECT_NE(g.voxels[sd.voxel], kEmpty);
+    }
+  }
+  EXPECT_GT(inside, 20);
+  EXPECT_GT(outside, 200);
+  // Beyond reach: not found, phi = reach.
+  const SignedDistance far = signed_distance(tooth, Vec3(6e-3, 6e-3, 6.3e-3), 1e-4);
+  EXPECT_FALSE(far.found);
+  EXPECT_EQ(far.phi, 1e-4);
+}
+
+TEST(SurfaceProxy, NeverCrossesAWallOneVoxelThick) {
+  // A wall x in [3.2, 3.3) mm (one voxel at 64^3: h = 0.1 mm); the tool moves from x = 2 mm to
+  // x = 4.6 mm in steps from 0.05 mm to 3 mm (a step larger than the wall and the tip together).
+  const VoxelTooth tooth =
+      make_tooth(64, [](const Vec3& p) { return p.x() > 3.2e-3 && p.x() < 3.3e-3; });
+  for (const double step : {0.05e-3, 0.3e-3, 0.9e-3, 3e-3}) {
+    SurfaceProxy proxy(kRho, tooth.grid().voxel_size);
+    Vec3 c(2e-3, 3.2e-3, 3.2e-3);
+    proxy.update(tooth, c);  // first seen on the near side, free
+    for (int tick = 0; tick < 200 && c.x() < 4.6e-3; ++tick) {
+      c.x() = std::min(4.6e-3, c.x() + step);
+      const Vec3 g = proxy.update(tooth, c);
+      // g stays on the near side, its sphere clear of the wall (exact here: flat face).
+      EXPECT_LE(g.x(), 3.2e-3 - kRho + 1e-12) << "step " << step;
+      EXPECT_GE(signed_distance(tooth, g, 1.0).phi, kRho - 1e-12);
+    }
+    // The spring from the tool to g pushes the tool back towards the near side: K (g - c).
+    EXPECT_NEAR(proxy.g().x(), 3.2e-3 - kRho, 1e-12);
+  }
+}
+
+TEST(SurfaceProxy, ProxyFoundInsideLeavesAlongTheShortestWay) {
+  // A slab z < 3.2 mm; a tool first seen 0.7 mm under its top leaves straight up (not down
+  // through 2.5 mm of material).
+  const VoxelTooth tooth = make_tooth(64, [](const Vec3& p) { return p.z() < 3.2e-3; });
+  SurfaceProxy proxy(kRho, tooth.grid().voxel_size);
+  const Vec3 c(3.15e-3, 3.05e-3, 2.5e-3);
+  const Vec3 g = proxy.update(tooth, c);
+  EXPECT_NEAR(g.x(), c.x(), 1e-12);
+  EXPECT_NEAR(g.y(), c.y(), 1e-12);
+  EXPECT_NEAR(g.z(), 3.2e-3 + kRho, 1e-12);
+}
+
+TEST(SurfaceProxy, FlatFaceContactIsTheToolsDepthAndSlidesWithoutRipple) {
+  const VoxelTooth tooth = make_tooth(64, [](const Vec3& p) { return p.z() < 3.2e-3; });
+  ToothContactProvider provider(const_cast<VoxelTooth&>(tooth), ToolTip{kRho, Vec3::Zero()}, kK,
+                                0.0, nullptr, ContactModel::kSurfaceProxy);
+  std::vector<Contact> out;
+  out.reserve(kContactCapacity);
+  Pose pose;
+  pose.x = Vec3(1e-3, 3e-3, 3.2e-3 + 2 * kRho);  // free: no contact
+  ASSERT_TRUE(provider.contacts(pose, out));
+  EXPECT_TRUE(out.empty());
+  // Pressed 1 mm under the offset surface (2.5 radii: the face model tunnels there), sliding in x
+  // across 30 voxel boundaries: the force is K * 1 mm straight up everywhere.
+  const double depth = 1e-3;
+  for (int tick = 0; tick < 300; ++tick) {
+    pose.x = Vec3(1e-3 + tick * 0.01e-3, 3e-3, 3.2e-3 + kRho - std::min(depth, tick * 0.1e-3));
+    ASSERT_TRUE(provider.contacts(pose, out));
+    if (tick < 10) continue;
+    ASSERT_EQ(out.size(), 1u);
+    EXPECT_NEAR(out[0].depth, depth, 1e-12);
+    EXPECT_NEAR(out[0].n.z(), 1.0, 1e-12);
+    EXPECT_NEAR((blended_contact_force(out) - Vec3(0, 0, kK * depth)).norm(), 0.0, 1e-9);
+  }
+}
+
+TEST(SurfaceProxy, DrillingGoesThroughTheLayersInOrderAndOpensThePulp) {
+  // A layered slab on 64^3 (h = 0.1 mm): enamel 2.6-3.2 mm, dentin 1.6-2.6 mm, pulp below.
+  VoxelGrid g(64, Vec3::Zero(), kSide / 64);
+  for (int k = 0; k < 64; ++k) {
+    for (int j = 0; j < 64; ++j) {
+      for (int i = 0; i < 64; ++i) {
+        const double z = g.center(i, j, k).z();
+        if (z < 3.2e-3) g.set(i, j, k, z > 2.6e-3 ? kEnamel : z > 1.6e-3 ? kDentin : kPulp);
+      }
+    }
+  }
+  VoxelTooth tooth(std::move(g));
+  DrillParams drill;
+  drill.bur_speed_rad_s *= 20.0;  // a fast bur so that 1500 ticks reach the pulp
+  ToothContactProvider provider(tooth, ToolTip{kRho, Vec3::Zero()}, kK, 0.0, &drill,
+                                ContactModel::kSurfaceProxy);
+  std::vector<Contact> out;
+  out.reserve(kContactCapacity);
+  Pose pose;
+  for (int tick = 0; tick < 1500; ++tick) {
+    // The tool's centre is led down from 0.2 mm above the touching height at 2 um per tick.
+    pose.x = Vec3(3.2e-3, 3.2e-3, 3.2e-3 + kRho + 0.2e-3 - 2e-6 * tick);
+    ASSERT_TRUE(provider.contacts(pose, out));
+    // The proxy stays clear of what is left (the bur never sinks into the tooth).
+    ASSERT_GE(signed_distance(tooth, provider.surface_proxy().g(), 1.0).phi,
+              kRho - provider.surface_proxy().skin());
+    if (!out.empty()) provider.drill(out, 1e-3);
+  }
+  const std::vector<DrillRecord>& log = provider.drill_log();
+  ASSERT_FALSE(log.empty());
+  // The material under the bur goes enamel, dentin, pulp with depth (at a boundary both are
+  // under the bur, so compare the mean depth per material), and dentin first shows once the cut
+  // passed the 0.6 mm of enamel (less two voxels: the bur's cap reaches ahead).
+  std::array<long, kMaterialCount> seen{};
+  std::array<double, kMaterialCount> depth_sum{};
+  double first_dentin = -1.0;
+  for (const DrillRecord& r : log) {
+    ++seen[r.material];
+    depth_sum[r.material] += r.depth_m;
+    if (r.material == kDentin && first_dentin < 0.0) first_dentin = r.depth_m;
+  }
+  ASSERT_GT(seen[kEnamel], 0);
+  ASSERT_GT(seen[kDentin], 0);
+  ASSERT_GT(seen[kPulp], 0);
+  const auto mean = [&](int m) { return depth_sum[m] / seen[m]; };
+  EXPECT_LT(mean(kEnamel), mean(kDentin));
+  EXPECT_LT(mean(kDentin), mean(kPulp));
+  EXPECT_GE(first_dentin, 0.6e-3 - 2 * tooth.grid().voxel_size);
+  const DrillState& st = provider.drill_state();
+  EXPECT_GT(st.removed_voxels[kEnamel], 0);
+  EXPECT_GT(st.removed_voxels[kDentin], 0);
+  EXPECT_TRUE(st.pulp_exposed);
+  // The pulp opened on a logged tick, once the cut had passed the 1.6 mm of enamel and dentin.
+  const long opened = provider.pulp_exposed_tick();
+  ASSERT_GT(opened, 0);
+  const auto at =
+      std::find_if(log.begin(), log.end(), [&](const DrillRecord& r) { return r.tick == opened; });
+  ASSERT_NE(at, log.end());
+  EXPECT_GE(at->depth_m, 1.6e-3 - 2 * tooth.grid().voxel_size);
+}
+
+TEST(ContactModel, ParsesTheSceneNames) {
+  EXPECT_EQ(parse_contact_model("faces"), ContactModel::kFaces);
+  EXPECT_EQ(parse_contact_model("sdf"), ContactModel::kSurfaceProxy);
+  EXPECT_STREQ(contact_model_name(ContactModel::kSurfaceProxy), "sdf");
+  EXPECT_THROW(parse_contact_model("voxels"), InputError);
+}
+
+}  // namespace
+}  // namespace dentsim

@@ -1,0 +1,291 @@
+// The contact sweep of validation/crosscheck_contact.h (issue #16).
+#include "validation/crosscheck_contact.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <numbers>
+#include <random>
+#include <utility>
+
+#include "reference/core/contact_provider.h"
+#include "reference/core/io.h"
+#include "reference/tooth/mesh.h"
+#include "reference/tooth/procedural_molar.h"
+#include "reference/tooth/sdf.h"
+#include "reference/tooth/tooth_contacts.h"
+#include "reference/tooth/voxelize.h"
+
+namespace dentsim {
+namespace {
+
+constexpr double kAlpha = 0.5;        // relaxation gain of the quasi-static probe
+constexpr double kMaxStepM = 0.1e-3;  // a hand at 0.1 m/s, 1 ms ticks
+constexpr double kSlideStepM = 0.02e-3;
+constexpr double kStartGapM = 0.3e-3;  // start this far outside the tip's touching distance
+constexpr double kSphereRadiusM = 5e-3;
+constexpr int kRippleTicks = 800;
+
+struct Probe {
+  Vec3 start, d, t;
+};
+
+struct NamedTooth {
+  std::string name;
+  VoxelTooth tooth;
+};
+
+VoxelTooth build_mesh_tooth(const std::string& path, double size_mm, int resolution) {
+  LoadedMesh loaded = load_mesh(path);
+  scale_mesh(loaded.mesh, scale_for_size(loaded.mesh, 1e-3 * size_mm));
+  VoxelizeOptions opt;
+  opt.resolution = resolution;
+  return VoxelTooth(voxelize_mesh(loaded.mesh, opt));
+}
+
+Vec3 random_unit(std::mt19937_64& rng) {
+  std::normal_distribution<double> g(0.0, 1.0);
+  Vec3 v;
+  do {
+    v = Vec3(g(rng), g(rng), g(rng));
+  } while (v.norm() < 1e-6);
+  return v.normalized();
+}
+
+// `count` probes on exposed faces of `tooth`, starting in free space.
+std::vector<Probe> draw_probes(const VoxelTooth& tooth, int count, double rho,
+                               std::mt19937_64& rng) {
+  const VoxelGrid& g = tooth.grid();
+  std::vector<std::uint64_t> faces;
+  for (std::size_t v = 0; v < g.voxels.size(); ++v) {
+    const std::uint8_t code = tooth.codes.code[v];
+    for (int f = 0; f < 6; ++f) {
+      if (code & (1u << f)) faces.push_back(8 * v + static_cast<std::uint64_t>(f));
+    }
+  }
+  if (faces.empty()) throw InputError("crosscheck contact: a tooth has no exposed face");
+  std::uniform_int_distribution<std::size_t> pick(0, faces.size() - 1);
+  const std::size_t n = static_cast<std::size_t>(g.n);
+  std::vector<Probe> out;
+  for (int attempt = 0; static_cast<int>(out.size()) < count && attempt < 100 * count; ++attempt) {
+    const std::uint64_t e = faces[pick(rng)];
+    const std::size_t v = e / 8;
+    const int f = static_cast<int>(e % 8);
+    const Vec3 nf = face_normal(f);
+    const Vec3 p = g.center(static_cast<int>(v % n), static_cast<int>((v / n) % n),
+                            static_cast<int>(v / (n * n))) +
+                   0.5 * g.voxel_size * nf;
+    const Vec3 d = -(nf + 0.8 * random_unit(rng)).normalized();
+    if (d.dot(nf) > -0.2) continue;
+    Probe probe;
+    probe.d = d;
+    probe.start = p - (rho + kStartGapM) * d;
+    if (signed_distance(tooth, probe.start, 2.0 * rho).phi < rho + 0.5 * kStartGapM) continue;
+    const Vec3 w = random_unit(rng);
+    probe.t = (w - w.dot(d) * d);
+    if (probe.t.norm() < 1e-6) continue;
+    probe.t.normalize();
+    out.push_back(probe);
+  }
+  return out;
+}
+
+struct ProbeOutcome {
+  bool popped = false;
+  double max_penetration = 0.0;  // [m]
+};
+
+ProbeOutcome run_probe(VoxelTooth& tooth, ContactModel model, const Probe& probe, double force,
+                       const ContactCrosscheckOptions& o) {
+  const double rho = o.tip_radius_m;
+  ToothContactProvider provider(tooth, ToolTip{rho, Vec3::Zero()}, o.k_tooth, 0.0, nullptr, model);
+  std::vector<Contact> contacts;
+  contacts.reserve(kContactCapacity);
+  Pose pose;
+  pose.x = probe.start;
+  ProbeOutcome out;
+  for (int tick = 0; tick < o.settle_ticks + o.slide_ticks; ++tick) {
+    provider.contacts(pose, contacts);
+    const Vec3 f = blended_contact_force(contacts);
+    const Vec3 y = model == ContactModel::kSurfaceProxy && provider.surface_proxy().valid()
+                       ? provider.surface_proxy().g()
+                       : pose.x;
+    const SignedDistance sd = signed_distance(tooth, y, 2.0 * rho);
+    out.max_penetration = std::max(out.max_penetration, rho - sd.phi);
+    if (sd.phi < 0.0 && -f.dot(probe.d) < 0.5 * force) out.popped = true;
+    Vec3 step = kAlpha * (force * probe.d + f) / o.k_tooth;
+    if (step.norm() > kMaxStepM) step *= kMaxStepM / step.norm();
+    if (tick >= o.settle_ticks) step += kSlideStepM * probe.t;
+    pose.x += step;
+  }
+  out.max_penetration = std::max(0.0, out.max_penetration);
+  return out;
+}
+
+// The voxelised sphere of radius 5 mm with voxel size h (centre test), on the smallest
+// power-of-two grid holding it with a 1 mm margin.
+VoxelTooth make_sphere(double h, Vec3* centre) {
+  int n = 16;
+  while (n * h < 2.0 * (kSphereRadiusM + 1e-3)) n *= 2;
+  VoxelGrid g(n, Vec3::Zero(), h);
+  *centre = Vec3::Constant(0.5 * n * h);
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        if ((g.center(i, j, k) - *centre).norm() < kSphereRadiusM) g.set(i, j, k, kEnamel);
+      }
+    }
+  }
+  return VoxelTooth(std::move(g));
+}
+
+double sliding_ripple(VoxelTooth& sphere, const Vec3& centre, ContactModel model, double force,
+                      const ContactCrosscheckOptions& o) {
+  const double rho = o.tip_radius_m;
+  ToothContactProvider provider(sphere, ToolTip{rho, Vec3::Zero()}, o.k_tooth, 0.0, nullptr, model);
+  std::vector<Contact> contacts;
+  contacts.reserve(kContactCapacity);
+  const double azimuth = 20.0 * std::numbers::pi / 180.0;
+  const double radius = kSphereRadiusM + rho - force / o.k_tooth;
+  double sum2 = 0.0;
+  for (int i = 0; i < kRippleTicks; ++i) {
+    const double polar = (80.0 * std::numbers::pi / 180.0) * i / (kRippleTicks - 1);
+    const Vec3 u(std::sin(polar) * std::cos(azimuth), std::sin(polar) * std::sin(azimuth),
+                 std::cos(polar));
+    Pose pose;
+    pose.x = centre + radius * u;
+    provider.contacts(pose, contacts);
+    const Vec3 f = blended_contact_force(contacts);
+    sum2 += (f - force * u).squaredNorm() / (force * force);
+  }
+  return std::sqrt(sum2 / kRippleTicks);
+}
+
+}  // namespace
+
+ContactCrosscheckResult crosscheck_contact(const ContactCrosscheckOptions& o) {
+  for (const int r : o.resolutions) {
+    if (r < 16 || r > 512 || (r & (r - 1)) != 0) {
+      throw InputError("--resolutions: " + std::to_string(r) +
+                       ", expected powers of two from 16 to 512");
+    }
+  }
+  for (const double f : o.forces_n) {
+    if (!(f > 0.0) || !std::isfinite(f)) {
+      throw InputError("--forces: " + std::to_string(f) + ", expected finite forces > 0 [N]");
+    }
+  }
+  if (o.probes < 1) throw InputError("--probes: expected at least 1");
+  if (o.models.empty()) throw InputError("--models: expected at least one of sdf, faces");
+  std::vector<ContactModel> models;
+  for (const std::string& m : o.models) models.push_back(parse_contact_model(m));
+  std::vector<std::string> meshes;
+  if (!o.data_dir.empty()) {
+    for (const char* file : {"molar-cc0.stl", "chai3d-tooth.obj"}) {
+      const std::string path = o.data_dir + "/" + file;
+      if (!std::filesystem::exists(path)) {
+        throw InputError("--data-dir: " + path +
+                         " not found (expected the meshes of "
+                         "../shared/data; --data-dir '' sweeps the procedural molar only)");
+      }
+      meshes.push_back(path);
+    }
+  }
+
+  ContactCrosscheckResult result;
+  result.options = o;
+  result.teeth.push_back("procedural molar");
+  for (const std::string& m : meshes) {
+    result.teeth.push_back(std::filesystem::path(m).filename().string());
+  }
+  const int teeth = static_cast<int>(result.teeth.size());
+  const int per_tooth = (o.probes + teeth - 1) / teeth;
+  for (const int res : o.resolutions) {
+    std::vector<ContactSweepRow> rows(models.size());
+    for (std::size_t m = 0; m < models.size(); ++m) {
+      rows[m].model = o.models[m];
+      rows[m].resolution = res;
+      rows[m].pop_throughs_per_force.assign(o.forces_n.size(), 0);
+    }
+    double h_molar = 0.0;
+    for (int t = 0; t < teeth; ++t) {
+      VoxelTooth tooth = t == 0 ? VoxelTooth(voxelize_procedural_molar(MolarParams{}, res))
+                                : build_mesh_tooth(meshes[t - 1], o.mesh_size_mm, res);
+      if (t == 0) h_molar = tooth.grid().voxel_size;
+      std::mt19937_64 rng(o.seed + 1000003ULL * static_cast<std::uint64_t>(res) +
+                          static_cast<std::uint64_t>(t));
+      const std::vector<Probe> probes = draw_probes(tooth, per_tooth, o.tip_radius_m, rng);
+      for (std::size_t m = 0; m < models.size(); ++m) {
+        ContactSweepRow& row = rows[m];
+        row.probes += static_cast<long>(probes.size());
+        for (const Probe& probe : probes) {
+          for (std::size_t fi = 0; fi < o.forces_n.size(); ++fi) {
+            const ProbeOutcome out = run_probe(tooth, models[m], probe, o.forces_n[fi], o);
+            ++row.runs;
+            if (out.popped) {
+              ++row.pop_throughs;
+              ++row.pop_throughs_per_force[fi];
+            }
+            row.max_penetration_over_radius =
+                std::max(row.max_penetration_over_radius, out.max_penetration / o.tip_radius_m);
+            row.max_penetration_over_voxel = std::max(
+                row.max_penetration_over_voxel, out.max_penetration / tooth.grid().voxel_size);
+          }
+        }
+      }
+    }
+    Vec3 centre;
+    VoxelTooth sphere = make_sphere(h_molar, &centre);
+    for (std::size_t m = 0; m < models.size(); ++m) {
+      rows[m].voxel_size_m = h_molar;
+      for (const double f : o.forces_n) {
+        rows[m].ripple_per_force.push_back(sliding_ripple(sphere, centre, models[m], f, o));
+      }
+      rows[m].sliding_ripple_rms =
+          *std::max_element(rows[m].ripple_per_force.begin(), rows[m].ripple_per_force.end());
+      result.rows.push_back(rows[m]);
+    }
+  }
+  return result;
+}
+
+nlohmann::json crosscheck_contact_json(const ContactCrosscheckResult& r) {
+  const ContactCrosscheckOptions& o = r.options;
+  nlohmann::json rows = nlohmann::json::array();
+  long default_pops = 0;
+  for (const ContactSweepRow& row : r.rows) {
+    if (row.model == "sdf") default_pops += row.pop_throughs;
+    nlohmann::json per_force = nlohmann::json::array();
+    for (std::size_t i = 0; i < o.forces_n.size(); ++i) {
+      per_force.push_back({{"force_n", o.forces_n[i]},
+                           {"pop_throughs", row.pop_throughs_per_force[i]},
+                           {"sliding_ripple_rms", row.ripple_per_force[i]}});
+    }
+    rows.push_back({{"model", row.model},
+                    {"resolution", row.resolution},
+                    {"voxel_size_mm", 1e3 * row.voxel_size_m},
+                    {"probes", row.probes},
+                    {"runs", row.runs},
+                    {"pop_throughs", row.pop_throughs},
+                    {"max_penetration_over_radius", row.max_penetration_over_radius},
+                    {"max_penetration_over_voxel", row.max_penetration_over_voxel},
+                    {"sliding_ripple_rms", row.sliding_ripple_rms},
+                    {"per_force", per_force}});
+  }
+  return {{"teeth", r.teeth},
+          {"resolutions", o.resolutions},
+          {"forces_n", o.forces_n},
+          {"models", o.models},
+          {"tip_radius_mm", 1e3 * o.tip_radius_m},
+          {"k_tooth_n_per_m", o.k_tooth},
+          {"mesh_size_mm", o.mesh_size_mm},
+          {"settle_ticks", o.settle_ticks},
+          {"slide_ticks", o.slide_ticks},
+          {"seed", o.seed},
+          {"default_model", "sdf"},
+          {"default_model_pop_throughs", default_pops},
+          {"rows", rows}};
+}
+
+}  // namespace dentsim
