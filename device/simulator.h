@@ -34,6 +34,7 @@
 #include <vector>
 
 #include "device/scene.h"
+#include "device/tick_observer.h"
 #include "reference/tooth/voxel_grid.h"
 
 namespace dentsim {
@@ -44,6 +45,9 @@ struct RunOptions {
   int log_every = 1;               // keep every n-th tick in the time series
   // Called every ~1 % of the run with the fraction done (progress bar).
   std::function<void(double)> progress;
+  // Called once per tick at the end of the loop body, on the loop's thread (device/tick_observer.h;
+  // the live view). Not owned; null: none.
+  TickObserver* observer = nullptr;
 };
 
 // One row of the time series.

@@ -7,6 +7,9 @@ PACKAGES=(
   build-essential cmake ccache pkg-config
   libmujoco-dev libqhull-dev libeigen3-dev libceres-dev libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev libfmt-dev libpng-dev libcairo2-dev
+  # the 3-D view (view/, issue #19): OpenGL 3.3 through GLVND, EGL (headless, Mesa's surfaceless
+  # platform), GLFW (the window), Xvfb (the viewer's test under a virtual display)
+  libgl-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libglfw3-dev xvfb xauth
 )
 
 missing=()
