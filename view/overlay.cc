@@ -14,7 +14,7 @@ std::vector<std::string> overlay_lines(const std::string& method, const TickSnap
   out.emplace_back(buf);
   std::snprintf(buf, sizeof buf, "tick time median %.1f us, p99 %.1f us", median_us, p99_us);
   out.emplace_back(buf);
-  std::snprintf(buf, sizeof buf, "force on device %.2f N, on proxy %.2f N (%d contacts)",
+  std::snprintf(buf, sizeof buf, "force: on device %.2f N, on proxy %.2f N, %d contacts",
                 s.device_force_n.norm(), s.contact_force_n.norm(), s.contacts);
   out.emplace_back(buf);
   std::snprintf(buf, sizeof buf, "removed mm^3: enamel %.4f  dentin %.4f  pulp %.4f",

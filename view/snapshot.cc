@@ -29,6 +29,8 @@ void SnapshotChannel::on_tick(const TickSnapshotView& v) {
   s.tick_us = v.tick_us;
   s.removed_volume_mm3 = v.removed_volume_mm3;
   s.faults = v.faults;
+  if (v.tick == 0) device_R0_ = v.device.R;
+  s.device_R0 = device_R0_;
   back_ = middle_.exchange(static_cast<std::uint8_t>(back_ | kFresh), std::memory_order_acq_rel) &
           static_cast<std::uint8_t>(~kFresh);
 

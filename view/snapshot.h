@@ -44,6 +44,7 @@ struct TickSnapshot {
   double tick_us = 0.0;
   std::array<double, 4> removed_volume_mm3{};
   std::uint32_t faults = 0;
+  Mat3 device_R0 = Mat3::Identity();  // R1 at tick 0 (the home pose), for drawing the shank
 };
 
 class SnapshotChannel : public TickObserver {
@@ -87,7 +88,8 @@ class SnapshotChannel : public TickObserver {
   std::vector<std::uint32_t> seen_generation_;  // reader's
   std::atomic<bool> tooth_ready_{false};
   std::atomic<bool> mismatch_{false};
-  Vec3 origin_ = Vec3::Zero();  // written before tooth_ready_ (release)
+  Mat3 device_R0_ = Mat3::Identity();  // writer's, set at tick 0
+  Vec3 origin_ = Vec3::Zero();         // written before tooth_ready_ (release)
   double h_ = 0.0;
   bool reader_has_tooth_ = false;
 

@@ -37,7 +37,7 @@ struct ViewOptions {
 std::vector<std::string> overlay_lines(const std::string& method, const TickSnapshot& s,
                                        double median_us, double p99_us);
 // The overlay occupies this rectangle at the top-left corner of the picture [pixels].
-inline constexpr int kOverlayWidth = 400, kOverlayHeight = 150;
+inline constexpr int kOverlayWidth = 460, kOverlayHeight = 140;
 
 // Whether this build has the headless renderer (EGL) / the window (GLFW); if not, *why says what
 // is missing.

@@ -339,14 +339,17 @@ void GlRenderer::draw(const OrbitCamera& camera, const TickSnapshot* tick,
   if (tick != nullptr && tick->tick >= 0) {
     const float rho = static_cast<float>(tick->tool_radius_m);
     const Eigen::Vector3f x1 = tick->device.x.cast<float>(), x2 = tick->proxy.x.cast<float>();
-    const Eigen::Vector3f axis = tick->device.R.col(2).cast<float>().normalized();
+    // The shank: vertical at the home pose, turning with the device from there (the Phantom
+    // stylus's own axis R1 e_z points sideways at home, through the tooth in the scenes).
+    const Eigen::Vector3f axis =
+        (tick->device.R * tick->device_R0.transpose() * Vec3::UnitZ()).cast<float>().normalized();
     auto solid = [&](const GlMesh& mesh, const Eigen::Matrix4f& model, const float* rgb) {
       glUniformMatrix4fv(u_model, 1, GL_FALSE, model.data());
       glUniform1i(u_use, 1);
       glUniform4f(u_color, rgb[0], rgb[1], rgb[2], 1.0f);
       mesh.draw();
     };
-    // The device's tool: the tip sphere and a shaft along the tool's body z axis.
+    // The device's tool: the tip sphere and its shank.
     solid(d.sphere, sphere_at(x1, rho), kToolRgb);
     solid(d.cylinder, along(x1, axis, 0.45f * rho, kShaftLength), kToolRgb);
     // The force on the proxy from the tooth.
@@ -384,13 +387,13 @@ void GlRenderer::draw(const OrbitCamera& camera, const TickSnapshot* tick,
     cairo_paint(cr);
     cairo_select_font_face(cr, "DejaVu Sans Mono", CAIRO_FONT_SLANT_NORMAL,
                            CAIRO_FONT_WEIGHT_NORMAL);
-    cairo_set_font_size(cr, 12.5);
+    cairo_set_font_size(cr, 12.0);
     cairo_set_source_rgba(cr, 0.1, 0.1, 0.12, 1.0);
     double y = 22.0;
     for (const std::string& line : overlay) {
       cairo_move_to(cr, 10.0, y);
       cairo_show_text(cr, line.c_str());
-      y += 24.0;
+      y += 25.0;
     }
     cairo_destroy(cr);
     cairo_surface_flush(surf);

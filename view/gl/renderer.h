@@ -5,8 +5,9 @@
 //   c = albedo (0.30 + 0.70 max(0, n.l)) + 0.15 max(0, n.h)^32
 // albedo per material from reference/tooth/materials.cc (enamel ivory, dentin yellow, pulp red).
 // The proxy is drawn last, translucent (alpha 0.35, no depth writes), and only when it is more than
-// 0.02 mm from the device's tool. The force arrow starts at the proxy's tip centre, points along
-// the force on the proxy from the tooth, 2 mm per N, at most 10 mm.
+// 0.02 mm from the device's tool. The tool's shank is drawn vertical at the home pose and turns
+// with the device from there. The force arrow starts at the proxy's tip centre, points along the
+// force on the proxy from the tooth, 2 mm per N, at most 10 mm.
 #pragma once
 
 #include <cstdint>
