@@ -24,7 +24,8 @@ struct RenderCliOptions {
   int width = 960, height = 720;
   bool cutaway = false;
   bool no_overlay = false;
-  float azimuth = 45.0f, elevation = 35.0f, zoom = 1.0f;
+  float azimuth = 45.0f, elevation = 55.0f, zoom = 1.0f;
+  bool focus_tool = false;
 };
 
 void render(const RenderCliOptions& o) {
@@ -64,6 +65,7 @@ void render(const RenderCliOptions& o) {
   vo.azimuth_deg = o.azimuth;
   vo.elevation_deg = o.elevation;
   vo.zoom = o.zoom;
+  vo.focus_tool = o.focus_tool;
   vo.method = method_name(scene.method.method);
   write_png(o.png, view::render_offscreen(tooth, &tick, vo, median, p99));
   std::printf("render: scene %s at t = %.3f s (%ld ticks, removed %.4f mm^3): wrote %s\n",
@@ -86,6 +88,7 @@ void setup_render(CLI::App& app) {
   sub->add_option("--azimuth", o->azimuth, "Camera azimuth [deg]")->capture_default_str();
   sub->add_option("--elevation", o->elevation, "Camera elevation [deg]")->capture_default_str();
   sub->add_option("--zoom", o->zoom, "Zoom factor (> 1: closer)")->capture_default_str();
+  sub->add_flag("--focus-tool", o->focus_tool, "Aim the camera at the tool instead of the tooth");
   sub->callback([o] { render(*o); });
 }
 DENTSIM_REGISTER_COMMAND(setup_render);

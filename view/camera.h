@@ -14,7 +14,7 @@ struct OrbitCamera {
   Eigen::Vector3f target = Eigen::Vector3f::Zero();  // orbit centre [m]
   float distance = 0.05f;                            // eye to target [m]
   float azimuth_deg = 45.0f;
-  float elevation_deg = 35.0f;
+  float elevation_deg = 55.0f;
   float fov_y_deg = 30.0f;
 
   Eigen::Vector3f eye() const;

@@ -28,9 +28,10 @@ struct ViewOptions {
   bool cutaway = false;           // remove the +x +y quarter (surface_mesh.h CutAway)
   bool overlay = true;            // draw the text overlay
   bool tool = true;               // draw the tool, proxy and force arrow (needs a snapshot)
-  float azimuth_deg = 45.0f, elevation_deg = 35.0f;  // camera (camera.h)
+  float azimuth_deg = 45.0f, elevation_deg = 55.0f;  // camera (camera.h)
   float zoom = 1.0f;                                 // > 1: closer
-  std::string method;                                // shown in the overlay
+  bool focus_tool = false;  // aim the camera at the proxy's tip instead of the tooth's centre
+  std::string method;       // shown in the overlay
 };
 
 // The overlay's text lines for one tick (GL-free, so it is tested on its own).
@@ -63,8 +64,8 @@ struct ViewerOptions {
 // Opens the window and draws at the display's rate (vsync) until the user closes it (Esc, Q or
 // the window's close button) or, with close_when_done, until `run_done` is set. Must be called on
 // the main thread. Keys: C cut-away, P freeze the picture (the simulation goes on), S screenshot,
-// R reset the camera; left drag orbits, wheel zooms. Throws InputError if there is no display or
-// no GLFW in this build.
+// F aim at the tool (toggle), R reset the camera; left drag orbits, wheel zooms. Throws InputError
+// if there is no display or no GLFW in this build.
 void run_viewer(SnapshotChannel& channel, const std::atomic<bool>& run_done,
                 const ViewerOptions& options);
 

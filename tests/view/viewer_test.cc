@@ -176,7 +176,7 @@ TEST(ViewerXvfb, WindowShowsTheDrillingAndMatchesTheHeadlessRender) {
   EXPECT_GT(static_cast<double>(covered) / want, 0.93);
   // Outside the tooth only the tool's tip and shank (8 mm x 0.45 mm: ~1 % of the tooth's area).
   EXPECT_LT(static_cast<double>(drawn_outside) / drawn, 0.03);
-  // The crown is enamel; it is most of what the camera sees from 35 degrees up.
+  // The crown is enamel; it is most of what the camera sees from 55 degrees up.
   EXPECT_GT(static_cast<double>(enamel) / tooth_pixels, 0.4);
 
   // Drilling changed the tooth: pixels that are tooth-coloured in both frames with a different

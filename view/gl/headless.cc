@@ -99,9 +99,13 @@ RgbImage render_offscreen(const VoxelGrid& tooth, const TickSnapshot* tick,
   {
     const Framebuffer fb(options.width, options.height);
     GlRenderer renderer;
-    const SurfaceMesher mesher(tooth, 16, options.cutaway ? centre_cut(tooth) : CutAway{});
+    const SurfaceMesher mesher(tooth, SurfaceMesher::kDefaultBlockSize,
+                               options.cutaway ? centre_cut(tooth) : CutAway{});
     renderer.sync(mesher);
-    const OrbitCamera cam = camera_for(tooth, options);
+    OrbitCamera cam = camera_for(tooth, options);
+    if (options.focus_tool && tick != nullptr && tick->tick >= 0) {
+      cam.target = tick->proxy.x.cast<float>();
+    }
     std::vector<std::string> lines;
     if (options.overlay && tick != nullptr) {
       lines = overlay_lines(options.method, *tick, median_us, p99_us);

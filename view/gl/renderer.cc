@@ -228,8 +228,8 @@ constexpr float kToolRgb[3] = {0.55f, 0.58f, 0.63f};
 constexpr float kProxyRgba[4] = {0.25f, 0.55f, 0.95f, 0.35f};
 constexpr float kArrowRgb[3] = {0.85f, 0.15f, 0.75f};
 constexpr float kShaftLength = 0.008f;    // drawn length of the tool's shaft [m]
-constexpr float kArrowMPerN = 0.002f;     // arrow length per newton [m/N]
-constexpr float kArrowMaxM = 0.010f;      // longest arrow [m]
+constexpr float kArrowMPerN = 0.010f;     // arrow length per newton [m/N]
+constexpr float kArrowMaxM = 0.008f;      // longest arrow [m]
 constexpr float kProxyGhostMinM = 2e-5f;  // draw the proxy when it is farther than this [m]
 
 }  // namespace
@@ -359,8 +359,11 @@ void GlRenderer::draw(const OrbitCamera& camera, const TickSnapshot* tick,
       const float len = std::min(kArrowMaxM, kArrowMPerN * fn);
       const Eigen::Vector3f dir = f / fn;
       const float head = std::min(0.4f * len, 2.5f * rho);
-      solid(d.cylinder, along(x2, dir, 0.18f * rho, len - head), kArrowRgb);
-      solid(d.cone, along(x2 + (len - head) * dir, dir, 0.5f * rho, head), kArrowRgb);
+      // Drawn over everything (it runs along the shank and out of the cavity).
+      glDisable(GL_DEPTH_TEST);
+      solid(d.cylinder, along(x2, dir, 0.25f * rho, len - head), kArrowRgb);
+      solid(d.cone, along(x2 + (len - head) * dir, dir, 0.7f * rho, head), kArrowRgb);
+      glEnable(GL_DEPTH_TEST);
     }
     if ((x2 - x1).norm() > kProxyGhostMinM) {
       glEnable(GL_BLEND);

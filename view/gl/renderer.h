@@ -7,7 +7,8 @@
 // The proxy is drawn last, translucent (alpha 0.35, no depth writes), and only when it is more than
 // 0.02 mm from the device's tool. The tool's shank is drawn vertical at the home pose and turns
 // with the device from there. The force arrow starts at the proxy's tip centre, points along the
-// force on the proxy from the tooth, 2 mm per N, at most 10 mm.
+// force on the proxy from the tooth, 10 mm per N, at most 8 mm, drawn over the scene (it runs
+// along the shank, out of the cavity).
 #pragma once
 
 #include <cstdint>

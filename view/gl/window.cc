@@ -23,6 +23,7 @@ struct WindowState {
   bool have_camera = false;
   bool cut = false, cut_changed = false;
   bool frozen = false;
+  bool follow = false;
   bool screenshot = false;
   bool dragging = false;
   double last_x = 0.0, last_y = 0.0;
@@ -48,6 +49,9 @@ void on_key(GLFWwindow* w, int key, int, int action, int) {
       break;
     case GLFW_KEY_R:
       s->camera = s->home;
+      break;
+    case GLFW_KEY_F:
+      s->follow = !s->follow;
       break;
     default:
       break;
@@ -112,6 +116,7 @@ void run_viewer(SnapshotChannel& channel, const std::atomic<bool>& run_done,
   glfwSwapInterval(1);
   WindowState state;
   state.cut = options.view.cutaway;
+  state.follow = options.view.focus_tool;
   glfwSetWindowUserPointer(window, &state);
   glfwSetKeyCallback(window, on_key);
   glfwSetMouseButtonCallback(window, on_button);
@@ -139,7 +144,8 @@ void run_viewer(SnapshotChannel& channel, const std::atomic<bool>& run_done,
         channel.latest(&tick);
         if (channel.sync_tooth(&grid, &changed)) {
           if (!mesher) {
-            mesher.emplace(grid, 16, state.cut ? centre_cut(grid) : CutAway{});
+            mesher.emplace(grid, SurfaceMesher::kDefaultBlockSize,
+                           state.cut ? centre_cut(grid) : CutAway{});
             state.camera = state.home = camera_for(grid, options.view);
             state.have_camera = true;
           } else if (!changed.empty()) {
@@ -150,6 +156,10 @@ void run_viewer(SnapshotChannel& channel, const std::atomic<bool>& run_done,
       if (mesher && state.cut_changed) {
         mesher->set_cut(state.cut ? centre_cut(mesher->grid()) : CutAway{});
         state.cut_changed = false;
+      }
+      if (mesher) {
+        state.camera.target =
+            state.follow && tick.tick >= 0 ? tick.proxy.x.cast<float>() : state.home.target;
       }
       int w = 0, h = 0;
       glfwGetFramebufferSize(window, &w, &h);
