@@ -17,7 +17,7 @@ namespace dentsim::cli {
 RunResult run_scene_with_view(const Scene& scene, RunOptions options, const RunViewOptions& v) {
   if (!v.view) return run_scene(scene, options);
   std::string why;
-  if (!view::window_available(&why)) throw InputError(why);
+  if (!view::window_available(&why)) throw InputError("--view: " + why);
   const char* display = std::getenv("DISPLAY");
   const char* wayland = std::getenv("WAYLAND_DISPLAY");
   if ((display == nullptr || *display == '\0') && (wayland == nullptr || *wayland == '\0')) {
