@@ -1,4 +1,5 @@
-// The live window (view/view.h run_viewer): GLFW 3, OpenGL 3.3 core, vsync (the display's rate).
+// The live window (view/view.h run_viewer): GLFW 3, OpenGL 3.3 core, vsync (the display's rate,
+// at most 60 frames per second where the swap does not wait).
 // Each frame: take the newest tick snapshot and the tooth's changed blocks from the
 // SnapshotChannel (lock-free, view/snapshot.h), re-mesh only the affected surface blocks
 // (view/surface_mesh.h), upload them, draw (view/gl/renderer.h). The servo loop never waits for
@@ -6,9 +7,11 @@
 #include <GLFW/glfw3.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <memory>
 #include <optional>
+#include <thread>
 
 #include "reference/core/io.h"
 #include "view/gl/gl.h"
@@ -131,6 +134,7 @@ void run_viewer(SnapshotChannel& channel, const std::atomic<bool>& run_done,
     TickSnapshot tick;
     int shot = 0;
     bool wrote_first = false, wrote_last = false;
+    auto next_frame = std::chrono::steady_clock::now();
     auto save = [&](const std::string& name, int w, int h) {
       if (!options.save_png) return;
       const std::string path = options.screenshot_dir + "/" + name;
@@ -186,6 +190,16 @@ void run_viewer(SnapshotChannel& channel, const std::atomic<bool>& run_done,
         wrote_last = true;
       }
       glfwSwapBuffers(window);
+      // At most 60 frames per second where the swap does not wait for a vertical blank (Xvfb,
+      // drivers that ignore the swap interval): the renderer must not take the cores the servo
+      // loop runs on.
+      next_frame += std::chrono::microseconds(16667);
+      const auto now = std::chrono::steady_clock::now();
+      if (next_frame > now) {
+        std::this_thread::sleep_until(next_frame);
+      } else {
+        next_frame = now;
+      }
       if (done && options.close_when_done && (wrote_last || !options.capture_first_last)) break;
     }
   }
