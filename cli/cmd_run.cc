@@ -12,6 +12,7 @@
 #include "cli/png_writer.h"
 #include "cli/progress.h"
 #include "cli/registry.h"
+#include "cli/run_view.h"
 #include "device/fault_injection.h"
 #include "device/scene.h"
 #include "device/simulator.h"
@@ -31,6 +32,7 @@ struct RunCliOptions {
   bool list = false;
   bool show = false;
   int log_every = 1;
+  RunViewOptions view;
   std::string pipeline = "reference";
   std::string inject_fault;
 };
@@ -220,18 +222,14 @@ void run(const RunCliOptions& o) {
   ro.duration_override = o.duration;
   ro.log_every = o.log_every;
   ro.progress = [&bar](double f) { bar.update(f); };
-  const RunResult r = run_scene(scene, ro);
+  const RunResult r = run_scene_with_view(scene, ro, o.view);
   bar.finish();
 
   const nlohmann::json report = report_json(scene, r);
   write_json(o.out + "/report.json", report);
   write_file_atomic(o.out + "/timeseries.csv", csv_of(r));
   write_plots(r, o.out);
-  // Seen from above the occlusal surface, where the tool works.
-  RenderOptions view;
-  view.elevation_deg = 55.0;
-  write_png(o.out + "/tooth_before.png", render_voxels(r.tooth_before, view));
-  write_png(o.out + "/tooth_after.png", render_voxels(r.tooth_after, view));
+  write_tooth_pictures(r, o.out);
 
   std::printf("scene %s: %ld ticks (%ld in contact), %.2f s simulated in %.2f s\n",
               scene.name.c_str(), r.ticks, r.contact_ticks, r.simulated_s, r.wall_s);
@@ -274,6 +272,11 @@ void setup_run(CLI::App& app) {
                   "inf-sample@T (qd[0] infinite); the run must end in a named fault with zero "
                   "torque and its report written");
   sub->add_flag("--list", o->list, "List the built-in scenes");
+  sub->add_flag("--view", o->view.view,
+                "Show the simulation live in a 3-D window, paced at real time (docs/view.md)");
+  sub->add_flag("--view-close", o->view.close, "Close the window when the run ends");
+  sub->add_option("--view-shots", o->view.shots_dir,
+                  "With --view: write DIR/first.png and DIR/last.png of the window, then close it");
   sub->add_flag("--show", o->show, "Print the scene file (e.g. to start a new scene from a built-in one)");
   sub->callback([o] { run(*o); });
 }

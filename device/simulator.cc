@@ -302,6 +302,26 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       }
       res.series.push_back(std::move(smp));
     }
+    if (options.observer != nullptr) {
+      TickSnapshotView view;
+      view.tick = k;
+      view.t = t;
+      view.device = r.device;
+      view.proxy = pipeline.proxy().pose;
+      view.tool_radius_m = tip.radius;
+      view.contact_force_n = r.F_contact.head<3>();
+      view.device_force_n = r.T1.head<3>();
+      view.contacts = static_cast<int>(r.contacts.size());
+      view.max_depth_m = r.max_depth;
+      view.tick_us = 1e-3 * tick_ns;
+      for (int m = 1; m < kMaterialCount && contacts.drills(); ++m) {
+        view.removed_volume_mm3[m] = contacts.drill_state().removed_volume_m3(m) * 1e9;
+      }
+      view.faults = device.faults();
+      view.tooth = &tooth.grid();
+      view.touched_voxels = contacts.contact_voxels();
+      options.observer->on_tick(view);
+    }
     if (device.faults() != kFaultNone) {
       res.faults.push_back(fault_string(device.faults()) + " at t = " + std::to_string(t) + " s");
       break;

@@ -40,6 +40,7 @@
 #include "device/scene.h"
 #include "device/scripted_hand.h"
 #include "device/simulated_phantom.h"
+#include "device/tick_observer.h"
 #include "fast/tooth/tooth_contacts.h"
 #include "reference/grasp_mass_model.h"
 #include "reference/phantom/phantom_model.h"
@@ -57,6 +58,9 @@ struct RunOptions {
   int log_every = 1;               // keep every n-th tick in the time series
   // Called every ~1 % of the run with the fraction done (progress bar).
   std::function<void(double)> progress;
+  // Called once per tick at the end of the loop body, on the loop's thread (device/tick_observer.h;
+  // the live view). Not owned; null: none.
+  TickObserver* observer = nullptr;
 };
 
 // One row of the time series.

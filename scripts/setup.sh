@@ -11,6 +11,9 @@ PACKAGES=(
   libopenvdb-dev libboost-dev liboctomap-dev
   clang libclang-rt-14-dev  # the fuzz flavour: clang with libFuzzer (scripts/build.sh fuzz)
   libgdcm-dev libnifti2-dev libteem-dev
+  # the 3-D view (view/, issue #19): OpenGL 3.3 through GLVND, EGL (headless, Mesa's surfaceless
+  # platform), GLFW (the window), Xvfb (the viewer's test under a virtual display)
+  libgl-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libglfw3-dev xvfb xauth
 )
 
 missing=()

@@ -1,0 +1,202 @@
+// Tests of view/surface_mesh.h: the surface is closed and oriented outwards, encloses the solid's
+// volume, shows the inner layers when cut away, and an incremental update re-meshes exactly the
+// blocks within the halo of the changed voxels and equals a full re-mesh bit for bit.
+#include "view/surface_mesh.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <array>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <set>
+#include <tuple>
+
+#include "reference/tooth/procedural_molar.h"
+
+namespace dentsim::view {
+namespace {
+
+// A ball of radius r voxels centred in an n^3 grid of 0.1 mm voxels, enamel.
+VoxelGrid ball_grid(int n, double r) {
+  VoxelGrid g(n, Vec3(0.01, -0.02, 0.03), 1e-4);
+  const double c = 0.5 * n;
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        const double d = std::hypot(i + 0.5 - c, j + 0.5 - c, k + 0.5 - c);
+        if (d <= r) g.set(i, j, k, kEnamel);
+      }
+    }
+  }
+  return g;
+}
+
+using Key = std::array<float, 3>;
+Key key(const MeshVertex& v) { return {v.p[0], v.p[1], v.p[2]}; }
+
+struct MeshStats {
+  long triangles = 0;
+  long edges_not_twice = 0;       // undirected edges not used by exactly two triangles
+  long edges_same_direction = 0;  // directed edges used twice (inconsistent orientation)
+  double volume = 0.0;            // divergence theorem, sum of signed tetrahedra [m^3]
+  long normals_inward = 0;        // vertices whose normal points towards `centre`
+};
+
+MeshStats stats(const SurfaceMesher& m, const Vec3& centre) {
+  MeshStats s;
+  std::map<std::pair<Key, Key>, int> directed;
+  for (const BlockMesh& b : m.blocks()) {
+    for (std::size_t t = 0; t + 2 < b.indices.size(); t += 3) {
+      ++s.triangles;
+      const MeshVertex* v[3] = {&b.vertices[b.indices[t]], &b.vertices[b.indices[t + 1]],
+                                &b.vertices[b.indices[t + 2]]};
+      Vec3 p[3];
+      for (int a = 0; a < 3; ++a) p[a] = Vec3(v[a]->p[0], v[a]->p[1], v[a]->p[2]) - centre;
+      s.volume += p[0].dot(p[1].cross(p[2])) / 6.0;
+      for (int a = 0; a < 3; ++a) ++directed[{key(*v[a]), key(*v[(a + 1) % 3])}];
+    }
+    for (const MeshVertex& v : b.vertices) {
+      const Vec3 p = Vec3(v.p[0], v.p[1], v.p[2]) - centre;
+      if (p.dot(Vec3(v.n[0], v.n[1], v.n[2])) < 0.0) ++s.normals_inward;
+    }
+  }
+  for (const auto& [e, count] : directed) {
+    if (e.first == e.second) continue;  // degenerate (collapsed) edge
+    if (count > 1) ++s.edges_same_direction;
+    const auto it = directed.find({e.second, e.first});
+    if (it == directed.end() || it->second != count) ++s.edges_not_twice;
+  }
+  return s;
+}
+
+TEST(SurfaceMesh, BallIsClosedOutwardAndEnclosesItsVolume) {
+  const int n = 32;
+  const double r = 10.0;
+  const VoxelGrid g = ball_grid(n, r);
+  const SurfaceMesher m(g, 8);
+  const Vec3 centre = g.origin + Vec3::Constant(0.5 * n * g.voxel_size);
+  const MeshStats s = stats(m, centre);
+  ASSERT_GT(s.triangles, 1000);
+  // Closed and consistently oriented: every edge has exactly one opposite twin.
+  EXPECT_EQ(s.edges_not_twice, 0);
+  EXPECT_EQ(s.edges_same_direction, 0);
+  EXPECT_EQ(s.normals_inward, 0);
+  // Volume: the smoothed field's 1/2 level set lies within a quarter voxel of the voxel boundary
+  // (the (1,2,1)/4 blur of a step crosses 1/2 at the step; curvature and the mean of the edge
+  // crossings move it less than that), so |V_mesh - V_ball| / V_ball <= 3 (0.25 / r) = 7.5 %;
+  // the blur shrinks convex shapes, so the mesh is below the voxels. Measured: -1.8 % vs the ball.
+  double voxels = 0;
+  for (std::uint8_t v : g.voxels) voxels += v != 0;
+  const double v_vox = voxels * g.voxel_volume();
+  const double v_ball = 4.0 / 3.0 * std::numbers::pi * std::pow(r * g.voxel_size, 3);
+  std::printf("mesh volume %.4g, voxels %.4g, ball %.4g m^3\n", s.volume, v_vox, v_ball);
+  EXPECT_GT(s.volume, 0.0);
+  EXPECT_NEAR(s.volume / v_ball, 1.0, 0.75 / r);
+  EXPECT_LT(s.volume, v_vox);
+}
+
+TEST(SurfaceMesh, DrilledRegionRemeshesOnlyItsBlocksAndEqualsAFullRemesh) {
+  VoxelGrid g = voxelize_procedural_molar(MolarParams{}, 64);
+  SurfaceMesher inc(g, 8);
+  const int nb = inc.blocks_per_axis();
+  ASSERT_EQ(nb, 8);
+  std::vector<std::uint64_t> version_before;
+  for (const BlockMesh& b : inc.blocks()) version_before.push_back(b.version);
+
+  // Drill a ball of radius 3 voxels into the top of the crown near the centre column.
+  int top = -1;
+  for (int k = 0; k < g.n; ++k) {
+    if (g.solid(32, 32, k)) top = k;
+  }
+  ASSERT_GT(top, 3);
+  std::vector<std::size_t> changed;
+  std::set<int> expected;
+  for (int k = top - 3; k <= top + 3; ++k) {
+    for (int j = 29; j <= 35; ++j) {
+      for (int i = 29; i <= 35; ++i) {
+        if (std::hypot(i - 32, j - 32, k - top) > 3.0 || !g.solid(i, j, k)) continue;
+        g.set(i, j, k, kEmpty);
+        changed.push_back(g.index(i, j, k));
+        // Blocks within +-2 voxels (the halo) of the changed voxel, computed here independently.
+        for (int dz = -2; dz <= 2; ++dz) {
+          for (int dy = -2; dy <= 2; ++dy) {
+            for (int dx = -2; dx <= 2; ++dx) {
+              const int a = i + dx, b = j + dy, c = k + dz;
+              if (!g.inside(a, b, c)) continue;
+              expected.insert(a / 8 + nb * (b / 8 + nb * (c / 8)));
+            }
+          }
+        }
+      }
+    }
+  }
+  ASSERT_GT(changed.size(), 40u);
+  const std::vector<int> remeshed = inc.update(g, changed);
+  EXPECT_EQ(std::set<int>(remeshed.begin(), remeshed.end()), expected);
+  EXPECT_LE(remeshed.size(), 8u) << "a 7-voxel ball touches at most 2 blocks per axis";
+  for (int b = 0; b < nb * nb * nb; ++b) {
+    const bool was_remeshed = expected.count(b) != 0;
+    EXPECT_EQ(inc.blocks()[b].version != version_before[b], was_remeshed) << "block " << b;
+  }
+
+  const SurfaceMesher full(g, 8);
+  ASSERT_EQ(full.blocks().size(), inc.blocks().size());
+  bool any_changed = false;
+  for (std::size_t b = 0; b < full.blocks().size(); ++b) {
+    const BlockMesh& x = full.blocks()[b];
+    const BlockMesh& y = inc.blocks()[b];
+    ASSERT_EQ(x.indices, y.indices) << "block " << b;
+    ASSERT_EQ(x.vertices.size(), y.vertices.size()) << "block " << b;
+    for (std::size_t v = 0; v < x.vertices.size(); ++v) {
+      for (int a = 0; a < 3; ++a) {
+        ASSERT_EQ(x.vertices[v].p[a], y.vertices[v].p[a]);
+        ASSERT_EQ(x.vertices[v].n[a], y.vertices[v].n[a]);
+      }
+      ASSERT_EQ(x.vertices[v].material, y.vertices[v].material);
+    }
+  }
+  // The drilled surface is new geometry: the re-meshed blocks differ from before the drilling.
+  const SurfaceMesher before(voxelize_procedural_molar(MolarParams{}, 64), 8);
+  for (int b : remeshed)
+    any_changed =
+        any_changed || before.blocks()[b].vertices.size() != inc.blocks()[b].vertices.size();
+  EXPECT_TRUE(any_changed);
+}
+
+TEST(SurfaceMesh, CutAwayShowsTheInnerLayers) {
+  const VoxelGrid g = voxelize_procedural_molar(MolarParams{}, 64);
+  SurfaceMesher m(g, 16);
+  std::array<long, kMaterialCount> whole{};
+  for (const BlockMesh& b : m.blocks()) {
+    for (const MeshVertex& v : b.vertices) ++whole[static_cast<int>(v.material)];
+  }
+  // The outside of the tooth is enamel (crown) and dentin (roots); the pulp is enclosed.
+  EXPECT_GT(whole[kEnamel], 0);
+  EXPECT_GT(whole[kDentin], 0);
+  EXPECT_EQ(whole[kPulp], 0);
+  EXPECT_EQ(whole[kEmpty], 0);
+
+  const CutAway cut = centre_cut(g);
+  ASSERT_TRUE(cut.enabled);
+  m.set_cut(cut);
+  // The cut face x = x_cut facing the removed quarter (y > y_cut): vertices within one voxel of
+  // the plane with a normal along +x. It crosses the pulp chamber: all three layers show on it.
+  const double h = g.voxel_size;
+  const double x_cut = g.origin.x() + h * cut.i, y_cut = g.origin.y() + h * cut.j;
+  std::array<long, kMaterialCount> face{};
+  for (const BlockMesh& b : m.blocks()) {
+    for (const MeshVertex& v : b.vertices) {
+      if (std::abs(v.p[0] - x_cut) < h && v.p[1] > y_cut + 2 * h && v.n[0] > 0.9f) {
+        ++face[static_cast<int>(v.material)];
+      }
+    }
+  }
+  EXPECT_GT(face[kEnamel], 0);
+  EXPECT_GT(face[kDentin], face[kEnamel]) << "dentin is the bulk of the section";
+  EXPECT_GT(face[kPulp], 0);
+}
+
+}  // namespace
+}  // namespace dentsim::view

@@ -1,0 +1,47 @@
+// The drawing code of the 3-D view (issue #19; view/view.h), OpenGL 3.3 core profile. Needs a
+// current context (a GLFW window or an EGL surfaceless context with a framebuffer object).
+//
+// Shading: Lambert + Blinn-Phong specular, a key light over the camera's shoulder plus ambient:
+//   c = albedo (0.30 + 0.70 max(0, n.l)) + 0.15 max(0, n.h)^32
+// albedo per material from reference/tooth/materials.cc (enamel ivory, dentin yellow, pulp red).
+// The proxy is drawn last, translucent (alpha 0.35, no depth writes), and only when it is more than
+// 0.02 mm from the device's tool. The tool's shank is drawn vertical at the home pose and turns
+// with the device from there. The force arrow starts at the proxy's tip centre, points along the
+// force on the proxy from the tooth, 10 mm per N, at most 8 mm, drawn over the scene (it runs
+// along the shank, out of the cavity).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "reference/tooth/render_png.h"
+#include "view/camera.h"
+#include "view/snapshot.h"
+#include "view/surface_mesh.h"
+
+namespace dentsim::view {
+
+class GlRenderer {
+ public:
+  GlRenderer();  // compiles the shaders; throws std::runtime_error with the GL log on failure
+  ~GlRenderer();
+  GlRenderer(const GlRenderer&) = delete;
+  GlRenderer& operator=(const GlRenderer&) = delete;
+
+  // Uploads the blocks whose version changed since the last call.
+  void sync(const SurfaceMesher& mesher);
+  // Draws one frame into the bound framebuffer of width x height pixels. tick: null = tooth only;
+  // overlay: lines of text (empty = no overlay).
+  void draw(const OrbitCamera& camera, const TickSnapshot* tick,
+            const std::vector<std::string>& overlay, int width, int height);
+  // Reads the bound framebuffer back (rows top to bottom).
+  static RgbImage read_pixels(int width, int height);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace dentsim::view

@@ -1,0 +1,97 @@
+// A smooth, incrementally updated surface of the voxel tooth for the 3-D view (issue #19).
+//
+// Field: each voxel centre c = (i, j, k) carries the smoothed occupancy
+//   s(c) = sum_{d in {-1,0,1}^3} w(d) o(c + d),  w(d) = w1(dx) w1(dy) w1(dz) / 64,  w1 = (1, 2, 1)
+// with o = 1 for a solid voxel that is not cut away and 0 otherwise (also outside the grid), so
+// s in [0, 1] and s < 1/2 outside the grid. A centre is inside when s >= 1/2.
+//
+// Surface (naive surface nets on s, Gibson 1998 "Constrained elastic surface nets"): every dual
+// cell (the cube between 8 neighbouring centres, named by its minimum centre) whose corners are
+// not all inside or all outside holds one vertex: the mean of the points where s crosses 1/2 on
+// its 12 edges (linear interpolation). Every grid edge from an inside centre a to an outside
+// neighbour a + d gives one quad joining the vertices of the 4 dual cells around that edge, wound
+// counter-clockwise seen from outside (from a + d), split into two triangles. Vertex normal: the
+// normalised -grad s of the dual cell (differences of its 8 corners), so the surface shades
+// smoothly. Positions are world [m]: origin + h (c + 1/2) for centre c (voxel_grid.h).
+//
+// Material per quad: the material of a if it is solid, else the most frequent material among the
+// solid voxels of a's 3x3x3 neighbourhood (ties: the lower id). The cut-away (a quarter removed,
+// as in reference/tooth/render_png.h) makes voxels with i >= cut_i and j >= cut_j empty for the
+// field only, so the cut faces are real surface, coloured by the layers they cross.
+//
+// Blocks: the grid is split into blocks of B^3 voxels; a quad belongs to the block of its inside
+// centre a. A quad depends on s within +-1 of a, hence on o within +-2 of a: a changed voxel v
+// dirties exactly the blocks that contain a voxel within +-2 of v (per axis). update() re-meshes
+// only those blocks; the result is identical, bit for bit, to meshing the changed grid whole
+// (tests/view/surface_mesh_test.cc).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "reference/tooth/voxel_grid.h"
+
+namespace dentsim::view {
+
+struct MeshVertex {
+  float p[3];      // world position [m]
+  float n[3];      // unit outward normal
+  float material;  // Material id (1 enamel, 2 dentin, 3 pulp)
+};
+
+struct BlockMesh {
+  std::vector<MeshVertex> vertices;
+  std::vector<std::uint32_t> indices;  // triangles, indices into vertices
+  std::uint64_t version = 0;           // bumped each time the block is re-meshed
+};
+
+struct CutAway {
+  bool enabled = false;
+  int i = 0, j = 0;  // voxels with i >= cut_i and j >= cut_j are removed from the field
+};
+
+class SurfaceMesher {
+ public:
+  static constexpr int kHalo = 2;  // voxels of o a block's quads depend on beyond the block
+  // Blocks of 8^3: a drilled ball of 3 voxels re-meshes in ~0.8 ms against ~4 ms with 16^3 and
+  // ~130-170 ms for the whole 128^3 tooth (docs/view.md, bench/view_bench.cc).
+  static constexpr int kDefaultBlockSize = 8;
+
+  // Meshes `grid` whole. block_size B >= 4.
+  explicit SurfaceMesher(const VoxelGrid& grid, int block_size = kDefaultBlockSize,
+                         CutAway cut = {});
+
+  // The grid changed at the flat voxel indices `changed` (the mesher's own copy is updated from
+  // `grid`); re-meshes the dirty blocks and returns their ids, sorted.
+  std::vector<int> update(const VoxelGrid& grid, std::span<const std::size_t> changed);
+  // Changes the cut-away and re-meshes everything.
+  void set_cut(CutAway cut);
+
+  const VoxelGrid& grid() const { return grid_; }
+  int block_size() const { return block_size_; }
+  int blocks_per_axis() const { return nb_; }
+  const std::vector<BlockMesh>& blocks() const { return blocks_; }
+  const CutAway& cut() const { return cut_; }
+  std::size_t triangle_count() const;
+  // The blocks update() would re-mesh for a change of voxel (i, j, k), sorted.
+  std::vector<int> blocks_touched_by(int i, int j, int k) const;
+
+ private:
+  void mesh_block(int block);
+  bool occupied(int i, int j, int k) const;
+
+  VoxelGrid grid_;
+  int block_size_;
+  int nb_;
+  CutAway cut_;
+  std::vector<BlockMesh> blocks_;
+  std::vector<float> s_;  // scratch: s over one block + 1 voxel halo
+};
+
+// The cut-away through the centre of the solid's bounding box: removes the +x, +y quarter (seen
+// by a camera at azimuth 45 deg, view/camera.h). An empty grid gives a disabled cut.
+CutAway centre_cut(const VoxelGrid& grid);
+
+}  // namespace dentsim::view
