@@ -308,7 +308,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       view.t = t;
       view.device = r.device;
       view.proxy = pipeline.proxy().pose;
-      view.tool_radius_m = tip.radius;
+      view.tool_radius_m = rig->tip.radius;
       view.contact_force_n = r.F_contact.head<3>();
       view.device_force_n = r.T1.head<3>();
       view.contacts = static_cast<int>(r.contacts.size());
@@ -318,7 +318,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
         view.removed_volume_mm3[m] = contacts.drill_state().removed_volume_m3(m) * 1e9;
       }
       view.faults = device.faults();
-      view.tooth = &tooth.grid();
+      view.tooth = &rig->tooth_grid();
       view.touched_voxels = contacts.contact_voxels();
       options.observer->on_tick(view);
     }

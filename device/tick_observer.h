@@ -15,6 +15,7 @@
 #include <span>
 
 #include "reference/core/types.h"
+#include "reference/tooth/materials.h"
 #include "reference/tooth/voxel_grid.h"
 
 namespace dentsim {
@@ -30,7 +31,7 @@ struct TickSnapshotView {
   int contacts = 0;                     // size of the tick's contact set
   double max_depth_m = 0.0;             // deepest penetration of the proxy [m]
   double tick_us = 0.0;                 // wall-clock time of the servo tick (stages + drilling)
-  std::array<double, 4> removed_volume_mm3{};  // per Material id so far (0 unused)
+  std::array<double, kMaterialCount> removed_volume_mm3{};  // per Material id so far (0 unused)
   std::uint32_t faults = 0;                    // the device's latched fault flags (device/device.h)
   // The tooth after this tick's drilling, and the flat indices of the voxels the tick's contacts
   // touched (the only voxels drilling can have removed in this tick).

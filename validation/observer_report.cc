@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "device/closed_loop.h"
 #include "device/phantom_device.h"
 #include "reference/core/io.h"
 #include "reference/observer.h"
@@ -46,6 +47,65 @@ std::vector<HandKeyframe> hand_profile(const ObserverReportConfig& c, const Vec3
   return k;
 }
 
+// The report's controller as a Pipeline, so that the loop owner (device/closed_loop.h) runs it
+// like every other servo loop: gravity compensation by the model plus a joint hold
+// spring-damper, tau = g(q) + K_p (q_hold - q) - K_d qd, and the momentum observer updated on each
+// new sample with the torque held over the tick that just ended (as the pipeline's observe stage).
+class HoldController : public Pipeline {
+ public:
+  HoldController(const DeviceModel& model, const ObserverReportConfig& c, VecX q_hold)
+      : model_(model),
+        obs_(model, VecX::Constant(6, c.gain_L)),
+        q_hold_(std::move(q_hold)),
+        Kp_(c.K_p),
+        Kd_(c.K_d) {}
+  TickStatus reset(const DeviceSample& s) override {
+    obs_.reset(s.q, s.qd);
+    t_prev_ = s.t;
+    have_prev_ = false;
+    return TickStatus::kOk;
+  }
+  const TickResult& tick(const DeviceSample& s, double, ContactProvider&) override {
+    if (have_prev_) obs_.update(s.q, s.qd, r_.tau, s.t - t_prev_);
+    t_prev_ = s.t;
+    have_prev_ = true;
+    r_.tau = model_.gravity(s.q) + Kp_.cwiseProduct(q_hold_ - s.q) - Kd_.cwiseProduct(s.qd);
+    return r_;
+  }
+  const ProxyState& proxy() const override { return proxy_; }
+  const char* name() const override { return "observer-report hold"; }
+  const VecX& estimate() const { return obs_.estimate(); }
+
+ private:
+  const DeviceModel& model_;
+  MomentumObserver obs_;
+  VecX q_hold_, Kp_, Kd_;
+  double t_prev_ = 0.0;
+  bool have_prev_ = false;
+  TickResult r_;
+  ProxyState proxy_;
+};
+
+// Exact sensing: the driver reports the true joint velocity.
+class ExactVelocity : public Device {
+ public:
+  explicit ExactVelocity(SimulatedPhantom& dev) : dev_(dev) {}
+  const DeviceCapabilities& capabilities() const override { return dev_.capabilities(); }
+  const DeviceLimits& limits() const override { return dev_.limits(); }
+  void read(DeviceSample& out) const override {
+    dev_.read(out);
+    out.qd = dev_.true_qd();
+  }
+  void write(const VecX& tau) override { dev_.write(tau); }
+  void advance() override { dev_.advance(); }
+  const VecX& applied_torque() const override { return dev_.applied_torque(); }
+  std::uint32_t faults() const override { return dev_.faults(); }
+  void clear_faults() override { dev_.clear_faults(); }
+
+ private:
+  SimulatedPhantom& dev_;
+};
+
 Trace simulate(const PhantomParams& params, const ObserverReportConfig& c,
                const DeviceModel& model) {
   SimulatedDeviceConfig dc = phantom_device_config(params);
@@ -57,30 +117,31 @@ Trace simulate(const PhantomParams& params, const ObserverReportConfig& c,
   const Pose p0 = dev.tip_pose();
   const ScriptedHand hand(c.hand, hand_profile(c, p0.x), p0.R);
   dev.set_hand(&hand);
-
-  MomentumObserver obs(model, VecX::Constant(6, c.gain_L));
-  DeviceSample s = dev.make_sample();
-  dev.read(s);
-  if (c.ideal_sensing) s.qd = dev.true_qd();
-  obs.reset(s.q, s.qd);
-  const VecX Kp = c.K_p, Kd = c.K_d;
+  ExactVelocity exact(dev);
+  HoldController controller(model, c, q_hold);
+  NoContacts free_space;
+  ClosedLoop loop(c.ideal_sensing ? static_cast<Device&>(exact) : dev, controller, free_space);
+  loop.start();
   Trace tr;
-  double t_prev = s.t;
-  while (s.t < c.t_end) {
-    // Motors: gravity compensation by the model + joint hold spring-damper.
-    if (c.ideal_sensing) s.qd = dev.true_qd();
-    const VecX tau = model.gravity(s.q) + Kp.cwiseProduct(q_hold - s.q) - Kd.cwiseProduct(s.qd);
-    dev.write(tau);
-    const VecX tau_applied = dev.applied_torque();
-    dev.advance();
-    dev.read(s);
-    if (c.ideal_sensing) s.qd = dev.true_qd();
-    const VecX f_hat = obs.update(s.q, s.qd, tau_applied, s.t - t_prev);
-    t_prev = s.t;
-    tr.t.push_back(s.t);
-    tr.f_hat.push_back(f_hat);
+  // After each step the device holds sample k+1; its estimate comes with the next tick (the
+  // controller updates the observer on a new sample first), so the trace row is completed then.
+  bool pending = false;
+  while (true) {
+    const bool more = loop.sample().t < c.t_end;
+    if (pending) {
+      if (more) loop.step();  // the tick on the pending sample updates the observer
+      else controller.tick(loop.sample(), loop.last_tick_length(), free_space);  // last sample
+      tr.f_hat.push_back(controller.estimate());
+      pending = false;
+      if (!more) break;
+    } else {
+      if (!more) break;
+      loop.step();
+    }
+    tr.t.push_back(loop.sample().t);
     tr.f_true.push_back(dev.hand_joint_torque());
     tr.qd.push_back(dev.true_qd());
+    pending = true;
   }
   if (dev.faults() != kFaultNone) {
     throw std::runtime_error("observer report: the simulated device faulted: " +

@@ -42,7 +42,7 @@ struct TickSnapshot {
   int contacts = 0;
   double max_depth_m = 0.0;
   double tick_us = 0.0;
-  std::array<double, 4> removed_volume_mm3{};
+  std::array<double, kMaterialCount> removed_volume_mm3{};
   std::uint32_t faults = 0;
   Mat3 device_R0 = Mat3::Identity();  // R1 at tick 0 (the home pose), for drawing the shank
 };
