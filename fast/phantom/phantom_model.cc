@@ -1,0 +1,250 @@
+// The Phantom's device terms in one pass (equations: fast/phantom/phantom_model.h).
+#include "fast/phantom/phantom_model.h"
+
+#include <Eigen/LU>
+#include <cmath>
+
+namespace dentsim::fast {
+
+namespace {
+
+constexpr std::array<int, kPhantomTreeDof> kParent = {-1,     kBase,    kUpperArm,  kBase,
+                                                      kCrank, kForearm, kGimbalYaw, kGimbalPitch};
+
+// G^T v for a tree vector v (theta = G q, phantom_tree_map()).
+template <typename V8>
+auto tree_to_joint(const V8& v) {
+  using T = std::decay_t<decltype(v[0])>;
+  Eigen::Matrix<T, 6, 1> out;
+  out << v[kBase], v[kUpperArm] - v[kForearm] + v[kParallelLink],
+      v[kForearm] + v[kCrank] - v[kParallelLink], v[kGimbalYaw], v[kGimbalPitch], v[kGimbalRoll];
+  return out;
+}
+
+// J = J_tree G from the tree columns of the tip chain (kBase, kUpperArm, kForearm, gimbal yaw,
+// pitch, roll): q2 drives tree joints 1 (+1) and 2 (-1), q3 tree joint 2 (+1) (3 and 4 do not
+// move the tip).
+template <typename T>
+void tip_chain_to_joint(const Eigen::Matrix<T, 6, 6>& tc, Mat6& J) {
+  J.col(0) = tc.col(0).template cast<double>();
+  J.col(1) = (tc.col(1) - tc.col(2)).template cast<double>();
+  J.template rightCols<4>() = tc.template rightCols<4>().template cast<double>();
+}
+
+// a x b, written out (Eigen's vectorised cross of float 3-vectors trips GCC 12's -Warray-bounds).
+template <typename A, typename B>
+Eigen::Matrix<typename A::Scalar, 3, 1> cross(const Eigen::MatrixBase<A>& a_in,
+                                              const Eigen::MatrixBase<B>& b_in) {
+  const Eigen::Matrix<typename A::Scalar, 3, 1> a = a_in, b = b_in;
+  return {a(1) * b(2) - a(2) * b(1), a(2) * b(0) - a(0) * b(2), a(0) * b(1) - a(1) * b(0)};
+}
+
+}  // namespace
+
+template <typename T>
+PhantomDynamics<T>::PhantomDynamics(const PhantomParams& params)
+    : params_(params), reference_(params) {
+  const PhantomTreeT<double>& tree = reference_.tree();
+  for (int i = 0; i < kPhantomTreeDof; ++i) {
+    const Mat3 S = phantom_detail::skew_t<double>(tree.axis[i]);
+    Body& b = body_[i];
+    b.A = tree.rot0[i].cast<T>();
+    b.B = (tree.rot0[i] * S).cast<T>();
+    b.D = (tree.rot0[i] * (S * S)).cast<T>();
+    b.s = (tree.rot0[i] * tree.axis[i]).cast<T>();
+    b.pos = tree.pos[i].cast<T>();
+    b.com = tree.com[i].cast<T>();
+    b.inertia = tree.inertia[i].cast<T>();
+    b.mass = T(tree.mass[i]);
+  }
+  tip_ = tree.tip.cast<T>();
+  armature_ = tree.armature.cast<T>();
+  damping_ = tree.damping.cast<T>();
+  coulomb_ = tree.coulomb.cast<T>();
+  coulomb_smoothing_ = T(tree.coulomb_smoothing);
+  gravity_ = T(tree.gravity);
+}
+
+template <typename T>
+void PhantomDynamics<T>::terms(const Vec6& q_in, const Vec6& qd_in, bool with_jacobian_rate,
+                               DeviceTerms& out) const {
+  constexpr int n = kPhantomTreeDof;
+  const V6 q = q_in.cast<T>();
+  const V6 qd = qd_in.cast<T>();
+  const std::array<T, n> thd = {qd(0),         qd(1), qd(2) - qd(1), qd(2),
+                                qd(1) - qd(2), qd(3), qd(4),         qd(5)};
+  // Sines and cosines of theta = G q; theta_4 = -theta_2 exactly, so its pair is reused.
+  const std::array<T, n> th = {q(0), q(1), q(2) - q(1), q(2), T(0), q(3), q(4), q(5)};
+  std::array<T, n> sn, cs;
+  for (int i = 0; i < n; ++i) {
+    if (i == kParallelLink) continue;
+    sn[i] = std::sin(th[i]);
+    cs[i] = std::cos(th[i]);
+  }
+  sn[kParallelLink] = -sn[kForearm];
+  cs[kParallelLink] = cs[kForearm];
+
+  // 1. Forward sweep: kinematics (header section 1).
+  std::array<M3, n> R;
+  std::array<V3, n> p, a, r, w, vo, vc;
+  for (int i = 0; i < n; ++i) {
+    const Body& b = body_[i];
+    const M3 local = b.A + sn[i] * b.B + (T(1) - cs[i]) * b.D;
+    const int par = kParent[i];
+    if (par < 0) {
+      R[i] = local;
+      a[i] = b.s;
+      p[i] = b.pos;
+      w[i] = a[i] * thd[i];
+      vo[i].setZero();
+    } else {
+      R[i].noalias() = R[par] * local;
+      a[i].noalias() = R[par] * b.s;
+      const V3 d = R[par] * b.pos;
+      p[i] = p[par] + d;
+      w[i] = w[par] + a[i] * thd[i];
+      vo[i] = vo[par] + cross(w[par], d);
+    }
+    r[i].noalias() = R[i] * b.com;
+    vc[i] = vo[i] + cross(w[i], r[i]);
+  }
+
+  // 2. Backward sweep: composite bodies about their joint points (header section 2).
+  std::array<T, n> m;
+  std::array<V3, n> h, P, L;
+  std::array<M3, n> K;
+  for (int i = 0; i < n; ++i) {
+    const Body& b = body_[i];
+    // I_i = R diag(I) R^T
+    const M3 RI = R[i] * b.inertia.asDiagonal();
+    M3 I;
+    I.noalias() = RI * R[i].transpose();
+    m[i] = b.mass;
+    h[i] = b.mass * r[i];
+    K[i] = I - h[i] * r[i].transpose();
+    K[i].diagonal().array() += h[i].dot(r[i]);
+    P[i] = b.mass * vc[i];
+    L[i] = cross(r[i], P[i]);
+    L[i].noalias() += I * w[i];
+  }
+  for (int k = n - 1; k > 0; --k) {  // children have larger indices than their parents
+    const int j = kParent[k];
+    const V3 d = p[k] - p[j];
+    const V3 md = m[k] * d;
+    K[j] += K[k] - h[k] * d.transpose() - d * (h[k] + md).transpose();
+    K[j].diagonal().array() += T(2) * h[k].dot(d) + md.dot(d);
+    h[j] += h[k] + md;
+    m[j] += m[k];
+    L[j] += L[k] + cross(d, P[k]);
+    P[j] += P[k];
+  }
+
+  // 3. Tree terms (header section 3).
+  Eigen::Matrix<T, n, n> Mt = Eigen::Matrix<T, n, n>::Zero();
+  std::array<T, n> gt, ct;
+  for (int j = 0; j < n; ++j) {
+    const V3 u = cross(a[j], h[j]);
+    const V3 F = K[j] * a[j];
+    gt[j] = gravity_ * u(2);
+    ct[j] = cross(w[j], a[j]).dot(L[j]) - a[j].dot(cross(vo[j], P[j]));
+    Mt(j, j) = a[j].dot(F);
+    for (int k = kParent[j]; k >= 0; k = kParent[k]) {
+      Mt(j, k) = a[k].dot(F + cross(p[j] - p[k], u));
+      Mt(k, j) = Mt(j, k);
+    }
+  }
+  // M = G^T Mt G: columns Mt G, then rows; the lower triangle is mirrored (M exactly symmetric).
+  Eigen::Matrix<T, n, 6> MG;
+  MG.col(0) = Mt.col(kBase);
+  MG.col(1) = Mt.col(kUpperArm) - Mt.col(kForearm) + Mt.col(kParallelLink);
+  MG.col(2) = Mt.col(kForearm) + Mt.col(kCrank) - Mt.col(kParallelLink);
+  MG.col(3) = Mt.col(kGimbalYaw);
+  MG.col(4) = Mt.col(kGimbalPitch);
+  MG.col(5) = Mt.col(kGimbalRoll);
+  for (int c = 0; c < 6; ++c) {
+    const Eigen::Matrix<T, 6, 1> col = tree_to_joint(MG.col(c));
+    for (int rr = c; rr < 6; ++rr) {
+      out.M(rr, c) = double(col(rr));
+      out.M(c, rr) = out.M(rr, c);
+    }
+    out.M(c, c) += double(armature_(c));
+  }
+  out.g = tree_to_joint(gt).template cast<double>();
+  out.CTqd = tree_to_joint(ct).template cast<double>();
+  for (int j = 0; j < 6; ++j) {
+    out.tau_f(j) =
+        double(phantom_joint_friction(damping_(j), coulomb_(j), coulomb_smoothing_, qd(j)));
+  }
+
+  // 4. Tool pose, J_t and dJ_t/dt (header section 4).
+  constexpr int kTipChain[6] = {kBase, kUpperArm, kForearm, kGimbalYaw, kGimbalPitch, kGimbalRoll};
+  const M3& R1 = R[kGimbalRoll];
+  const V3 x1 = p[kGimbalRoll] + R1 * tip_;
+  out.pose.x = x1.template cast<double>();
+  out.pose.R = R1.template cast<double>();
+  Eigen::Matrix<T, 6, 6> Jc;  // tree columns of the tip chain, in kTipChain order
+  for (int c = 0; c < 6; ++c) {
+    const int j = kTipChain[c];
+    Jc.col(c).template head<3>() = cross(a[j], x1 - p[j]);
+    Jc.col(c).template tail<3>().noalias() = R1.transpose() * a[j];
+  }
+  tip_chain_to_joint(Jc, out.J_t);
+  if (with_jacobian_rate) {
+    const V3& w1 = w[kGimbalRoll];
+    const V3 xd1 = vo[kGimbalRoll] + cross(w1, x1 - p[kGimbalRoll]);
+    for (int c = 0; c < 6; ++c) {
+      const int j = kTipChain[c];
+      const V3 da = cross(w[j], a[j]);
+      Jc.col(c).template head<3>() = cross(da, x1 - p[j]) + cross(a[j], xd1 - vo[j]);
+      Jc.col(c).template tail<3>().noalias() = R1.transpose() * (da - cross(w1, a[j]));
+    }
+    tip_chain_to_joint(Jc, out.J_t_dot);
+  } else {
+    out.J_t_dot.setZero();
+  }
+}
+
+template <typename T>
+MatX PhantomDynamics<T>::mass_matrix(const VecX& q) const {
+  DeviceTerms t;
+  terms(phantom_vec6(q, "q"), Vec6::Zero(), false, t);
+  return t.M;
+}
+
+template <typename T>
+MatX PhantomDynamics<T>::coriolis_matrix(const VecX& q, const VecX& qd) const {
+  return reference_.C(phantom_vec6(q, "q"), phantom_vec6(qd, "qd"));
+}
+
+template <typename T>
+VecX PhantomDynamics<T>::gravity(const VecX& q) const {
+  DeviceTerms t;
+  terms(phantom_vec6(q, "q"), Vec6::Zero(), false, t);
+  return t.g;
+}
+
+template <typename T>
+VecX PhantomDynamics<T>::friction_torque(const VecX& q, const VecX& qd) const {
+  DeviceTerms t;
+  terms(phantom_vec6(q, "q"), phantom_vec6(qd, "qd"), false, t);
+  return t.tau_f;
+}
+
+template <typename T>
+Pose PhantomDynamics<T>::forward_kinematics(const VecX& q) const {
+  DeviceTerms t;
+  terms(phantom_vec6(q, "q"), Vec6::Zero(), false, t);
+  return t.pose;
+}
+
+template <typename T>
+Mat6 PhantomDynamics<T>::twist_to_joint(const VecX& q) const {
+  DeviceTerms t;
+  terms(phantom_vec6(q, "q"), Vec6::Zero(), false, t);
+  return t.J_t.partialPivLu().inverse();  // (2.2)
+}
+
+template class PhantomDynamics<double>;
+template class PhantomDynamics<float>;
+
+}  // namespace dentsim::fast
