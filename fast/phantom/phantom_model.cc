@@ -39,6 +39,42 @@ Eigen::Matrix<typename A::Scalar, 3, 1> cross(const Eigen::MatrixBase<A>& a_in,
   return {a(1) * b(2) - a(2) * b(1), a(2) * b(0) - a(0) * b(2), a(0) * b(1) - a(1) * b(0)};
 }
 
+// A symmetric 3x3 matrix by its 6 distinct entries.
+template <typename T>
+struct Sym3 {
+  T xx, yy, zz, xy, xz, yz;
+
+  // R diag(d) R^T
+  static Sym3 rotated(const Eigen::Matrix<T, 3, 3>& R, const Eigen::Matrix<T, 3, 1>& d) {
+    auto e = [&](int a, int b) {
+      return R(a, 0) * d(0) * R(b, 0) + R(a, 1) * d(1) * R(b, 1) + R(a, 2) * d(2) * R(b, 2);
+    };
+    return {e(0, 0), e(1, 1), e(2, 2), e(0, 1), e(0, 2), e(1, 2)};
+  }
+  Sym3& operator+=(const Sym3& o) {
+    xx += o.xx, yy += o.yy, zz += o.zz, xy += o.xy, xz += o.xz, yz += o.yz;
+    return *this;
+  }
+  // Moves the reference point of a body (or subtree) of mass m and first moment h about the old
+  // point by d = old - new point (parallel axes):
+  //   += (2 h.d + m |d|^2) E - (h d^T + d h^T + m d d^T) = (h.d + g.d) E - (h d^T + d g^T),
+  // g = h + m d. From the CoM (h = 0) with d = r it adds m (|r|^2 E - r r^T).
+  void add_shift(T m, const Eigen::Matrix<T, 3, 1>& h, const Eigen::Matrix<T, 3, 1>& d) {
+    const Eigen::Matrix<T, 3, 1> g = h + m * d;
+    const T tr = h.dot(d) + g.dot(d);
+    xx += tr - (h(0) * d(0) + d(0) * g(0));
+    yy += tr - (h(1) * d(1) + d(1) * g(1));
+    zz += tr - (h(2) * d(2) + d(2) * g(2));
+    xy -= h(0) * d(1) + d(0) * g(1);
+    xz -= h(0) * d(2) + d(0) * g(2);
+    yz -= h(1) * d(2) + d(1) * g(2);
+  }
+  Eigen::Matrix<T, 3, 1> operator*(const Eigen::Matrix<T, 3, 1>& v) const {
+    return {xx * v(0) + xy * v(1) + xz * v(2), xy * v(0) + yy * v(1) + yz * v(2),
+            xz * v(0) + yz * v(1) + zz * v(2)};
+  }
+};
+
 }  // namespace
 
 template <typename T>
@@ -56,6 +92,31 @@ PhantomDynamics<T>::PhantomDynamics(const PhantomParams& params)
     b.com = tree.com[i].cast<T>();
     b.inertia = tree.inertia[i].cast<T>();
     b.mass = T(tree.mass[i]);
+    // Signed permutation and coordinate axis? (exact comparisons: the shipped tree is built from
+    // exact 0 and +-1 entries; anything else takes the general formula.)
+    bool aligned = true;
+    for (int c = 0; c < 3; ++c) {
+      int nonzero = 0;
+      for (int rr = 0; rr < 3; ++rr) {
+        const double v = tree.rot0[i](rr, c);
+        if (v == 0.0) continue;
+        ++nonzero;
+        aligned = aligned && (v == 1.0 || v == -1.0);
+        b.col_from[c] = rr;
+        b.col_sign[c] = T(v);
+      }
+      aligned = aligned && nonzero == 1;
+    }
+    int axis_nonzero = 0;
+    for (int c = 0; c < 3; ++c) {
+      const double v = tree.axis[i](c);
+      if (v == 0.0) continue;
+      ++axis_nonzero;
+      aligned = aligned && (v == 1.0 || v == -1.0);
+      b.k = c;
+      b.axis_sign = T(v);
+    }
+    b.axis_aligned = aligned && axis_nonzero == 1;
   }
   tip_ = tree.tip.cast<T>();
   armature_ = tree.armature.cast<T>();
@@ -73,14 +134,17 @@ void PhantomDynamics<T>::terms(const Vec6& q_in, const Vec6& qd_in, bool with_ja
   const V6 qd = qd_in.cast<T>();
   const std::array<T, n> thd = {qd(0),         qd(1), qd(2) - qd(1), qd(2),
                                 qd(1) - qd(2), qd(3), qd(4),         qd(5)};
-  // Sines and cosines of theta = G q; theta_4 = -theta_2 exactly, so its pair is reused.
-  const std::array<T, n> th = {q(0), q(1), q(2) - q(1), q(2), T(0), q(3), q(4), q(5)};
+  // Sines and cosines of theta = G q: theta_2 = q3 - q2 by the angle-difference formulas,
+  // theta_4 = -theta_2.
   std::array<T, n> sn, cs;
-  for (int i = 0; i < n; ++i) {
-    if (i == kParallelLink) continue;
-    sn[i] = std::sin(th[i]);
-    cs[i] = std::cos(th[i]);
+  const std::array<int, 6> device_body = {kBase,      kUpperArm,    kCrank,
+                                          kGimbalYaw, kGimbalPitch, kGimbalRoll};
+  for (int j = 0; j < 6; ++j) {
+    sn[device_body[j]] = std::sin(q(j));
+    cs[device_body[j]] = std::cos(q(j));
   }
+  sn[kForearm] = sn[kCrank] * cs[kUpperArm] - cs[kCrank] * sn[kUpperArm];
+  cs[kForearm] = cs[kCrank] * cs[kUpperArm] + sn[kCrank] * sn[kUpperArm];
   sn[kParallelLink] = -sn[kForearm];
   cs[kParallelLink] = cs[kForearm];
 
@@ -89,17 +153,37 @@ void PhantomDynamics<T>::terms(const Vec6& q_in, const Vec6& qd_in, bool with_ja
   std::array<V3, n> p, a, r, w, vo, vc;
   for (int i = 0; i < n; ++i) {
     const Body& b = body_[i];
-    const M3 local = b.A + sn[i] * b.B + (T(1) - cs[i]) * b.D;
     const int par = kParent[i];
+    if (b.axis_aligned) {
+      M3& Ri = R[i];  // R_par rot0: signed column permutation of R_par (E at the root)
+      for (int c = 0; c < 3; ++c) {
+        if (par < 0) {
+          Ri.col(c) = b.col_sign[c] * M3::Identity().col(b.col_from[c]);
+        } else {
+          Ri.col(c) = b.col_sign[c] * R[par].col(b.col_from[c]);
+        }
+      }
+      a[i] = b.axis_sign * Ri.col(b.k);
+      const int ci = (b.k + 1) % 3, cj = (b.k + 2) % 3;
+      const T st = b.axis_sign * sn[i];
+      const V3 col_i = Ri.col(ci);
+      Ri.col(ci) = cs[i] * col_i + st * Ri.col(cj);
+      Ri.col(cj) = cs[i] * Ri.col(cj) - st * col_i;
+    } else {
+      const M3 local = b.A + sn[i] * b.B + (T(1) - cs[i]) * b.D;
+      if (par < 0) {
+        R[i] = local;
+        a[i] = b.s;
+      } else {
+        R[i].noalias() = R[par] * local;
+        a[i].noalias() = R[par] * b.s;
+      }
+    }
     if (par < 0) {
-      R[i] = local;
-      a[i] = b.s;
       p[i] = b.pos;
       w[i] = a[i] * thd[i];
       vo[i].setZero();
     } else {
-      R[i].noalias() = R[par] * local;
-      a[i].noalias() = R[par] * b.s;
       const V3 d = R[par] * b.pos;
       p[i] = p[par] + d;
       w[i] = w[par] + a[i] * thd[i];
@@ -109,31 +193,27 @@ void PhantomDynamics<T>::terms(const Vec6& q_in, const Vec6& qd_in, bool with_ja
     vc[i] = vo[i] + cross(w[i], r[i]);
   }
 
-  // 2. Backward sweep: composite bodies about their joint points (header section 2).
+  // 2. Backward sweep: composite bodies about their joint points (header section 2). The
+  // symmetric inertias are kept as their 6 distinct entries (Sym3).
   std::array<T, n> m;
   std::array<V3, n> h, P, L;
-  std::array<M3, n> K;
+  std::array<Sym3<T>, n> K;
   for (int i = 0; i < n; ++i) {
     const Body& b = body_[i];
-    // I_i = R diag(I) R^T
-    const M3 RI = R[i] * b.inertia.asDiagonal();
-    M3 I;
-    I.noalias() = RI * R[i].transpose();
+    const Sym3<T> I = Sym3<T>::rotated(R[i], b.inertia);  // R diag(I) R^T
     m[i] = b.mass;
     h[i] = b.mass * r[i];
-    K[i] = I - h[i] * r[i].transpose();
-    K[i].diagonal().array() += h[i].dot(r[i]);
     P[i] = b.mass * vc[i];
-    L[i] = cross(r[i], P[i]);
-    L[i].noalias() += I * w[i];
+    L[i] = cross(r[i], P[i]) + I * w[i];
+    K[i] = I;
+    K[i].add_shift(b.mass, V3::Zero(), r[i]);  // from the CoM to the joint point
   }
   for (int k = n - 1; k > 0; --k) {  // children have larger indices than their parents
     const int j = kParent[k];
     const V3 d = p[k] - p[j];
-    const V3 md = m[k] * d;
-    K[j] += K[k] - h[k] * d.transpose() - d * (h[k] + md).transpose();
-    K[j].diagonal().array() += T(2) * h[k].dot(d) + md.dot(d);
-    h[j] += h[k] + md;
+    K[j] += K[k];
+    K[j].add_shift(m[k], h[k], d);
+    h[j] += h[k] + m[k] * d;
     m[j] += m[k];
     L[j] += L[k] + cross(d, P[k]);
     P[j] += P[k];
