@@ -151,6 +151,7 @@ void PhantomDynamics<T>::terms(const Vec6& q_in, const Vec6& qd_in, bool with_ja
   // 1. Forward sweep: kinematics (header section 1).
   std::array<M3, n> R;
   std::array<V3, n> p, a, r, w, vo, vc;
+#pragma GCC unroll 8
   for (int i = 0; i < n; ++i) {
     const Body& b = body_[i];
     const int par = kParent[i];
@@ -198,6 +199,7 @@ void PhantomDynamics<T>::terms(const Vec6& q_in, const Vec6& qd_in, bool with_ja
   std::array<T, n> m;
   std::array<V3, n> h, P, L;
   std::array<Sym3<T>, n> K;
+#pragma GCC unroll 8
   for (int i = 0; i < n; ++i) {
     const Body& b = body_[i];
     const Sym3<T> I = Sym3<T>::rotated(R[i], b.inertia);  // R diag(I) R^T
@@ -208,6 +210,7 @@ void PhantomDynamics<T>::terms(const Vec6& q_in, const Vec6& qd_in, bool with_ja
     K[i] = I;
     K[i].add_shift(b.mass, V3::Zero(), r[i]);  // from the CoM to the joint point
   }
+#pragma GCC unroll 8
   for (int k = n - 1; k > 0; --k) {  // children have larger indices than their parents
     const int j = kParent[k];
     const V3 d = p[k] - p[j];
@@ -219,32 +222,46 @@ void PhantomDynamics<T>::terms(const Vec6& q_in, const Vec6& qd_in, bool with_ja
     P[j] += P[k];
   }
 
-  // 3. Tree terms (header section 3).
-  Eigen::Matrix<T, n, n> Mt = Eigen::Matrix<T, n, n>::Zero();
+  // 3. Tree terms (header section 3). M_tree(j, k) = a_k . (n_j - p_k x u_j) = a_k . n_j
+  // + u_j . (p_k x a_k) with n_j = K_j a_j + p_j x u_j: the moment about the world origin
+  // (spatial force of the unit rate) against the Pluecker coordinates of axis k.
   std::array<T, n> gt, ct;
+  std::array<V3, n> u, nj, mk;
+  T t[n][n];  // lower triangle (k <= j) of M_tree on ancestor pairs
+#pragma GCC unroll 8
   for (int j = 0; j < n; ++j) {
-    const V3 u = cross(a[j], h[j]);
+    u[j] = cross(a[j], h[j]);
     const V3 F = K[j] * a[j];
-    gt[j] = gravity_ * u(2);
+    nj[j] = F + cross(p[j], u[j]);
+    mk[j] = cross(p[j], a[j]);
+    gt[j] = gravity_ * u[j](2);
     ct[j] = cross(w[j], a[j]).dot(L[j]) - a[j].dot(cross(vo[j], P[j]));
-    Mt(j, j) = a[j].dot(F);
-    for (int k = kParent[j]; k >= 0; k = kParent[k]) {
-      Mt(j, k) = a[k].dot(F + cross(p[j] - p[k], u));
-      Mt(k, j) = Mt(j, k);
-    }
+    t[j][j] = a[j].dot(F);
+#pragma GCC unroll 8
+    for (int k = kParent[j]; k >= 0; k = kParent[k]) t[j][k] = a[k].dot(nj[j]) + u[j].dot(mk[k]);
   }
-  // M = G^T Mt G: columns Mt G, then rows; the lower triangle is mirrored (M exactly symmetric).
-  Eigen::Matrix<T, n, 6> MG;
-  MG.col(0) = Mt.col(kBase);
-  MG.col(1) = Mt.col(kUpperArm) - Mt.col(kForearm) + Mt.col(kParallelLink);
-  MG.col(2) = Mt.col(kForearm) + Mt.col(kCrank) - Mt.col(kParallelLink);
-  MG.col(3) = Mt.col(kGimbalYaw);
-  MG.col(4) = Mt.col(kGimbalPitch);
-  MG.col(5) = Mt.col(kGimbalRoll);
-  for (int c = 0; c < 6; ++c) {
-    const Eigen::Matrix<T, 6, 1> col = tree_to_joint(MG.col(c));
-    for (int rr = c; rr < 6; ++rr) {
-      out.M(rr, c) = double(col(rr));
+  // M = G^T M_tree G + diag(armature), written out; pairs of unrelated joints (crank or parallel
+  // link with upper arm, forearm or gimbal) are zero and left out. Lower triangle, mirrored.
+  constexpr int b0 = kBase, b1 = kUpperArm, b2 = kForearm, b3 = kCrank, b4 = kParallelLink,
+                b5 = kGimbalYaw, b6 = kGimbalPitch, b7 = kGimbalRoll;
+  // clang-format off
+  const T lower[21] = {
+      t[b0][b0],                                                                  // (0, 0)
+      t[b1][b0] - t[b2][b0] + t[b4][b0],                                          // (1, 0)
+      t[b2][b0] + t[b3][b0] - t[b4][b0],                                          // (2, 0)
+      t[b5][b0], t[b6][b0], t[b7][b0],                                            // (3..5, 0)
+      t[b1][b1] + t[b2][b2] - T(2) * t[b2][b1] + t[b4][b4],                       // (1, 1)
+      t[b2][b1] - t[b2][b2] + t[b4][b3] - t[b4][b4],                              // (2, 1)
+      t[b5][b1] - t[b5][b2], t[b6][b1] - t[b6][b2], t[b7][b1] - t[b7][b2],        // (3..5, 1)
+      t[b2][b2] + t[b3][b3] + t[b4][b4] - T(2) * t[b4][b3],                       // (2, 2)
+      t[b5][b2], t[b6][b2], t[b7][b2],                                            // (3..5, 2)
+      t[b5][b5], t[b6][b5], t[b7][b5],                                            // (3..5, 3)
+      t[b6][b6], t[b7][b6],                                                       // (4..5, 4)
+      t[b7][b7]};                                                                 // (5, 5)
+  // clang-format on
+  for (int c = 0, e = 0; c < 6; ++c) {
+    for (int rr = c; rr < 6; ++rr, ++e) {
+      out.M(rr, c) = double(lower[e]);
       out.M(c, rr) = out.M(rr, c);
     }
     out.M(c, c) += double(armature_(c));

@@ -31,15 +31,19 @@
 // 3. Tree terms from the composites (the reference's Jacobian sums, regrouped per subtree):
 //    - M_tree (composite-rigid-body algorithm): a unit rate of joint j moves S(j) with momentum
 //      u_j = a_j x h_j and angular momentum K_j a_j about p_j, so for k an ancestor of j or j
-//          M_tree(j, k) = a_k . (K_j a_j + (p_j - p_k) x u_j)   (0 for unrelated joints).
+//          M_tree(j, k) = a_k . (K_j a_j + (p_j - p_k) x u_j)   (0 for unrelated joints)
+//                       = a_k . n_j + u_j . (p_k x a_k),   n_j = K_j a_j + p_j x u_j
+//      (the unit rate's moment about the origin against the Pluecker coordinates of axis k: two
+//      dot products per pair).
 //    - g_tree(j) = |g| sum m_i (a_j x (c_i - p_j))_z = |g| (u_j)_z.
 //    - C^T qd: with the reference's C_tree = sum_i m_i Jv_i^T dJv_i + Jw_i^T (I_i dJw_i
 //      + S(w_i) I_i Jw_i), Jv_i thd = vc_i, Jw_i thd = w_i and w.(w x x) = 0,
 //          (C_tree^T thd)_j = (w_j x a_j) . L_j - a_j . (vo_j x P_j).
 //      C^T qd is the same for every factorisation with dM/dt = C + C^T: it equals
 //      dM/dt qd - C qd = d/dq (1/2 qd^T M qd) (Lagrange), which the tests check.
-//    Joint space (device_model.h): M = G^T M_tree G + diag(armature), C^T qd = G^T (C_tree^T thd),
-//    g = G^T g_tree, with G^T v = (v0, v1 - v2 + v4, v2 + v3 - v4, v5, v6, v7).
+//    Joint space (device_model.h): M = G^T M_tree G + diag(armature) (written out entry by
+//    entry, zero pairs left out), C^T qd = G^T (C_tree^T thd), g = G^T g_tree, with
+//    G^T v = (v0, v1 - v2 + v4, v2 + v3 - v4, v5, v6, v7).
 //
 // 4. Tool (thesis (2.2)): x1 = p_7 + R_7 tip, R1 = R_7; for the tip's ancestors j in
 //    {0, 1, 2, 5, 6, 7}: J_tree col j = [a_j x (x1 - p_j); R1^T a_j], J_t = J_tree G; along qd
