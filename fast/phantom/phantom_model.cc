@@ -117,6 +117,7 @@ PhantomDynamics<T>::PhantomDynamics(const PhantomParams& params)
       b.axis_sign = T(v);
     }
     b.axis_aligned = aligned && axis_nonzero == 1;
+    b.at_parent_origin = tree.pos[i].isZero(0.0);
   }
   tip_ = tree.tip.cast<T>();
   armature_ = tree.armature.cast<T>();
@@ -184,6 +185,10 @@ void PhantomDynamics<T>::terms(const Vec6& q_in, const Vec6& qd_in, bool with_ja
       p[i] = b.pos;
       w[i] = a[i] * thd[i];
       vo[i].setZero();
+    } else if (b.at_parent_origin) {
+      p[i] = p[par];
+      w[i] = w[par] + a[i] * thd[i];
+      vo[i] = vo[par];
     } else {
       const V3 d = R[par] * b.pos;
       p[i] = p[par] + d;
@@ -213,12 +218,17 @@ void PhantomDynamics<T>::terms(const Vec6& q_in, const Vec6& qd_in, bool with_ja
 #pragma GCC unroll 8
   for (int k = n - 1; k > 0; --k) {  // children have larger indices than their parents
     const int j = kParent[k];
-    const V3 d = p[k] - p[j];
     K[j] += K[k];
-    K[j].add_shift(m[k], h[k], d);
-    h[j] += h[k] + m[k] * d;
+    if (body_[k].at_parent_origin) {
+      h[j] += h[k];
+      L[j] += L[k];
+    } else {
+      const V3 d = p[k] - p[j];
+      K[j].add_shift(m[k], h[k], d);
+      h[j] += h[k] + m[k] * d;
+      L[j] += L[k] + cross(d, P[k]);
+    }
     m[j] += m[k];
-    L[j] += L[k] + cross(d, P[k]);
     P[j] += P[k];
   }
 

@@ -18,7 +18,9 @@
 //    (all of them with the shipped parameters), R_par rot0 is a signed column permutation of
 //    R_par and Rot turns two of its columns: 12 multiplications instead of 45.
 //    theta_4 = -theta_2 exactly, so its sine and cosine are reused, and theta_2 = q3 - q2 comes
-//    from the angle-difference formulas: 6 sin/cos pairs, not 8.
+//    from the angle-difference formulas: 6 sin/cos pairs, not 8. Bodies hinged at their parent's
+//    origin (base, upper arm and crank; the gimbal bodies when pitch_pos = roll_pos = 0) skip
+//    the terms with pos (and in section 2 the shift by d = 0).
 //
 // 2. Composite bodies, one backward sweep (children first). For the subtree S(j) of joint j,
 //    about its joint point p_j: mass m_j, first moment h_j = sum m_i (c_i - p_j), rotational
@@ -105,6 +107,7 @@ class PhantomDynamics : public SixDofDeviceModel {
     std::array<T, 3> col_sign{};
     int k = 0;
     T axis_sign = T(1);
+    bool at_parent_origin = false;  // pos = 0: p_i = p_par, vo_i = vo_par, no parallel-axis shift
   };
 
   PhantomParams params_;
