@@ -312,10 +312,15 @@ void PhantomDynamics<T>::terms(const Vec6& q_in, const Vec6& qd_in, bool with_ja
 }
 
 template <typename T>
-MatX PhantomDynamics<T>::mass_matrix(const VecX& q) const {
+DeviceTerms PhantomDynamics<T>::terms_at(const VecX& q, const Vec6& qd) const {
   DeviceTerms t;
-  terms(phantom_vec6(q, "q"), Vec6::Zero(), false, t);
-  return t.M;
+  terms(phantom_vec6(q, "q"), qd, false, t);
+  return t;
+}
+
+template <typename T>
+MatX PhantomDynamics<T>::mass_matrix(const VecX& q) const {
+  return terms_at(q, Vec6::Zero()).M;
 }
 
 template <typename T>
@@ -325,30 +330,22 @@ MatX PhantomDynamics<T>::coriolis_matrix(const VecX& q, const VecX& qd) const {
 
 template <typename T>
 VecX PhantomDynamics<T>::gravity(const VecX& q) const {
-  DeviceTerms t;
-  terms(phantom_vec6(q, "q"), Vec6::Zero(), false, t);
-  return t.g;
+  return terms_at(q, Vec6::Zero()).g;
 }
 
 template <typename T>
 VecX PhantomDynamics<T>::friction_torque(const VecX& q, const VecX& qd) const {
-  DeviceTerms t;
-  terms(phantom_vec6(q, "q"), phantom_vec6(qd, "qd"), false, t);
-  return t.tau_f;
+  return terms_at(q, phantom_vec6(qd, "qd")).tau_f;
 }
 
 template <typename T>
 Pose PhantomDynamics<T>::forward_kinematics(const VecX& q) const {
-  DeviceTerms t;
-  terms(phantom_vec6(q, "q"), Vec6::Zero(), false, t);
-  return t.pose;
+  return terms_at(q, Vec6::Zero()).pose;
 }
 
 template <typename T>
 Mat6 PhantomDynamics<T>::twist_to_joint(const VecX& q) const {
-  DeviceTerms t;
-  terms(phantom_vec6(q, "q"), Vec6::Zero(), false, t);
-  return t.J_t.partialPivLu().inverse();  // (2.2)
+  return terms_at(q, Vec6::Zero()).J_t.partialPivLu().inverse();  // (2.2)
 }
 
 template class PhantomDynamics<double>;

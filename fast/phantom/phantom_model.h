@@ -90,6 +90,8 @@ class PhantomDynamics : public SixDofDeviceModel {
   Mat6 twist_to_joint(const VecX& q) const override;  // J1 = J_t^-1 (2.2)
 
  private:
+  DeviceTerms terms_at(const VecX& q, const Vec6& qd) const;  // q size-checked, no dJ_t/dt
+
   using V3 = Eigen::Matrix<T, 3, 1>;
   using M3 = Eigen::Matrix<T, 3, 3>;
   using V6 = Eigen::Matrix<T, 6, 1>;

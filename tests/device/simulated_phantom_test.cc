@@ -18,22 +18,7 @@
 #include "reference/core/io.h"
 #include "reference/core/so3.h"
 #include "tests/device/test_plants.h"
-
-// Allocation counter for the no-allocation-per-tick test (Drake's LimitMalloc idea). GCC cannot
-// see that the replaced operator new pairs with the replaced operator delete below.
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-namespace {
-std::atomic<bool> g_count_allocs{false};
-std::atomic<long> g_allocs{0};
-}  // namespace
-
-void* operator new(std::size_t n) {
-  if (g_count_allocs.load(std::memory_order_relaxed)) g_allocs.fetch_add(1);
-  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+#include "tests/support/alloc_counter.h"
 
 namespace dentsim {
 namespace {

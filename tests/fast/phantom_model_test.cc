@@ -20,41 +20,12 @@
 #include <cstdlib>
 #include <new>
 #include <numbers>
-#include <random>
 #include <string>
 
 #include "reference/phantom/phantom_model.h"
 #include "reference/phantom/phantom_params.h"
-
-// Allocation counter (as tests/device/simulated_phantom_test.cc): the global operator new, and
-// outside the sanitizer build also malloc itself, since Eigen's dynamic matrices call std::malloc
-// directly (glibc's __libc_malloc does the work; ASan intercepts malloc itself, so there only
-// operator new is counted). GCC cannot see that the replaced operator new pairs with the
-// replaced operator delete below.
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-namespace {
-std::atomic<bool> g_count_allocs{false};
-std::atomic<long> g_allocs{0};
-}  // namespace
-
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kCountsMalloc = false;
-#else
-constexpr bool kCountsMalloc = true;
-extern "C" void* __libc_malloc(std::size_t n);
-extern "C" void* malloc(std::size_t n) noexcept {
-  if (g_count_allocs.load(std::memory_order_relaxed)) g_allocs.fetch_add(1);
-  return __libc_malloc(n);
-}
-#endif
-
-void* operator new(std::size_t n) {
-  if (g_count_allocs.load(std::memory_order_relaxed)) g_allocs.fetch_add(1);
-  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+#include "tests/support/alloc_counter.h"
+#include "tests/support/phantom_states.h"
 
 namespace dentsim {
 namespace {
@@ -106,48 +77,29 @@ void compare(const fast::PhantomModel& f, const PhantomModel& r, const Vec6& q, 
   EXPECT_EQ(tf.J_t_dot, Mat6::Zero());  // not asked for: zero, as the reference
 }
 
-class States {
- public:
-  States(const PhantomParams& p, std::uint64_t seed) : p_(p), rng_(seed) {
-    std::printf("seed %llu (fixed)\n", static_cast<unsigned long long>(seed));
-  }
-  // Within the joint box (beyond = false) or a box 1 rad wider on each side.
-  Vec6 q(bool beyond) {
-    Vec6 q;
-    const double pad = beyond ? 1.0 : 0.0;
-    for (int j = 0; j < 6; ++j) {
-      const double lo = p_.q_min_rad(j) - pad, hi = p_.q_max_rad(j) + pad;
-      q(j) = lo + u_(rng_) * (hi - lo);
-    }
-    return q;
-  }
-  Vec6 qd(double scale) {
-    Vec6 v;
-    for (int j = 0; j < 6; ++j) v(j) = scale * (2.0 * u_(rng_) - 1.0);
-    return v;
-  }
+using States = testing::PhantomStates;
 
- private:
-  PhantomParams p_;
-  std::mt19937_64 rng_;
-  std::uniform_real_distribution<double> u_{0.0, 1.0};
-};
+// The worst errors of terms() against the reference over `count` seeded random states of `p`:
+// odd ones in the joint box, even ones up to 1 rad beyond it, qd up to 20 rad/s.
+Worst compare_random(const PhantomParams& p, std::uint64_t seed, int count, const char* what) {
+  const fast::PhantomModel f(p);
+  const PhantomModel r(p);
+  States s(p, seed);
+  Worst worst;
+  for (int k = 0; k < count; ++k) compare(f, r, s.q(k % 2 == 1 ? 0.0 : 1.0), s.qd(20.0), worst);
+  worst.print(what);
+  return worst;
+}
 
 // 10^4 seeded random states: half in the joint box, half up to 1 rad beyond it, qd up to 20 rad/s.
 TEST(FastPhantomModel, MatchesReferenceOnRandomStates) {
-  const PhantomParams p = default_phantom_params();
-  const fast::PhantomModel f(p);
-  const PhantomModel r(p);
-  States s(p, kSeed);
-  Worst worst;
-  for (int k = 0; k < 10000; ++k) compare(f, r, s.q(k % 2 == 1), s.qd(20.0), worst);
-  worst.print("random");
-  EXPECT_LT(worst.max(), kRoundOff);
+  EXPECT_LT(compare_random(default_phantom_params(), kSeed, 10000, "random").max(), kRoundOff);
 }
 
 // A params file with every number perturbed: masses and inertias scaled, CoMs moved, gimbal
-// joints off the gimbal centre, tilted axes, a tip offset in all three directions; written as a
-// model file and parsed back (the loader's validation applies).
+// joints off the gimbal centre, tilted axes (the general rotation formula, not the column turns),
+// a tip offset in all three directions; written as a model file and parsed back (the loader's
+// validation applies).
 PhantomParams perturbed_params() {
   PhantomParams p = default_phantom_params();
   double scale = 1.3;
@@ -169,32 +121,16 @@ PhantomParams perturbed_params() {
 }
 
 TEST(FastPhantomModel, MatchesReferenceWithPerturbedParamsFile) {
-  const PhantomParams p = perturbed_params();
-  const fast::PhantomModel f(p);
-  const PhantomModel r(p);
-  States s(p, kSeed + 1);
-  Worst worst;
-  for (int k = 0; k < 2000; ++k) compare(f, r, s.q(k % 2 == 1), s.qd(20.0), worst);
-  worst.print("perturbed params");
-  EXPECT_LT(worst.max(), kRoundOff);
+  EXPECT_LT(compare_random(perturbed_params(), kSeed + 1, 2000, "perturbed params").max(),
+            kRoundOff);
 }
 
-// Gravity off: g is exactly zero in both; the rest unchanged.
+// Gravity off: g is exactly zero in both (rel_err demands an exact 0 where the reference is 0).
 TEST(FastPhantomModel, GravityOff) {
   PhantomParams p = default_phantom_params();
   p.gravity_on = false;
-  const fast::PhantomModel f(p);
-  const PhantomModel r(p);
-  States s(p, kSeed + 2);
-  Worst worst;
-  for (int k = 0; k < 500; ++k) {
-    const Vec6 q = s.q(true), qd = s.qd(20.0);
-    compare(f, r, q, qd, worst);
-    DeviceTerms t;
-    f.terms(q, qd, false, t);
-    ASSERT_EQ(t.g, Vec6::Zero());
-  }
-  worst.print("gravity off");
+  const Worst worst = compare_random(p, kSeed + 2, 500, "gravity off");
+  EXPECT_EQ(worst.g, 0.0);
   EXPECT_LT(worst.max(), kRoundOff);
 }
 
@@ -213,7 +149,7 @@ TEST(FastPhantomModel, SignFrictionIsTheReferenceLaw) {
     if (k % 6 != 5 && k % 7 == 0)
       qd(5) = -1e-300;  // tiny but not zero: full Coulomb force, negative
     DeviceTerms tf, tr;
-    const Vec6 q = s.q(false);
+    const Vec6 q = s.q();
     f.terms(q, qd, false, tf);
     r.terms(q, qd, false, tr);
     ASSERT_EQ(tf.tau_f, tr.tau_f) << "k " << k;
@@ -242,14 +178,14 @@ TEST(FastPhantomModel, MatchesReferenceOnAdversarialStates) {
   double smin_lock = 1e300;
   for (const double pitch : {std::numbers::pi / 2, -std::numbers::pi / 2}) {
     for (const double eps : {0.0, 1e-12, -1e-9, 1e-6}) {
-      Vec6 q = s.q(false);
+      Vec6 q = s.q();
       q(4) = pitch + eps;
       compare(f, r, q, s.qd(20.0), worst);
       f.terms(q, Vec6::Zero(), false, t);
       smin_lock = std::min(smin_lock, Eigen::JacobiSVD<Mat6>(t.J_t).singularValues()(5));
     }
   }
-  for (int k = 0; k < 200; ++k) compare(f, r, s.q(k % 2 == 0), s.qd(1000.0), worst);
+  for (int k = 0; k < 200; ++k) compare(f, r, s.q(k % 2 == 0 ? 1.0 : 0.0), s.qd(1000.0), worst);
   for (int k = 0; k < 200; ++k) compare(f, r, s.qd(50.0), s.qd(20.0), worst);
   worst.print("adversarial");
   std::printf("smallest singular value of J_t at gimbal lock: %.3e\n", smin_lock);
@@ -274,7 +210,7 @@ TEST(FastPhantomModel, CTransposeQdIsLagrangian) {
     return t.M;
   };
   for (int k = 0; k < 200; ++k) {
-    const Vec6 q = s.q(false), qd = s.qd(3.0);
+    const Vec6 q = s.q(), qd = s.qd(3.0);
     DeviceTerms t;
     f.terms(q, qd, false, t);
     Vec6 dT;
@@ -303,7 +239,7 @@ TEST(FastPhantomModel, TermsDoNotAllocate) {
   g_allocs = 0;
   g_count_allocs = true;
   for (int k = 0; k < 10000; ++k) {
-    const Vec6 q = s.q(false), qd = s.qd(20.0);
+    const Vec6 q = s.q(), qd = s.qd(20.0);
     f.terms(q, qd, k % 2 == 0, t);
     sink += t.M(0, 0);
     ff.terms(q, qd, k % 2 == 1, t);
@@ -336,7 +272,7 @@ TEST(FastPhantomModel, FloatVariantWithinFloatRoundOff) {
   States s(p, kSeed + 7);
   Worst worst;
   for (int k = 0; k < 2000; ++k) {
-    const Vec6 q = s.q(false), qd = s.qd(20.0);
+    const Vec6 q = s.q(), qd = s.qd(20.0);
     DeviceTerms tf, tr;
     f.terms(q, qd, true, tf);
     r.terms(q, qd, true, tr);
@@ -353,7 +289,7 @@ TEST(FastPhantomModel, DeviceModelInterface) {
   const fast::PhantomModel f(p);
   const PhantomModel r(p);
   States s(p, kSeed + 8);
-  const Vec6 q = s.q(false), qd = s.qd(3.0);
+  const Vec6 q = s.q(), qd = s.qd(3.0);
   DeviceTerms t;
   f.terms(q, qd, false, t);
   DeviceTerms t0;
