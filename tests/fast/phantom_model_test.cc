@@ -67,8 +67,8 @@ struct Worst {
 };
 
 // Compares fast and reference terms at (q, qd), with and without the Jacobian rate.
-void compare(const fast::PhantomModel& f, const PhantomModel& r, const Vec6& q, const Vec6& qd,
-             Worst& worst) {
+template <typename Fast>
+void compare(const Fast& f, const PhantomModel& r, const Vec6& q, const Vec6& qd, Worst& worst) {
   DeviceTerms tf, tr;
   f.terms(q, qd, true, tf);
   r.terms(q, qd, true, tr);
@@ -81,8 +81,9 @@ using States = testing::PhantomStates;
 
 // The worst errors of terms() against the reference over `count` seeded random states of `p`:
 // odd ones in the joint box, even ones up to 1 rad beyond it, qd up to 20 rad/s.
+template <typename Fast = fast::PhantomModel>
 Worst compare_random(const PhantomParams& p, std::uint64_t seed, int count, const char* what) {
-  const fast::PhantomModel f(p);
+  const Fast f(p);
   const PhantomModel r(p);
   States s(p, seed);
   Worst worst;
@@ -266,19 +267,8 @@ TEST(FastPhantomModel, TermsDoNotAllocate) {
 
 // The float variant (a time-vs-error point, never the default): within float round-off.
 TEST(FastPhantomModel, FloatVariantWithinFloatRoundOff) {
-  const PhantomParams p = default_phantom_params();
-  const fast::PhantomModelFloat f(p);
-  const PhantomModel r(p);
-  States s(p, kSeed + 7);
-  Worst worst;
-  for (int k = 0; k < 2000; ++k) {
-    const Vec6 q = s.q(), qd = s.qd(20.0);
-    DeviceTerms tf, tr;
-    f.terms(q, qd, true, tf);
-    r.terms(q, qd, true, tr);
-    worst.add(tf, tr);
-  }
-  worst.print("float");
+  const Worst worst =
+      compare_random<fast::PhantomModelFloat>(default_phantom_params(), kSeed + 7, 2000, "float");
   EXPECT_LT(worst.max(), kRoundOffFloat);
   EXPECT_GT(worst.M, 1e-9);  // really float arithmetic (double would be ~1e-15)
 }
