@@ -12,8 +12,8 @@
 //    D_i = rot0_i S(axis_i)^2; Rodrigues: rot0 Rot(axis, th) = A + sin(th) B + (1 - cos(th)) D):
 //        R_i = R_par (A_i + sin th_i B_i + (1 - cos th_i) D_i),   a_i = R_par s_i,
 //        p_i = p_par + R_par pos_i,   r_i = R_i com_i (CoM from the joint point),
-//        w_i = w_par + a_i thd_i,   vo_i = vo_par + w_par x (p_i - p_par),   vc_i = vo_i + w_i x
-//        r_i.
+//        w_i = w_par + a_i thd_i,   vo_i = vo_par + w_par x (p_i - p_par),
+//        vc_i = vo_i + w_i x r_i.
 //    For the bodies whose rot0 is a signed permutation and whose axis is a coordinate axis +-e_k
 //    (all of them with the shipped parameters), R_par rot0 is a signed column permutation of
 //    R_par and Rot turns two of its columns: 12 multiplications instead of 45.
@@ -28,7 +28,8 @@
 //    linear momentum P_j = sum m_i vc_i and angular momentum L_j = sum m_i (c_i - p_j) x vc_i
 //    + I_i w_i. A child k is merged into its parent j with d = p_k - p_j (parallel-axis shift):
 //        K_j += K_k + (2 h_k.d + m_k |d|^2) E - h_k d^T - d h_k^T - m_k d d^T,
-//        h_j += h_k + m_k d,   m_j += m_k,   P_j += P_k,   L_j += L_k + d x P_k.
+//        h_j += h_k + m_k d,   m_j += m_k,   P_j += P_k,   L_j += L_k + d x P_k
+//    (symmetric inertias stored as their 6 distinct entries).
 //
 // 3. Tree terms from the composites (the reference's Jacobian sums, regrouped per subtree):
 //    - M_tree (composite-rigid-body algorithm): a unit rate of joint j moves S(j) with momentum
@@ -57,6 +58,8 @@
 // Everything lives in fixed-size stack arrays: terms() neither allocates nor throws. The scalar
 // type T of the arithmetic is a template parameter: PhantomModel (double) is the model; a float
 // variant (PhantomModelFloat) exists only as a measured point on the time-vs-error curve.
+// Measured (docs/benchmarks.md): 3.3x faster than the reference terms, and faster than MuJoCo's
+// mass matrix from q alone on the same states.
 #pragma once
 
 #include <Eigen/Core>
