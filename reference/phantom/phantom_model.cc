@@ -38,37 +38,35 @@ Eigen::Matrix<double, kPhantomTreeDof, 6> phantom_tree_map() {
   return G;
 }
 
-namespace {
-Vec6 as6(const VecX& v, const char* what) {
+Vec6 phantom_vec6(const VecX& v, const char* what) {
   if (v.size() != 6) {
     throw std::invalid_argument(std::string("PhantomModel: ") + what +
                                 " must have 6 entries, got " + std::to_string(v.size()));
   }
   return v;
 }
-}  // namespace
 
 PhantomModel::PhantomModel(PhantomParams params) : params_(std::move(params)), model_(params_) {}
 
-MatX PhantomModel::mass_matrix(const VecX& q) const { return model_.M(as6(q, "q")); }
+MatX PhantomModel::mass_matrix(const VecX& q) const { return model_.M(phantom_vec6(q, "q")); }
 
 MatX PhantomModel::coriolis_matrix(const VecX& q, const VecX& qd) const {
-  return model_.C(as6(q, "q"), as6(qd, "qd"));
+  return model_.C(phantom_vec6(q, "q"), phantom_vec6(qd, "qd"));
 }
 
-VecX PhantomModel::gravity(const VecX& q) const { return model_.g(as6(q, "q")); }
+VecX PhantomModel::gravity(const VecX& q) const { return model_.g(phantom_vec6(q, "q")); }
 
 VecX PhantomModel::friction_torque(const VecX& /*q*/, const VecX& qd) const {
-  return model_.friction(as6(qd, "qd"));
+  return model_.friction(phantom_vec6(qd, "qd"));
 }
 
 Pose PhantomModel::forward_kinematics(const VecX& q) const {
   Pose pose;
-  model_.fk(as6(q, "q"), &pose.x, &pose.R);
+  model_.fk(phantom_vec6(q, "q"), &pose.x, &pose.R);
   return pose;
 }
 
-Mat6 PhantomModel::twist_to_joint(const VecX& q) const { return model_.J1(as6(q, "q")); }
+Mat6 PhantomModel::twist_to_joint(const VecX& q) const { return model_.J1(phantom_vec6(q, "q")); }
 
 void PhantomModel::terms(const Vec6& q, const Vec6& qd, bool with_jacobian_rate,
                          DeviceTerms& out) const {

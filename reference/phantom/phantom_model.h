@@ -83,6 +83,25 @@ struct PhantomTreeT {
 template <typename T>
 PhantomTreeT<T> phantom_tree(const PhantomParams& p);
 
+// Friction of one device joint (the one definition of the law, used by PhantomModelT and by
+// fast/phantom): tau_f = b qd + f_c tanh(qd / v_s) [N m], or f_c sign(qd) when v_s = 0
+// (b [N m s/rad], f_c [N m], v_s [rad/s], qd [rad/s]).
+template <typename T>
+T phantom_joint_friction(const T& b, const T& f_c, const T& v_s, const T& qd) {
+  using std::tanh;
+  T s;
+  if (v_s > T(0)) {
+    s = tanh(qd / v_s);
+  } else {
+    s = qd > T(0) ? T(1) : (qd < T(0) ? T(-1) : T(0));
+  }
+  return b * qd + f_c * s;
+}
+
+// v as a 6-vector; std::invalid_argument "PhantomModel: <what> must have 6 entries, got n"
+// otherwise (the size check of the DeviceModel adapters).
+Vec6 phantom_vec6(const VecX& v, const char* what);
+
 template <typename T>
 class PhantomModelT {
  public:
@@ -315,16 +334,10 @@ typename PhantomModelT<T>::V6 PhantomModelT<T>::g(const V6& q) const {
 
 template <typename T>
 typename PhantomModelT<T>::V6 PhantomModelT<T>::friction(const V6& qd) const {
-  using std::tanh;
   V6 f;
   for (int j = 0; j < 6; ++j) {
-    T s;
-    if (tree_.coulomb_smoothing > T(0)) {
-      s = tanh(qd(j) / tree_.coulomb_smoothing);
-    } else {
-      s = qd(j) > T(0) ? T(1) : (qd(j) < T(0) ? T(-1) : T(0));
-    }
-    f(j) = tree_.damping(j) * qd(j) + tree_.coulomb(j) * s;
+    f(j) =
+        phantom_joint_friction(tree_.damping(j), tree_.coulomb(j), tree_.coulomb_smoothing, qd(j));
   }
   return f;
 }

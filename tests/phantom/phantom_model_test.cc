@@ -12,33 +12,18 @@
 #include <random>
 
 #include "reference/core/so3.h"
+#include "tests/support/phantom_states.h"
 
 namespace dentsim {
 namespace {
 
 constexpr std::uint64_t kSeed = 20021;
 
-class RandomStates {
+// The fixed seed of this file's states.
+class RandomStates : public testing::PhantomStates {
  public:
-  explicit RandomStates(const PhantomParams& p, std::uint64_t seed = kSeed) : p_(p), rng_(seed) {
-    std::printf("seed %llu (fixed)\n", static_cast<unsigned long long>(seed));
-  }
-  Vec6 q() {
-    Vec6 q;
-    for (int j = 0; j < 6; ++j)
-      q(j) = p_.q_min_rad(j) + u_(rng_) * (p_.q_max_rad(j) - p_.q_min_rad(j));
-    return q;
-  }
-  Vec6 qd(double scale = 3.0) {
-    Vec6 v;
-    for (int j = 0; j < 6; ++j) v(j) = scale * (2.0 * u_(rng_) - 1.0);
-    return v;
-  }
-
- private:
-  PhantomParams p_;
-  std::mt19937_64 rng_;
-  std::uniform_real_distribution<double> u_{0.0, 1.0};
+  explicit RandomStates(const PhantomParams& p, std::uint64_t seed = kSeed)
+      : PhantomStates(p, seed) {}
 };
 
 double rel_err(const MatX& a, const MatX& b) {

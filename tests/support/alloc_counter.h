@@ -1,12 +1,16 @@
-// Allocation counter for the no-allocation-per-tick tests (Drake's LimitMalloc idea): replaces the
-// global operator new/delete of the test executable. Include it in ONE translation unit of a test
-// executable (each tests/<area>/<name>_test.cc is its own executable).
+// Heap-allocation counter for the no-allocation tests (Drake's LimitMalloc idea): replaces the
+// global operator new/delete of the test executable and, outside the sanitizer build, malloc
+// itself, since Eigen's dynamic matrices call std::malloc directly (glibc's __libc_malloc does the
+// work; ASan intercepts malloc, so there only operator new is counted: kCountsMalloc says which).
+// Include it in ONE translation unit of a test executable (each tests/<area>/<name>_test.cc is its
+// own executable).
 //
 //   {
 //     dentsim::testing::AllocationScope scope;   // counts from here ...
 //     ... code under test ...
 //     EXPECT_EQ(scope.count(), 0);                // ... to here
 //   }
+// or by hand: g_allocs = 0; g_count_allocs = true; ...; g_count_allocs = false.
 #pragma once
 
 #include <atomic>
@@ -19,6 +23,12 @@
 namespace dentsim::testing {
 inline std::atomic<bool> g_count_allocs{false};
 inline std::atomic<long> g_allocs{0};
+
+#if defined(__SANITIZE_ADDRESS__)
+inline constexpr bool kCountsMalloc = false;
+#else
+inline constexpr bool kCountsMalloc = true;
+#endif
 
 class AllocationScope {
  public:
@@ -33,17 +43,33 @@ class AllocationScope {
 };
 }  // namespace dentsim::testing
 
-void* operator new(std::size_t n) {
+using dentsim::testing::g_allocs;
+using dentsim::testing::g_count_allocs;
+using dentsim::testing::kCountsMalloc;
+
+#if !defined(__SANITIZE_ADDRESS__)
+extern "C" void* __libc_malloc(std::size_t n);
+extern "C" void* malloc(std::size_t n) noexcept {
   if (dentsim::testing::g_count_allocs.load(std::memory_order_relaxed)) {
     dentsim::testing::g_allocs.fetch_add(1);
   }
+  return __libc_malloc(n);
+}
+#endif
+
+inline void count_allocation() {
+  if (dentsim::testing::g_count_allocs.load(std::memory_order_relaxed)) {
+    dentsim::testing::g_allocs.fetch_add(1);
+  }
+}
+
+void* operator new(std::size_t n) {
+  if (!dentsim::testing::kCountsMalloc) count_allocation();  // else malloc counts it
   if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
   throw std::bad_alloc();
 }
 void* operator new(std::size_t n, std::align_val_t a) {
-  if (dentsim::testing::g_count_allocs.load(std::memory_order_relaxed)) {
-    dentsim::testing::g_allocs.fetch_add(1);
-  }
+  count_allocation();  // aligned_alloc is not the malloc above
   const std::size_t al = static_cast<std::size_t>(a);
   if (void* p = std::aligned_alloc(al, (n + al - 1) / al * al)) return p;
   throw std::bad_alloc();

@@ -1,0 +1,354 @@
+// The Phantom's device terms in one pass (equations: fast/phantom/phantom_model.h).
+#include "fast/phantom/phantom_model.h"
+
+#include <Eigen/LU>
+#include <cmath>
+
+namespace dentsim::fast {
+
+namespace {
+
+constexpr std::array<int, kPhantomTreeDof> kParent = {-1,     kBase,    kUpperArm,  kBase,
+                                                      kCrank, kForearm, kGimbalYaw, kGimbalPitch};
+
+// G^T v for a tree vector v (theta = G q, phantom_tree_map()).
+template <typename V8>
+auto tree_to_joint(const V8& v) {
+  using T = std::decay_t<decltype(v[0])>;
+  Eigen::Matrix<T, 6, 1> out;
+  out << v[kBase], v[kUpperArm] - v[kForearm] + v[kParallelLink],
+      v[kForearm] + v[kCrank] - v[kParallelLink], v[kGimbalYaw], v[kGimbalPitch], v[kGimbalRoll];
+  return out;
+}
+
+// J = J_tree G from the tree columns of the tip chain (kBase, kUpperArm, kForearm, gimbal yaw,
+// pitch, roll): q2 drives tree joints 1 (+1) and 2 (-1), q3 tree joint 2 (+1) (3 and 4 do not
+// move the tip).
+template <typename T>
+void tip_chain_to_joint(const Eigen::Matrix<T, 6, 6>& tc, Mat6& J) {
+  J.col(0) = tc.col(0).template cast<double>();
+  J.col(1) = (tc.col(1) - tc.col(2)).template cast<double>();
+  J.template rightCols<4>() = tc.template rightCols<4>().template cast<double>();
+}
+
+// a x b, written out (Eigen's vectorised cross of float 3-vectors trips GCC 12's -Warray-bounds).
+template <typename A, typename B>
+Eigen::Matrix<typename A::Scalar, 3, 1> cross(const Eigen::MatrixBase<A>& a_in,
+                                              const Eigen::MatrixBase<B>& b_in) {
+  const Eigen::Matrix<typename A::Scalar, 3, 1> a = a_in, b = b_in;
+  return {a(1) * b(2) - a(2) * b(1), a(2) * b(0) - a(0) * b(2), a(0) * b(1) - a(1) * b(0)};
+}
+
+// A symmetric 3x3 matrix by its 6 distinct entries.
+template <typename T>
+struct Sym3 {
+  T xx, yy, zz, xy, xz, yz;
+
+  // R diag(d) R^T
+  static Sym3 rotated(const Eigen::Matrix<T, 3, 3>& R, const Eigen::Matrix<T, 3, 1>& d) {
+    auto e = [&](int a, int b) {
+      return R(a, 0) * d(0) * R(b, 0) + R(a, 1) * d(1) * R(b, 1) + R(a, 2) * d(2) * R(b, 2);
+    };
+    return {e(0, 0), e(1, 1), e(2, 2), e(0, 1), e(0, 2), e(1, 2)};
+  }
+  Sym3& operator+=(const Sym3& o) {
+    xx += o.xx, yy += o.yy, zz += o.zz, xy += o.xy, xz += o.xz, yz += o.yz;
+    return *this;
+  }
+  // Moves the reference point of a body (or subtree) of mass m and first moment h about the old
+  // point by d = old - new point (parallel axes):
+  //   += (2 h.d + m |d|^2) E - (h d^T + d h^T + m d d^T) = (h.d + g.d) E - (h d^T + d g^T),
+  // g = h + m d. From the CoM (h = 0) with d = r it adds m (|r|^2 E - r r^T).
+  void add_shift(T m, const Eigen::Matrix<T, 3, 1>& h, const Eigen::Matrix<T, 3, 1>& d) {
+    const Eigen::Matrix<T, 3, 1> g = h + m * d;
+    const T tr = h.dot(d) + g.dot(d);
+    xx += tr - (h(0) * d(0) + d(0) * g(0));
+    yy += tr - (h(1) * d(1) + d(1) * g(1));
+    zz += tr - (h(2) * d(2) + d(2) * g(2));
+    xy -= h(0) * d(1) + d(0) * g(1);
+    xz -= h(0) * d(2) + d(0) * g(2);
+    yz -= h(1) * d(2) + d(1) * g(2);
+  }
+  Eigen::Matrix<T, 3, 1> operator*(const Eigen::Matrix<T, 3, 1>& v) const {
+    return {xx * v(0) + xy * v(1) + xz * v(2), xy * v(0) + yy * v(1) + yz * v(2),
+            xz * v(0) + yz * v(1) + zz * v(2)};
+  }
+};
+
+}  // namespace
+
+template <typename T>
+PhantomDynamics<T>::PhantomDynamics(const PhantomParams& params)
+    : params_(params), reference_(params) {
+  const PhantomTreeT<double>& tree = reference_.tree();
+  for (int i = 0; i < kPhantomTreeDof; ++i) {
+    const Mat3 S = phantom_detail::skew_t<double>(tree.axis[i]);
+    Body& b = body_[i];
+    b.A = tree.rot0[i].cast<T>();
+    b.B = (tree.rot0[i] * S).cast<T>();
+    b.D = (tree.rot0[i] * (S * S)).cast<T>();
+    b.s = (tree.rot0[i] * tree.axis[i]).cast<T>();
+    b.pos = tree.pos[i].cast<T>();
+    b.com = tree.com[i].cast<T>();
+    b.inertia = tree.inertia[i].cast<T>();
+    b.mass = T(tree.mass[i]);
+    // Signed permutation and coordinate axis? (exact comparisons: the shipped tree is built from
+    // exact 0 and +-1 entries; anything else takes the general formula.)
+    bool aligned = true;
+    for (int c = 0; c < 3; ++c) {
+      int nonzero = 0;
+      for (int rr = 0; rr < 3; ++rr) {
+        const double v = tree.rot0[i](rr, c);
+        if (v == 0.0) continue;
+        ++nonzero;
+        aligned = aligned && (v == 1.0 || v == -1.0);
+        b.col_from[c] = rr;
+        b.col_sign[c] = T(v);
+      }
+      aligned = aligned && nonzero == 1;
+    }
+    int axis_nonzero = 0;
+    for (int c = 0; c < 3; ++c) {
+      const double v = tree.axis[i](c);
+      if (v == 0.0) continue;
+      ++axis_nonzero;
+      aligned = aligned && (v == 1.0 || v == -1.0);
+      b.k = c;
+      b.axis_sign = T(v);
+    }
+    b.axis_aligned = aligned && axis_nonzero == 1;
+    b.at_parent_origin = tree.pos[i].isZero(0.0);
+  }
+  tip_ = tree.tip.cast<T>();
+  armature_ = tree.armature.cast<T>();
+  damping_ = tree.damping.cast<T>();
+  coulomb_ = tree.coulomb.cast<T>();
+  coulomb_smoothing_ = T(tree.coulomb_smoothing);
+  gravity_ = T(tree.gravity);
+}
+
+template <typename T>
+void PhantomDynamics<T>::terms(const Vec6& q_in, const Vec6& qd_in, bool with_jacobian_rate,
+                               DeviceTerms& out) const {
+  constexpr int n = kPhantomTreeDof;
+  const V6 q = q_in.cast<T>();
+  const V6 qd = qd_in.cast<T>();
+  const std::array<T, n> thd = {qd(0),         qd(1), qd(2) - qd(1), qd(2),
+                                qd(1) - qd(2), qd(3), qd(4),         qd(5)};
+  // Sines and cosines of theta = G q: theta_2 = q3 - q2 by the angle-difference formulas,
+  // theta_4 = -theta_2.
+  std::array<T, n> sn, cs;
+  const std::array<int, 6> device_body = {kBase,      kUpperArm,    kCrank,
+                                          kGimbalYaw, kGimbalPitch, kGimbalRoll};
+  for (int j = 0; j < 6; ++j) {
+    sn[device_body[j]] = std::sin(q(j));
+    cs[device_body[j]] = std::cos(q(j));
+  }
+  sn[kForearm] = sn[kCrank] * cs[kUpperArm] - cs[kCrank] * sn[kUpperArm];
+  cs[kForearm] = cs[kCrank] * cs[kUpperArm] + sn[kCrank] * sn[kUpperArm];
+  sn[kParallelLink] = -sn[kForearm];
+  cs[kParallelLink] = cs[kForearm];
+
+  // 1. Forward sweep: kinematics (header section 1).
+  std::array<M3, n> R;
+  std::array<V3, n> p, a, r, w, vo, vc;
+#pragma GCC unroll 8
+  for (int i = 0; i < n; ++i) {
+    const Body& b = body_[i];
+    const int par = kParent[i];
+    if (b.axis_aligned) {
+      M3& Ri = R[i];  // R_par rot0: signed column permutation of R_par (E at the root)
+      for (int c = 0; c < 3; ++c) {
+        if (par < 0) {
+          Ri.col(c) = b.col_sign[c] * M3::Identity().col(b.col_from[c]);
+        } else {
+          Ri.col(c) = b.col_sign[c] * R[par].col(b.col_from[c]);
+        }
+      }
+      a[i] = b.axis_sign * Ri.col(b.k);
+      const int ci = (b.k + 1) % 3, cj = (b.k + 2) % 3;
+      const T st = b.axis_sign * sn[i];
+      const V3 col_i = Ri.col(ci);
+      Ri.col(ci) = cs[i] * col_i + st * Ri.col(cj);
+      Ri.col(cj) = cs[i] * Ri.col(cj) - st * col_i;
+    } else {
+      const M3 local = b.A + sn[i] * b.B + (T(1) - cs[i]) * b.D;
+      if (par < 0) {
+        R[i] = local;
+        a[i] = b.s;
+      } else {
+        R[i].noalias() = R[par] * local;
+        a[i].noalias() = R[par] * b.s;
+      }
+    }
+    if (par < 0) {
+      p[i] = b.pos;
+      w[i] = a[i] * thd[i];
+      vo[i].setZero();
+    } else if (b.at_parent_origin) {
+      p[i] = p[par];
+      w[i] = w[par] + a[i] * thd[i];
+      vo[i] = vo[par];
+    } else {
+      const V3 d = R[par] * b.pos;
+      p[i] = p[par] + d;
+      w[i] = w[par] + a[i] * thd[i];
+      vo[i] = vo[par] + cross(w[par], d);
+    }
+    r[i].noalias() = R[i] * b.com;
+    vc[i] = vo[i] + cross(w[i], r[i]);
+  }
+
+  // 2. Backward sweep: composite bodies about their joint points (header section 2). The
+  // symmetric inertias are kept as their 6 distinct entries (Sym3).
+  std::array<T, n> m;
+  std::array<V3, n> h, P, L;
+  std::array<Sym3<T>, n> K;
+#pragma GCC unroll 8
+  for (int i = 0; i < n; ++i) {
+    const Body& b = body_[i];
+    const Sym3<T> I = Sym3<T>::rotated(R[i], b.inertia);  // R diag(I) R^T
+    m[i] = b.mass;
+    h[i] = b.mass * r[i];
+    P[i] = b.mass * vc[i];
+    L[i] = cross(r[i], P[i]) + I * w[i];
+    K[i] = I;
+    K[i].add_shift(b.mass, V3::Zero(), r[i]);  // from the CoM to the joint point
+  }
+#pragma GCC unroll 8
+  for (int k = n - 1; k > 0; --k) {  // children have larger indices than their parents
+    const int j = kParent[k];
+    K[j] += K[k];
+    if (body_[k].at_parent_origin) {
+      h[j] += h[k];
+      L[j] += L[k];
+    } else {
+      const V3 d = p[k] - p[j];
+      K[j].add_shift(m[k], h[k], d);
+      h[j] += h[k] + m[k] * d;
+      L[j] += L[k] + cross(d, P[k]);
+    }
+    m[j] += m[k];
+    P[j] += P[k];
+  }
+
+  // 3. Tree terms (header section 3). M_tree(j, k) = a_k . (n_j - p_k x u_j) = a_k . n_j
+  // + u_j . (p_k x a_k) with n_j = K_j a_j + p_j x u_j: the moment about the world origin
+  // (spatial force of the unit rate) against the Pluecker coordinates of axis k.
+  std::array<T, n> gt, ct;
+  std::array<V3, n> u, nj, mk;
+  T t[n][n];  // lower triangle (k <= j) of M_tree on ancestor pairs
+#pragma GCC unroll 8
+  for (int j = 0; j < n; ++j) {
+    u[j] = cross(a[j], h[j]);
+    const V3 F = K[j] * a[j];
+    nj[j] = F + cross(p[j], u[j]);
+    mk[j] = cross(p[j], a[j]);
+    gt[j] = gravity_ * u[j](2);
+    ct[j] = cross(w[j], a[j]).dot(L[j]) - a[j].dot(cross(vo[j], P[j]));
+    t[j][j] = a[j].dot(F);
+#pragma GCC unroll 8
+    for (int k = kParent[j]; k >= 0; k = kParent[k]) t[j][k] = a[k].dot(nj[j]) + u[j].dot(mk[k]);
+  }
+  // M = G^T M_tree G + diag(armature), written out; pairs of unrelated joints (crank or parallel
+  // link with upper arm, forearm or gimbal) are zero and left out. Lower triangle, mirrored.
+  constexpr int b0 = kBase, b1 = kUpperArm, b2 = kForearm, b3 = kCrank, b4 = kParallelLink,
+                b5 = kGimbalYaw, b6 = kGimbalPitch, b7 = kGimbalRoll;
+  // clang-format off
+  const T lower[21] = {
+      t[b0][b0],                                                                  // (0, 0)
+      t[b1][b0] - t[b2][b0] + t[b4][b0],                                          // (1, 0)
+      t[b2][b0] + t[b3][b0] - t[b4][b0],                                          // (2, 0)
+      t[b5][b0], t[b6][b0], t[b7][b0],                                            // (3..5, 0)
+      t[b1][b1] + t[b2][b2] - T(2) * t[b2][b1] + t[b4][b4],                       // (1, 1)
+      t[b2][b1] - t[b2][b2] + t[b4][b3] - t[b4][b4],                              // (2, 1)
+      t[b5][b1] - t[b5][b2], t[b6][b1] - t[b6][b2], t[b7][b1] - t[b7][b2],        // (3..5, 1)
+      t[b2][b2] + t[b3][b3] + t[b4][b4] - T(2) * t[b4][b3],                       // (2, 2)
+      t[b5][b2], t[b6][b2], t[b7][b2],                                            // (3..5, 2)
+      t[b5][b5], t[b6][b5], t[b7][b5],                                            // (3..5, 3)
+      t[b6][b6], t[b7][b6],                                                       // (4..5, 4)
+      t[b7][b7]};                                                                 // (5, 5)
+  // clang-format on
+  for (int c = 0, e = 0; c < 6; ++c) {
+    for (int rr = c; rr < 6; ++rr, ++e) {
+      out.M(rr, c) = double(lower[e]);
+      out.M(c, rr) = out.M(rr, c);
+    }
+    out.M(c, c) += double(armature_(c));
+  }
+  out.g = tree_to_joint(gt).template cast<double>();
+  out.CTqd = tree_to_joint(ct).template cast<double>();
+  for (int j = 0; j < 6; ++j) {
+    out.tau_f(j) =
+        double(phantom_joint_friction(damping_(j), coulomb_(j), coulomb_smoothing_, qd(j)));
+  }
+
+  // 4. Tool pose, J_t and dJ_t/dt (header section 4).
+  constexpr int kTipChain[6] = {kBase, kUpperArm, kForearm, kGimbalYaw, kGimbalPitch, kGimbalRoll};
+  const M3& R1 = R[kGimbalRoll];
+  const V3 x1 = p[kGimbalRoll] + R1 * tip_;
+  out.pose.x = x1.template cast<double>();
+  out.pose.R = R1.template cast<double>();
+  Eigen::Matrix<T, 6, 6> Jc;  // tree columns of the tip chain, in kTipChain order
+  for (int c = 0; c < 6; ++c) {
+    const int j = kTipChain[c];
+    Jc.col(c).template head<3>() = cross(a[j], x1 - p[j]);
+    Jc.col(c).template tail<3>().noalias() = R1.transpose() * a[j];
+  }
+  tip_chain_to_joint(Jc, out.J_t);
+  if (with_jacobian_rate) {
+    const V3& w1 = w[kGimbalRoll];
+    const V3 xd1 = vo[kGimbalRoll] + cross(w1, x1 - p[kGimbalRoll]);
+    for (int c = 0; c < 6; ++c) {
+      const int j = kTipChain[c];
+      const V3 da = cross(w[j], a[j]);
+      Jc.col(c).template head<3>() = cross(da, x1 - p[j]) + cross(a[j], xd1 - vo[j]);
+      Jc.col(c).template tail<3>().noalias() = R1.transpose() * (da - cross(w1, a[j]));
+    }
+    tip_chain_to_joint(Jc, out.J_t_dot);
+  } else {
+    out.J_t_dot.setZero();
+  }
+}
+
+template <typename T>
+DeviceTerms PhantomDynamics<T>::terms_at(const VecX& q, const Vec6& qd) const {
+  DeviceTerms t;
+  terms(phantom_vec6(q, "q"), qd, false, t);
+  return t;
+}
+
+template <typename T>
+MatX PhantomDynamics<T>::mass_matrix(const VecX& q) const {
+  return terms_at(q, Vec6::Zero()).M;
+}
+
+template <typename T>
+MatX PhantomDynamics<T>::coriolis_matrix(const VecX& q, const VecX& qd) const {
+  return reference_.C(phantom_vec6(q, "q"), phantom_vec6(qd, "qd"));
+}
+
+template <typename T>
+VecX PhantomDynamics<T>::gravity(const VecX& q) const {
+  return terms_at(q, Vec6::Zero()).g;
+}
+
+template <typename T>
+VecX PhantomDynamics<T>::friction_torque(const VecX& q, const VecX& qd) const {
+  return terms_at(q, phantom_vec6(qd, "qd")).tau_f;
+}
+
+template <typename T>
+Pose PhantomDynamics<T>::forward_kinematics(const VecX& q) const {
+  return terms_at(q, Vec6::Zero()).pose;
+}
+
+template <typename T>
+Mat6 PhantomDynamics<T>::twist_to_joint(const VecX& q) const {
+  return terms_at(q, Vec6::Zero()).J_t.partialPivLu().inverse();  // (2.2)
+}
+
+template class PhantomDynamics<double>;
+template class PhantomDynamics<float>;
+
+}  // namespace dentsim::fast
