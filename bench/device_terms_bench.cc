@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "fast/phantom/phantom_model.h"
+#include "plant/mujoco_phantom.h"
 #include "reference/phantom/phantom_model.h"
-#include "validation/mujoco_phantom.h"
 
 namespace dentsim {
 namespace {
@@ -75,7 +75,7 @@ void BM_ReferenceMassMatrix(benchmark::State& state) {
 }
 BENCHMARK(BM_ReferenceMassMatrix);
 
-// MuJoCo on the Phantom's 8-dof tree (validation/mujoco_phantom.h), qpos = G q, qvel = G qd of
+// MuJoCo on the Phantom's 8-dof tree (plant/mujoco_phantom.h), qpos = G q, qvel = G qd of
 // the same states. Arg 0 selects what one iteration computes:
 //   0: mj_crb alone (kinematics and com positions of one state computed beforehand)
 //   1: mj_kinematics + mj_comPos + mj_crb + mj_fullM: the dense M from q

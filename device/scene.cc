@@ -305,12 +305,11 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   rd.at_most("method.grasp_mass_scale", s.method.grasp_mass_scale, kMaxGraspMassScale,
              "a fraction of the hand's mass, 1 = all of it");
   s.method.grip_detector = rd.boolean(m, "method", "grip_detector", false);
-  if (s.method.grip_detector && !(s.method.grasp_mass_scale > 0.0)) {
+  if (s.method.grip_detector &&
+      (s.method.grasp_mass_scale <= 0.0 || s.method.method != Method::kPmiPd)) {
     rd.fail("method.grip_detector",
-            "needs method.grasp_mass_scale > 0 (the hand's mass to detect)");
-  }
-  if (s.method.grip_detector && s.method.method != Method::kPmiPd) {
-    rd.fail("method.grip_detector", "only the pmi-pd method uses the hand's mass");
+            "needs name \"pmi-pd\" and grasp_mass_scale > 0 (it chooses whether the model carries "
+            "the hand's mass)");
   }
   s.method.friction.mu = rd.number(m, "method", "friction_mu", 0.0);
   rd.non_negative("method.friction_mu", s.method.friction.mu);

@@ -158,14 +158,20 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   // tip when the scene asks for it (reference/grasp_mass_model.h): always (a fixed mass), or
   // tick by tick as the grip detector decides (method.grip_detector; then the pipeline's model
   // is the device alone and the detector adds the mass).
+  // The fast pipeline evaluates the same model file through fast::PhantomModel.
+  const SixDofDeviceModel* base = g.model.get();
+  if (options.pipeline == "fast") {
+    g.fast_model = std::make_unique<fast::PhantomModel>(g.params);
+    base = g.fast_model.get();
+  }
   if (scene.method.grasp_mass_scale > 0.0) {
     g.grasp =
-        std::make_unique<GraspMassModel>(*g.model, scene.method.grasp_mass_scale * scene.hand.mass,
+        std::make_unique<GraspMassModel>(*base, scene.method.grasp_mass_scale * scene.hand.mass,
                                          scene.method.grasp_mass_scale * scene.hand.inertia);
   }
   const bool detect = g.grasp && scene.method.grip_detector;
   const SixDofDeviceModel& belief =
-      g.grasp && !detect ? *g.grasp : static_cast<const SixDofDeviceModel&>(*g.model);
+      g.grasp && !detect ? static_cast<const SixDofDeviceModel&>(*g.grasp) : *base;
 
   // Pipeline.
   PipelineConfig pc;
@@ -178,7 +184,7 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   // feel lighter than the device by injecting energy); with the detector, on the gripped model.
   {
     const SixDofDeviceModel& heaviest =
-        g.grasp ? static_cast<const SixDofDeviceModel&>(*g.grasp) : *g.model;
+        g.grasp ? static_cast<const SixDofDeviceModel&>(*g.grasp) : *base;
     const Mat6 J1 = heaviest.twist_to_joint(g.q_home);
     const Mat6 M1 = J1.transpose() * heaviest.mass_matrix(g.q_home) * J1;
     pc.tool = tool_preset(scene.tool.preset, M1 + scene.method.proxy.M());
@@ -319,7 +325,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       }
       view.faults = device.faults();
       view.tooth = &rig->tooth_grid();
-      view.touched_voxels = contacts.contact_voxels();
+      view.touched_voxels = contacts.last_removed();
       options.observer->on_tick(view);
     }
     if (device.faults() != kFaultNone) {

@@ -41,6 +41,7 @@
 #include "device/scripted_hand.h"
 #include "device/simulated_phantom.h"
 #include "device/tick_observer.h"
+#include "fast/phantom/phantom_model.h"
 #include "fast/tooth/tooth_contacts.h"
 #include "reference/grasp_mass_model.h"
 #include "reference/phantom/phantom_model.h"
@@ -125,7 +126,8 @@ struct SceneRigOptions {
 struct SceneRig {
   double tick = 1e-3;  // nominal T [s]
   PhantomParams params;
-  std::unique_ptr<PhantomModel> model;
+  std::unique_ptr<PhantomModel> model;            // the reference model (plant, placement)
+  std::unique_ptr<SixDofDeviceModel> fast_model;  // fast::PhantomModel for the fast pipeline
   VecX q_home;
   Pose home;
   Vec3 anchor = Vec3::Zero();  // the tooth's occlusal anchor (world)

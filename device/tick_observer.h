@@ -33,8 +33,8 @@ struct TickSnapshotView {
   double tick_us = 0.0;                 // wall-clock time of the servo tick (stages + drilling)
   std::array<double, kMaterialCount> removed_volume_mm3{};  // per Material id so far (0 unused)
   std::uint32_t faults = 0;                    // the device's latched fault flags (device/device.h)
-  // The tooth after this tick's drilling, and the flat indices of the voxels the tick's contacts
-  // touched (the only voxels drilling can have removed in this tick).
+  // The tooth after this tick's drilling, and the flat indices of the voxels this tick's
+  // drilling removed (the only voxels that changed; ToothProviderBase::last_removed).
   const VoxelGrid* tooth = nullptr;
   std::span<const std::size_t> touched_voxels;
 };

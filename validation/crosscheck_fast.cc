@@ -11,7 +11,11 @@
 namespace dentsim {
 namespace {
 
-// Largest |a - b|_inf / |a|_inf over the outputs added; exact zero required where a is zero.
+// Largest |a - b|_inf / |a|_inf over the outputs added, where differences of at most 1e-15 (SI
+// units) count as agreement: a near-zero output (C^T qd at qd ~ 1e-9 rad/s is ~1e-20 N m) differs
+// by round-off that is large relative to itself and meaningless (docs/tolerance_policy.md 9).
+constexpr double kAbsoluteFloor = 1e-15;
+
 class Diff {
  public:
   template <class A, class B>
@@ -33,7 +37,7 @@ class Diff {
       max_rel = INFINITY;
       return;
     }
-    if (d == 0.0) return;
+    if (d <= kAbsoluteFloor) return;
     max_rel = std::max(max_rel, scale > 0.0 ? d / scale : INFINITY);
   }
 };

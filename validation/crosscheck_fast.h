@@ -13,8 +13,8 @@
 //   solve         V_hat, the proxy state at k+1, F_contact, F_coupling, T1_pd
 //   command       tau, T1, tau_gravity
 //   drill         the number of voxels removed (exact)
-// max_rel of a stage = the largest over its outputs of |a - b|_inf / |a|_inf (an output whose
-// reference is exactly zero must be exactly zero too), and every count exact.
+// max_rel of a stage = the largest over its outputs of |a - b|_inf / |a|_inf, differences of at
+// most 1e-15 (SI units) counting as agreement, and every count exact.
 //
 // Closed loop: each scene runs on both pipelines from the same start; the per-tick difference of
 // the force fed back to the device |f(T1_fast) - f(T1_ref)| [N] is recorded with the time where it

@@ -12,7 +12,8 @@ int ToothContactProvider::drill(std::span<const Contact> contacts, double T) {
   const std::array<std::int64_t, kMaterialCount> removed_before = drill_state_.removed_voxels;
   const bool pulp_before = drill_state_.pulp_exposed;
   const std::uint8_t material = heaviest_material(contacts);
-  const int removed = drill_tick(contacts, voxels_, tip_, drill_params_, T, &tooth_, &drill_state_);
+  const int removed =
+      drill_tick(contacts, voxels_, tip_, drill_params_, T, &tooth_, &drill_state_, &removed_);
   record_drill(contacts, material, removed_before, pulp_before);
   return removed;
 }

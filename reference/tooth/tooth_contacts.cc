@@ -38,12 +38,14 @@ ToothProviderBase::ToothProviderBase(const VoxelGrid& grid, ToolTip tip, double 
     drill_log_.reserve(kDrillLogCapacity);
   }
   voxels_.reserve(kContactCapacity);
+  removed_.reserve(kContactCapacity);
 }
 
 std::size_t ToothProviderBase::begin_query(std::vector<Contact>& out) {
   ++ticks_;
   out.clear();
   voxels_.clear();
+  removed_.clear();
   return std::min(out.capacity(), voxels_.capacity());
 }
 
@@ -104,14 +106,15 @@ int ToothContactProvider::drill(std::span<const Contact> contacts, double T) {
   if (model_ == ContactModel::kSurfaceProxy) {
     if (drill_contacts_.empty()) return 0;
     material = heaviest_material(drill_contacts_);
-    removed =
-        drill_tick(drill_contacts_, drill_voxels_, tip_, drill_params_, T, &tooth_, &drill_state_);
+    removed = drill_tick(drill_contacts_, drill_voxels_, tip_, drill_params_, T, &tooth_,
+                         &drill_state_, &removed_);
     drill_contacts_.clear();
     drill_voxels_.clear();
   } else {
     if (!can_drill(contacts)) return 0;
     material = heaviest_material(contacts);
-    removed = drill_tick(contacts, voxels_, tip_, drill_params_, T, &tooth_, &drill_state_);
+    removed =
+        drill_tick(contacts, voxels_, tip_, drill_params_, T, &tooth_, &drill_state_, &removed_);
   }
   record_drill(contacts, material, removed_before, pulp_before);
   return removed;

@@ -58,6 +58,8 @@ class ToothProviderBase : public ContactProvider {
   // whose drilling first opened the pulp (0: not yet; DrillState::pulp_exposed).
   const std::vector<DrillRecord>& drill_log() const { return drill_log_; }
   long pulp_exposed_tick() const { return pulp_exposed_tick_; }
+  // The flat indices of the voxels the last tick's drilling removed (empty if none).
+  const std::vector<std::size_t>& last_removed() const { return removed_; }
 
  protected:
   // `grid`: the tooth's grid (sizes the drill state when `drill` is set).
@@ -81,6 +83,7 @@ class ToothProviderBase : public ContactProvider {
   DrillParams drill_params_;
   DrillState drill_state_;
   std::vector<std::size_t> voxels_;
+  std::vector<std::size_t> removed_;  // voxels removed by the last drill()
   long ticks_ = 0;  // contacts() calls
   long pulp_exposed_tick_ = 0;
   bool have_surface_z_ = false;

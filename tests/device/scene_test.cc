@@ -99,8 +99,7 @@ TEST(Scene, BadFieldsAreNamed) {
 // Values that used to run to the end with null/inf in the report, or wrap silently (issue #18),
 // are rejected at the door with the field named.
 TEST(Scene, OutOfRangeValuesAreRejectedWithTheField) {
-  EXPECT_EQ(error_of("\"observer_gain_per_s\": 30", "\"observer_gain_per_s\": 30, "
-                     "\"grasp_mass_scale\": 1e300"),
+  EXPECT_EQ(error_of("\"grasp_mass_scale\": 1.0", "\"grasp_mass_scale\": 1e300"),
             "bad.json: method.grasp_mass_scale: must be at most 10 (a fraction of the hand's mass, "
             "1 = all of it; got 1e+300)");
   EXPECT_EQ(error_of("\"bur_radius_mm\": 0.5", "\"bur_radius_mm\": 1e5"),
@@ -108,13 +107,13 @@ TEST(Scene, OutOfRangeValuesAreRejectedWithTheField) {
             "radius; got 100000)");
   EXPECT_EQ(error_of("\"resolution\": 128", "\"resolution\": 4294967424"),
             "bad.json: tooth.resolution: expected an integer in [32, 512], got 4294967424");
-  EXPECT_EQ(error_of("\"k_vc_n_per_m\": 700", "\"k_vc_n_per_m\": 1e400"),
+  EXPECT_EQ(error_of("\"k_vc_n_per_m\": 1200", "\"k_vc_n_per_m\": 1e400"),
             "bad.json: method.k_vc_n_per_m: number '1e400' is outside the range of a double "
             "(|x| < 1.8e308)");
-  EXPECT_EQ(error_of("\"k_vc_n_per_m\": 700", "\"k_vc_n_per_m\": 700, \"k_vc_n_per_m\": 70"),
+  EXPECT_EQ(error_of("\"k_vc_n_per_m\": 1200", "\"k_vc_n_per_m\": 1200, \"k_vc_n_per_m\": 70"),
             "bad.json: method.k_vc_n_per_m: key given twice in one object (JSON would silently "
             "keep the last)");
-  EXPECT_THAT(error_of("\"k_tooth_n_per_m\": 3000", "\"k_tooth_n_per_m\": 1e200"),
+  EXPECT_THAT(error_of("\"k_tooth_n_per_m\": 12000", "\"k_tooth_n_per_m\": 1e200"),
               ::testing::HasSubstr("bad.json: tooth.k_tooth_n_per_m: must be at most 1e+07"));
   EXPECT_THAT(error_of("\"offset_mm\": [0, 0, 6]", "\"offset_mm\": [0, 0, 1e300]"),
               ::testing::HasSubstr("bad.json: hand.script[0].offset_mm: must be at most 1000"));
