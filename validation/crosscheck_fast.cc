@@ -130,6 +130,9 @@ void check_stages(const FastCrosscheckOptions& o, FastCrosscheckResult* out) {
   Scene scene = load_scene("drill");
   scene.method.grasp_mass_scale = 1.0;  // exercise the hand's terms and the grip detector too
   scene.method.grip_detector = true;
+  // The face contact model: the one with a fast twin (fast/tooth/), so `collide` and `drill`
+  // compare the brick tooth with the reference octree.
+  scene.tooth.contact_model = "faces";
   SceneRigOptions ro;
   ro.pipeline = "reference";
   const std::unique_ptr<SceneRig> ref = build_scene_rig(scene, ro);
@@ -199,7 +202,10 @@ void check_stages(const FastCrosscheckOptions& o, FastCrosscheckResult* out) {
 
 void check_scene(const std::string& name, const StageTable& table, const FastCrosscheckOptions& o,
                  FastCrosscheckResult* out) {
-  const Scene scene = load_scene(name);
+  // "NAME:faces": the built-in scene with the face contact model (the one with a fast twin).
+  const std::size_t colon = name.find(':');
+  Scene scene = load_scene(name.substr(0, colon));
+  if (colon != std::string::npos) scene.tooth.contact_model = name.substr(colon + 1);
   SceneRigOptions ro;
   ro.pipeline = "reference";
   const std::unique_ptr<SceneRig> a = build_scene_rig(scene, ro);

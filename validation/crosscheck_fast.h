@@ -2,7 +2,7 @@
 // closed loop (issue #14 "Differential testing"; docs/tolerance_policy.md).
 //
 // Stage by stage (open loop, every implementation of the registry, fast/registry.h): the
-// reference pipeline runs a scene in closed loop, one stage at a time; before each stage its data
+// reference pipeline runs the drill scene (face contact model, grip detector on) in closed loop, one stage at a time; before each stage its data
 // is copied and the other implementation's stage runs on the copy, with that implementation's
 // device model and environment (fast::PhantomModel, fast::ToothContactProvider over a fast tooth
 // kept in the same drilled state). The stage's outputs are compared:
@@ -32,7 +32,9 @@ namespace dentsim {
 struct FastCrosscheckOptions {
   long stage_ticks = 2000;        // ticks of the drill scene checked stage by stage
   double scene_duration_s = 5.0;  // closed-loop run per scene
-  std::vector<std::string> scenes = {"drill", "probe"};
+  // Built-in scenes; "NAME:faces" runs one with the face contact model (whose tooth has a fast
+  // twin; the scenes' default surface-proxy contact runs the reference provider in both).
+  std::vector<std::string> scenes = {"drill", "probe", "drill:faces"};
   double max_rel_bound = 1e-9;  // per stage (the policy's aim is 1e-12; see the doc)
 };
 
