@@ -37,7 +37,7 @@ const char* kMeshFs = R"(#version 330 core
 in vec3 v_normal;
 in vec3 v_world;
 flat in int v_material;
-uniform vec3 u_palette[4];
+uniform vec3 u_palette[8];
 uniform int u_use_color;
 uniform vec4 u_color;
 uniform vec3 u_eye;
@@ -46,7 +46,7 @@ out vec4 frag;
 void main() {
   vec3 n = normalize(v_normal);
   if (!gl_FrontFacing) n = -n;
-  vec3 albedo = u_use_color != 0 ? u_color.rgb : u_palette[clamp(v_material, 0, 3)];
+  vec3 albedo = u_use_color != 0 ? u_color.rgb : u_palette[clamp(v_material, 0, 7)];
   vec3 v = normalize(u_eye - v_world);
   vec3 h = normalize(u_light + v);
   float d = max(dot(n, u_light), 0.0);
@@ -325,11 +325,14 @@ void GlRenderer::draw(const OrbitCamera& camera, const TickSnapshot* tick,
   glUniformMatrix4fv(loc("u_view_proj"), 1, GL_FALSE, view_proj.data());
   glUniform3fv(loc("u_eye"), 1, eye.data());
   glUniform3fv(loc("u_light"), 1, light.data());
-  float palette[12] = {};
+  // One colour per material id (the shader's u_palette holds up to 8: enamel, dentin, pulp,
+  // caries, ...).
+  static_assert(kMaterialCount <= 8, "u_palette in the shader holds 8 materials");
+  float palette[3 * 8] = {};
   for (int m = 1; m < kMaterialCount; ++m) {
     for (int c = 0; c < 3; ++c) palette[3 * m + c] = material_properties(m).rgb[c] / 255.0f;
   }
-  glUniform3fv(loc("u_palette"), 4, palette);
+  glUniform3fv(loc("u_palette"), 8, palette);
   const GLint u_model = loc("u_model"), u_use = loc("u_use_color"), u_color = loc("u_color");
   const Eigen::Matrix4f identity = Eigen::Matrix4f::Identity();
   glUniformMatrix4fv(u_model, 1, GL_FALSE, identity.data());
