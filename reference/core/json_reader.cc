@@ -130,7 +130,22 @@ JsonReader::Json JsonReader::parse(const std::string& text) const {
 }
 
 void JsonReader::fail(const std::string& field, const std::string& what) const {
-  throw InputError(origin_ + ": " + (field.empty() ? "" : field + ": ") + what);
+  // `what` may quote the file's text (an unknown method name, ...): control bytes never reach the
+  // terminal (written \xNN; found by the scene fuzz target, tests/device/scene_test.cc).
+  std::string safe;
+  safe.reserve(what.size());
+  for (const char c : what) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u < 0x20 || u == 0x7f) {
+      static const char kHex[] = "0123456789abcdef";
+      safe += "\\x";
+      safe += kHex[u >> 4];
+      safe += kHex[u & 15];
+    } else {
+      safe += c;
+    }
+  }
+  throw InputError(origin_ + ": " + (field.empty() ? "" : field + ": ") + safe);
 }
 
 std::string JsonReader::join(const std::string& path, const std::string& key) {

@@ -148,5 +148,14 @@ TEST(Scene, NotJsonAndUnknownScene) {
   }
 }
 
+// Found by the scene fuzz target: a method name with an escape byte was echoed raw in the
+// message (a terminal control sequence); it is written \x1b.
+TEST(Scene, ControlBytesOfTheFileAreEscapedInMessages) {
+  const std::string e = error_of("\"name\": \"pmi-pd\"", "\"name\": \"pmi-p\\u001bd\"");
+  EXPECT_NE(e.find("method.name"), std::string::npos) << e;
+  EXPECT_NE(e.find("pmi-p\\x1bd"), std::string::npos) << e;
+  for (const char c : e) EXPECT_FALSE(static_cast<unsigned char>(c) < 0x20) << e;
+}
+
 }  // namespace
 }  // namespace dentsim
