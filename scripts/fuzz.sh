@@ -2,6 +2,8 @@
 # Runs the libFuzzer targets of tests/fuzz/ (built by scripts/build.sh fuzz) on their seed corpora.
 # Usage: scripts/fuzz.sh [SECONDS_PER_TARGET [target...]]     (default: 20 s, every target)
 #        FUZZ_RUNS=N scripts/fuzz.sh 0 stl                     (a fixed number of executions)
+# FUZZ_SEED (default 1) seeds libFuzzer's mutations: with FUZZ_RUNS the run is reproducible, which
+# is how scripts/test.sh (CI) runs it; the long budgets use time and other seeds.
 # New inputs go to build/fuzz/corpus/<target> (the seeds in tests/fuzz/corpus/<target> are only
 # read); a crash leaves its input in build/fuzz/artifacts/ and makes this script exit 1.
 # Each run prints libFuzzer's final stats (executions, cov, ft) — docs/results/reliability.md.
@@ -19,8 +21,8 @@ for t in "${targets[@]}"; do
   [ -x "$bin" ] || { echo "fuzz.sh: $bin not built (scripts/build.sh fuzz)" >&2; exit 2; }
   [ -n "${dict[$t]:-}" ] || { echo "fuzz.sh: unknown target '$t'" >&2; exit 2; }
   mkdir -p "build/fuzz/corpus/$t"
-  budget=(-max_total_time="$seconds")
-  [ -n "${FUZZ_RUNS:-}" ] && budget=(-runs="$FUZZ_RUNS")
+  budget=(-max_total_time="$seconds" -seed="${FUZZ_SEED:-1}")
+  [ -n "${FUZZ_RUNS:-}" ] && budget=(-runs="$FUZZ_RUNS" -seed="${FUZZ_SEED:-1}")
   echo "== fuzz $t (${FUZZ_RUNS:-$seconds s})"
   # -timeout: one input may take at most 10 s (a hang is a finding); -rss_limit_mb: 2 GB.
   if ! "$bin" "${budget[@]}" -timeout=10 -rss_limit_mb=2048 -max_len=65536 -print_final_stats=1 \

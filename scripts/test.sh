@@ -2,7 +2,8 @@
 # README command 2: install what is missing, build, and run the whole test suite — first the
 # Release build, then the same suite under AddressSanitizer + UndefinedBehaviorSanitizer, then
 # the fuzz stage: the libFuzzer targets of tests/fuzz/ for a short fixed budget each
-# (FUZZ_SECONDS, default 20 s per target; the long runs: docs/results/reliability.md).
+# (FUZZ_RUNS executions with a fixed seed, default 20000 per target, so CI is reproducible; the
+# long runs: docs/results/reliability.md).
 # Stress suites run in their short form unless DENTSIM_STRESS=full.
 # Usage: scripts/test.sh            (release, asan, fuzz)
 #        scripts/test.sh release    (one flavour; fuzz = only the fuzz stage)
@@ -15,10 +16,10 @@ flavours=("$@")
 [ ${#flavours[@]} -gt 0 ] || flavours=(release asan fuzz)
 for f in "${flavours[@]}"; do
   if [ "$f" = fuzz ]; then
-    echo "== fuzz: build and run each target ${FUZZ_SECONDS:-20} s"
+    echo "== fuzz: build and run each target for ${FUZZ_RUNS:-20000} executions (seed ${FUZZ_SEED:-1})"
     start=$(date +%s)
     scripts/build.sh fuzz
-    scripts/fuzz.sh "${FUZZ_SECONDS:-20}"
+    FUZZ_RUNS=${FUZZ_RUNS:-20000} scripts/fuzz.sh 0
     echo "== fuzz took $(( $(date +%s) - start )) s"
     continue
   fi
