@@ -3,15 +3,13 @@
 #include <Eigen/LU>
 #include <cmath>
 
+#include "reference/pmi.h"
+
 namespace dentsim::fast {
 
 bool pmi_try_solve(const PmiSystem& sys, Vec6* V_hat) {
   if (!sys.A.allFinite() || !sys.b.allFinite()) return false;
-  Vec6 d;
-  for (int i = 0; i < 6; ++i) {
-    const double a = std::abs(sys.A(i, i));
-    d(i) = a > 0.0 ? 1.0 / std::sqrt(a) : 1.0;
-  }
+  const Vec6 d = pmi_scaling(sys.A);  // the reference's scaling (reference/pmi.h)
   const Mat6 As = d.asDiagonal() * sys.A * d.asDiagonal();
   const Eigen::PartialPivLU<Mat6> lu(As);
   const auto U = lu.matrixLU().diagonal().cwiseAbs();

@@ -61,18 +61,22 @@ PmiSystem pmi_inertia_system_unchecked(const ProxyParams& p, const ProxyState& s
   return sys;
 }
 
+Vec6 pmi_scaling(const Mat6& A) {
+  Vec6 d;
+  for (int i = 0; i < 6; ++i) {
+    const double a = std::abs(A(i, i));
+    d(i) = a > 0.0 ? 1.0 / std::sqrt(a) : 1.0;
+  }
+  return d;
+}
+
 namespace {
 
 enum class SolveOutcome { kOk, kSystemNotFinite, kSingular, kResultNotFinite };
 
 SolveOutcome solve_scaled(const PmiSystem& sys, Vec6* V_hat) {
   if (!sys.A.allFinite() || !sys.b.allFinite()) return SolveOutcome::kSystemNotFinite;
-  // Symmetric diagonal scaling with D = diag(1/sqrt|A_ii|): solve (D A D) y = D b, V_hat = D y.
-  Vec6 d;
-  for (int i = 0; i < 6; ++i) {
-    const double a = std::abs(sys.A(i, i));
-    d(i) = a > 0.0 ? 1.0 / std::sqrt(a) : 1.0;
-  }
+  const Vec6 d = pmi_scaling(sys.A);  // solve (D A D) y = D b, V_hat = D y
   const Mat6 As = d.asDiagonal() * sys.A * d.asDiagonal();
   const Eigen::FullPivLU<Mat6> lu(As);
   if (!lu.isInvertible()) return SolveOutcome::kSingular;

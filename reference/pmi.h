@@ -63,6 +63,9 @@ ProxyState pmi_advance(const ProxyState& s, const Vec6& V_hat, double T);
 PmiSystem pmi_inertia_system_unchecked(const ProxyParams& p, const ProxyState& s, double T,
                                        GyroVelocity gyro = GyroVelocity::kStart);
 bool pmi_try_solve(const PmiSystem& sys, Vec6* V_hat);
+// The solve's symmetric diagonal scaling D = diag(1/sqrt|A_ii|) (1 where A_ii = 0): the system
+// solved is (D A D) y = D b, V_hat = D y (pmi_try_solve and its fast twin fast/pmi.h share it).
+Vec6 pmi_scaling(const Mat6& A);
 ProxyState pmi_advance_unchecked(const ProxyState& s, const Vec6& V_hat, double T);
 
 // Kinetic energy 1/2 V^T M V [J].

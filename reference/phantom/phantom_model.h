@@ -365,16 +365,7 @@ void PhantomModelT<T>::fk(const V6& q, V3* x1, M3* R1) const {
 
 template <typename T>
 typename PhantomModelT<T>::M6 PhantomModelT<T>::tool_jacobian(const V6& q) const {
-  const Eigen::Matrix<T, kPhantomTreeDof, 6> G = phantom_tree_map().cast<T>();
-  const Kinematics k = kinematics(q, V6::Zero());
-  const V3 x1 = k.p[kGimbalRoll] + k.R[kGimbalRoll] * tree_.tip;
-  Eigen::Matrix<T, 6, kPhantomTreeDof> Jt = Eigen::Matrix<T, 6, kPhantomTreeDof>::Zero();
-  for (int j = 0; j < kPhantomTreeDof; ++j) {
-    if (!ancestor_or_self(j, kGimbalRoll)) continue;
-    Jt.col(j).template head<3>() = k.a[j].cross(x1 - k.p[j]);              // v1, world
-    Jt.col(j).template tail<3>() = k.R[kGimbalRoll].transpose() * k.a[j];  // w1, body
-  }
-  return Jt * G;
+  return tool_jacobian(kinematics(q, V6::Zero()));
 }
 
 template <typename T>
