@@ -28,6 +28,7 @@ struct ObserverOptions {
   bool no_friction = false;
   bool ideal_sensing = false;
   std::vector<std::string> observer_models;  // NAME=FILE
+  std::string pipeline = "fast";
 };
 
 void setup_observer(CLI::App& app) {
@@ -51,6 +52,10 @@ void setup_observer(CLI::App& app) {
   sub->add_option("--gain", opt->gain, "observer gain L [1/s] on every joint (default 100)");
   sub->add_flag("--no-friction", opt->no_friction,
                 "simulate the device without Coulomb friction (stiction)");
+  sub->add_option("--pipeline", opt->pipeline,
+                  "the implementation evaluating the observer's device models: reference\n"
+                  "(PhantomModel) or fast (fast::PhantomModel, the fast pipeline's)")
+      ->capture_default_str();
   sub->add_flag("--ideal-sensing", opt->ideal_sensing,
                 "exact joint angles and velocities (no quantisation, no estimator)");
   sub->callback([opt] {
@@ -70,10 +75,13 @@ void setup_observer(CLI::App& app) {
     c.gain_L = opt->gain;
     c.device_friction = !opt->no_friction;
     c.ideal_sensing = opt->ideal_sensing;
+    if (opt->pipeline != "reference" && opt->pipeline != "fast") {
+      throw InputError("--pipeline '" + opt->pipeline + "': expected reference or fast");
+    }
+    c.pipeline = opt->pipeline;
     // Named observer models: parse and load them all before running anything.
     std::vector<std::string> names;
-    std::vector<PhantomModel> models;  // reserved: the run list points into it
-    models.reserve(opt->observer_models.size());
+    std::vector<std::unique_ptr<DeviceModel>> models;
     for (const std::string& spec : opt->observer_models) {
       const std::size_t eq = spec.find('=');
       if (eq == std::string::npos || eq == 0 || eq + 1 == spec.size()) {
@@ -85,15 +93,17 @@ void setup_observer(CLI::App& app) {
                          "true model's)");
       }
       names.push_back(name);
-      models.emplace_back(file == "builtin" ? default_phantom_params() : load_phantom_params(file));
+      models.push_back(observer_device_model(
+          file == "builtin" ? default_phantom_params() : load_phantom_params(file), c.pipeline));
     }
     ObserverReport r;
     if (models.empty()) {
       r = run_observer_report(params, c);
     } else {
-      const PhantomModel truth(observer_true_params(params, c));
-      std::vector<NamedObserverModel> list{{"true", &truth}};
-      for (std::size_t i = 0; i < models.size(); ++i) list.push_back({names[i], &models[i]});
+      const std::unique_ptr<DeviceModel> truth =
+          observer_device_model(observer_true_params(params, c), c.pipeline);
+      std::vector<NamedObserverModel> list{{"true", truth.get()}};
+      for (std::size_t i = 0; i < models.size(); ++i) list.push_back({names[i], models[i].get()});
       r = run_observer_models(params, c, list);
     }
     std::fputs(observer_report_table(r).c_str(), stdout);

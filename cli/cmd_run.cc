@@ -29,11 +29,12 @@ struct RunCliOptions {
   std::string out = "out/run";
   bool realtime = false;
   double duration = 0.0;
+  double tick_hz = 0.0;  // 0 = the scene's
   bool list = false;
   bool show = false;
   int log_every = 1;
   RunViewOptions view;
-  std::string pipeline = "reference";
+  std::string pipeline = "fast";
   std::string inject_fault;
 };
 
@@ -203,7 +204,11 @@ void run(const RunCliOptions& o) {
   const InjectedFault fault = o.inject_fault.empty()
                                   ? InjectedFault{}
                                   : parse_injected_fault(o.inject_fault, "--inject-fault");
-  const Scene scene = load_scene(o.scene);
+  const Scene scene =
+      o.tick_hz > 0.0
+          ? load_scene_patched(o.scene, {{"tick_hz", o.tick_hz}},
+                               "at --tick-hz " + std::to_string(static_cast<long>(o.tick_hz)))
+          : load_scene(o.scene);
   std::error_code ec;
   std::filesystem::create_directories(o.out, ec);
   if (ec || !std::filesystem::is_directory(o.out)) {
@@ -263,6 +268,9 @@ void setup_run(CLI::App& app) {
   sub->add_flag("--realtime", o->realtime, "Pace the loop at the tick rate (default: as fast as possible)");
   sub->add_option("--duration", o->duration, "Override the scene's duration [s] (0 = the scene's)")
       ->check(finite_range(0.0, 3600.0));
+  sub->add_option("--tick-hz", o->tick_hz,
+                  "Run the scene at this servo rate [Hz] instead of its tick_hz (100-20000)")
+      ->check(finite_range(100.0, 20000.0));
   sub->add_option("--log-every", o->log_every, "Keep every n-th tick in the time series")
       ->capture_default_str();
   sub->add_option("--pipeline", o->pipeline, "The tick's implementation: " + stage_table_names())

@@ -16,6 +16,7 @@
 
 #include "cli/plot.h"
 #include "cli/registry.h"
+#include "fast/registry.h"
 #include "reference/core/io.h"
 #include "validation/zwidth_experiment.h"
 
@@ -29,6 +30,7 @@ struct ZwidthOptions {
   std::vector<std::string> methods = {"explicit", "pmi", "pmi-pd"};
   std::vector<std::string> operators = {"force", "grip", "tap", "release"};
   std::string testbed = "phantom";
+  std::string pipeline = "fast";
   int threads = 0;
   double hold_s = 5.0;
   double tick_ms = 1.0;
@@ -198,9 +200,9 @@ void print_summary(const ZwidthExperimentResult& r) {
   const ZwidthScenario& sc = r.experiment.scenario;
   const std::vector<ZwidthOperator>& ops = r.experiment.operators;
   std::printf(
-      "testbed %s, T = %.3g ms, device damping at the tip b_d = %.4g N s/m, tip encoder "
-      "quantum %.3g mm\n",
-      testbed_name(sc.testbed), sc.tick * 1e3, r.device_tip_damping_n_s_per_m,
+      "testbed %s, %s pipeline, T = %.3g ms, device damping at the tip b_d = %.4g N s/m, tip "
+      "encoder quantum %.3g mm\n",
+      testbed_name(sc.testbed), sc.pipeline.c_str(), sc.tick * 1e3, r.device_tip_damping_n_s_per_m,
       r.device_tip_quantum_m * 1e3);
   std::printf("%-8s %10s %24s", "method", "thesis", "Z-width [N/m] (gains)");
   for (ZwidthOperator op : ops) std::printf(" %9s", operator_name(op));
@@ -257,6 +259,10 @@ void run_zwidth(const ZwidthOptions& o) {
 
   ZwidthScenario& sc = e.scenario;
   sc.testbed = parse_testbed(o.testbed);
+  if (find_stage_table(o.pipeline) == nullptr) {
+    throw InputError("--pipeline '" + o.pipeline + "': expected one of " + stage_table_names());
+  }
+  sc.pipeline = o.pipeline;
   sc.tick = o.tick_ms * 1e-3;
   sc.hold_s = o.hold_s;
   if (!o.tap_speeds.empty()) {
@@ -333,6 +339,10 @@ void setup_zwidth(CLI::App& app) {
                   "the strictest: the headline Z-width)")
       ->capture_default_str();
   sub->add_option("--testbed", o->testbed, "phantom (simulated Phantom) or axis (1-DoF)")
+      ->capture_default_str();
+  sub->add_option("--pipeline", o->pipeline,
+                  "The tick's implementation: " + stage_table_names() +
+                      " (fast evaluates the Phantom through fast::PhantomModel)")
       ->capture_default_str();
   sub->add_option("--threads", o->threads, "Worker threads (0 = all cores)")
       ->capture_default_str()

@@ -129,6 +129,17 @@ Scene load_scene(const std::string& name_or_path) {
   return parse_scene(read_file(name_or_path), name_or_path);
 }
 
+Scene load_scene_patched(const std::string& name_or_path, const nlohmann::json& patch,
+                         const std::string& what) {
+  const Scene as_written = load_scene(name_or_path);
+  bool builtin = false;
+  for (const std::string& n : builtin_scene_names()) builtin = builtin || n == name_or_path;
+  nlohmann::json doc =
+      nlohmann::json::parse(builtin ? builtin_scene_text(name_or_path) : read_file(name_or_path));
+  doc.merge_patch(patch);
+  return parse_scene(doc.dump(), as_written.origin + " " + what);
+}
+
 ToothSource tooth_source(const SceneTooth& tooth) {
   ToothSource t;
   t.source = tooth.source;

@@ -13,6 +13,7 @@
 // tooth", "0.5 mm into the occlusal surface".
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -99,6 +100,13 @@ Scene parse_scene(const std::string& text, const std::string& origin);
 // A built-in scene by name, or else a scene file by path. Throws InputError naming both
 // possibilities when neither exists.
 Scene load_scene(const std::string& name_or_path);
+// The scene with some of its fields changed (e.g. {"tick_hz": 8000} for `run --tick-hz`, or a
+// tooth resolution for `dentsim bench`): the scene as written is validated first, then again with
+// `patch` merged into its JSON (RFC 7386 merge patch), so every check — a rate-dependent one
+// such as the observer's L T < 1 included — names the field. `what` is added to the scene's origin
+// in messages. Throws InputError like load_scene.
+Scene load_scene_patched(const std::string& name_or_path, const nlohmann::json& patch,
+                         const std::string& what);
 std::vector<std::string> builtin_scene_names();
 // The JSON text of a built-in scene (throws InputError for an unknown name).
 std::string builtin_scene_text(const std::string& name);

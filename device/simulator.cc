@@ -74,6 +74,9 @@ StageStats stats_of(std::vector<double>& v) {
   s.median_us = v[v.size() / 2];
   s.p99_us = v[std::min(v.size() - 1, static_cast<std::size_t>(0.99 * v.size()))];
   s.max_us = v.back();
+  double sum = 0.0;
+  for (double x : v) sum += x;
+  s.mean_us = sum / static_cast<double>(v.size());
   return s;
 }
 
@@ -160,8 +163,16 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   // is the device alone and the detector adds the mass).
   // The fast pipeline evaluates the same model file through fast::PhantomModel.
   const SixDofDeviceModel* base = g.model.get();
+  if (options.float_device_terms && options.pipeline != "fast") {
+    throw InputError("float device terms exist in the fast pipeline only (got pipeline '" +
+                     options.pipeline + "')");
+  }
   if (options.pipeline == "fast") {
-    g.fast_model = std::make_unique<fast::PhantomModel>(g.params);
+    if (options.float_device_terms) {
+      g.fast_model = std::make_unique<fast::PhantomModelFloat>(g.params);
+    } else {
+      g.fast_model = std::make_unique<fast::PhantomModel>(g.params);
+    }
     base = g.fast_model.get();
   }
   if (scene.method.grasp_mass_scale > 0.0) {
@@ -208,6 +219,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   SceneRigOptions rig_options;
   rig_options.pipeline = options.pipeline;
   rig_options.fault = options.fault;
+  rig_options.float_device_terms = options.float_device_terms;
   const std::unique_ptr<SceneRig> rig = build_scene_rig(scene, rig_options);
   const double T = rig->tick;
   res.device_model =
@@ -292,6 +304,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       smp.t = t;
       smp.contact_force_n = f_contact;
       smp.device_force_n = f_device;
+      smp.device_force = r.T1.head<3>();
       smp.penetration_m = r.max_depth;
       smp.device_penetration_m = d_dev;
       smp.proxy_x = pipeline.proxy().pose.x;

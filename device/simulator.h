@@ -57,6 +57,9 @@ struct RunOptions {
   bool realtime = false;           // pace the loop at the tick rate (sleep to absolute deadlines)
   double duration_override = 0.0;  // > 0: run this long instead of the scene's duration [s]
   int log_every = 1;               // keep every n-th tick in the time series
+  // The fast pipeline's device terms in float (fast::PhantomModelFloat): a point on the
+  // time-against-error curve (`dentsim bench`), never a default. Fast pipeline only.
+  bool float_device_terms = false;
   // Called every ~1 % of the run with the fraction done (progress bar).
   std::function<void(double)> progress;
   // Called once per tick at the end of the loop body, on the loop's thread (device/tick_observer.h;
@@ -69,6 +72,7 @@ struct RunSample {
   double t;
   double contact_force_n;       // |f| on the proxy
   double device_force_n;        // |f| of T1 (fed back to the device)
+  Vec3 device_force;            // f of T1, world [N]
   double penetration_m;         // proxy tip
   double device_penetration_m;  // device tip
   Vec3 proxy_x, device_x;
@@ -82,7 +86,7 @@ struct RunSample {
 };
 
 struct StageStats {
-  double median_us = 0.0, p99_us = 0.0, max_us = 0.0;
+  double median_us = 0.0, p99_us = 0.0, max_us = 0.0, mean_us = 0.0;
 };
 
 struct RunResult {
@@ -121,6 +125,7 @@ struct RunResult {
 struct SceneRigOptions {
   std::string pipeline = "reference";
   InjectedFault fault;
+  bool float_device_terms = false;  // RunOptions::float_device_terms
 };
 
 struct SceneRig {

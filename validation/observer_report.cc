@@ -10,6 +10,7 @@
 #include "device/phantom_device.h"
 #include "reference/core/io.h"
 #include "reference/observer.h"
+#include "fast/phantom/phantom_model.h"
 #include "reference/phantom/phantom_model.h"
 
 namespace dentsim {
@@ -335,13 +336,22 @@ ObserverReport run_observer_models(const PhantomParams& params, const ObserverRe
   return rep;
 }
 
+std::unique_ptr<DeviceModel> observer_device_model(const PhantomParams& params,
+                                                   const std::string& pipeline) {
+  if (pipeline == "reference") return std::make_unique<PhantomModel>(params);
+  if (pipeline == "fast") return std::make_unique<fast::PhantomModel>(params);
+  throw InputError("observer report: unknown pipeline '" + pipeline +
+                   "' (expected reference or fast)");
+}
+
 ObserverReport run_observer_report(const PhantomParams& params,
                                    const ObserverReportConfig& config) {
   check_config(config);
-  const PhantomModel truth(observer_true_params(params, config));
-  const ScaledDeviceModel perturbed(truth, 1.0 + config.model_error, 1.0 + config.model_error);
+  const std::unique_ptr<DeviceModel> truth =
+      observer_device_model(observer_true_params(params, config), config.pipeline);
+  const ScaledDeviceModel perturbed(*truth, 1.0 + config.model_error, 1.0 + config.model_error);
   ObserverReport rep =
-      run_observer_models(params, config, {{"true", &truth}, {"perturbed", &perturbed}});
+      run_observer_models(params, config, {{"true", truth.get()}, {"perturbed", &perturbed}});
   rep.scaled_model_run = true;
   return rep;
 }
@@ -357,7 +367,8 @@ std::string observer_report_json(const ObserverReport& r) {
                  {"t_end_s", c.t_end},
                  {"f_step_n", {c.f_step[0], c.f_step[1], c.f_step[2]}},
                  {"move_amplitude_m", c.move_amplitude},
-                 {"move_period_s", c.move_period}};
+                 {"move_period_s", c.move_period},
+                 {"pipeline", c.pipeline}};
   if (r.scaled_model_run) j["config"]["model_error"] = c.model_error;
   j["expected_lag_s"] = r.expected_lag_s;
   j["device_coulomb_n_m"] = vec_json(r.device_coulomb);

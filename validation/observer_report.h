@@ -39,6 +39,7 @@
 // as a user's model would (the calibration's end-to-end check, docs/calibration.md).
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -88,6 +89,9 @@ struct ObserverReportConfig {
   Vec6 K_d = (Vec6() << 0.01, 0.01, 0.01, 1e-4, 1e-4, 5e-5).finished();  // [N m s/rad]
   HandImpedance hand;  // the operator (literature defaults, scripted_hand.h)
   TickJitter jitter;   // default: constant 1 ms
+  // The implementation evaluating the observer's device models (fast/registry.h): "reference"
+  // (PhantomModel) or "fast" (fast::PhantomModel, the fast pipeline's device terms).
+  std::string pipeline = "reference";
 };
 
 struct ObserverRun {
@@ -119,6 +123,11 @@ struct NamedObserverModel {
   std::string name;
   const DeviceModel* model = nullptr;
 };
+
+// The Phantom model of `params` as the named implementation evaluates it ("reference":
+// PhantomModel, "fast": fast::PhantomModel). Throws InputError for another name.
+std::unique_ptr<DeviceModel> observer_device_model(const PhantomParams& params,
+                                                   const std::string& pipeline);
 
 // The true model of the simulated device of `params` (the analytic PhantomModel's parameters):
 // without Coulomb friction when config.device_friction is off.

@@ -12,6 +12,8 @@
 #include "device/closed_loop.h"
 #include "device/phantom_device.h"
 #include "device/simulated_phantom.h"
+#include "fast/phantom/phantom_model.h"
+#include "fast/registry.h"
 #include "plant/mujoco_plant.h"
 #include "plant/phantom_mjcf.h"
 #include "reference/core/io.h"
@@ -135,6 +137,9 @@ class PhantomRig : public Rig {
  public:
   explicit PhantomRig(const ZwidthScenario& sc)
       : truth_(phantom_truth(sc)), model_(phantom_belief(sc)) {
+    if (sc.pipeline == "fast") {
+      fast_model_ = std::make_unique<fast::PhantomModel>(phantom_belief(sc));
+    }
     SimulatedDeviceConfig cfg;
     cfg.gravity = false;
     if (sc.jitter_half_width > 0.0) {
@@ -146,13 +151,16 @@ class PhantomRig : public Rig {
     dev_ = std::make_unique<SimulatedPhantom>(phantom_plant(truth_), cfg, VecX(sc.phantom_q0));
   }
   Device& device() override { return *dev_; }
-  const SixDofDeviceModel& model() const override { return model_; }
+  const SixDofDeviceModel& model() const override {
+    return fast_model_ ? static_cast<const SixDofDeviceModel&>(*fast_model_) : model_;
+  }
   void set_hand(const ScriptedHand* hand) override { dev_->set_hand(hand); }
   Pose true_tip() const override { return dev_->tip_pose(); }
 
  private:
   PhantomParams truth_;
   PhantomModel model_;
+  std::unique_ptr<fast::PhantomModel> fast_model_;  // the fast pipeline's evaluation of model_
   std::unique_ptr<SimulatedPhantom> dev_;
 };
 
@@ -314,7 +322,8 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
     const Mat6 M1 = J1.transpose() * heaviest.mass_matrix(s0.q) * J1;  // (2.2)
     pc.tool = tool_preset(sc.tool, M1 + sc.proxy.M());              // floor M_L at the start
   }
-  ReferencePipeline pipeline(model, pc);
+  const std::unique_ptr<Pipeline> pipeline_ptr = make_pipeline(sc.pipeline, model, pc);
+  Pipeline& pipeline = *pipeline_ptr;
   ClosedLoop loop(dev, pipeline, wall);
   loop.start();
 

@@ -90,6 +90,10 @@ struct ZwidthScenario {
   double model_damping_scale = 1.0;
 
   // Pipeline.
+  // The tick's implementation (fast/registry.h: "reference", "fast"). With "fast" on the Phantom
+  // testbed the pipeline evaluates the believed model through fast::PhantomModel; the 1-DoF axis
+  // model has one implementation.
+  std::string pipeline = "reference";
   ProxyParams proxy;  // m_2, J_2, b_2
   // b_2 = max(proxy.damping_lin, k_vc T / 2): the thesis's proxy-side passivity condition of PMI
   // virtual coupling (§3.1, b_v >= b_vc (T_k/T_k-1 - 1) / 2 + k_vc T_k / 2), applied to every

@@ -265,6 +265,7 @@ nlohmann::json zwidth_experiment_json(const ZwidthExperimentResult& r) {
   const ZwidthScenario& sc = e.scenario;
   nlohmann::json out;
   out["testbed"] = testbed_name(sc.testbed);
+  out["pipeline"] = sc.pipeline;
   out["tick_s"] = sc.tick;
   out["hold_s"] = sc.hold_s;
   out["tap_speeds_m_s"] = sc.tap_speeds_m_s;

@@ -110,14 +110,14 @@ TEST(ResultsUnchanged, RunProbe) {
 TEST(ResultsUnchanged, ZwidthEveryMethodUnderForceAndGrip) {
   check(
       "zwidth --methods explicit pmi pmi-pd --operators force grip --k-vc 2400 --b-vc 4 "
-      "--k-tooth 6000 --threads 1",
+      "--k-tooth 6000 --threads 1 --pipeline reference",
       "wave1_zwidth_force_grip", "json");
 }
 
 TEST(ResultsUnchanged, ZwidthGripDetector) {
   check(
       "zwidth --methods pmi-pd --operators grip release --k-vc 2400 --b-vc 4 --k-tooth 6000 "
-      "--grasp-mass 1 --grip-detector --threads 1",
+      "--grasp-mass 1 --grip-detector --threads 1 --pipeline reference",
       "wave1_zwidth_grip_detector", "json");
 }
 

@@ -47,27 +47,33 @@ bool consistent(const TickSnapshot& s) {
 TEST(SnapshotChannel, ReaderNeverSeesATornSnapshotAndEndsOnTheLatest) {
   SnapshotChannel ch(8);
   const long n = 200000;
-  std::atomic<bool> done{false};
-  long reads = 0, torn = 0, backwards = 0;
+  std::atomic<bool> done{false}, started{false};
+  std::atomic<long> reads{0};
+  long torn = 0, backwards = 0;
   std::thread reader([&] {
     TickSnapshot s;
     long last = -1;
+    started.store(true);
     while (!done.load()) {
       if (ch.latest(&s)) {
-        ++reads;
+        reads.fetch_add(1);
         torn += !consistent(s);
         backwards += s.tick < last;
         last = s.tick;
       }
-      if (reads % 64 == 0) std::this_thread::yield();
+      if (reads.load() % 64 == 0) std::this_thread::yield();
     }
   });
+  // On a loaded machine the reader thread may not be scheduled before the writer is done: the
+  // writer starts once the reader runs and stops once it has read at least once.
+  while (!started.load()) std::this_thread::yield();
   for (long k = 0; k < n; ++k) ch.on_tick(view_of(k, nullptr));
+  while (reads.load() == 0) std::this_thread::yield();
   done.store(true);
   reader.join();
   EXPECT_EQ(torn, 0);
   EXPECT_EQ(backwards, 0);
-  EXPECT_GT(reads, 0);
+  EXPECT_GT(reads.load(), 0);
   TickSnapshot last;
   EXPECT_TRUE(ch.latest(&last) || last.tick == n - 1);
   EXPECT_EQ(last.tick, n - 1);
