@@ -30,17 +30,18 @@ struct Options {
 };
 
 void write_pareto(const TimeVsErrorResult& r, const std::string& path) {
-  // Errors are plotted with a floor (the finest run's own error is 0 by construction; on a log
-  // axis it sits at the floor).
-  constexpr double kFloor = 1e-9;
+  // The finest run is the yardstick (its error is 0 by construction): not plotted. Errors of
+  // exactly 0 (a variant equal to the yardstick up to the compared quantity) sit at a floor.
+  constexpr double kFloor = 1e-12;
   plot::Figure rms, vol;
-  rms.title = "Run time against force error (drill scene; each point one variant)";
-  rms.xlabel = vol.xlabel = "servo tick, median [us]";
+  rms.title = "Run time against force error vs " + r.reference_variant + " (each point a variant)";
+  rms.xlabel = vol.xlabel = "servo tick, median [us] (log)";
   rms.ylabel = "force RMS error vs the finest run [N]";
-  vol.title = "Run time against removed-volume error";
+  vol.title = "Run time against removed-volume error vs " + r.reference_variant;
   vol.ylabel = "removed volume error [mm^3]";
-  rms.log_y = vol.log_y = true;
+  rms.log_y = vol.log_y = rms.log_x = vol.log_x = true;
   for (const BenchVariant& v : r.variants) {
+    if (v.name == r.reference_variant) continue;
     plot::Series a;
     a.label = v.name;
     a.points = true;

@@ -1,8 +1,9 @@
 // `dentsim replay FILE --pipeline reference --json OUT`: re-runs a pipeline open-loop on a
 // recorded session (device/session_record.h) and reports how far its torques are from the
 // recorded commands (device/session_replay.h): `ticks`, `max_torque_diff_n_m`,
-// `max_force_diff_n`. The pipeline runs in free space on the default Phantom model with the
-// configuration free_space_pipeline_config() (the one the session context names).
+// `max_force_diff_n`. A session recorded by `dentsim run --record` replays in its scene (the
+// scene's pipeline configuration and a fresh copy of its tooth); others in free space on the
+// default Phantom model (free_space_pipeline_config()). `--pipeline fast|reference`.
 #include <cstdio>
 #include <memory>
 
@@ -21,11 +22,13 @@ struct ReplayOptions {
 
 void replay(const ReplayOptions& o) {
   const Session session = read_session(o.file);
-  const ReplayResult r = replay_free_space_reference(session);
+  bool scene = false;
+  const ReplayResult r = replay_recorded_session(session, o.pipeline, &scene);
   nlohmann::json j;
   j["file"] = o.file;
   j["pipeline"] = o.pipeline;
   j["context"] = session.header.context;
+  j["environment"] = scene ? "the recorded scene (pipeline config, tooth, drilling)" : "free space";
   j["dof"] = session.header.dof;
   j["tick_rate_hz"] = session.header.tick_rate_hz;
   j["ticks"] = r.ticks;
@@ -33,6 +36,8 @@ void replay(const ReplayOptions& o) {
   j["max_force_diff_n"] = r.max_force_diff_n;
   j["worst_tick"] = r.worst_tick;
   j["contact_count_mismatches"] = r.contact_count_mismatches;
+  j["first_divergent_tick"] = r.first_divergent_tick;
+  j["max_force_diff_before_divergence_n"] = r.max_force_diff_before_divergence_n;
   if (!o.json.empty()) write_json(o.json, j);
   std::printf("%s: %ld ticks, max torque diff %.3g N m, max force diff %.3g N\n", o.file.c_str(),
               r.ticks, r.max_torque_diff_n_m, r.max_force_diff_n);
@@ -46,7 +51,7 @@ void setup_replay(CLI::App& app) {
       "recorded commands (differential testing on data recorded from a device)");
   sub->add_option("FILE", o->file, "recorded session (dentsim run ... --record FILE)")->required();
   sub->add_option("--pipeline", o->pipeline, "pipeline to re-run")
-      ->check(CLI::IsMember({"reference"}))
+      ->check(CLI::IsMember({"reference", "fast"}))
       ->capture_default_str();
   sub->add_option("--json", o->json, "write the comparison as JSON to this file");
   sub->callback([o] { replay(*o); });

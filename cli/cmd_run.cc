@@ -36,6 +36,7 @@ struct RunCliOptions {
   RunViewOptions view;
   std::string pipeline = "fast";
   std::string inject_fault;
+  std::string record;  // --record FILE
 };
 
 nlohmann::json report_json(const Scene& scene, const RunResult& r) {
@@ -73,6 +74,10 @@ nlohmann::json report_json(const Scene& scene, const RunResult& r) {
   }
   j["timing_us"] = tj;
   j["faults"] = r.faults;
+  if (r.recorded_ticks > 0 || r.record_dropped_ticks > 0) {
+    j["recorded_ticks"] = r.recorded_ticks;
+    j["record_dropped_ticks"] = r.record_dropped_ticks;
+  }
   if (!r.faults.empty()) j["torque_after_fault_n_m"] = r.torque_after_fault_n_m;
   return j;
 }
@@ -204,6 +209,9 @@ void run(const RunCliOptions& o) {
   const InjectedFault fault = o.inject_fault.empty()
                                   ? InjectedFault{}
                                   : parse_injected_fault(o.inject_fault, "--inject-fault");
+  if (!o.record.empty()) {
+    check_output_paths({{"--record", o.record}}, {{"scene", o.scene}});
+  }
   const Scene scene =
       o.tick_hz > 0.0
           ? load_scene_patched(o.scene, {{"tick_hz", o.tick_hz}},
@@ -226,6 +234,7 @@ void run(const RunCliOptions& o) {
   ro.realtime = o.realtime;
   ro.duration_override = o.duration;
   ro.log_every = o.log_every;
+  ro.record_path = o.record;
   ro.progress = [&bar](double f) { bar.update(f); };
   const RunResult r = run_scene_with_view(scene, ro, o.view);
   bar.finish();
@@ -279,6 +288,9 @@ void setup_run(CLI::App& app) {
                   "Inject a device fault, KIND@T: nan-sample@T (q[0] NaN from T s on) or "
                   "inf-sample@T (qd[0] infinite); the run must end in a named fault with zero "
                   "torque and its report written");
+  sub->add_option("--record", o->record,
+                  "Record every tick's device sample, command and contact count to FILE (a "
+                  "session for `dentsim replay`; kept up to a fault)");
   sub->add_flag("--list", o->list, "List the built-in scenes");
   sub->add_flag("--view", o->view.view,
                 "Show the simulation live in a 3-D window, paced at real time (docs/view.md)");

@@ -161,6 +161,7 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
                          "tool", "device", "method", "proxy", "hand"});
   Scene s;
   s.origin = origin;
+  s.text = text;
   s.version = static_cast<int>(rd.integer(doc, "", "dentsim_scene", -1, 0, 1000));
   if (s.version != 1) {
     rd.fail("dentsim_scene", "unsupported or missing scene format version (expected 1)");

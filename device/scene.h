@@ -82,6 +82,7 @@ struct Scene {
   std::string name;
   std::string description;
   std::string origin;                  // where it was loaded from (for messages)
+  std::string text;                    // the JSON it was parsed from (recorded sessions keep it)
   double duration = 1.0;               // [s]
   double tick_hz = 1000.0;
   SceneTooth tooth;

@@ -1,10 +1,15 @@
 #include "device/session_replay.h"
 
 #include <cmath>
+#include <memory>
+#include <nlohmann/json.hpp>
 
 #include "device/device.h"
 #include "device/velocity_estimator.h"
 #include "reference/core/io.h"
+#include "device/simulator.h"
+#include "fast/phantom/phantom_model.h"
+#include "fast/registry.h"
 #include "reference/phantom/phantom_model.h"
 
 namespace dentsim {
@@ -31,7 +36,15 @@ ReplayResult replay_session(const Session& session, Pipeline& pipeline, ContactP
       r.worst_tick = static_cast<long>(k);
     }
     const Vec6 W = model.twist_to_joint(rec.sample.q).transpose() * d;
-    r.max_force_diff_n = std::max(r.max_force_diff_n, W.head<3>().norm());
+    const double df = W.head<3>().norm();
+    r.max_force_diff_n = std::max(r.max_force_diff_n, df);
+    if (r.first_divergent_tick < 0) {
+      if (df > kReplayAgreementN || !std::isfinite(df)) {
+        r.first_divergent_tick = static_cast<long>(k);
+      } else {
+        r.max_force_diff_before_divergence_n = std::max(r.max_force_diff_before_divergence_n, df);
+      }
+    }
     if (out.contacts.size() != rec.contacts) ++r.contact_count_mismatches;
     ++r.ticks;
   }
@@ -50,11 +63,35 @@ PipelineConfig free_space_pipeline_config(const VecX& torque_limit) {
 }
 
 ReplayResult replay_free_space_reference(const Session& session) {
+  return replay_recorded_session(session, "reference");
+}
+
+ReplayResult replay_recorded_session(const Session& session, const std::string& pipeline,
+                                     bool* scene_replayed) {
+  if (find_stage_table(pipeline) == nullptr) {
+    throw InputError("replay: unknown pipeline '" + pipeline + "' (expected one of " +
+                     stage_table_names() + ")");
+  }
+  const nlohmann::json context =
+      nlohmann::json::parse(session.header.context, nullptr, /*allow_exceptions=*/false);
+  const bool has_scene = context.is_object() && context.contains("scene");
+  if (scene_replayed != nullptr) *scene_replayed = has_scene;
+  if (has_scene) {
+    const Scene scene = parse_scene(context["scene"].dump(), "the recorded session's scene");
+    SceneRigOptions o;
+    o.pipeline = pipeline;
+    const std::unique_ptr<SceneRig> rig = build_scene_rig(scene, o);
+    return replay_session(session, *rig->pipeline, *rig->contacts, *rig->model);
+  }
   const PhantomParams params = default_phantom_params();
   const PhantomModel model(params);
-  ReferencePipeline pipeline(model, free_space_pipeline_config(params.torque_limit_n_m));
+  const fast::PhantomModel fast_model(params);
+  const SixDofDeviceModel& belief =
+      pipeline == "fast" ? static_cast<const SixDofDeviceModel&>(fast_model) : model;
+  const std::unique_ptr<Pipeline> p =
+      make_pipeline(pipeline, belief, free_space_pipeline_config(params.torque_limit_n_m));
   NoContacts contacts;
-  return replay_session(session, pipeline, contacts, model);
+  return replay_session(session, *p, contacts, model);
 }
 
 }  // namespace dentsim

@@ -23,7 +23,14 @@ struct ReplayResult {
   double max_force_diff_n = 0.0;
   long worst_tick = -1;               // index of the record with the largest torque difference
   long contact_count_mismatches = 0;  // ticks whose contact count differs from the recording
+  // The first record whose force difference exceeds kReplayAgreementN (-1: none): before it the
+  // replay agrees with the recording to round-off; a discrete event (a voxel removed one tick
+  // apart) makes them part there (docs/results/fast_crosscheck.md).
+  long first_divergent_tick = -1;
+  double max_force_diff_before_divergence_n = 0.0;
 };
+
+inline constexpr double kReplayAgreementN = 1e-9;  // [N] (docs/tolerance_policy.md item 9)
 
 // Throws InputError if the session's dof is not the model's.
 ReplayResult replay_session(const Session& session, Pipeline& pipeline, ContactProvider& contacts,
@@ -35,7 +42,16 @@ ReplayResult replay_session(const Session& session, Pipeline& pipeline, ContactP
 PipelineConfig free_space_pipeline_config(const VecX& torque_limit);
 
 // replay_session() through the reference pipeline with free_space_pipeline_config() on the
-// default Phantom model (default_phantom_params()), no contacts: `dentsim replay` today.
+// default Phantom model (default_phantom_params()), no contacts.
 ReplayResult replay_free_space_reference(const Session& session);
+
+// `dentsim replay`: a session whose context holds a scene (`dentsim run ... --record`: {"scene":
+// the scene's JSON, "pipeline": ...}) is replayed through that scene's pipeline configuration and
+// a fresh copy of its tooth (contacts and drilling as in the run), with the implementation
+// `pipeline` ("reference", "fast"); any other session in free space as
+// replay_free_space_reference, with that implementation. `scene_replayed` (optional) says which.
+// Throws InputError for an unknown pipeline or a context scene that does not parse.
+ReplayResult replay_recorded_session(const Session& session, const std::string& pipeline,
+                                     bool* scene_replayed = nullptr);
 
 }  // namespace dentsim

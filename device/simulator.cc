@@ -1,5 +1,7 @@
 #include "device/simulator.h"
 
+#include "device/session_record.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -9,6 +11,7 @@
 
 #include "device/closed_loop.h"
 #include "device/phantom_device.h"
+#include "device/session_record.h"
 #include "device/simulated_phantom.h"
 #include "fast/registry.h"
 #include "reference/core/io.h"
@@ -243,6 +246,23 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   VecX q_true_prev = device.true_q();
   const auto wall_start = std::chrono::steady_clock::now();
   long next_progress = 0;
+  // The recorder (RunOptions::record_path): its writer thread drains a preallocated ring; the
+  // loop copies the tick's input sample into rec_sample (no allocation: same sizes) and pushes.
+  std::unique_ptr<SessionWriter> recorder;
+  DeviceSample rec_sample = loop.sample();
+  if (!options.record_path.empty()) {
+    SessionHeader h;
+    h.dof = device.dof();
+    h.tick_rate_hz = scene.tick_hz;
+    const nlohmann::json context = {{"scene", nlohmann::json::parse(scene.text)},
+                                    {"scene_origin", scene.origin},
+                                    {"pipeline", res.pipeline},
+                                    {"duration_s", duration}};
+    h.context = context.dump();
+    const std::size_t capacity =
+        static_cast<std::size_t>(std::min<long>(n_ticks + 2, 1L << 18));
+    recorder = std::make_unique<SessionWriter>(options.record_path, h, capacity);
+  }
   loop.start();
   if (loop.faulted()) {
     res.faults.push_back(std::string(loop.fault_name()) +
@@ -255,7 +275,12 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     const auto t0 = std::chrono::steady_clock::now();
     const double t = loop.sample().t;
     q_true_prev = device.true_q();
+    if (recorder) rec_sample = loop.sample();
     const TickResult& r = loop.step();
+    if (recorder) {
+      recorder->push(static_cast<std::uint64_t>(k), rec_sample, r.tau,
+                     static_cast<std::uint32_t>(r.contacts.size()));
+    }
     if (loop.faulted()) {
       // The loop latched a tick fault and commanded zero torque: end the run here; the report
       // and the time series up to the fault are kept.
@@ -351,6 +376,11 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     }
   }
   if (options.progress) options.progress(1.0);
+  if (recorder) {
+    recorder->stop();  // drains every pushed tick, the faulting one included
+    res.recorded_ticks = static_cast<long>(recorder->written());
+    res.record_dropped_ticks = static_cast<long>(recorder->dropped());
+  }
 
   res.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   res.simulated_s = res.ticks * T;

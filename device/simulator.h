@@ -60,6 +60,10 @@ struct RunOptions {
   // The fast pipeline's device terms in float (fast::PhantomModelFloat): a point on the
   // time-against-error curve (`dentsim bench`), never a default. Fast pipeline only.
   bool float_device_terms = false;
+  // Non-empty: record every tick's device sample, command and contact count to this file
+  // (device/session_record.h; the context holds the scene's JSON and the pipeline, so that
+  // `dentsim replay` can rebuild the environment). The file is complete up to a fault.
+  std::string record_path;
   // Called every ~1 % of the run with the fraction done (progress bar).
   std::function<void(double)> progress;
   // Called once per tick at the end of the loop body, on the loop's thread (device/tick_observer.h;
@@ -117,6 +121,8 @@ struct RunResult {
   std::string device_model;                 // which device model file
   std::string pipeline;                     // the tick's implementation that ran
   double torque_after_fault_n_m = 0.0;      // |tau| applied over the faulting tick (0 expected)
+  long recorded_ticks = 0;                  // ticks written to RunOptions::record_path
+  long record_dropped_ticks = 0;            // ticks the recorder's ring had no room for
 };
 
 // Everything a scene runs on, built once: the simulated Phantom (behind a fault injector when
