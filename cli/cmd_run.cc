@@ -285,9 +285,10 @@ void setup_run(CLI::App& app) {
   sub->add_option("--pipeline", o->pipeline, "The tick's implementation: " + stage_table_names())
       ->capture_default_str();
   sub->add_option("--inject-fault", o->inject_fault,
-                  "Inject a device fault, KIND@T: nan-sample@T (q[0] NaN from T s on) or "
-                  "inf-sample@T (qd[0] infinite); the run must end in a named fault with zero "
-                  "torque and its report written");
+                  "Inject a device fault, KIND@T (T [s]): nan-sample, inf-sample, encoder-jump, "
+                  "frozen, clock-backwards, device-loss end in a named fault with zero torque and "
+                  "the report written; late-tick (one sample 5 periods late) is ridden through "
+                  "(device/fault_injection.h)");
   sub->add_option("--record", o->record,
                   "Record every tick's device sample, command and contact count to FILE (a "
                   "session for `dentsim replay`; kept up to a fault)");

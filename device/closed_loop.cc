@@ -12,8 +12,20 @@ ClosedLoop::ClosedLoop(Device& device, Pipeline& pipeline, ContactProvider& cont
   T_ = device_.capabilities().nominal_period;
 }
 
+void ClosedLoop::set_safety_chain(SafetyChain* chain) {
+  safety_ = chain;
+  tau_safe_ = VecX::Zero(device_.dof());
+}
+
+const char* ClosedLoop::fault_name() const {
+  if (fault_ != TickStatus::kOk || device_faults_ == kFaultNone) return tick_status_name(fault_);
+  return dentsim::fault_name(static_cast<DeviceFault>(device_faults_ & (~device_faults_ + 1u)));
+}
+
 void ClosedLoop::start() {
   device_.read(sample_);
+  device_faults_ = kFaultNone;
+  if (safety_ != nullptr) safety_->start(sample_.t);
   fault_ = pipeline_.reset(sample_);
   fault_t_ = sample_.t;
   T_ = device_.capabilities().nominal_period;
@@ -28,14 +40,29 @@ const TickResult& ClosedLoop::step() {
     fault_ = r.status;
     fault_t_ = sample_.t;
   }
+  if (!faulted() && safety_ != nullptr) {
+    const std::uint32_t f = safety_->apply(sample_, r.tau, -1.0, nullptr, tau_safe_);
+    if (f != kFaultNone) {
+      device_faults_ = f;
+      fault_t_ = sample_.t;
+    }
+  }
   if (faulted()) {
     tau_cmd_.setZero();  // the latch: zero torque from the faulting tick on
   } else {
-    tau_cmd_ = r.tau;
+    tau_cmd_ = safety_ != nullptr ? tau_safe_ : r.tau;
   }
   device_.write(tau_cmd_);
   device_.advance();
   device_.read(next_);
+  if (safety_ != nullptr && !faulted() && device_.faults() != kFaultNone) {
+    // The device reported a fault over this tick (lost, its own command chain): latch it and
+    // command zero torque at once.
+    device_faults_ = device_.faults();
+    fault_t_ = next_.t;
+    tau_cmd_.setZero();
+    device_.write(tau_cmd_);
+  }
   // Passivity observer: the torque held over the tick times the joint displacement.
   if (!faulted()) {
     energy_ += (device_.applied_torque() - r.tau_gravity).dot(next_.q - sample_.q);

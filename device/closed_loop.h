@@ -16,6 +16,13 @@
 // advanced, so a simulated device still moves under the hand); the owner of the loop reads
 // fault() and ends the run, writing its report. Nothing in step() allocates or throws.
 //
+// With a safety chain (set_safety_chain; device/safety_chain.h, one definition for every backend)
+// the tick's torque passes through it before the device: the chain's guards on the sample (clock
+// not advancing or going backwards, encoder jumps, velocity, workspace) and on the command latch
+// a device fault (named after its flag: "non_monotonic_time", "encoder_jump", ...) with zero
+// torque on that very tick; a fault the device itself reports after a tick (a lost device, its
+// own command chain) latches too, and zero torque is written at once.
+//
 // Passivity observer at the device port: E_v = sum_k (tau_k - tau_g,k)^T (q_k+1 - q_k), the
 // energy the virtual side put into the device through the motors, from the torque actually
 // applied (after the device's command chain) less the pipeline's gravity compensation tau_g (which
@@ -24,7 +31,10 @@
 // hold) up to encoder quantisation; E_v <= 0 means passive.
 #pragma once
 
+#include <cstdint>
+
 #include "device/device.h"
+#include "device/safety_chain.h"
 #include "reference/tick.h"
 
 namespace dentsim {
@@ -40,6 +50,9 @@ class ClosedLoop {
   // Hand the pipeline the device's nominal period every tick instead of the measured one (an
   // ideal simulated device whose tick is exact by construction).
   void use_nominal_period(bool on) { nominal_ = on; }
+  // Runs every command through `chain` (nullptr: none) and latches the device's own faults; the
+  // chain must outlive the loop. Call before start().
+  void set_safety_chain(SafetyChain* chain);
   // One tick: read, tick, write, advance. Returns the tick's result (valid until the next step).
   const TickResult& step();
 
@@ -47,10 +60,13 @@ class ClosedLoop {
   double energy_virtual_j() const { return energy_; }     // E_v so far
   double last_tick_length() const { return T_; }
   long ticks() const { return ticks_; }
-  // The latched fault (kOk while none), its name, and the time of the sample it was raised on.
+  // The latched tick fault (kOk while none), the latched device faults (safety chain or device;
+  // kFaultNone while none), the name of the first (the tick's status name, else the lowest device
+  // flag's name), and the time of the sample it was raised on.
   TickStatus fault() const { return fault_; }
-  bool faulted() const { return fault_ != TickStatus::kOk; }
-  const char* fault_name() const { return tick_status_name(fault_); }
+  std::uint32_t device_faults() const { return device_faults_; }
+  bool faulted() const { return fault_ != TickStatus::kOk || device_faults_ != kFaultNone; }
+  const char* fault_name() const;
   double fault_time() const { return fault_t_; }
   // The torque commanded on the last step (zero once faulted) [N m].
   const VecX& commanded_torque() const { return tau_cmd_; }
@@ -67,6 +83,9 @@ class ClosedLoop {
   TickStatus fault_ = TickStatus::kOk;
   double fault_t_ = 0.0;
   bool nominal_ = false;
+  SafetyChain* safety_ = nullptr;
+  VecX tau_safe_;
+  std::uint32_t device_faults_ = kFaultNone;
 };
 
 }  // namespace dentsim

@@ -15,11 +15,26 @@ const char* kind_name(InjectedFault::Kind k) {
       return "nan-sample";
     case InjectedFault::kInfSample:
       return "inf-sample";
+    case InjectedFault::kEncoderJump:
+      return "encoder-jump";
+    case InjectedFault::kFrozen:
+      return "frozen";
+    case InjectedFault::kClockBackwards:
+      return "clock-backwards";
+    case InjectedFault::kLateTick:
+      return "late-tick";
+    case InjectedFault::kDeviceLoss:
+      return "device-loss";
     case InjectedFault::kNone:
       break;
   }
   return "none";
 }
+
+constexpr InjectedFault::Kind kKinds[] = {InjectedFault::kNanSample,      InjectedFault::kInfSample,
+                                          InjectedFault::kEncoderJump,    InjectedFault::kFrozen,
+                                          InjectedFault::kClockBackwards, InjectedFault::kLateTick,
+                                          InjectedFault::kDeviceLoss};
 
 }  // namespace
 
@@ -27,20 +42,18 @@ InjectedFault parse_injected_fault(const std::string& text, const std::string& w
   const auto fail = [&](const std::string& why) {
     std::ostringstream m;
     m << what << " '" << text << "': " << why
-      << "expected KIND@T with KIND nan-sample or inf-sample and T >= 0 [s]";
+      << "expected KIND@T with KIND one of nan-sample, inf-sample, encoder-jump, frozen, "
+         "clock-backwards, late-tick, device-loss and T >= 0 [s]";
     throw InputError(m.str());
   };
   const auto at = text.find('@');
   if (at == std::string::npos) fail("");
   const std::string kind = text.substr(0, at), time = text.substr(at + 1);
   InjectedFault f;
-  if (kind == "nan-sample") {
-    f.kind = InjectedFault::kNanSample;
-  } else if (kind == "inf-sample") {
-    f.kind = InjectedFault::kInfSample;
-  } else {
-    fail("unknown kind '" + kind + "'; ");
+  for (InjectedFault::Kind k : kKinds) {
+    if (kind == kind_name(k)) f.kind = k;
   }
+  if (f.kind == InjectedFault::kNone) fail("unknown kind '" + kind + "'; ");
   std::size_t used = 0;
   double t = 0.0;
   try {
@@ -63,9 +76,33 @@ std::string injected_fault_string(const InjectedFault& f) {
 }
 
 void FaultInjectingDevice::read(DeviceSample& out) const {
+  if (holding_) {  // frozen or lost: the same sample again
+    out.q = held_.q;
+    out.qd = held_.qd;
+    out.t = held_.t;
+    return;
+  }
   inner_.read(out);
   if (out.t < fault_.at_s) return;
+  const double T = inner_.capabilities().nominal_period;
   switch (fault_.kind) {
+    case InjectedFault::kEncoderJump:
+      out.q(0) += 0.5;
+      break;
+    case InjectedFault::kFrozen:
+    case InjectedFault::kDeviceLoss:
+      held_.q = out.q;
+      held_.qd = out.qd;
+      held_.t = out.t;
+      holding_ = true;
+      lost_ = fault_.kind == InjectedFault::kDeviceLoss;
+      break;
+    case InjectedFault::kClockBackwards:
+      out.t -= 2.0 * T;
+      break;
+    case InjectedFault::kLateTick:
+      out.t += 4.0 * T;
+      break;
     case InjectedFault::kNanSample:
       out.q(0) = std::numeric_limits<double>::quiet_NaN();
       break;

@@ -18,6 +18,8 @@ SafetyLimits phantom_safety_limits(const VecX& q_min, const VecX& q_max) {
   l.q_min = q_min;
   l.q_max = q_max;
   l.watchdog_s = 1e-3;
+  l.monotonic_time = true;
+  l.max_joint_step = 0.1;
   return l;
 }
 
@@ -52,10 +54,12 @@ SafetyChain::SafetyChain(SafetyLimits limits) : limits_(std::move(limits)) {
     throw InputError("safety limits: tau_max must be positive on every joint");
   }
   if (!(limits_.ramp_time_s >= 0.0) || !(limits_.watchdog_s >= 0.0) ||
-      !(limits_.nominal_period > 0.0)) {
-    throw InputError("safety limits: ramp_time_s, watchdog_s must be >= 0, nominal_period > 0");
+      !(limits_.nominal_period > 0.0) || !(limits_.max_joint_step >= 0.0)) {
+    throw InputError(
+        "safety limits: ramp_time_s, watchdog_s, max_joint_step must be >= 0, nominal_period > 0");
   }
   tau_prev_ = VecX::Zero(n);
+  q_prev_ = VecX::Zero(n);
 }
 
 void SafetyChain::start(double t) {
@@ -80,6 +84,8 @@ std::uint32_t SafetyChain::apply(const DeviceSample& s, const VecX& tau_cmd, dou
                                  const double* motor_temperature, VecX& tau_out) noexcept {
   const Eigen::Index n = tau_prev_.size();
   const double T = have_prev_ && s.t > t_prev_ ? s.t - t_prev_ : limits_.nominal_period;
+  const bool had_prev = have_prev_;
+  const double t_last = t_prev_;
   t_prev_ = s.t;
   have_prev_ = true;
   std::uint32_t f = kFaultNone;
@@ -98,7 +104,13 @@ std::uint32_t SafetyChain::apply(const DeviceSample& s, const VecX& tau_cmd, dou
     }
   }
   // 4. guards on the sample and the device's signals.
+  if (had_prev && limits_.monotonic_time && !(s.t > t_last)) f |= kFaultNonMonotonicTime;
   for (Eigen::Index i = 0; i < n; ++i) {
+    if (had_prev && limits_.max_joint_step > 0.0 &&
+        !(std::abs(s.q[i] - q_prev_[i]) <= limits_.max_joint_step)) {
+      f |= kFaultEncoderJump;
+    }
+    q_prev_[i] = s.q[i];
     if (limits_.qd_max.size() == n && !(std::abs(s.qd[i]) <= limits_.qd_max[i])) {
       f |= kFaultVelocityLimit;
     }

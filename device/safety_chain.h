@@ -6,7 +6,9 @@
 //   2. torque rate limit   tau_i = clamp(tau_cmd,i, tau_prev,i -+ rate_i T_k)  (T_k = t_k - t_k-1,
 //                          the nominal period on the first tick; tau_prev the last output)
 //   3. saturation          tau_i = clamp(tau_i, -tau_max,i, tau_max,i)
-//   4. guards              |qd_i| > qd_max,i                          -> velocity_limit
+//   4. guards              t_k <= t_k-1 (monotonic_time)              -> non_monotonic_time
+//                          |q_k,i - q_k-1,i| > max_joint_step         -> encoder_jump
+//                          |qd_i| > qd_max,i                          -> velocity_limit
 //                          q_i outside [q_min,i, q_max,i]             -> workspace_limit
 //                          watchdog: last tick's execution time > budget -> watchdog
 //                          motor temperature_i >= max (warm motors)   -> motor_temperature
@@ -35,11 +37,16 @@ struct SafetyLimits {
   double motor_temperature_max = 0.9;  // normalised 0..1 (device's HD_MOTOR_TEMPERATURE scale)
   double ramp_time_s = 0.5;            // ramp-in duration [s] (0: no ramp)
   double nominal_period = 1e-3;        // T of the first tick [s]
+  // The sample's own guards: a clock that does not advance (a frozen or backwards device clock,
+  // the same sample repeated) and an encoder that jumps (a lost frame, a cable fault).
+  bool monotonic_time = false;  // t_k <= t_k-1 is a fault
+  double max_joint_step = 0.0;  // [rad] |q_k - q_k-1| beyond it on any joint (0: no guard)
 };
 
 // Defaults for the Phantom Premium 1.5/6DoF: tau_max = phantom_tau_max(), rate 200 tau_max per s
 // (full scale in 5 ms), qd_max 20 rad/s per joint (the hardware trips HD_EXCEEDED_MAX_VELOCITY
-// beyond; unpublished, an assumption), workspace = joint ranges (`q_min`, `q_max`), watchdog 1 ms.
+// beyond; unpublished, an assumption), workspace = joint ranges (`q_min`, `q_max`), watchdog 1 ms,
+// monotonic time, encoder jumps beyond 0.1 rad per tick.
 SafetyLimits phantom_safety_limits(const VecX& q_min, const VecX& q_max);
 
 class SafetyChain {
@@ -65,7 +72,7 @@ class SafetyChain {
 
  private:
   SafetyLimits limits_;
-  VecX tau_prev_;
+  VecX tau_prev_, q_prev_;
   double t_prev_ = 0.0, t_start_ = 0.0;
   bool have_prev_ = false;
   std::uint32_t faults_ = kFaultNone;

@@ -69,6 +69,8 @@ Vec3 occlusal_anchor(const VoxelGrid& g) {
 // Device penetrations below this (the Phantom's tip resolution, ~0.03 mm, PHANTOM.md) are
 // encoder noise and do not enter the stiffness fit.
 constexpr double kMinDepthForStiffness = 3e-5;
+// The loop owner's velocity guard [rad/s] (phantom_safety_limits' value, device/safety_chain.h).
+constexpr double kSceneMaxJointSpeed = 20.0;
 
 StageStats stats_of(std::vector<double>& v) {
   StageStats s;
@@ -210,7 +212,16 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   pc.torque_limit = g.params.torque_limit_n_m;
   if (detect) pc.grasp_model = g.grasp.get();
   g.pipeline = make_pipeline(options.pipeline, belief, pc);
+  SafetyLimits limits;
+  limits.tau_max = g.params.torque_limit_n_m;
+  limits.qd_max = VecX::Constant(g.device->dof(), kSceneMaxJointSpeed);
+  limits.ramp_time_s = 0.0;
+  limits.nominal_period = g.tick;
+  limits.monotonic_time = true;
+  limits.max_joint_step = g.device->limits().max_joint_step;
+  g.safety = std::make_unique<SafetyChain>(limits);
   g.loop = std::make_unique<ClosedLoop>(*loop_device, *g.pipeline, *g.contacts);
+  g.loop->set_safety_chain(g.safety.get());
   return rig;
 }
 

@@ -153,6 +153,10 @@ struct SceneRig {
   std::unique_ptr<ScriptedHand> hand;
   std::unique_ptr<GraspMassModel> grasp;
   std::unique_ptr<Pipeline> pipeline;
+  // The loop owner's safety chain (device/safety_chain.h): fault thresholds and the sample's
+  // guards (clock, encoder jumps, velocity); no rate limit, ramp or watchdog in simulation, and a
+  // saturation equal to the pipeline's own, so a healthy run's torques are unchanged.
+  std::unique_ptr<SafetyChain> safety;
   std::unique_ptr<ClosedLoop> loop;
 
   // The grid of the tooth the pipeline drills, and the contact set of the tool tip at `pose` on

@@ -123,6 +123,42 @@ TEST(SafetyChain, ExternalFaultLatchesZeroAndClearRampsIn) {
   EXPECT_EQ(out, VecX(0.25 * cmd));
 }
 
+// The sample's own guards (issue #18): a clock that does not advance and an encoder that jumps.
+TEST(SafetyChain, ClockNotAdvancingLatchesZero) {
+  SafetyLimits l = two_joint_limits();
+  l.monotonic_time = true;
+  SafetyChain chain(l);
+  VecX out = VecX::Zero(2);
+  const VecX ok = (VecX(2) << 0.125, -0.125).finished();
+  chain.start(0.0);
+  EXPECT_EQ(chain.apply(sample(0.0), ok, 0.0, nullptr, out), kFaultNone);  // first: no previous
+  EXPECT_EQ(chain.apply(sample(T), ok, 0.0, nullptr, out), kFaultNone);
+  EXPECT_EQ(chain.apply(sample(T), ok, 0.0, nullptr, out), kFaultNonMonotonicTime);  // repeated
+  EXPECT_EQ(fault_string(chain.faults()), "non_monotonic_time");
+  EXPECT_EQ(out, VecX::Zero(2));
+  chain.start(0.0);
+  EXPECT_EQ(chain.apply(sample(2 * T), ok, 0.0, nullptr, out), kFaultNone);
+  EXPECT_EQ(chain.apply(sample(T), ok, 0.0, nullptr, out), kFaultNonMonotonicTime);  // backwards
+  EXPECT_EQ(out, VecX::Zero(2));
+  // Without the guard the same samples pass.
+  Fixture f;
+  EXPECT_EQ(f.chain.apply(sample(0.0), f.ok, 0.0, nullptr, f.out), kFaultNone);
+}
+
+TEST(SafetyChain, EncoderJumpLatchesZero) {
+  SafetyLimits l = two_joint_limits();
+  l.max_joint_step = 0.125;
+  SafetyChain chain(l);
+  VecX out = VecX::Zero(2);
+  const VecX ok = (VecX(2) << 0.125, -0.125).finished();
+  chain.start(0.0);
+  EXPECT_EQ(chain.apply(sample(0.0, 0.0), ok, 0.0, nullptr, out), kFaultNone);
+  EXPECT_EQ(chain.apply(sample(T, 0.125), ok, 0.0, nullptr, out), kFaultNone);  // at the limit
+  EXPECT_EQ(chain.apply(sample(2 * T, 0.25 + 1.0 / 64), ok, 0.0, nullptr, out), kFaultEncoderJump);
+  EXPECT_EQ(fault_string(chain.faults()), "encoder_jump");
+  EXPECT_EQ(out, VecX::Zero(2));
+}
+
 TEST(SafetyChain, RateLimitThenSaturation) {
   SafetyChain chain(two_joint_limits());
   VecX out = VecX::Zero(2);

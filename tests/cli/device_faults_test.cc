@@ -1,0 +1,85 @@
+// Device-side faults injected into the main job (`dentsim run drill --inject-fault KIND@T`, issue
+// #18; device/fault_injection.h): every kind ends in its named fault with zero torque on the
+// faulting tick and the report and time series written up to it; a late tick (missed ticks) is
+// ridden through with the measured tick length.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "tests/support/cli.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Outcome {
+  int status = -1;
+  nlohmann::json report;
+  long series_rows = 0;
+  std::string output;
+};
+
+Outcome inject(const std::string& kind) {
+  const fs::path d = fs::temp_directory_path() / ("dentsim_device_faults_" + kind);
+  fs::remove_all(d);
+  const auto r = dentsim::testing::run_dentsim("run drill --duration 1 --inject-fault " + kind +
+                                               "@0.4 --out " + d.string());
+  Outcome o;
+  o.status = r.status;
+  o.output = r.output;
+  std::ifstream f(d / "report.json");
+  if (f.good()) o.report = nlohmann::json::parse(f);
+  std::ifstream csv(d / "timeseries.csv");
+  std::string line;
+  while (std::getline(csv, line)) ++o.series_rows;
+  return o;
+}
+
+// The run stops at the fault (exit 1), names it, applied zero torque over the faulting tick, and
+// kept the data up to it (400 ticks at 1 kHz before t = 0.4 s).
+void expect_safe_stop(const std::string& kind, const std::string& name) {
+  const Outcome o = inject(kind);
+  EXPECT_EQ(o.status, 1) << o.output;
+  ASSERT_TRUE(o.report.is_object()) << kind << ": no report\n" << o.output;
+  ASSERT_EQ(o.report["faults"].size(), 1u) << o.report["faults"];
+  EXPECT_EQ(o.report["faults"][0].get<std::string>().rfind(name + " at t = 0.", 0), 0u)
+      << o.report["faults"];
+  EXPECT_EQ(o.report["torque_after_fault_n_m"].get<double>(), 0.0);
+  EXPECT_GE(o.report["ticks"].get<long>(), 398);
+  EXPECT_LE(o.report["ticks"].get<long>(), 401);
+  EXPECT_GE(o.series_rows, 399);  // header + every tick before the fault
+}
+
+TEST(DeviceFaults, EncoderJumpStopsSafely) { expect_safe_stop("encoder-jump", "encoder_jump"); }
+
+TEST(DeviceFaults, FrozenDeviceStopsSafely) { expect_safe_stop("frozen", "non_monotonic_time"); }
+
+TEST(DeviceFaults, ClockGoingBackwardsStopsSafely) {
+  expect_safe_stop("clock-backwards", "non_monotonic_time");
+}
+
+TEST(DeviceFaults, LostDeviceStopsSafely) { expect_safe_stop("device-loss", "scheduler_stopped"); }
+
+TEST(DeviceFaults, NanSampleStopsSafely) { expect_safe_stop("nan-sample", "tick_bad_sample"); }
+
+TEST(DeviceFaults, LateTickIsRiddenThrough) {
+  const Outcome o = inject("late-tick");
+  EXPECT_EQ(o.status, 0) << o.output;
+  ASSERT_TRUE(o.report.is_object());
+  EXPECT_TRUE(o.report["faults"].empty()) << o.report["faults"];
+  EXPECT_EQ(o.report["ticks"], 1000);
+  EXPECT_TRUE(o.report["passive_at_hand"].get<bool>());
+  EXPECT_LT(o.report["max_contact_force_n"].get<double>(), 8.5);  // the device's peak force
+}
+
+TEST(DeviceFaults, UnknownKindIsAnInputError) {
+  const auto r = dentsim::testing::run_dentsim("run drill --inject-fault melt@1 --out " +
+                                               (fs::temp_directory_path() / "x").string());
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("unknown kind 'melt'"), std::string::npos) << r.output;
+}
+
+}  // namespace
