@@ -74,6 +74,23 @@ nlohmann::json report_json(const Scene& scene, const RunResult& r) {
   }
   j["timing_us"] = tj;
   j["faults"] = r.faults;
+  if (r.realtime) {
+    const ServoTimingStats& s = *r.realtime;
+    j["realtime"] = {
+        {"ticks", s.ticks},
+        {"overruns", s.overruns},
+        {"skipped_deadlines", s.skipped_deadlines},
+        {"period_us",
+         {{"median", s.period_median_us}, {"p99", s.period_p99_us}, {"max", s.period_max_us}}},
+        {"exec_us",
+         {{"median", s.exec_median_us},
+          {"p99", s.exec_p99_us},
+          {"max", s.exec_max_us},
+          {"mean", s.exec_mean_us}}},
+        {"sched_fifo", s.sched_fifo},
+        {"memory_locked", s.memory_locked},
+        {"warning", s.warning}};
+  }
   if (r.recorded_ticks > 0 || r.record_dropped_ticks > 0) {
     j["recorded_ticks"] = r.recorded_ticks;
     j["record_dropped_ticks"] = r.record_dropped_ticks;
@@ -232,6 +249,7 @@ void run(const RunCliOptions& o) {
   ro.pipeline = o.pipeline;
   ro.fault = fault;
   ro.realtime = o.realtime;
+  ro.realtime_priority = o.realtime;
   ro.duration_override = o.duration;
   ro.log_every = o.log_every;
   ro.record_path = o.record;
@@ -274,7 +292,10 @@ void setup_run(CLI::App& app) {
       "run", "Run the dental simulator on a scene (built-in: probe, drill; or a scene file)");
   sub->add_option("scene", o->scene, "Built-in scene name or scene file (JSON, docs/scenes.md)");
   sub->add_option("--out", o->out, "Output directory")->capture_default_str();
-  sub->add_flag("--realtime", o->realtime, "Pace the loop at the tick rate (default: as fast as possible)");
+  sub->add_flag("--realtime", o->realtime,
+                "Pace the loop at the tick rate on absolute deadlines, at SCHED_FIFO with locked "
+                "memory where permitted (a warning where not); overruns are counted and skipped, "
+                "timing statistics go to report.json `realtime` (default: as fast as possible)");
   sub->add_option("--duration", o->duration, "Override the scene's duration [s] (0 = the scene's)")
       ->check(finite_range(0.0, 3600.0));
   sub->add_option("--tick-hz", o->tick_hz,

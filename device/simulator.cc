@@ -1,10 +1,12 @@
 #include "device/simulator.h"
 
+#include "device/servo_pacer.h"
 #include "device/session_record.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <numbers>
 #include <thread>
@@ -279,15 +281,27 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     res.faults.push_back(std::string(loop.fault_name()) +
                          " at t = " + std::to_string(loop.fault_time()) + " s");
   }
-  for (long k = 0; !loop.faulted() && k < n_ticks; ++k) {
-    if (options.realtime) {
-      std::this_thread::sleep_until(wall_start + std::chrono::duration<double>(k * T));
+  // --realtime: absolute deadlines, overruns counted and skipped (device/servo_pacer.h).
+  std::unique_ptr<ServoPacer> pacer;
+  bool fifo = false, locked = false;
+  if (options.realtime) {
+    pacer = std::make_unique<ServoPacer>(T);
+    std::string warning;
+    if (options.realtime_priority) {
+      request_realtime(&fifo, &locked, &warning);
+      if (!warning.empty()) std::fprintf(stderr, "dentsim run: warning: %s\n", warning.c_str());
     }
+    pacer->set_privileges(fifo, locked, warning);
+    pacer->start();
+  }
+  for (long k = 0; !loop.faulted() && k < n_ticks; ++k) {
+    if (pacer) pacer->wait_next();
     const auto t0 = std::chrono::steady_clock::now();
     const double t = loop.sample().t;
     q_true_prev = device.true_q();
     if (recorder) rec_sample = loop.sample();
     const TickResult& r = loop.step();
+    if (pacer) pacer->tick_done();
     if (recorder) {
       recorder->push(static_cast<std::uint64_t>(k), rec_sample, r.tau,
                      static_cast<std::uint32_t>(r.contacts.size()));
@@ -387,6 +401,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     }
   }
   if (options.progress) options.progress(1.0);
+  if (pacer) {
+    release_realtime(fifo, locked);
+    res.realtime = pacer->stats();
+  }
   if (recorder) {
     recorder->stop();  // drains every pushed tick, the faulting one included
     res.recorded_ticks = static_cast<long>(recorder->written());

@@ -39,6 +39,7 @@
 #include "device/fault_injection.h"
 #include "device/scene.h"
 #include "device/scripted_hand.h"
+#include "device/servo_pacer.h"
 #include "device/simulated_phantom.h"
 #include "device/tick_observer.h"
 #include "fast/phantom/phantom_model.h"
@@ -54,7 +55,9 @@ namespace dentsim {
 struct RunOptions {
   std::string pipeline = "reference";  // the tick's implementation (fast/registry.h)
   InjectedFault fault;                 // a device fault to inject (device/fault_injection.h)
-  bool realtime = false;           // pace the loop at the tick rate (sleep to absolute deadlines)
+  bool realtime = false;           // pace the loop at the tick rate (device/servo_pacer.h)
+  // With realtime: ask for SCHED_FIFO and locked memory (a warning where refused).
+  bool realtime_priority = false;
   double duration_override = 0.0;  // > 0: run this long instead of the scene's duration [s]
   int log_every = 1;               // keep every n-th tick in the time series
   // The fast pipeline's device terms in float (fast::PhantomModelFloat): a point on the
@@ -121,6 +124,7 @@ struct RunResult {
   std::string device_model;                 // which device model file
   std::string pipeline;                     // the tick's implementation that ran
   double torque_after_fault_n_m = 0.0;      // |tau| applied over the faulting tick (0 expected)
+  std::optional<ServoTimingStats> realtime; // --realtime: period and execution-time statistics
   long recorded_ticks = 0;                  // ticks written to RunOptions::record_path
   long record_dropped_ticks = 0;            // ticks the recorder's ring had no room for
 };
