@@ -37,6 +37,8 @@ struct RunCliOptions {
   std::string pipeline = "fast";
   std::string inject_fault;
   std::string record;  // --record FILE
+  std::string device;  // "" = the scene's device.type
+  std::string hd_library;
 };
 
 nlohmann::json report_json(const Scene& scene, const RunResult& r) {
@@ -56,12 +58,17 @@ nlohmann::json report_json(const Scene& scene, const RunResult& r) {
   j["max_penetration_m"] = r.max_penetration_m;
   j["rendered_stiffness_n_per_m"] = r.rendered_stiffness_n_per_m;
   j["virtual_energy_generated_j"] = r.virtual_energy_generated_j;
-  j["hand_work_j"] = r.hand_work_j;
-  j["hand_work_min_j"] = r.hand_work_min_j;
+  j["device"] = r.device;
+  j["hand_work_j"] = r.has_ground_truth ? nlohmann::json(r.hand_work_j) : nlohmann::json(nullptr);
+  j["hand_work_min_j"] =
+      r.has_ground_truth ? nlohmann::json(r.hand_work_min_j) : nlohmann::json(nullptr);
   // Passive toward the hand: it never got back more energy than it put in (tolerance: 1 uJ).
-  j["passive_at_hand"] = r.hand_work_min_j >= -1e-6;
+  // Unknown (null) on a real device: the hand's force is not measured.
+  j["passive_at_hand"] = r.has_ground_truth ? nlohmann::json(r.hand_work_min_j >= -1e-6)
+                                            : nlohmann::json(nullptr);
   j["passive_at_motors"] = r.virtual_energy_generated_j <= 0.0;
-  j["observer_rms_error_n"] = r.observer_rms_error_n;
+  j["observer_rms_error_n"] =
+      r.has_ground_truth ? nlohmann::json(r.observer_rms_error_n) : nlohmann::json(nullptr);
   nlohmann::json rv;
   for (int m = 1; m < kMaterialCount; ++m) rv[material_properties(m).name] = r.removed_volume_mm3[m];
   rv["total"] = r.removed_volume_total_mm3;
@@ -253,6 +260,8 @@ void run(const RunCliOptions& o) {
   ro.duration_override = o.duration;
   ro.log_every = o.log_every;
   ro.record_path = o.record;
+  ro.device = o.device;
+  ro.hd_library = o.hd_library;
   ro.progress = [&bar](double f) { bar.update(f); };
   const RunResult r = run_scene_with_view(scene, ro, o.view);
   bar.finish();
@@ -269,7 +278,9 @@ void run(const RunCliOptions& o) {
               r.max_contact_force_n, r.rms_contact_force_n, r.max_penetration_m * 1e3);
   std::printf("  rendered stiffness %.0f N/m; energy from the motors %.3g J; hand port min %.3g J (%s)\n",
               r.rendered_stiffness_n_per_m, r.virtual_energy_generated_j, r.hand_work_min_j,
-              r.hand_work_min_j >= -1e-6 ? "passive toward the hand" : "ACTIVE toward the hand");
+              !r.has_ground_truth        ? "the hand's force is not measured on this device"
+              : r.hand_work_min_j >= -1e-6 ? "passive toward the hand"
+                                           : "ACTIVE toward the hand");
   std::printf("  removed %.4f mm^3 (enamel %.4f, dentin %.4f, pulp %.4f)\n",
               r.removed_volume_total_mm3, r.removed_volume_mm3[kEnamel],
               r.removed_volume_mm3[kDentin], r.removed_volume_mm3[kPulp]);
@@ -310,6 +321,14 @@ void setup_run(CLI::App& app) {
                   "frozen, clock-backwards, device-loss end in a named fault with zero torque and "
                   "the report written; late-tick (one sample 5 periods late) is ridden through "
                   "(device/fault_injection.h)");
+  sub->add_option("--device", o->device,
+                  "The device: simulated-phantom (the embedded default) or hdapi (a Phantom through "
+                  "OpenHaptics, or the project's emulator; docs/hardware.md); default: the "
+                  "scene's device.type")
+      ->check(CLI::IsMember({"simulated-phantom", "hdapi"}));
+  sub->add_option("--hd-library", o->hd_library,
+                  "With --device hdapi: the HDAPI library to load (default: DENTSIM_HD_LIBRARY, "
+                  "then libHD.so, libHD.so.3.0, ...)");
   sub->add_option("--record", o->record,
                   "Record every tick's device sample, command and contact count to FILE (a "
                   "session for `dentsim replay`; kept up to a fault)");

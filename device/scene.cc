@@ -273,8 +273,8 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   const auto& dv = rd.object(doc, "", "device");
   rd.only_keys(dv, "device", {"type", "model_file", "jitter_us", "quantize", "saturate"});
   s.device.type = rd.string(dv, "device", "type");
-  if (s.device.type != "simulated-phantom") {
-    rd.fail("device.type", "expected \"simulated-phantom\" (the only backend built here), got \"" +
+  if (s.device.type != "simulated-phantom" && s.device.type != "hdapi") {
+    rd.fail("device.type", "expected \"simulated-phantom\" or \"hdapi\" (OpenHaptics), got \"" +
                                s.device.type + "\"");
   }
   s.device.model_file = rd.string(dv, "device", "model_file", "");

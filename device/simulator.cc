@@ -1,18 +1,21 @@
 #include "device/simulator.h"
 
-#include "device/servo_pacer.h"
-#include "device/session_record.h"
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 #include <memory>
 #include <numbers>
 #include <thread>
 
 #include "device/closed_loop.h"
+#include "device/hdapi/hdapi_device.h"
 #include "device/phantom_device.h"
+#include "device/servo_pacer.h"
 #include "device/session_record.h"
 #include "device/simulated_phantom.h"
 #include "fast/registry.h"
@@ -121,10 +124,9 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
     dcfg.jitter.half_width = 1e-6 * scene.device.jitter_us;
   }
   g.device = std::make_unique<SimulatedPhantom>(phantom_plant(g.params), dcfg, g.q_home);
-  Device* loop_device = g.device.get();
-  if (options.fault.kind != InjectedFault::kNone) {
-    g.faulty = std::make_unique<FaultInjectingDevice>(*g.device, options.fault);
-    loop_device = g.faulty.get();
+  const std::string backend = options.device.empty() ? scene.device.type : options.device;
+  if (backend != "simulated-phantom" && backend != "hdapi") {
+    throw InputError("device '" + backend + "': expected simulated-phantom or hdapi");
   }
 
   // Tooth, placed so its occlusal anchor sits at home + anchor_offset.
@@ -222,6 +224,31 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   limits.monotonic_time = true;
   limits.max_joint_step = g.device->limits().max_joint_step;
   g.safety = std::make_unique<SafetyChain>(limits);
+  // The device the loop drives, started last: a device with its own clock (HDAPI's scheduler;
+  // the emulator's scripted hand starts at hdInitDevice) runs from here on.
+  Device* loop_device = g.device.get();
+  if (backend == "hdapi") {
+    // The project's emulator simulates the plant and the hand of the scene named by
+    // DENTSIM_HD_EMU_SCENE (device/hdapi/emulator): hand it this scene, as parsed, unless the
+    // caller chose one; a real device's library ignores the variable.
+    if (std::getenv("DENTSIM_HD_EMU_SCENE") == nullptr) {
+      const std::string path = (std::filesystem::temp_directory_path() /
+                                ("dentsim_hd_scene_" + std::to_string(::getpid()) + ".json"))
+                                   .string();
+      write_file_atomic(path, scene.text);
+      ::setenv("DENTSIM_HD_EMU_SCENE", path.c_str(), 0);
+    }
+    HdapiConfig hc;
+    hc.library = options.hd_library;
+    hc.rate_hz = static_cast<int>(std::lround(scene.tick_hz));
+    g.backend = std::make_unique<HdapiDevice>(hc);
+    loop_device = g.backend.get();
+  }
+  if (options.fault.kind != InjectedFault::kNone) {
+    g.faulty = std::make_unique<FaultInjectingDevice>(*loop_device, options.fault);
+    loop_device = g.faulty.get();
+  }
+  g.loop_device = loop_device;
   g.loop = std::make_unique<ClosedLoop>(*loop_device, *g.pipeline, *g.contacts);
   g.loop->set_safety_chain(g.safety.get());
   return rig;
@@ -236,13 +263,19 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   rig_options.pipeline = options.pipeline;
   rig_options.fault = options.fault;
   rig_options.float_device_terms = options.float_device_terms;
+  rig_options.device = options.device;
+  rig_options.hd_library = options.hd_library;
   const std::unique_ptr<SceneRig> rig = build_scene_rig(scene, rig_options);
   const double T = rig->tick;
   res.device_model =
       scene.device.model_file.empty() ? "default Phantom Premium 1.5A" : scene.device.model_file;
   res.pipeline = rig->pipeline->name();
   res.tooth_before = rig->tooth_before;
-  SimulatedPhantom& device = *rig->device;
+  SimulatedPhantom& device = *rig->device;  // the simulator's ground truth (unless a backend)
+  Device& driven = *rig->loop_device;        // what the loop drives
+  const bool truth = rig->backend == nullptr;
+  res.device = truth ? "simulated-phantom" : "hdapi";
+  res.has_ground_truth = truth;
   ClosedLoop& loop = *rig->loop;
   const Pipeline& pipeline = *rig->pipeline;
   const ToothProviderBase& contacts = *rig->contacts;
@@ -294,11 +327,16 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     pacer->set_privileges(fifo, locked, warning);
     pacer->start();
   }
-  for (long k = 0; !loop.faulted() && k < n_ticks; ++k) {
+  // A device with its own clock (hdapi) runs until its clock has covered the duration (its ticks
+  // need not be the nominal ones); the simulated device for the nominal number of ticks.
+  const double t_begin = loop.sample().t;
+  const long max_ticks = truth ? n_ticks : 4 * n_ticks + 16;
+  for (long k = 0; !loop.faulted() && k < max_ticks; ++k) {
+    if (!truth && loop.sample().t - t_begin >= duration - 0.5 * T) break;
     if (pacer) pacer->wait_next();
     const auto t0 = std::chrono::steady_clock::now();
     const double t = loop.sample().t;
-    q_true_prev = device.true_q();
+    if (truth) q_true_prev = device.true_q();
     if (recorder) rec_sample = loop.sample();
     const TickResult& r = loop.step();
     if (pacer) pacer->tick_done();
@@ -314,7 +352,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       break;
     }
     // Hand port: the hand's joint torques (averaged over the tick) times the true joint motion.
-    hand_work += device.hand_joint_torque().dot(device.true_q() - q_true_prev);
+    if (truth) hand_work += device.hand_joint_torque().dot(device.true_q() - q_true_prev);
     res.hand_work_min_j = std::min(res.hand_work_min_j, hand_work);
     // The servo tick is what a real loop computes: the pipeline's stages and drilling. The
     // simulated device's physics (MuJoCo substeps, hand) runs inside loop.step too and is
@@ -345,7 +383,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       sum_fd += f_device * d_dev;
       sum_dd += d_dev * d_dev;
     }
-    const Vec3 f_hand = device.hand_wrench().head<3>();
+    const Vec3 f_hand = truth ? Vec3(device.hand_wrench().head<3>()) : Vec3::Zero();
     const Vec3 f_obs = r.F1_hat.head<3>();
     sum_obs2 += (f_obs - f_hand).squaredNorm();
     ++res.ticks;
@@ -386,13 +424,13 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       for (int m = 1; m < kMaterialCount && contacts.drills(); ++m) {
         view.removed_volume_mm3[m] = contacts.drill_state().removed_volume_m3(m) * 1e9;
       }
-      view.faults = device.faults();
+      view.faults = driven.faults();
       view.tooth = &rig->tooth_grid();
       view.touched_voxels = contacts.last_removed();
       options.observer->on_tick(view);
     }
-    if (device.faults() != kFaultNone) {
-      res.faults.push_back(fault_string(device.faults()) + " at t = " + std::to_string(t) + " s");
+    if (driven.faults() != kFaultNone) {
+      res.faults.push_back(fault_string(driven.faults()) + " at t = " + std::to_string(t) + " s");
       break;
     }
     if (options.progress && k >= next_progress) {
@@ -412,7 +450,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   }
 
   res.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  res.simulated_s = res.ticks * T;
+  res.simulated_s = truth ? res.ticks * T : loop.sample().t - t_begin;
   res.rms_contact_force_n = res.contact_ticks > 0 ? std::sqrt(sum_f2 / res.contact_ticks) : 0.0;
   res.rendered_stiffness_n_per_m = sum_dd > 0.0 ? sum_fd / sum_dd : 0.0;
   res.virtual_energy_generated_j = loop.energy_virtual_j();
@@ -432,7 +470,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   res.timing.emplace_back("tick", stats_of(stage_us[kStageCount]));
   res.timing.emplace_back("device_simulation", stats_of(stage_us[kStageCount + 1]));
   res.tooth_after = rig->tooth_grid();
-  res.torque_after_fault_n_m = loop.faulted() ? device.applied_torque().norm() : 0.0;
+  res.torque_after_fault_n_m = loop.faulted() ? driven.applied_torque().norm() : 0.0;
   return res;
 }
 

@@ -54,6 +54,8 @@ namespace dentsim {
 
 struct RunOptions {
   std::string pipeline = "reference";  // the tick's implementation (fast/registry.h)
+  std::string device;                  // SceneRigOptions::device
+  std::string hd_library;              // SceneRigOptions::hd_library
   InjectedFault fault;                 // a device fault to inject (device/fault_injection.h)
   bool realtime = false;           // pace the loop at the tick rate (device/servo_pacer.h)
   // With realtime: ask for SCHED_FIFO and locked memory (a warning where refused).
@@ -123,6 +125,10 @@ struct RunResult {
   VoxelGrid tooth_before, tooth_after;      // for pictures
   std::string device_model;                 // which device model file
   std::string pipeline;                     // the tick's implementation that ran
+  std::string device;                       // the backend that ran ("simulated-phantom", "hdapi")
+  // false on a device without the simulator's ground truth (hdapi): the hand's work, the
+  // passivity at the hand and the observer's error against the true hand force are not known.
+  bool has_ground_truth = true;
   double torque_after_fault_n_m = 0.0;      // |tau| applied over the faulting tick (0 expected)
   std::optional<ServoTimingStats> realtime; // --realtime: period and execution-time statistics
   long recorded_ticks = 0;                  // ticks written to RunOptions::record_path
@@ -133,6 +139,12 @@ struct RunResult {
 // asked), the placed voxel tooth and its contact provider, the scripted hand, the pipeline and
 // the loop owner. run_scene drives it; tests drive it tick by tick (the allocation test).
 struct SceneRigOptions {
+  // The device the loop drives: "" = the scene's device.type; "simulated-phantom" (the embedded
+  // default) or "hdapi" (device/hdapi/hdapi_device.h: a Phantom through OpenHaptics, or any library
+  // exporting HDAPI, such as the project's emulator). With hdapi the simulated Phantom is still
+  // built (the placement of the tooth, the scripted hand's geometry) but not stepped.
+  std::string device;
+  std::string hd_library;  // --hd-library ("" = DENTSIM_HD_LIBRARY, then the usual sonames)
   std::string pipeline = "reference";
   InjectedFault fault;
   bool float_device_terms = false;  // RunOptions::float_device_terms
@@ -148,6 +160,8 @@ struct SceneRig {
   Vec3 anchor = Vec3::Zero();  // the tooth's occlusal anchor (world)
   std::unique_ptr<SimulatedPhantom> device;
   std::unique_ptr<FaultInjectingDevice> faulty;  // set when a fault is injected
+  std::unique_ptr<Device> backend;               // the hdapi device, when it drives the loop
+  Device* loop_device = nullptr;                 // what the loop drives (device, backend, faulty)
   VoxelGrid tooth_before;
   std::unique_ptr<VoxelTooth> tooth;        // the reference tooth (drilled by "reference")
   std::unique_ptr<fast::BrickTooth> brick;  // the fast tooth (drilled by "fast")

@@ -32,8 +32,11 @@ for f in "${flavours[@]}"; do
   # Under the sanitizers the calibration suites are left out: Debian ships Ceres only as a
   # static library built without ASan, and its Eigen instantiations collide with ours at link
   # time (a bad-free inside ceres::Covariance's dense SVD). They run in the Release pass.
+  # The emulator-backed run against the direct run paces a real-time scheduler thread: under the
+  # sanitizers' slowdown on a loaded 2-core machine its timing is not the device's; it runs in the
+  # Release pass (the emulator's fault and error tests run in both).
   exclude=()
-  [ "$f" = asan ] && exclude=(-LE calibration)
+  [ "$f" = asan ] && exclude=(-LE calibration -E 'HdapiRun\.EmulatorRunMatchesTheDirectRunAtItsRate')
   (cd "build/$f" && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
      LSAN_OPTIONS="suppressions=$root/scripts/lsan.supp" \
      UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
