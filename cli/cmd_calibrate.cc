@@ -23,6 +23,7 @@
 #include "calibration/log.h"
 #include "cli/plot.h"
 #include "cli/registry.h"
+#include "device/hdapi/hdapi_device.h"
 #include "device/phantom_device.h"
 #include "device/simulated_phantom.h"
 #include "reference/core/io.h"
@@ -34,6 +35,7 @@ namespace {
 
 struct ExciteOptions {
   std::string device, out;
+  std::string hd_library, model;  // --device hdapi: the library, the feed-forward's model file
   double duration = 30.0;
   std::uint64_t seed = 1;
   bool no_friction = false, ideal_sensing = false;
@@ -48,7 +50,16 @@ void setup_excite(CLI::App& app) {
       "torque limits) under joint-space PD tracking on the simulated Phantom and log t, q, qd\n"
       "(driver estimate) and the applied torque to a CSV calibration log");
   sub->add_option("--device", opt->device,
-                  "device model file of the simulated Phantom (default: built-in Premium 1.5A)");
+                  "device model file of the simulated Phantom (default: built-in Premium 1.5A),\n"
+                  "or 'hdapi': a Phantom through OpenHaptics (or the project's emulator), driven\n"
+                  "from where it stands with its command chain active; any fault stops the run,\n"
+                  "zero torque, no log written (docs/hardware.md)");
+  sub->add_option("--hd-library", opt->hd_library,
+                  "with --device hdapi: the HDAPI library (default: DENTSIM_HD_LIBRARY, then\n"
+                  "libHD.so, libHD.so.3.0, ...)");
+  sub->add_option("--model", opt->model,
+                  "with --device hdapi: the device model file of the feed-forward (default:\n"
+                  "built-in Premium 1.5A)");
   sub->add_option("-o,--output", opt->out, "calibration log to write (CSV)")->required();
   sub->add_option("--duration", opt->duration, "length of the run [s] (default 30)");
   sub->add_option("--seed", opt->seed, "seed of the Fourier coefficients, 0..2^64-1 (default 1)")
@@ -66,6 +77,35 @@ void setup_excite(CLI::App& app) {
     if (!(std::isfinite(opt->duration) && opt->duration >= 1.0 && opt->duration <= 3600.0)) {
       throw InputError("--duration: expected 1 <= S <= 3600 s, got " +
                        std::to_string(opt->duration));
+    }
+    if (opt->device == "hdapi") {
+      check_output_paths({{"-o", opt->out}}, {{"--model", opt->model}});
+      const PhantomParams p =
+          opt->model.empty() ? default_phantom_params() : load_phantom_params(opt->model);
+      HdapiConfig hc;
+      hc.library = opt->hd_library;
+      HdapiDevice dev(hc);
+      // A device is wherever its user left it: the excitation starts from the reading.
+      DeviceSample s0 = dev.make_sample();
+      dev.read(s0);
+      ExcitationParams ep;
+      ep.seed = opt->seed;
+      const Excitation exc(p, Vec6(s0.q), ep);
+      CalibrationLog log = run_excitation(dev, p, exc, opt->duration);
+      log.comments.push_back(" device: hdapi (" + dev.info().library + ", model " +
+                             dev.info().model + ", serial " + dev.info().serial + ")");
+      log.comments.push_back(" feed-forward model: " + p.name);
+      log.comments.push_back(" excitation: Fourier f_base " +
+                             std::to_string(ep.base_frequency_hz) + " Hz, " +
+                             std::to_string(ep.harmonics) + " harmonics, seed " +
+                             std::to_string(opt->seed));
+      write_calibration_log(opt->out, log);
+      std::printf("excite: %d samples over %.3f s on the hdapi device -> %s\n", log.size(),
+                  log.t.back() - log.t.front(), opt->out.c_str());
+      return;
+    }
+    if (!opt->hd_library.empty() || !opt->model.empty()) {
+      throw InputError("--hd-library and --model go with --device hdapi");
     }
     check_output_paths({{"-o", opt->out}}, {{"--device", opt->device}});
     const PhantomParams p =

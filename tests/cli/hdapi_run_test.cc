@@ -17,6 +17,7 @@
 // alone (RUN_SERIAL, tests/CMakeLists.txt).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -91,6 +92,37 @@ TEST(HdapiRun, CommErrorEndsInItsNamedFaultWithZeroTorqueAndTheDataWritten) {
   EXPECT_EQ(e["torque_after_fault_n_m"].get<double>(), 0.0);
   EXPECT_GT(e["ticks"].get<long>(), 100);
   EXPECT_TRUE(fs::exists(a / "timeseries.csv"));
+}
+
+// `dentsim excite --device hdapi`: the calibration excitation through the backend, from where the
+// arm stands, with the device's command chain active; a fault stops it with no log written.
+TEST(HdapiRun, ExcitationRunsThroughTheBackendAndStopsOnAFault) {
+  const fs::path d = fresh("excite");
+  fs::create_directories(d);
+  const std::string log = (d / "excite.csv").string();
+  const auto r = dentsim::testing::run_dentsim("excite --duration 2 -o " + log + kEmulator);
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::ifstream f(log);
+  std::string line;
+  long rows = 0;
+  double q2_min = 1e9, q2_max = -1e9;
+  while (std::getline(f, line)) {
+    if (line.empty() || line[0] == '#' || line[0] == 't') continue;
+    ++rows;
+    const std::size_t a = line.find(','), b = line.find(',', a + 1), c = line.find(',', b + 1);
+    const double q2 = std::stod(line.substr(b + 1, c - b - 1));
+    q2_min = std::min(q2_min, q2);
+    q2_max = std::max(q2_max, q2);
+  }
+  EXPECT_GT(rows, 500);              // a sample every one or two scheduler ticks over 2 s
+  EXPECT_GT(q2_max - q2_min, 0.02);  // the arm was excited (rad)
+  const std::string bad = (d / "fault.csv").string();
+  ::setenv("DENTSIM_HD_EMU_COMM_ERROR_AT", "300", 1);
+  const auto e = dentsim::testing::run_dentsim("excite --duration 2 -o " + bad + kEmulator);
+  ::unsetenv("DENTSIM_HD_EMU_COMM_ERROR_AT");
+  EXPECT_NE(e.status, 0) << e.output;
+  EXPECT_NE(e.output.find("hd_comm_error"), std::string::npos) << e.output;
+  EXPECT_FALSE(fs::exists(bad));
 }
 
 TEST(HdapiRun, MissingLibraryIsNamedWithWhereItLooked) {
