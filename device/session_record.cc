@@ -150,8 +150,12 @@ void SessionWriter::stop() {
 Session read_session(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError("session " + path + ": cannot open the file");
-  const std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)),
-                                         std::istreambuf_iterator<char>());
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return parse_session(bytes, path);
+}
+
+Session parse_session(const std::string& file_bytes, const std::string& path) {
+  const std::vector<unsigned char> bytes(file_bytes.begin(), file_bytes.end());
   const std::string where = "session " + path;
   const std::size_t fixed = 8 + 4 + 4 + 8 + 4;
   if (bytes.size() < 8 || std::memcmp(bytes.data(), kSessionMagic, 8) != 0) {

@@ -96,5 +96,7 @@ struct Session {
 // offset: not a session file (bad magic), unsupported version, bad header or record checksum,
 // truncated header or record.
 Session read_session(const std::string& path);
+// The same from the file's bytes (`path` names it in messages; the fuzz target's entry).
+Session parse_session(const std::string& bytes, const std::string& path);
 
 }  // namespace dentsim

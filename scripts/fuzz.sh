@@ -12,8 +12,9 @@ cd "$(dirname "$0")/.."
 seconds=${1:-20}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(stl obj scene device_model calibration_log)
-declare -A dict=([stl]=stl [obj]=obj [scene]=json [device_model]=json [calibration_log]=csv)
+[ ${#targets[@]} -gt 0 ] || targets=(stl obj scene device_model calibration_log session)
+declare -A dict=([stl]=stl [obj]=obj [scene]=json [device_model]=json [calibration_log]=csv
+                [session]=session)
 mkdir -p build/fuzz/artifacts
 status=0
 for t in "${targets[@]}"; do
