@@ -1,0 +1,154 @@
+#include "validation/stress.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "device/scene.h"
+#include "device/simulator.h"
+#include "reference/core/io.h"
+
+namespace dentsim {
+namespace {
+
+double log_uniform(std::mt19937_64& rng, double lo, double hi) {
+  return std::exp(std::uniform_real_distribution<double>(std::log(lo), std::log(hi))(rng));
+}
+
+double uniform(std::mt19937_64& rng, double lo, double hi) {
+  return std::uniform_real_distribution<double>(lo, hi)(rng);
+}
+
+template <typename T, std::size_t N>
+const T& pick(std::mt19937_64& rng, const T (&choices)[N]) {
+  return choices[std::uniform_int_distribution<std::size_t>(0, N - 1)(rng)];
+}
+
+struct Draw {
+  std::string scene, pipeline;
+  nlohmann::json patch;
+};
+
+// One random configuration: a patch of a built-in scene.
+Draw draw(std::mt19937_64& rng, long ticks_per_run) {
+  static const char* const kScenes[] = {"probe", "drill"};
+  static const char* const kMethods[] = {"explicit", "pmi", "pmi-pd"};
+  static const char* const kPipelines[] = {"reference", "fast"};
+  static const double kRates[] = {500.0, 1000.0, 2000.0};
+  static const int kResolutions[] = {64, 128};
+  Draw d;
+  d.scene = pick(rng, kScenes);
+  d.pipeline = pick(rng, kPipelines);
+  const std::string method = pick(rng, kMethods);
+  const double hz = pick(rng, kRates);
+  const double duration = static_cast<double>(ticks_per_run) / hz;
+  nlohmann::json script = nlohmann::json::array();
+  const int keys = 4;
+  for (int k = 0; k < keys; ++k) {
+    const double t = duration * k / (keys - 1);
+    const double z = k == 0 ? uniform(rng, 2.0, 6.0) : uniform(rng, -2.0, 2.0);
+    script.push_back({{"t_s", t},
+                      {"offset_mm", {uniform(rng, -2.0, 2.0), uniform(rng, -2.0, 2.0), z}},
+                      {"force_n",
+                       {uniform(rng, -1.0, 1.0), uniform(rng, -1.0, 1.0),
+                        k == 0 ? 0.0 : -uniform(rng, 0.0, 5.0)}},
+                      {"phase", "stress"}});
+  }
+  d.patch = {{"duration_s", duration},
+             {"tick_hz", hz},
+             {"tooth",
+              {{"resolution", pick(rng, kResolutions)},
+               {"k_tooth_n_per_m", log_uniform(rng, 1000.0, 40000.0)},
+               {"b_tooth_n_s_per_m", uniform(rng, 0.0, 10.0)}}},
+             {"device", {{"jitter_us", uniform(rng, 0.0, 0.4 * 0.5e6 / hz)}}},
+             {"method",
+              {{"name", method},
+               {"k_vc_n_per_m", log_uniform(rng, 100.0, 8000.0)},
+               {"b_vc_n_s_per_m", uniform(rng, 0.0, 12.0)},
+               {"friction_mu", uniform(rng, 0.0, 0.6)}}},
+             {"hand", {{"script", script}}}};
+  if (method != "pmi-pd") d.patch["method"]["grip_detector"] = false;
+  return d;
+}
+
+}  // namespace
+
+StressResult run_stress(const StressConfig& c, const std::function<void(long, long)>& progress) {
+  if (c.ticks < 1 || c.ticks_per_run < 10) {
+    throw InputError("stress: expected ticks >= 1 and ticks_per_run >= 10");
+  }
+  StressResult res;
+  std::mt19937_64 rng(c.seed);
+  auto violate = [&res](const std::string& what) {
+    if (res.violations++ == 0) res.first_violation = what;
+  };
+  while (res.ticks < c.ticks) {
+    const Draw d = draw(rng, c.ticks_per_run);
+    Scene scene;
+    try {
+      scene = load_scene_patched(d.scene, d.patch, "(stress run " + std::to_string(res.runs) + ")");
+    } catch (const InputError&) {
+      ++res.rejected_configs;
+      continue;
+    }
+    SceneRigOptions o;
+    o.pipeline = d.pipeline;
+    const std::unique_ptr<SceneRig> rig = build_scene_rig(scene, o);
+    ClosedLoop& loop = *rig->loop;
+    const Device& device = *rig->loop_device;
+    const VecX& tau_max = rig->device->limits().tau_max;
+    const double rho = rig->tip.radius;
+    const std::string where = "stress seed " + std::to_string(c.seed) + " run " +
+                              std::to_string(res.runs) + " (" + d.scene + ", " + d.pipeline + ", " +
+                              d.patch.dump() + ")";
+    const std::string method = d.patch["method"]["name"].get<std::string>();
+    ++res.runs_by_method[method];
+    bool exploded = false;
+    double run_force = 0.0, run_depth = 0.0;
+    loop.start();
+    double t_prev = loop.sample().t;
+    for (long k = 0; k < c.ticks_per_run && res.ticks < c.ticks && !loop.faulted(); ++k) {
+      const TickResult& r = loop.step();
+      ++res.ticks;
+      const std::string at = where + " tick " + std::to_string(k);
+      const VecX& applied = device.applied_torque();
+      for (Eigen::Index i = 0; i < applied.size(); ++i) {
+        const double ratio = std::abs(applied[i]) / tau_max[i];
+        res.worst_torque_ratio = std::max(res.worst_torque_ratio, ratio);
+        if (!(ratio <= 1.0 + 1e-12))
+          violate("torque beyond the limit on joint " + std::to_string(i + 1) + " at " + at);
+      }
+      if (loop.faulted()) {
+        if (!applied.isZero(0.0)) violate("non-zero torque after the fault at " + at);
+        ++res.faults[loop.fault_name()];
+        break;
+      }
+      if (!r.tau.allFinite() || !r.T1.allFinite() || !rig->pipeline->proxy().pose.x.allFinite() ||
+          !rig->pipeline->proxy().pose.R.allFinite()) {
+        violate("a non-finite output without a fault at " + at);
+      }
+      const double t = loop.sample().t;
+      if (!(t > t_prev)) violate("the device clock did not advance at " + at);
+      t_prev = t;
+      if (!exploded && (rig->pipeline->proxy().pose.x - r.device.x).norm() > 1.0) {
+        exploded = true;
+        ++res.exploded[method];
+        if (method != "explicit") violate("the proxy left the workspace under PMI at " + at);
+      }
+      run_force = std::max(run_force, r.F_contact.head<3>().norm());
+      run_depth = std::max(run_depth, r.max_depth / rho);
+    }
+    if (!exploded) {
+      res.worst_contact_force_n = std::max(res.worst_contact_force_n, run_force);
+      res.worst_depth_over_radius = std::max(res.worst_depth_over_radius, run_depth);
+    }
+    ++res.runs;
+    if (progress) progress(res.ticks, c.ticks);
+  }
+  return res;
+}
+
+}  // namespace dentsim
