@@ -31,15 +31,11 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path fresh(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("dentsim_hdapi_run_" + name);
-  fs::remove_all(d);
-  return d;
+  return dentsim::testing::fresh_temp_dir("dentsim_hdapi_run_" + name);
 }
 
 nlohmann::json report(const fs::path& dir) {
-  std::ifstream f(dir / "report.json");
-  EXPECT_TRUE(f.good()) << dir;
-  return f.good() ? nlohmann::json::parse(f) : nlohmann::json();
+  return dentsim::testing::read_json_file(dir / "report.json");
 }
 
 double rel(const nlohmann::json& a, const nlohmann::json& b) {
@@ -98,7 +94,6 @@ TEST(HdapiRun, CommErrorEndsInItsNamedFaultWithZeroTorqueAndTheDataWritten) {
 // arm stands, with the device's command chain active; a fault stops it with no log written.
 TEST(HdapiRun, ExcitationRunsThroughTheBackendAndStopsOnAFault) {
   const fs::path d = fresh("excite");
-  fs::create_directories(d);
   const std::string log = (d / "excite.csv").string();
   const auto r = dentsim::testing::run_dentsim("excite --duration 2 -o " + log + kEmulator);
   ASSERT_EQ(r.status, 0) << r.output;

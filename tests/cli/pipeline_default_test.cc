@@ -19,16 +19,10 @@ namespace fs = std::filesystem;
 using dentsim::testing::run_dentsim;
 
 fs::path temp_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("dentsim_pipeline_default_" + name);
-  fs::remove_all(d);
-  return d;
+  return dentsim::testing::fresh_temp_dir("dentsim_pipeline_default_" + name);
 }
 
-nlohmann::json read_json(const fs::path& p) {
-  std::ifstream f(p);
-  EXPECT_TRUE(f.good()) << p;
-  return f.good() ? nlohmann::json::parse(f) : nlohmann::json();
-}
+nlohmann::json read_json(const fs::path& p) { return dentsim::testing::read_json_file(p); }
 
 // `dentsim run SCENE ARGS` into a fresh directory; its report.
 nlohmann::json run_report(const std::string& scene, const std::string& args,
@@ -113,7 +107,6 @@ TEST(PipelineDefault, ProbeReportsAgreeToRoundOff) {
 
 TEST(PipelineDefault, ZwidthNamesItsPipelineAndAgrees) {
   const fs::path d = temp_dir("zwidth");
-  fs::create_directories(d);
   const std::string grid =
       "zwidth --methods pmi-pd --operators force grip --k-vc 2400 --b-vc 4 --k-tooth 6000 "
       "--threads 1 --json ";
@@ -135,7 +128,6 @@ TEST(PipelineDefault, ZwidthNamesItsPipelineAndAgrees) {
 
 TEST(PipelineDefault, ObserverReportNamesItsPipelineAndAgrees) {
   const fs::path d = temp_dir("observer");
-  fs::create_directories(d);
   const auto a = run_dentsim("observer-report --json " + (d / "fast.json").string());
   ASSERT_EQ(a.status, 0) << a.output;
   const auto b =

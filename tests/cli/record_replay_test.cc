@@ -20,17 +20,10 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("dentsim_record_replay_" + name);
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
+  return testing::fresh_temp_dir("dentsim_record_replay_" + name);
 }
 
-nlohmann::json read_json(const fs::path& p) {
-  std::ifstream f(p);
-  EXPECT_TRUE(f.good()) << p;
-  return f.good() ? nlohmann::json::parse(f) : nlohmann::json();
-}
+nlohmann::json read_json(const fs::path& p) { return testing::read_json_file(p); }
 
 TEST(RecordReplay, DrillSessionReplaysThroughBothPipelines) {
   const fs::path d = fresh_dir("drill");

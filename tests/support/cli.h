@@ -5,6 +5,9 @@
 #include <sys/wait.h>
 
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 
 namespace dentsim::testing {
@@ -23,6 +26,20 @@ inline CliRun run_dentsim(const std::string& args) {
   while (p && std::fgets(buf, sizeof buf, p)) out += buf;
   const int st = p ? pclose(p) : -1;
   return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, out};
+}
+
+// A fresh, empty directory under the system's temporary directory (removed first if it exists).
+inline std::filesystem::path fresh_temp_dir(const std::string& name) {
+  const std::filesystem::path d = std::filesystem::temp_directory_path() / name;
+  std::filesystem::remove_all(d);
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+// A JSON file's document; null when the file cannot be read (the caller's assertions then fail).
+inline nlohmann::json read_json_file(const std::filesystem::path& p) {
+  std::ifstream f(p);
+  return f.good() ? nlohmann::json::parse(f) : nlohmann::json();
 }
 
 }  // namespace dentsim::testing
