@@ -74,20 +74,29 @@ TEST(HdapiRun, EmulatorRunMatchesTheDirectRunAtItsRate) {
       e["contact_ticks"].get<long>(), d["contact_ticks"].get<long>());
 }
 
-TEST(HdapiRun, CommErrorEndsInItsNamedFaultWithZeroTorqueAndTheDataWritten) {
-  const fs::path a = fresh("comm");
-  // The emulator's switch: from scheduler tick 400 on every frame raises HD_COMM_ERROR.
-  ::setenv("DENTSIM_HD_EMU_COMM_ERROR_AT", "400", 1);
+// One of the emulator's failure switches from scheduler tick 400 on; the run must end in `name`
+// with zero torque over the faulting tick and the report and time series written.
+void expect_named_stop(const char* variable, const std::string& name) {
+  const fs::path a = fresh(name);
+  ::setenv(variable, "400", 1);
   const auto r =
       dentsim::testing::run_dentsim("run probe --duration 2" + kEmulator + " --out " + a.string());
-  ::unsetenv("DENTSIM_HD_EMU_COMM_ERROR_AT");
+  ::unsetenv(variable);
   EXPECT_EQ(r.status, 1) << r.output;
   const nlohmann::json e = report(a);
   ASSERT_EQ(e["faults"].size(), 1u) << e;
-  EXPECT_EQ(e["faults"][0].get<std::string>().rfind("hd_comm_error at t = ", 0), 0u) << e["faults"];
+  EXPECT_EQ(e["faults"][0].get<std::string>().rfind(name + " at t = ", 0), 0u) << e["faults"];
   EXPECT_EQ(e["torque_after_fault_n_m"].get<double>(), 0.0);
   EXPECT_GT(e["ticks"].get<long>(), 100);
   EXPECT_TRUE(fs::exists(a / "timeseries.csv"));
+}
+
+TEST(HdapiRun, CommErrorEndsInItsNamedFaultWithZeroTorqueAndTheDataWritten) {
+  expect_named_stop("DENTSIM_HD_EMU_COMM_ERROR_AT", "hd_comm_error");
+}
+
+TEST(HdapiRun, WarmMotorsEndInTheirNamedFaultWithZeroTorqueAndTheDataWritten) {
+  expect_named_stop("DENTSIM_HD_EMU_WARM_AT", "hd_warm_motors");
 }
 
 // `dentsim excite --device hdapi`: the calibration excitation through the backend, from where the
