@@ -85,9 +85,14 @@ void setup_excite(CLI::App& app) {
       HdapiConfig hc;
       hc.library = opt->hd_library;
       HdapiDevice dev(hc);
-      // A device is wherever its user left it: the excitation starts from the reading.
+      // A device is wherever its user left it: hold it there with the model's gravity
+      // compensation while the excitation is designed (that takes a while: without the hold the
+      // arm falls, and the excitation's first command would then be a large step), and start
+      // the excitation from the reading.
       DeviceSample s0 = dev.make_sample();
       dev.read(s0);
+      const PhantomModel hold_model(p);
+      dev.write(hold_model.gravity(s0.q));
       ExcitationParams ep;
       ep.seed = opt->seed;
       const Excitation exc(p, Vec6(s0.q), ep);
