@@ -144,6 +144,11 @@ StressResult run_stress(const StressConfig& c, const std::function<void(long, lo
     if (!exploded) {
       res.worst_contact_force_n = std::max(res.worst_contact_force_n, run_force);
       res.worst_depth_over_radius = std::max(res.worst_depth_over_radius, run_depth);
+      double& worst = res.worst_depth_by_method[method];
+      if (run_depth > worst) {
+        worst = run_depth;
+        res.worst_depth_run[method] = where;
+      }
     }
     ++res.runs;
     if (progress) progress(res.ticks, c.ticks);

@@ -43,6 +43,10 @@ struct StressResult {
   double worst_torque_ratio = 0.0;     // max |tau_i| / tau_max_i
   double worst_contact_force_n = 0.0;  // max |f| on the proxy
   double worst_depth_over_radius = 0.0;
+  // Per method: the deepest contact / rho over runs whose proxy stayed bounded, and the run that
+  // reached it (scene, pipeline, the scene patch), so a deep contact can be replayed and isolated.
+  std::map<std::string, double> worst_depth_by_method;
+  std::map<std::string, std::string> worst_depth_run;
   // Runs whose proxy left the workspace (more than 1 m from the device: a numerically exploded
   // virtual side, the device saturated and safe), by method. PMI's energy bound forbids it under
   // pmi and pmi-pd; explicit Euler beyond its Z-width is expected to.

@@ -257,7 +257,7 @@ HDCallbackCode HdapiDevice::tick() {
     cmd_mu_.unlock();
   }
   if (f != kFaultNone) faults_.fetch_or(f);
-  if (faults_.load() != kFaultNone || stop) {
+  if (faults_.load() != kFaultNone || stop || force_disabled_.load()) {
     tau_out_.setZero();
   } else {
     tau_out_ = tau_cmd_;
@@ -319,12 +319,22 @@ bool HdapiDevice::wait_ticks(long n) {
                         std::chrono::duration<double>(cfg_.tick_timeout_s * static_cast<double>(n));
   while (ticks_.load() < target) {
     if (std::chrono::steady_clock::now() > deadline) {
-      faults_.fetch_or(kFaultSchedulerStopped);
+      scheduler_timed_out();
       return false;
     }
     std::this_thread::sleep_for(std::chrono::microseconds(50));
   }
   return true;
+}
+
+void HdapiDevice::scheduler_timed_out() {
+  faults_.fetch_or(kFaultSchedulerStopped);
+  if (timed_out_.exchange(true)) return;
+  // From this thread, while the scheduler may still run: an error this pushes is popped (and
+  // named) by the callback's next tick, if there is one; the fault is latched either way. The
+  // library is asked whether output is off: applied_torque() reports zero only then.
+  lib_->hdDisable(hd::kForceOutput);
+  force_disabled_.store(lib_->hdIsEnabled(hd::kForceOutput) == 0);
 }
 
 void HdapiDevice::advance() {
@@ -333,7 +343,7 @@ void HdapiDevice::advance() {
   // Tick k applies the command, tick k+1 publishes the sample after it.
   while (applied_seq_.load() < wait_seq_ || ticks_.load() < applied_tick_.load() + 2) {
     if (std::chrono::steady_clock::now() > deadline) {
-      faults_.fetch_or(kFaultSchedulerStopped);
+      scheduler_timed_out();
       return;
     }
     std::this_thread::sleep_for(std::chrono::microseconds(50));
@@ -342,7 +352,11 @@ void HdapiDevice::advance() {
 
 const VecX& HdapiDevice::applied_torque() const {
   const std::lock_guard<std::mutex> lock(snap_mu_);
-  tau_applied_read_ = tau_applied_snap_;
+  if (force_disabled_.load()) {
+    tau_applied_read_.setZero();  // force output is off: the motors get nothing
+  } else {
+    tau_applied_read_ = tau_applied_snap_;
+  }
   return tau_applied_read_;
 }
 

@@ -99,6 +99,11 @@ class HdapiDevice : public Device {
   // applies from its next tick k on (held until replaced); advance() waits until that tick k has
   // applied it and tick k+1 has published its sample (the sample after the command, as with
   // SimulatedPhantom), at most tick_timeout_s per tick, then latches kFaultSchedulerStopped.
+  // A wait that times out (a stalled scheduler, or a callback the scheduler dropped after DONE)
+  // also disables force output at once from the waiting thread (hdDisable(HD_FORCE_OUTPUT)):
+  // no scheduler tick would apply the zero torque the fault asks for, and the motors would keep
+  // the last torque set. Force output stays disabled until the device is destroyed, and
+  // applied_torque() is zero once the library reports output disabled (hdIsEnabled).
   const DeviceCapabilities& capabilities() const override { return caps_; }
   const DeviceLimits& limits() const override { return limits_; }
   void read(DeviceSample& out) const override;
@@ -126,6 +131,8 @@ class HdapiDevice : public Device {
   static HDCallbackCode servo_callback(void* self);
   HDCallbackCode tick();
   void check(const char* step);  // throws HdapiError on an HD error after `step`
+  // The scheduler did not tick in time: latch kFaultSchedulerStopped and disable force output.
+  void scheduler_timed_out();
   void shutdown();
 
   HdapiConfig cfg_;
@@ -159,6 +166,8 @@ class HdapiDevice : public Device {
   std::atomic<std::uint32_t> faults_{kFaultNone};
   std::atomic<long> ticks_{0};
   std::atomic<bool> done_{false};
+  std::atomic<bool> timed_out_{false};       // scheduler_timed_out() ran
+  std::atomic<bool> force_disabled_{false};  // and the library then reported output disabled
   long cmd_seq_ = 0;                    // write() count (under cmd_mu_)
   long wait_seq_ = 0;                   // the caller's last write()
   long cmd_seq_rt_ = 0;                 // the sequence the callback copied last

@@ -23,6 +23,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "tests/support/cli.h"
 
@@ -74,14 +76,18 @@ TEST(HdapiRun, EmulatorRunMatchesTheDirectRunAtItsRate) {
       e["contact_ticks"].get<long>(), d["contact_ticks"].get<long>());
 }
 
-// One of the emulator's failure switches from scheduler tick 400 on; the run must end in `name`
-// with zero torque over the faulting tick and the report and time series written.
-void expect_named_stop(const char* variable, const std::string& name) {
-  const fs::path a = fresh(name);
+// One of the emulator's failure switches from scheduler tick 400 on (with `extra` variables set
+// as well); the run must end in `name` with zero torque over the faulting tick and the report and
+// time series written.
+void expect_named_stop(const char* variable, const std::string& name,
+                       const std::vector<std::pair<const char*, const char*>>& extra = {}) {
+  const fs::path a = fresh(name + "_" + variable);
   ::setenv(variable, "400", 1);
+  for (const auto& [k, v] : extra) ::setenv(k, v, 1);
   const auto r =
       dentsim::testing::run_dentsim("run probe --duration 2" + kEmulator + " --out " + a.string());
   ::unsetenv(variable);
+  for (const auto& [k, v] : extra) ::unsetenv(k);
   EXPECT_EQ(r.status, 1) << r.output;
   const nlohmann::json e = report(a);
   ASSERT_EQ(e["faults"].size(), 1u) << e;
@@ -97,6 +103,20 @@ TEST(HdapiRun, CommErrorEndsInItsNamedFaultWithZeroTorqueAndTheDataWritten) {
 
 TEST(HdapiRun, WarmMotorsEndInTheirNamedFaultWithZeroTorqueAndTheDataWritten) {
   expect_named_stop("DENTSIM_HD_EMU_WARM_AT", "hd_warm_motors");
+}
+
+// The scheduler stalls for 0.8 s (longer than the backend's 3 x 0.1 s wait): no tick would apply
+// the zero torque the fault asks for, so the backend disables force output from the waiting
+// thread; the motors must not keep the last torque (they did before: 0.100 N m).
+TEST(HdapiRun, SchedulerStallEndsInSchedulerStoppedWithForceOutputDisabled) {
+  expect_named_stop("DENTSIM_HD_EMU_STALL_AT", "scheduler_stopped",
+                    {{"DENTSIM_HD_EMU_STALL_MS", "800"}});
+}
+
+// The scheduler drops our callback (as after HD_CALLBACK_DONE) but keeps running: the last torque
+// set would be held for good (0.077 N m before) unless force output is disabled.
+TEST(HdapiRun, DroppedCallbackEndsInSchedulerStoppedWithForceOutputDisabled) {
+  expect_named_stop("DENTSIM_HD_EMU_DONE_AT", "scheduler_stopped");
 }
 
 // `dentsim excite --device hdapi`: the calibration excitation through the backend, from where the

@@ -40,6 +40,10 @@ TEST(LoopStress, EveryTickKeepsTheInvariants) {
     std::printf("  %s: %ld runs, %ld with the proxy exploded\n", method.c_str(), n,
                 e == r.exploded.end() ? 0L : e->second);
   }
+  for (const auto& [method, depth] : r.worst_depth_by_method) {
+    std::printf("  deepest contact under %s: %.2f rho in %s\n", method.c_str(), depth,
+                r.worst_depth_run.at(method).c_str());
+  }
   EXPECT_EQ(r.violations, 0) << r.first_violation << "\n(re-run: --gtest_random_seed=" << c.seed - 1
                              << ")";
   EXPECT_EQ(r.ticks, c.ticks);
