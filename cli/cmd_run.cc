@@ -39,6 +39,7 @@ struct RunCliOptions {
   std::string record;  // --record FILE
   std::string device;  // "" = the scene's device.type
   std::string hd_library;
+  std::string hd_loop = "callback";
 };
 
 nlohmann::json report_json(const Scene& scene, const RunResult& r) {
@@ -59,6 +60,10 @@ nlohmann::json report_json(const Scene& scene, const RunResult& r) {
   j["rendered_stiffness_n_per_m"] = r.rendered_stiffness_n_per_m;
   j["virtual_energy_generated_j"] = r.virtual_energy_generated_j;
   j["device"] = r.device;
+  if (!r.hd_loop.empty()) {
+    j["hd_loop"] = r.hd_loop;
+    j["callback_dropped_ticks"] = r.callback_dropped_ticks;
+  }
   j["hand_work_j"] = r.has_ground_truth ? nlohmann::json(r.hand_work_j) : nlohmann::json(nullptr);
   j["hand_work_min_j"] =
       r.has_ground_truth ? nlohmann::json(r.hand_work_min_j) : nlohmann::json(nullptr);
@@ -262,6 +267,7 @@ void run(const RunCliOptions& o) {
   ro.record_path = o.record;
   ro.device = o.device;
   ro.hd_library = o.hd_library;
+  ro.hd_loop = o.hd_loop;
   ro.progress = [&bar](double f) { bar.update(f); };
   const RunResult r = run_scene_with_view(scene, ro, o.view);
   bar.finish();
@@ -329,6 +335,13 @@ void setup_run(CLI::App& app) {
   sub->add_option("--hd-library", o->hd_library,
                   "With --device hdapi: the HDAPI library to load (default: DENTSIM_HD_LIBRARY, "
                   "then libHD.so, libHD.so.3.0, ...)");
+  sub->add_option("--hd-loop", o->hd_loop,
+                  "With --device hdapi, where the tick runs: callback (inside the vendor's "
+                  "scheduler callback, every scheduler tick) or caller (this thread through "
+                  "read/write/advance, every second scheduler tick; needed for --inject-fault, "
+                  "--view, --realtime)")
+      ->check(CLI::IsMember({"callback", "caller"}))
+      ->capture_default_str();
   sub->add_option("--record", o->record,
                   "Record every tick's device sample, command and contact count to FILE (a "
                   "session for `dentsim replay`; kept up to a fault)");

@@ -9,6 +9,7 @@ ClosedLoop::ClosedLoop(Device& device, Pipeline& pipeline, ContactProvider& cont
   sample_ = device_.make_sample();
   next_ = device_.make_sample();
   tau_cmd_ = VecX::Zero(device_.dof());
+  tau_gravity_prev_ = VecX::Zero(device_.dof());
   T_ = device_.capabilities().nominal_period;
 }
 
@@ -34,7 +35,7 @@ void ClosedLoop::start() {
   tau_cmd_.setZero();
 }
 
-const TickResult& ClosedLoop::step() {
+const TickResult& ClosedLoop::decide() {
   const TickResult& r = pipeline_.tick(sample_, T_, contacts_);
   if (!faulted() && r.status != TickStatus::kOk) {
     fault_ = r.status;
@@ -52,6 +53,33 @@ const TickResult& ClosedLoop::step() {
   } else {
     tau_cmd_ = safety_ != nullptr ? tau_safe_ : r.tau;
   }
+  return r;
+}
+
+const TickResult& ClosedLoop::step_in_callback(const DeviceSample& s, VecX& tau_out) {
+  if (ticks_ > 0) {
+    // The previous tick, held over [sample_.t, s.t]: its torque times the joint motion.
+    if (!faulted()) energy_ += (tau_cmd_ - tau_gravity_prev_).dot(s.q - sample_.q);
+    const double dt = s.t - sample_.t;
+    if (dt > 0.0 && !nominal_) T_ = dt;
+  }
+  sample_.q = s.q;  // same sizes: no allocation
+  sample_.qd = s.qd;
+  sample_.t = s.t;
+  const std::uint32_t dev = device_.faults();
+  if (safety_ != nullptr && !faulted() && dev != kFaultNone) {
+    device_faults_ = dev;
+    fault_t_ = s.t;
+  }
+  const TickResult& r = decide();
+  tau_gravity_prev_ = r.tau_gravity;
+  tau_out = tau_cmd_;
+  ++ticks_;
+  return r;
+}
+
+const TickResult& ClosedLoop::step() {
+  const TickResult& r = decide();
   device_.write(tau_cmd_);
   device_.advance();
   device_.read(next_);

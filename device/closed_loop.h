@@ -55,6 +55,13 @@ class ClosedLoop {
   void set_safety_chain(SafetyChain* chain);
   // One tick: read, tick, write, advance. Returns the tick's result (valid until the next step).
   const TickResult& step();
+  // The same tick in callback form, for a device whose own clock calls us (HDAPI's scheduler:
+  // HdapiDevice::set_servo_function): `s` is this tick's sample, `tau_out` (sized dof) receives
+  // the torque to apply over it. The previous tick is accounted on `s` first (passivity
+  // observer from the torque this loop handed over, the measured tick length); a fault the device
+  // has latched (faults(): an atomic read) latches here too. Nothing allocates or throws; the
+  // caller must not call step() on the same loop.
+  const TickResult& step_in_callback(const DeviceSample& s, VecX& tau_out);
 
   const DeviceSample& sample() const { return sample_; }  // latest sample (after the last step)
   double energy_virtual_j() const { return energy_; }     // E_v so far
@@ -72,6 +79,9 @@ class ClosedLoop {
   const VecX& commanded_torque() const { return tau_cmd_; }
 
  private:
+  // The pipeline's tick on sample_ through the safety chain into tau_cmd_ (zero once faulted).
+  const TickResult& decide();
+
   Device& device_;
   Pipeline& pipeline_;
   ContactProvider& contacts_;
@@ -85,6 +95,7 @@ class ClosedLoop {
   bool nominal_ = false;
   SafetyChain* safety_ = nullptr;
   VecX tau_safe_;
+  VecX tau_gravity_prev_;  // callback form: the previous tick's gravity compensation
   std::uint32_t device_faults_ = kFaultNone;
 };
 

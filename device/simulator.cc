@@ -12,6 +12,7 @@
 #include <numbers>
 #include <thread>
 
+#include "device/callback_loop.h"
 #include "device/closed_loop.h"
 #include "device/hdapi/hdapi_device.h"
 #include "device/phantom_device.h"
@@ -259,6 +260,21 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   res.scene = scene.name;
   const double duration =
       options.duration_override > 0.0 ? options.duration_override : scene.duration;
+  const std::string backend = options.device.empty() ? scene.device.type : options.device;
+  if (options.hd_loop != "callback" && options.hd_loop != "caller") {
+    throw InputError("--hd-loop '" + options.hd_loop + "': expected callback or caller");
+  }
+  if (backend == "hdapi" && options.hd_loop == "callback") {
+    const char* why = options.fault.kind != InjectedFault::kNone ? "--inject-fault wraps"
+                      : options.observer != nullptr              ? "the view runs on"
+                      : options.realtime                         ? "--realtime paces"
+                                                                 : nullptr;
+    if (why != nullptr) {
+      throw InputError(std::string("with --device hdapi the tick runs in the vendor's callback (") +
+                       "--hd-loop callback), but " + why +
+                       " the caller's loop: add --hd-loop caller");
+    }
+  }
   SceneRigOptions rig_options;
   rig_options.pipeline = options.pipeline;
   rig_options.fault = options.fault;
@@ -274,6 +290,9 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   SimulatedPhantom& device = *rig->device;  // the simulator's ground truth (unless a backend)
   Device& driven = *rig->loop_device;        // what the loop drives
   const bool truth = rig->backend == nullptr;
+  // With HDAPI the tick runs inside the vendor's scheduler callback (RunOptions::hd_loop).
+  const bool callback = !truth && options.hd_loop == "callback";
+  if (!truth) res.hd_loop = options.hd_loop;
   res.device = truth ? "simulated-phantom" : "hdapi";
   res.has_ground_truth = truth;
   ClosedLoop& loop = *rig->loop;
@@ -296,6 +315,9 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   // loop copies the tick's input sample into rec_sample (no allocation: same sizes) and pushes.
   std::unique_ptr<SessionWriter> recorder;
   DeviceSample rec_sample = loop.sample();
+  VecX rec_tau = VecX::Zero(rec_sample.q.size());
+  DeviceSample step_in = loop.sample();  // the direct loop's copy of a tick's input sample
+  TickRecord record;
   if (!options.record_path.empty()) {
     SessionHeader h;
     h.dof = device.dof();
@@ -331,78 +353,71 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   // need not be the nominal ones); the simulated device for the nominal number of ticks.
   const double t_begin = loop.sample().t;
   const long max_ticks = truth ? n_ticks : 4 * n_ticks + 16;
-  for (long k = 0; !loop.faulted() && k < max_ticks; ++k) {
-    if (!truth && loop.sample().t - t_begin >= duration - 0.5 * T) break;
-    if (pacer) pacer->wait_next();
-    const auto t0 = std::chrono::steady_clock::now();
-    const double t = loop.sample().t;
-    if (truth) q_true_prev = device.true_q();
-    if (recorder) rec_sample = loop.sample();
-    const TickResult& r = loop.step();
-    if (pacer) pacer->tick_done();
+  double t_end = t_begin;  // the device clock at the end of the last tick consumed
+
+  // The measurements of one tick, whichever thread ran it (the direct loop below, or the vendor's
+  // scheduler callback: device/callback_loop.h). False ends the run.
+  auto consume = [&](const TickRecord& rec, double device_us) -> bool {
+    const long k = rec.k;
+    const double t = rec.t;
     if (recorder) {
-      recorder->push(static_cast<std::uint64_t>(k), rec_sample, r.tau,
-                     static_cast<std::uint32_t>(r.contacts.size()));
+      rec_sample.q = rec.q.head(rec_sample.q.size());
+      rec_sample.qd = rec.qd.head(rec_sample.qd.size());
+      rec_sample.t = rec.t;
+      rec_tau = rec.tau_pipeline.head(rec_tau.size());
+      recorder->push(static_cast<std::uint64_t>(k), rec_sample, rec_tau,
+                     static_cast<std::uint32_t>(rec.contacts));
     }
-    if (loop.faulted()) {
-      // The loop latched a tick fault and commanded zero torque: end the run here; the report
-      // and the time series up to the fault are kept.
-      res.faults.push_back(std::string(loop.fault_name()) +
-                           " at t = " + std::to_string(loop.fault_time()) + " s");
-      break;
+    res.virtual_energy_generated_j = rec.energy_virtual_j;
+    if (rec.faulted) {
+      // The loop latched a fault and commanded zero torque: end the run here; the report and the
+      // time series up to the fault are kept.
+      res.faults.push_back(std::string(rec.fault_name) +
+                           " at t = " + std::to_string(rec.fault_t) + " s");
+      return false;
     }
-    // Hand port: the hand's joint torques (averaged over the tick) times the true joint motion.
-    if (truth) hand_work += device.hand_joint_torque().dot(device.true_q() - q_true_prev);
     res.hand_work_min_j = std::min(res.hand_work_min_j, hand_work);
-    // The servo tick is what a real loop computes: the pipeline's stages and drilling. The
-    // simulated device's physics (MuJoCo substeps, hand) runs inside loop.step too and is
-    // reported apart, as "device_simulation".
-    const double step_us = 1e-3 * std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                      std::chrono::steady_clock::now() - t0).count();
     long tick_ns = 0;
     for (int s = 0; s < kStageCount; ++s) {
-      stage_us[s].push_back(1e-3 * r.stage_ns[s]);
-      tick_ns += r.stage_ns[s];
+      stage_us[s].push_back(1e-3 * rec.stage_ns[s]);
+      tick_ns += rec.stage_ns[s];
     }
     stage_us[kStageCount].push_back(1e-3 * tick_ns);
-    stage_us[kStageCount + 1].push_back(step_us - 1e-3 * tick_ns);
+    stage_us[kStageCount + 1].push_back(device_us);
 
     // Measurements.
-    const double f_contact = r.F_contact.head<3>().norm();
-    const double f_device = r.T1.head<3>().norm();
-    rig->tip_contacts(r.device, &device_contacts);
-    double d_dev = 0.0;
-    for (const Contact& c : device_contacts) d_dev = std::max(d_dev, c.depth);
-    if (!r.contacts.empty()) {
+    const double f_contact = rec.f_contact.norm();
+    const double f_device = rec.f_device.norm();
+    const double d_dev = rec.device_depth;
+    if (rec.contacts > 0) {
       ++res.contact_ticks;
       sum_f2 += f_contact * f_contact;
       res.max_contact_force_n = std::max(res.max_contact_force_n, f_contact);
-      res.max_penetration_m = std::max(res.max_penetration_m, r.max_depth);
+      res.max_penetration_m = std::max(res.max_penetration_m, rec.max_depth);
     }
     if (d_dev > kMinDepthForStiffness) {
       sum_fd += f_device * d_dev;
       sum_dd += d_dev * d_dev;
     }
     const Vec3 f_hand = truth ? Vec3(device.hand_wrench().head<3>()) : Vec3::Zero();
-    const Vec3 f_obs = r.F1_hat.head<3>();
-    sum_obs2 += (f_obs - f_hand).squaredNorm();
+    sum_obs2 += (rec.f_observer - f_hand).squaredNorm();
     ++res.ticks;
     if (k % std::max(1, options.log_every) == 0) {
       RunSample smp;
       smp.t = t;
       smp.contact_force_n = f_contact;
       smp.device_force_n = f_device;
-      smp.device_force = r.T1.head<3>();
-      smp.penetration_m = r.max_depth;
+      smp.device_force = rec.f_device;
+      smp.penetration_m = rec.max_depth;
       smp.device_penetration_m = d_dev;
-      smp.proxy_x = pipeline.proxy().pose.x;
-      smp.device_x = r.device.x;
-      smp.proxy_rotvec = log_so3(pipeline.proxy().pose.R);
-      smp.device_rotvec = log_so3(r.device.R);
+      smp.proxy_x = rec.proxy.x;
+      smp.device_x = rec.device.x;
+      smp.proxy_rotvec = log_so3(rec.proxy.R);
+      smp.device_rotvec = log_so3(rec.device.R);
       smp.hand_force_n = f_hand;
-      smp.observer_force_n = f_obs;
-      smp.contacts = static_cast<int>(r.contacts.size());
-      smp.energy_virtual_j = loop.energy_virtual_j();
+      smp.observer_force_n = rec.f_observer;
+      smp.contacts = rec.contacts;
+      smp.energy_virtual_j = rec.energy_virtual_j;
       smp.hand_work_j = hand_work;
       for (const SceneHandKey& key : scene.script) {
         if (key.t <= t) smp.phase = key.phase;
@@ -413,13 +428,13 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       TickSnapshotView view;
       view.tick = k;
       view.t = t;
-      view.device = r.device;
-      view.proxy = pipeline.proxy().pose;
+      view.device = rec.device;
+      view.proxy = rec.proxy;
       view.tool_radius_m = rig->tip.radius;
-      view.contact_force_n = r.F_contact.head<3>();
-      view.device_force_n = r.T1.head<3>();
-      view.contacts = static_cast<int>(r.contacts.size());
-      view.max_depth_m = r.max_depth;
+      view.contact_force_n = rec.f_contact;
+      view.device_force_n = rec.f_device;
+      view.contacts = rec.contacts;
+      view.max_depth_m = rec.max_depth;
       view.tick_us = 1e-3 * tick_ns;
       for (int m = 1; m < kMaterialCount && contacts.drills(); ++m) {
         view.removed_volume_mm3[m] = contacts.drill_state().removed_volume_m3(m) * 1e9;
@@ -431,11 +446,87 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     }
     if (driven.faults() != kFaultNone) {
       res.faults.push_back(fault_string(driven.faults()) + " at t = " + std::to_string(t) + " s");
-      break;
+      return false;
     }
     if (options.progress && k >= next_progress) {
       options.progress(static_cast<double>(k) / n_ticks);
       next_progress = k + std::max(1L, n_ticks / 100);
+    }
+    return true;
+  };
+
+  if (callback) {
+    // The tick inside the vendor's scheduler callback (device/callback_loop.h); this thread
+    // consumes the records until the device's clock has covered the duration.
+    HdapiDevice& hd = static_cast<HdapiDevice&>(*rig->backend);
+    auto depth = [](void* ctx, const Pose& pose) {
+      auto& g = *static_cast<SceneRig*>(ctx);
+      g.tip_contacts(pose, &g.measure_contacts);
+      double d = 0.0;
+      for (const Contact& c : g.measure_contacts) d = std::max(d, c.depth);
+      return d;
+    };
+    rig->measure_contacts.reserve(4096);
+    CallbackServo servo(hd, loop, pipeline, depth, rig.get(),
+                        static_cast<std::size_t>(std::min<long>(max_ticks + 16, 1L << 16)));
+    servo.start();
+    TickRecord rec;
+    bool running = true;
+    while (running) {
+      if (servo.pop(rec)) {
+        if (rec.t - t_begin >= duration - 0.5 * T) {
+          t_end = rec.t;
+          break;
+        }
+        running = consume(rec, 0.0);
+        t_end = rec.t;
+        if (rec.k + 1 >= max_ticks) break;
+        continue;
+      }
+      if (hd.servo_done() || !hd.wait_ticks(1)) {
+        // The scheduler stopped calling us (the backend latched scheduler_stopped and disabled
+        // force output): what is left in the ring is still measured.
+        while (running && servo.pop(rec)) running = consume(rec, 0.0);
+        if (running) {
+          res.faults.push_back(fault_string(driven.faults() | kFaultSchedulerStopped) +
+                               " at t = " + std::to_string(t_end) + " s");
+        }
+        break;
+      }
+    }
+    servo.request_stop();
+    hd.wait_ticks(2);  // the callback has returned DONE with zero torque (or the scheduler is gone)
+    res.callback_dropped_ticks = servo.dropped();
+  } else {
+    for (long k = 0; !loop.faulted() && k < max_ticks; ++k) {
+      if (!truth && loop.sample().t - t_begin >= duration - 0.5 * T) break;
+      if (pacer) pacer->wait_next();
+      const auto t0 = std::chrono::steady_clock::now();
+      if (truth) q_true_prev = device.true_q();
+      const DeviceSample& in = loop.sample();
+      step_in.q = in.q;  // the tick's input (same sizes: no allocation)
+      step_in.qd = in.qd;
+      step_in.t = in.t;
+      const TickResult& r = loop.step();
+      if (pacer) pacer->tick_done();
+      const double step_us = 1e-3 * std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                        std::chrono::steady_clock::now() - t0).count();
+      // Hand port: the hand's joint torques (averaged over the tick) times the true joint motion.
+      if (truth) hand_work += device.hand_joint_torque().dot(device.true_q() - q_true_prev);
+      // The servo tick is what a real loop computes: the pipeline's stages and drilling. The
+      // simulated device's physics (MuJoCo substeps, hand) runs inside loop.step too and is
+      // reported apart, as "device_simulation". The device tip's own penetration (rendered
+      // stiffness) is measured outside the tick.
+      long tick_ns = 0;
+      for (int s = 0; s < kStageCount; ++s) tick_ns += r.stage_ns[s];
+      double d_dev = 0.0;
+      if (!loop.faulted()) {
+        rig->tip_contacts(r.device, &device_contacts);
+        for (const Contact& c : device_contacts) d_dev = std::max(d_dev, c.depth);
+      }
+      fill_tick_record(k, step_in, r, loop, pipeline, d_dev, record);
+      t_end = loop.sample().t;
+      if (!consume(record, step_us - 1e-3 * tick_ns)) break;
     }
   }
   if (options.progress) options.progress(1.0);
@@ -450,10 +541,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   }
 
   res.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  res.simulated_s = truth ? res.ticks * T : loop.sample().t - t_begin;
+  res.simulated_s = truth ? res.ticks * T : t_end - t_begin;
   res.rms_contact_force_n = res.contact_ticks > 0 ? std::sqrt(sum_f2 / res.contact_ticks) : 0.0;
   res.rendered_stiffness_n_per_m = sum_dd > 0.0 ? sum_fd / sum_dd : 0.0;
-  res.virtual_energy_generated_j = loop.energy_virtual_j();
+  if (!callback) res.virtual_energy_generated_j = loop.energy_virtual_j();
   res.hand_work_j = hand_work;
   res.observer_rms_error_n = res.ticks > 0 ? std::sqrt(sum_obs2 / res.ticks) : 0.0;
   for (int m = 1; m < kMaterialCount; ++m) {
@@ -470,7 +561,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   res.timing.emplace_back("tick", stats_of(stage_us[kStageCount]));
   res.timing.emplace_back("device_simulation", stats_of(stage_us[kStageCount + 1]));
   res.tooth_after = rig->tooth_grid();
-  res.torque_after_fault_n_m = loop.faulted() ? driven.applied_torque().norm() : 0.0;
+  const bool faulted = callback ? !res.faults.empty() : loop.faulted();
+  res.torque_after_fault_n_m = faulted ? driven.applied_torque().norm() : 0.0;
   return res;
 }
 

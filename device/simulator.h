@@ -56,6 +56,11 @@ struct RunOptions {
   std::string pipeline = "reference";  // the tick's implementation (fast/registry.h)
   std::string device;                  // SceneRigOptions::device
   std::string hd_library;              // SceneRigOptions::hd_library
+  // With an hdapi device, where the tick runs: "callback" (the default: inside the vendor's
+  // scheduler callback, once per scheduler tick; device/callback_loop.h) or "caller" (this
+  // thread, through read/write/advance: one loop tick per two scheduler ticks). The caller form
+  // is needed for --inject-fault, the view and --realtime, which wrap or pace that thread.
+  std::string hd_loop = "callback";
   InjectedFault fault;                 // a device fault to inject (device/fault_injection.h)
   bool realtime = false;           // pace the loop at the tick rate (device/servo_pacer.h)
   // With realtime: ask for SCHED_FIFO and locked memory (a warning where refused).
@@ -122,6 +127,8 @@ struct RunResult {
   double simulated_s = 0.0;
   double wall_s = 0.0;
   std::vector<RunSample> series;
+  std::string hd_loop;              // hdapi: "callback" or "caller" (empty for a simulated run)
+  long callback_dropped_ticks = 0;  // hdapi callback loop: records the full ring dropped
   VoxelGrid tooth_before, tooth_after;      // for pictures
   std::string device_model;                 // which device model file
   std::string pipeline;                     // the tick's implementation that ran
@@ -181,6 +188,7 @@ struct SceneRig {
   // it (for measurements outside the tick; same code as the pipeline's collision stage).
   const VoxelGrid& tooth_grid() const;
   void tip_contacts(const Pose& pose, std::vector<Contact>* out);
+  std::vector<Contact> measure_contacts;  // run_scene's buffer for tip_contacts in the callback
 
  private:
   CollisionScratch scratch_;

@@ -254,10 +254,15 @@ TEST(HdapiDevice, CallbackEndedByTheLibraryIsSchedulerStopped) {
     dev.advance();
   }
   EXPECT_EQ(fault_string(dev.faults()), "scheduler_stopped");
-  // Nobody commands the motors any more: the emulator's held torque was the last frame's; the
-  // backend reports it cannot reach the device. (A real device's watchdog trips after ~1 s.)
+  // Nobody commands the motors any more: without more, the emulator would hold the last frame's
+  // torque (10 mN m per joint) for as long as the scheduler runs. The backend disabled force
+  // output when its wait timed out: the motors hold nothing, and the library says so.
   EXPECT_GE(dev.ticks(), 40);
   EXPECT_LE(dev.ticks(), 42);
+  const std::array<double, 6> held = motor_torque_mnm(dev);
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(held[i], 0.0) << "joint " << i + 1;
+  EXPECT_EQ(load_hd_library(dev.info().library).hdIsEnabled(hd::kForceOutput), 0);
+  EXPECT_TRUE(dev.applied_torque().isZero(0.0));
 }
 
 // The servo function runs inside the vendor's callback; returning false ends the loop.
