@@ -10,6 +10,7 @@
 #include "device/scene.h"
 #include "device/simulator.h"
 #include "reference/core/io.h"
+#include "reference/tooth/sdf.h"
 
 namespace dentsim {
 namespace {
@@ -106,6 +107,10 @@ StressResult run_stress(const StressConfig& c, const std::function<void(long, lo
                               d.patch.dump() + ")";
     const std::string method = d.patch["method"]["name"].get<std::string>();
     ++res.runs_by_method[method];
+    // The surface proxy on a tooth the tool does not drill: the rendered tip never enters it.
+    const bool check_outside =
+        scene.tooth.contact_model == "sdf" && !rig->contacts->drills() && rig->tooth != nullptr;
+    const double skin = std::min(0.25 * rho, 0.5 * rig->tooth->grid().voxel_size);
     bool exploded = false;
     double run_force = 0.0, run_depth = 0.0;
     loop.start();
@@ -137,6 +142,18 @@ StressResult run_stress(const StressConfig& c, const std::function<void(long, lo
         exploded = true;
         ++res.exploded[method];
         if (method != "explicit") violate("the proxy left the workspace under PMI at " + at);
+      }
+      if (check_outside && !r.contacts.empty()) {
+        // g = x_o + rho n (reference/tooth/sdf.h): phi(g) >= rho - s by construction.
+        const Contact& contact = r.contacts[0];
+        const Vec3 g = contact.x_o + rho * contact.n;
+        const double phi = signed_distance(*rig->tooth, g, 2.0 * rho).phi;
+        ++res.surface_checks;
+        res.min_clearance_over_radius = std::min(res.min_clearance_over_radius, (phi - rho) / rho);
+        if (!(phi >= rho - skin - 1e-9)) {
+          violate("the rendered tip entered the tooth (phi(g) = " + std::to_string(phi * 1e3) +
+                  " mm, rho - s = " + std::to_string((rho - skin) * 1e3) + " mm) at " + at);
+        }
       }
       run_force = std::max(run_force, r.F_contact.head<3>().norm());
       run_depth = std::max(run_depth, r.max_depth / rho);

@@ -13,6 +13,10 @@
 //   torque      the torque applied by the device is within its limit on every joint
 //   zero after  once the loop has latched a fault, the torque applied is exactly zero
 //   time        the device clock advances every tick (no stuck state) until the run ends
+//   outside     with the surface-proxy contact (tooth.contact_model sdf) and a tool that does not
+//               drill (probe), the rendered tip's centre g = x_o + rho n stays at least rho - s
+//               from the solid (phi(g) >= rho - s, s = min(rho/4, h/2); reference/tooth/sdf.h):
+//               no pop-through, whatever the gains, the rate or the push
 //   bounded     under PMI (pmi, pmi-pd) the proxy never leaves the workspace (1 m from the
 //               device): PMI's discrete energy balance bounds the proxy's energy by the work put
 //               in; explicit Euler beyond its Z-width may explode (counted, the device stays
@@ -43,6 +47,8 @@ struct StressResult {
   double worst_torque_ratio = 0.0;     // max |tau_i| / tau_max_i
   double worst_contact_force_n = 0.0;  // max |f| on the proxy
   double worst_depth_over_radius = 0.0;
+  long surface_checks = 0;                 // ticks the `outside` invariant was checked on
+  double min_clearance_over_radius = 1.0;  // min (phi(g) - rho) / rho over them (>= -s / rho)
   // Per method: the deepest contact / rho over runs whose proxy stayed bounded, and the run that
   // reached it (scene, pipeline, the scene patch), so a deep contact can be replayed and isolated.
   std::map<std::string, double> worst_depth_by_method;

@@ -40,6 +40,9 @@ TEST(LoopStress, EveryTickKeepsTheInvariants) {
     std::printf("  %s: %ld runs, %ld with the proxy exploded\n", method.c_str(), n,
                 e == r.exploded.end() ? 0L : e->second);
   }
+  std::printf("  rendered tip outside the tooth: %ld ticks checked, min clearance (phi(g) - rho) / "
+              "rho = %.4f\n",
+              r.surface_checks, r.min_clearance_over_radius);
   for (const auto& [method, depth] : r.worst_depth_by_method) {
     std::printf("  deepest contact under %s: %.2f rho in %s\n", method.c_str(), depth,
                 r.worst_depth_run.at(method).c_str());
@@ -51,6 +54,7 @@ TEST(LoopStress, EveryTickKeepsTheInvariants) {
   EXPECT_GE(r.runs, c.ticks / 2000);
   EXPECT_GT(r.worst_contact_force_n, 1.0);
   EXPECT_GT(r.worst_torque_ratio, 0.5);
+  EXPECT_GT(r.surface_checks, c.ticks / 100);  // probe runs in contact
 }
 
 }  // namespace
