@@ -1,5 +1,7 @@
 #include "device/closed_loop.h"
 
+#include <time.h>
+
 #include <utility>
 
 namespace dentsim {
@@ -32,22 +34,35 @@ void ClosedLoop::start() {
   T_ = device_.capabilities().nominal_period;
   energy_ = 0.0;
   ticks_ = 0;
+  last_exec_s_ = -1.0;
   tau_cmd_.setZero();
 }
 
+namespace {
+// CPU time of the calling thread [s] (vDSO-free but cheap: one clock_gettime).
+double thread_cpu_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+}  // namespace
+
 const TickResult& ClosedLoop::decide() {
+  const double cpu0 = safety_ != nullptr ? thread_cpu_s() : 0.0;
   const TickResult& r = pipeline_.tick(sample_, T_, contacts_);
+  const double exec_s = safety_ != nullptr ? thread_cpu_s() - cpu0 : -1.0;
   if (!faulted() && r.status != TickStatus::kOk) {
     fault_ = r.status;
     fault_t_ = sample_.t;
   }
   if (!faulted() && safety_ != nullptr) {
-    const std::uint32_t f = safety_->apply(sample_, r.tau, -1.0, nullptr, tau_safe_);
+    const std::uint32_t f = safety_->apply(sample_, r.tau, last_exec_s_, nullptr, tau_safe_);
     if (f != kFaultNone) {
       device_faults_ = f;
       fault_t_ = sample_.t;
     }
   }
+  last_exec_s_ = exec_s;
   if (faulted()) {
     tau_cmd_.setZero();  // the latch: zero torque from the faulting tick on
   } else {

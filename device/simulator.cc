@@ -104,6 +104,10 @@ void SceneRig::tip_contacts(const Pose& pose, std::vector<Contact>* out) {
   }
 }
 
+// The safety chain's ramp-in and watchdog on a real device (hdapi); none in simulation.
+constexpr double kHardwareRampS = 0.5;
+constexpr double kHardwareWatchdogPeriods = 5.0;
+
 std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOptions& options) {
   auto rig = std::make_unique<SceneRig>();
   SceneRig& g = *rig;
@@ -221,6 +225,13 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   limits.tau_max = g.params.torque_limit_n_m;
   limits.qd_max = VecX::Constant(g.device->dof(), kSceneMaxJointSpeed);
   limits.ramp_time_s = 0.0;
+  if (backend == "hdapi") {
+    // A real device: force engages over the first kHardwareRampS, and a tick whose own work took
+    // longer than kHardwareWatchdogPeriods periods of CPU time (it can never keep up; the
+    // device's own watchdog would trip later) means zero torque.
+    limits.ramp_time_s = kHardwareRampS;
+    limits.watchdog_s = kHardwareWatchdogPeriods * g.tick;
+  }
   limits.nominal_period = g.tick;
   limits.monotonic_time = true;
   limits.max_joint_step = g.device->limits().max_joint_step;

@@ -93,20 +93,23 @@ void expect_matches_direct(const std::string& extra, const std::string& direct_h
 // The tick in the vendor's callback: one loop tick per scheduler tick (about 2000 in 2 s; a
 // record dropped by a full ring would be missing from the measurements). The loop's rate no
 // longer depends on the calling thread's scheduling, so the bounds on when the tool arrives are
-// tighter than the caller form's (measured over 4 runs: stiffness 1.6-14.5 %, max force 10-13 %,
-// contact ticks 0.3-8.5 %).
+// tighter than the caller form's. The backend's safety chain ramps force in over the first 0.5 s
+// (the direct simulated run does not), so the arm starts lower and the tool arrives a little
+// differently: measured over 7 runs, stiffness 1-5 %, max force 0-11 %, contact ticks 5-18 %
+// (24 % with three busy processes beside it). Fewer than 1800 ticks means the scheduler skipped
+// ticks: the machine is too loaded for a real-time comparison.
 TEST(HdapiRun, EmulatorRunMatchesTheDirectRunAtItsRate) {
   nlohmann::json e;
-  expect_matches_direct("", "1000", "callback", {0.20, 0.30, 0.35, 0.25}, &e);
+  expect_matches_direct("", "1000", "callback", {0.20, 0.30, 0.35, 0.30}, &e);
   EXPECT_EQ(e["callback_dropped_ticks"].get<long>(), 0);
-  EXPECT_GT(e["ticks"].get<long>(), 1900);
+  EXPECT_GT(e["ticks"].get<long>(), 1800);
   EXPECT_LE(e["ticks"].get<long>(), 2001);
 }
 
 // The drill scene (contact, drilling through enamel into dentin) with the tick in the vendor's
-// callback against the direct run at 1 kHz. Measured over 2 runs: rendered stiffness 1.8-4.7 %,
-// RMS contact force 2-5 %, contact ticks 2.3 %, removed volume 5-9 % (the cut integrates the
-// contact's timing).
+// callback against the direct run at 1 kHz. Measured over 5 runs (with the backend's 0.5 s
+// ramp-in): rendered stiffness 1-4 %, RMS contact force 0.5-5 %, removed volume 0-15 % (the cut
+// integrates the contact's timing; 34 % once with a stress run and a build beside it).
 TEST(HdapiRun, DrillSceneInTheCallbackMatchesTheDirectRun) {
   const fs::path a = fresh("drill_callback"), b = fresh("drill_direct");
   const auto ra = dentsim::testing::run_dentsim("run drill" + kEmulator + " --out " + a.string());
@@ -134,9 +137,11 @@ TEST(HdapiRun, DrillSceneInTheCallbackMatchesTheDirectRun) {
 
 TEST(HdapiRun, CallerLoopMatchesTheDirectRunAtHalfTheRate) {
   nlohmann::json e;
-  // Measured: stiffness 1-5 %, max force 29-37 % (a parallel build or stress run beside it),
-  // contact ticks 13-40 %.
-  expect_matches_direct(" --hd-loop caller", "500", "caller", {0.20, 0.45, 0.40, 0.50}, &e);
+  // Measured over 10 runs: stiffness 1-6 % (28 % once, right after a full build, with a sweep
+  // beside it: the loop's ticks then span 2-3 scheduler ticks), max force 1-37 %, contact ticks
+  // 4-40 %. What these bounds still catch: a wrong joint sign or torque unit (faults, or a
+  // stiffness off by orders of magnitude).
+  expect_matches_direct(" --hd-loop caller", "500", "caller", {0.35, 0.50, 0.50, 0.50}, &e);
   EXPECT_LT(e["ticks"].get<long>(), 1100);  // one loop tick per two scheduler ticks
 }
 
