@@ -211,14 +211,24 @@ const Vec3& SurfaceProxy::update(const VoxelTooth& tooth, const Vec3& c) {
     valid_ = true;
   }
   // A proxy inside the tooth (the first call, or a caller that moved the tooth) leaves along
-  // the shortest way (step 1).
-  push_out(tooth, &g_);
+  // the shortest way (step 1). The push-out alternates between the walls of a concave groove
+  // narrower than 2 rho and may not reach phi >= rho - s within its iterations: then a g that was
+  // admissible stays where it was (found by the full contact sweep: g stuck at phi = 0.73 rho).
+  {
+    const Vec3 before = g_;
+    if (push_out(tooth, &g_) < -skin_ &&
+        signed_distance(tooth, before, rho_).phi >= rho_ - skin_) {
+      g_ = before;
+    }
+  }
   Vec3 target = c;
   for (int slide = 0; slide <= kSurfaceProxySlides; ++slide) {
     Vec3 y = g_;
     const bool reached = sweep(tooth, &y, target);
     g_ = y;
-    push_out(tooth, &g_);  // back from the skin to phi >= rho, along the local normal
+    // Back from the skin to phi >= rho, along the local normal; where the push-out does not
+    // converge, y itself (in A_skin: the sweep started there and stays there) is kept.
+    if (push_out(tooth, &g_) < -skin_) g_ = y;
     if (reached && (target - c).norm() <= tol_) break;  // the tool itself is admissible
     // Blocked (or a slide target reached): slide towards c on the tangent plane at g.
     const SignedDistance sd = signed_distance(tooth, g_, rho_ + skin_);

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <limits>
 #include <random>
@@ -120,6 +121,44 @@ TEST(SurfaceProxy, NeverCrossesAWallOneVoxelThick) {
     // The spring from the tool to g pushes the tool back towards the near side: K (g - c).
     EXPECT_NEAR(proxy.g().x(), 3.2e-3 - kRho, 1e-12);
   }
+}
+
+// A slot with parallel walls a little narrower than the tip (0.7 mm, seven voxels of 0.1 mm; tip
+// radius 0.39 mm, skin s = 0.05 mm): its centre line has phi = 0.35 mm >= rho - s, so the swept
+// proxy may follow the tool down into it, but no point of the slot is in A (phi >= rho). The
+// push-out then alternates between the two walls and never leaves: from the centre it lands rho
+// from one wall, 0.31 mm < rho - s from the other. The proxy must keep phi(g) >= rho - s anyway
+// (the full contact sweep found g stuck at 0.73 rho in such a four-voxel slot of the molar at
+// 128^3 before the guard), and stay out of the material.
+TEST(SurfaceProxy, StaysOutOfTheSkinInASlotWhereThePushOutCannotConverge) {
+  const double rho = 0.39e-3;
+  const VoxelTooth tooth = make_tooth(64, [](const Vec3& p) {
+    return p.z() < 3.2e-3 && !(p.x() > 3.0e-3 && p.x() < 3.7e-3);
+  });
+  SurfaceProxy proxy(rho, tooth.grid().voxel_size);
+  ASSERT_NEAR(proxy.skin(), 0.05e-3, 1e-15);
+  const double floor_phi = rho - proxy.skin();
+  // Signal guard: from the slot's centre line the bare push-out cannot reach A.
+  Vec3 centre(3.35e-3, 3.2e-3, 2.5e-3);
+  EXPECT_NEAR(signed_distance(tooth, centre, 1.0).phi, 0.35e-3, 1e-12);
+  EXPECT_LT(proxy.push_out(tooth, &centre), -proxy.skin());
+  std::mt19937_64 rng(kSeed);
+  std::uniform_real_distribution<double> across(-0.1e-3, 0.1e-3);
+  Vec3 c(3.35e-3, 3.2e-3, 4.5e-3);
+  proxy.update(tooth, c);
+  double lowest = 1.0, worst = 1.0;
+  for (int tick = 0; tick < 400; ++tick) {
+    c.z() = std::max(1.8e-3, c.z() - 0.02e-3);  // down into the slot, to 1.4 mm below its mouth
+    c.x() = 3.35e-3 + (tick > 150 ? across(rng) : 0.0);
+    if (tick > 250) c.y() += 0.01e-3;  // and along it
+    const Vec3 g = proxy.update(tooth, c);
+    const double phi = signed_distance(tooth, g, 1.0).phi;
+    worst = std::min(worst, phi);
+    lowest = std::min(lowest, g.z());
+    ASSERT_GE(phi, floor_phi - 1e-12) << "tick " << tick;
+  }
+  std::printf("slot: g down to z = %.3f mm (mouth 3.2 mm), min phi(g) = %.4f mm (rho - s = %.3f)\n",
+              lowest * 1e3, worst * 1e3, floor_phi * 1e3);
 }
 
 TEST(SurfaceProxy, ProxyFoundInsideLeavesAlongTheShortestWay) {
