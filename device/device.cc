@@ -29,6 +29,8 @@ const char* fault_name(DeviceFault f) {
       return "motor_temperature";
     case kFaultSchedulerStopped:
       return "scheduler_stopped";
+    case kFaultSustainedSaturation:
+      return "sustained_saturation";
     case kFaultHdUnknownError:
       return "hd_unknown_error";
     case kFaultHdInvalidEnum:

@@ -44,6 +44,7 @@ enum DeviceFault : std::uint32_t {
   // Errors of the OpenHaptics HDAPI (device/hdapi/): one flag per HD error code, named after the
   // code in lower case (HD_COMM_ERROR -> "hd_comm_error"); hd_fault_for_error() maps a code.
   kFaultHdUnknownError = 1u << 9,     // an HD error code not in the list below
+  kFaultSustainedSaturation = 1u << 10,  // a joint held at its torque limit longer than allowed
   kFaultHdInvalidEnum = 1u << 11,
   kFaultHdInvalidValue = 1u << 12,
   kFaultHdInvalidOperation = 1u << 13,

@@ -20,6 +20,7 @@ SafetyLimits phantom_safety_limits(const VecX& q_min, const VecX& q_max) {
   l.watchdog_s = 1e-3;
   l.monotonic_time = true;
   l.max_joint_step = 0.1;
+  l.max_saturation_s = 2.0;
   return l;
 }
 
@@ -54,17 +55,21 @@ SafetyChain::SafetyChain(SafetyLimits limits) : limits_(std::move(limits)) {
     throw InputError("safety limits: tau_max must be positive on every joint");
   }
   if (!(limits_.ramp_time_s >= 0.0) || !(limits_.watchdog_s >= 0.0) ||
-      !(limits_.nominal_period > 0.0) || !(limits_.max_joint_step >= 0.0)) {
+      !(limits_.nominal_period > 0.0) || !(limits_.max_joint_step >= 0.0) ||
+      !(limits_.max_saturation_s >= 0.0)) {
     throw InputError(
-        "safety limits: ramp_time_s, watchdog_s, max_joint_step must be >= 0, nominal_period > 0");
+        "safety limits: ramp_time_s, watchdog_s, max_joint_step, max_saturation_s must be >= 0, "
+        "nominal_period > 0");
   }
   tau_prev_ = VecX::Zero(n);
   q_prev_ = VecX::Zero(n);
+  saturated_since_ = VecX::Constant(n, -1.0);
 }
 
 void SafetyChain::start(double t) {
   faults_ = kFaultNone;
   tau_prev_.setZero();
+  saturated_since_.setConstant(-1.0);
   t_start_ = t;
   have_prev_ = false;
 }
@@ -72,6 +77,7 @@ void SafetyChain::start(double t) {
 void SafetyChain::clear_faults(double t) noexcept {
   faults_ = kFaultNone;
   tau_prev_.setZero();
+  saturated_since_.setConstant(-1.0);
   t_start_ = t;
 }
 
@@ -122,6 +128,17 @@ std::uint32_t SafetyChain::apply(const DeviceSample& s, const VecX& tau_cmd, dou
     }
   }
   if (limits_.watchdog_s > 0.0 && tick_exec_s > limits_.watchdog_s) f |= kFaultWatchdog;
+  if (limits_.max_saturation_s > 0.0) {
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (!(std::abs(tau_cmd[i]) >= limits_.tau_max[i] * (1.0 - 1e-12))) {
+        saturated_since_[i] = -1.0;
+      } else if (saturated_since_[i] < 0.0) {
+        saturated_since_[i] = s.t;
+      } else if (s.t - saturated_since_[i] > limits_.max_saturation_s) {
+        f |= kFaultSustainedSaturation;
+      }
+    }
+  }
   // 5. latch.
   faults_ |= f;
   if (faults_ != kFaultNone) {

@@ -12,6 +12,10 @@
 //                          q_i outside [q_min,i, q_max,i]             -> workspace_limit
 //                          watchdog: last tick's execution time > budget -> watchdog
 //                          motor temperature_i >= max (warm motors)   -> motor_temperature
+//                          |tau_cmd,i| >= tau_max,i on every tick for longer than
+//                          max_saturation_s (the motors held at their peak: a hand pushing
+//                          harder than the device can render, a blocked proxy)
+//                                                                     -> sustained_saturation
 //   5. fault latch         any fault: tau = 0 on this tick and every tick until clear_faults()
 //   6. ramp-in             tau *= r(t) = min(1, (t - t_start) / ramp_time) after start() and after
 //                          clear_faults() (force engages gradually, CHAI3D)
@@ -36,6 +40,8 @@ struct SafetyLimits {
   double watchdog_s = 0.0;  // execution-time budget of a tick [s] (0: no watchdog)
   double motor_temperature_max = 0.9;  // normalised 0..1 (device's HD_MOTOR_TEMPERATURE scale)
   double ramp_time_s = 0.5;            // ramp-in duration [s] (0: no ramp)
+  // [s] longest time any joint's command may stay at or beyond its saturation (0: no guard).
+  double max_saturation_s = 0.0;
   double nominal_period = 1e-3;        // T of the first tick [s]
   // The sample's own guards: a clock that does not advance (a frozen or backwards device clock,
   // the same sample repeated) and an encoder that jumps (a lost frame, a cable fault).
@@ -46,7 +52,8 @@ struct SafetyLimits {
 // Defaults for the Phantom Premium 1.5/6DoF: tau_max = phantom_tau_max(), rate 200 tau_max per s
 // (full scale in 5 ms), qd_max 20 rad/s per joint (the hardware trips HD_EXCEEDED_MAX_VELOCITY
 // beyond; unpublished, an assumption), workspace = joint ranges (`q_min`, `q_max`), watchdog 1 ms,
-// monotonic time, encoder jumps beyond 0.1 rad per tick.
+// monotonic time, encoder jumps beyond 0.1 rad per tick, saturation held at most 2 s (the motors'
+// peak torque is for short contacts; their continuous rating is about a third of it).
 SafetyLimits phantom_safety_limits(const VecX& q_min, const VecX& q_max);
 
 class SafetyChain {
@@ -73,6 +80,7 @@ class SafetyChain {
  private:
   SafetyLimits limits_;
   VecX tau_prev_, q_prev_;
+  VecX saturated_since_;  // per joint: time its command reached saturation (-1: not saturated)
   double t_prev_ = 0.0, t_start_ = 0.0;
   bool have_prev_ = false;
   std::uint32_t faults_ = kFaultNone;

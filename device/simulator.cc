@@ -107,6 +107,8 @@ void SceneRig::tip_contacts(const Pose& pose, std::vector<Contact>* out) {
 // The safety chain's ramp-in and watchdog on a real device (hdapi); none in simulation.
 constexpr double kHardwareRampS = 0.5;
 constexpr double kHardwareWatchdogPeriods = 5.0;
+// The safety chain's sustained-saturation guard in every scene run.
+constexpr double kMaxSaturationS = 2.0;
 
 std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOptions& options) {
   auto rig = std::make_unique<SceneRig>();
@@ -235,6 +237,9 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   limits.nominal_period = g.tick;
   limits.monotonic_time = true;
   limits.max_joint_step = g.device->limits().max_joint_step;
+  // A hand pushing harder than the device can render holds the motors at their peak: a safe stop
+  // after kMaxSaturationS (both backends; a built-in scene never saturates that long).
+  limits.max_saturation_s = kMaxSaturationS;
   g.safety = std::make_unique<SafetyChain>(limits);
   // The device the loop drives, started last: a device with its own clock (HDAPI's scheduler;
   // the emulator's scripted hand starts at hdInitDevice) runs from here on.

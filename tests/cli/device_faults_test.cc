@@ -1,7 +1,7 @@
 // Device-side faults injected into the main job (`dentsim run drill --inject-fault KIND@T`, issue
 // #18; device/fault_injection.h): every kind ends in its named fault with zero torque on the
 // faulting tick and the report and time series written up to it; a late tick (missed ticks) is
-// ridden through with the measured tick length.
+// ridden through with the measured tick length; a torque held at saturation for seconds stops.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -73,6 +73,39 @@ TEST(DeviceFaults, LateTickIsRiddenThrough) {
   EXPECT_EQ(o.report["ticks"], 1000);
   EXPECT_TRUE(o.report["passive_at_hand"].get<bool>());
   EXPECT_LT(o.report["max_contact_force_n"].get<double>(), 8.5);  // the device's peak force
+}
+
+// A torque command that saturates for seconds: the probe scene with a hand pushing 12 N into the
+// tooth (the Phantom's peak is 8.5 N). The safety chain allows a joint at its limit for 2 s, then
+// stops with `sustained_saturation`, zero torque on that tick, report and time series written.
+// The built-in scenes never saturate that long (the same scene at its own 0.5 N: no fault).
+TEST(DeviceFaults, TorqueSaturatedForSecondsStopsSafely) {
+  const fs::path dir = dentsim::testing::fresh_temp_dir("dentsim_device_faults_saturation");
+  const auto shown = dentsim::testing::run_dentsim("run probe --show");
+  ASSERT_EQ(shown.status, 0) << shown.output;
+  nlohmann::json scene = nlohmann::json::parse(shown.output);
+  int pushes = 0;
+  for (auto& key : scene["hand"]["script"]) {
+    if (key["force_n"][2].get<double>() < 0.0) {
+      key["force_n"][2] = -12.0;
+      ++pushes;
+    }
+  }
+  ASSERT_GE(pushes, 2);
+  const fs::path file = dir / "probe_12n.json";
+  std::ofstream(file) << scene.dump(1);
+  const auto r = dentsim::testing::run_dentsim("run " + file.string() + " --out " +
+                                               (dir / "out").string());
+  EXPECT_EQ(r.status, 1) << r.output;
+  const nlohmann::json report = dentsim::testing::read_json_file(dir / "out" / "report.json");
+  ASSERT_EQ(report["faults"].size(), 1u) << report;
+  EXPECT_EQ(report["faults"][0].get<std::string>().rfind("sustained_saturation at t = ", 0), 0u)
+      << report["faults"];
+  EXPECT_EQ(report["torque_after_fault_n_m"].get<double>(), 0.0);
+  // At least the 2 s the chain allows, in contact, before the stop.
+  EXPECT_GT(report["ticks"].get<long>(), 2000);
+  EXPECT_GT(report["contact_ticks"].get<long>(), 1500);
+  EXPECT_TRUE(fs::exists(dir / "out" / "timeseries.csv"));
 }
 
 TEST(DeviceFaults, UnknownKindIsAnInputError) {

@@ -75,7 +75,9 @@ TEST(DeviceFaults, NamesAreStable) {
   EXPECT_EQ(fault_string(kFaultTorqueBeyondLimit | kFaultEncoderJump),
             "torque_beyond_limit,encoder_jump");
   EXPECT_EQ(fault_string(kFaultNonMonotonicTime), "non_monotonic_time");
-  EXPECT_STREQ(fault_name(static_cast<DeviceFault>(1u << 10)), "unknown");
+  EXPECT_EQ(fault_string(kFaultSustainedSaturation), "sustained_saturation");
+  EXPECT_STREQ(fault_name(static_cast<DeviceFault>(kFaultSustainedSaturation | kFaultWatchdog)),
+               "unknown");  // one flag at a time
 }
 
 }  // namespace

@@ -353,8 +353,9 @@ struct TrajectoryRecorder {
 
 TEST(HdapiDevice, EmulatedSceneIsTheSimulatedDeviceOfThatScene) {
   // The drill scene's device and hand behind the HDAPI, zero torque: every sample the backend
-  // reads equals, bit for bit, the direct SimulatedPhantom of the scene after as many ticks.
-  const EmulatorEnv env({{"DENTSIM_HD_EMU_SCENE", "drill"}});
+  // reads equals, bit for bit, the direct SimulatedPhantom of the scene after as many ticks
+  // (one physics period per callback tick: no catch-up through ticks a loaded machine skips).
+  const EmulatorEnv env({{"DENTSIM_HD_EMU_SCENE", "drill"}, {"DENTSIM_HD_EMU_CATCH_UP", "0"}});
   HdapiDevice dev(emulator_config());
   TrajectoryRecorder rec;
   rec.dev = &dev;

@@ -91,6 +91,34 @@ TEST(SafetyChain, WatchdogLatchesZero) {
                  kFaultWatchdog, "watchdog");
 }
 
+// Joint 2 commanded at its saturation: allowed for max_saturation_s (here 64 ticks), a fault on
+// the first tick beyond; an interruption (one tick below the limit) restarts the count.
+TEST(SafetyChain, SustainedSaturationLatchesZero) {
+  SafetyLimits l = two_joint_limits();
+  l.max_saturation_s = 64 * T;
+  l.tau_rate.resize(0);  // the command reaches the limit at once
+  SafetyChain chain(l);
+  chain.start(0.0);
+  VecX out = VecX::Zero(2);
+  const VecX at_limit = (VecX(2) << 0.125, -0.25).finished();  // joint 2 exactly at tau_max
+  const VecX beyond = (VecX(2) << 0.125, 0.75).finished();     // beyond (clipped to 0.25)
+  const VecX below = (VecX(2) << 0.125, 0.25 - 1.0 / 1024).finished();
+  int k = 0;
+  for (; k <= 40; ++k) ASSERT_EQ(chain.apply(sample(k * T), at_limit, 0.0, nullptr, out), kFaultNone);
+  ASSERT_EQ(chain.apply(sample(k * T), below, 0.0, nullptr, out), kFaultNone);  // count restarts
+  ++k;
+  const int start = k;
+  for (; k <= start + 64; ++k) {
+    ASSERT_EQ(chain.apply(sample(k * T), beyond, 0.0, nullptr, out), kFaultNone) << k - start;
+    EXPECT_EQ(out[1], 0.25);
+  }
+  EXPECT_EQ(chain.apply(sample(k * T), beyond, 0.0, nullptr, out), kFaultSustainedSaturation);
+  EXPECT_EQ(fault_string(chain.faults()), "sustained_saturation");
+  EXPECT_EQ(out, VecX::Zero(2));
+  EXPECT_EQ(chain.apply(sample((k + 1) * T), below, 0.0, nullptr, out), kFaultSustainedSaturation);
+  EXPECT_EQ(out, VecX::Zero(2));
+}
+
 TEST(SafetyChain, WarmMotorLatchesZero) {
   Fixture f;
   const double cool[2] = {0.5, 0.875};

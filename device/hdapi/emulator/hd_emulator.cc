@@ -12,7 +12,10 @@
 //   empty). Errors raised in a scheduler tick are read by the callbacks that run after them.
 // - The scheduler (hdStartScheduler) calls every scheduled callback once per tick, highest
 //   priority first, at the rate of hdSetSchedulerRate (default 1000 Hz) on absolute deadlines;
-//   late ticks are skipped, not replayed. A callback returning HD_CALLBACK_DONE is unscheduled.
+//   late ticks are skipped, not replayed (no callback runs for them), but the simulated device's
+//   physics runs through them with the torque held, as a real arm keeps moving while the
+//   scheduler is late (at most 2000 periods at once). A callback returning HD_CALLBACK_DONE is
+//   unscheduled.
 //   hdScheduleSynchronous runs its callback in the scheduler thread (in the caller's thread when
 //   the scheduler is not running) until it returns DONE, and blocks until then.
 // - A frame (hdBeginFrame .. hdEndFrame) sees the state sampled at the start of the tick. Torques
@@ -38,6 +41,8 @@
 //   DENTSIM_HD_EMU_DONE_AT=N          at tick N every asynchronous callback is treated as having
 //                                     returned HD_CALLBACK_DONE (it is unscheduled)
 //   DENTSIM_HD_EMU_GRAVITY=0          gravity off in the simulated device (it then rests in place)
+//   DENTSIM_HD_EMU_CATCH_UP=0         skipped ticks do not advance the physics (one physics period
+//                                     per callback tick, for comparisons by tick index)
 //   DENTSIM_HD_EMU_SCENE=NAME|FILE    the device and the scripted hand of that scene
 //                                     (device/scene_device.h: the plant `dentsim run` simulates),
 //                                     the hand's clock starting at hdInitDevice; a scene that does
@@ -92,6 +97,7 @@ struct Callback {
 constexpr double kMaxForceN = 8.5, kMaxContinuousForceN = 1.4, kMaxStiffnessNPerMm = 3.5;
 constexpr std::array<double, 3> kGimbalContinuousMnm = {188, 188, 48};
 constexpr std::array<double, 6> kPeakMnm = {1720, 1440, 1440, 188, 188, 48};
+constexpr long kMaxCatchUpTicks = 2000;  // skipped periods simulated at once after an overrun
 
 class Emulator {
  public:
@@ -117,6 +123,7 @@ class Emulator {
   // Injection.
   long init_fail = 0, comm_error_at = -1, stall_at = -1, stall_ms = 200, warm_at = -1, done_at = -1;
   bool gravity = true;
+  bool catch_up = true;  // DENTSIM_HD_EMU_CATCH_UP: physics through skipped ticks
   std::string scene;
 
   ~Emulator() {  // a process exiting with the scheduler running
@@ -166,6 +173,7 @@ class Emulator {
     warm_at = env_long("DENTSIM_HD_EMU_WARM_AT", -1);
     done_at = env_long("DENTSIM_HD_EMU_DONE_AT", -1);
     gravity = env_long("DENTSIM_HD_EMU_GRAVITY", 1) != 0;
+    catch_up = env_long("DENTSIM_HD_EMU_CATCH_UP", 1) != 0;
     const char* sc = std::getenv("DENTSIM_HD_EMU_SCENE");
     scene = sc != nullptr ? sc : "";
     const char* s = std::getenv("DENTSIM_HD_EMU_SERIAL");
@@ -226,6 +234,15 @@ class Emulator {
       if (deadline < now) {  // overrun: skip the missed ticks, never replay them in a burst
         const auto behind = (now - deadline) / period + 1;
         deadline += behind * period;
+        // The device does not stop while the scheduler is late: its physics runs through the
+        // skipped periods with the torque held (as a real arm keeps moving), so the simulated
+        // time follows the clock the client measures its ticks with.
+        const long steps =
+            catch_up ? std::min<long>(static_cast<long>(behind), kMaxCatchUpTicks) : 0;
+        for (long i = 0; i < steps && running.load(); ++i) {
+          std::lock_guard<std::mutex> lock(mu);
+          advance_locked();
+        }
       }
       std::this_thread::sleep_until(deadline);
     }
