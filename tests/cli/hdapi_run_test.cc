@@ -234,6 +234,23 @@ TEST(HdapiRun, ExcitationRunsThroughTheBackendAndStopsOnAFault) {
   EXPECT_FALSE(fs::exists(bad));
 }
 
+// The device does not initialise (the emulator's init-failure switch: HD_DEVICE_FAULT): the run
+// fails before its first tick, naming the call, the code and the usual causes; no report is
+// written (there is no data to keep).
+TEST(HdapiRun, InitFailureNamesTheCodeAndTheUsualCauses) {
+  const fs::path a = fresh("init_failure");
+  ::setenv("DENTSIM_HD_EMU_INIT_FAIL", "1", 1);
+  const auto r = dentsim::testing::run_dentsim("run probe --duration 1" + kEmulator + " --out " +
+                                               a.string());
+  ::unsetenv("DENTSIM_HD_EMU_INIT_FAIL");
+  EXPECT_EQ(r.status, 1) << r.output;
+  for (const char* part : {"hdInitDevice", "hd_device_fault (0x0300)", "not connected",
+                           "permissions"}) {
+    EXPECT_NE(r.output.find(part), std::string::npos) << part << "\n" << r.output;
+  }
+  EXPECT_FALSE(fs::exists(a / "report.json"));
+}
+
 TEST(HdapiRun, MissingLibraryIsNamedWithWhereItLooked) {
   const auto r = dentsim::testing::run_dentsim(
       "run probe --device hdapi --hd-library "
