@@ -20,7 +20,8 @@ void fill_tick_record(long k, const DeviceSample& in, const TickResult& r, const
   out.q.head(n) = in.q.head(n);
   out.qd.head(n) = in.qd.head(std::min<Eigen::Index>(n, in.qd.size()));
   const VecX& tau = loop.commanded_torque();
-  out.tau.head(std::min<Eigen::Index>(6, tau.size())) = tau.head(std::min<Eigen::Index>(6, tau.size()));
+  out.tau.head(std::min<Eigen::Index>(6, tau.size())) =
+      tau.head(std::min<Eigen::Index>(6, tau.size()));
   out.f_contact = r.F_contact.head<3>();
   out.f_device = r.T1.head<3>();
   out.f_observer = r.F1_hat.head<3>();
@@ -62,8 +63,7 @@ bool CallbackServo::servo(void* self_ptr, const DeviceSample& s, VecX& tau_out) 
   }
   const long k = self.ticks_.load(std::memory_order_relaxed);
   const TickResult& r = self.loop_.step_in_callback(s, tau_out);
-  const double depth =
-      self.depth_ != nullptr ? self.depth_(self.depth_context_, r.device) : 0.0;
+  const double depth = self.depth_ != nullptr ? self.depth_(self.depth_context_, r.device) : 0.0;
   fill_tick_record(k, s, r, self.loop_, self.pipeline_, depth, self.scratch_);
   if (!self.ring_.push(self.scratch_)) self.dropped_.fetch_add(1, std::memory_order_relaxed);
   self.ticks_.store(k + 1, std::memory_order_release);

@@ -29,22 +29,22 @@ class HdapiDevice;
 
 // One tick as the simulator measures it. Fixed size: no allocation to fill or copy.
 struct TickRecord {
-  long k = 0;                   // tick index since the loop started
-  double t = 0.0;               // the tick's input sample time [s]
+  long k = 0;                                // tick index since the loop started
+  double t = 0.0;                            // the tick's input sample time [s]
   Vec6 q = Vec6::Zero(), qd = Vec6::Zero();  // the input sample (6-DoF devices)
   Vec6 tau = Vec6::Zero();           // the command handed to the device [N m] (zero once faulted)
   Vec6 tau_pipeline = Vec6::Zero();  // the pipeline's torque of the tick (before the chain)
-  Vec3 f_contact = Vec3::Zero();   // contact + friction force on the proxy
-  Vec3 f_device = Vec3::Zero();    // force of T1 (fed back to the device)
-  Vec3 f_observer = Vec3::Zero();  // observer estimate F1_hat (force part)
-  double max_depth = 0.0;          // deepest penetration of the proxy [m]
-  double device_depth = 0.0;       // deepest penetration of the device's own tip [m]
+  Vec3 f_contact = Vec3::Zero();     // contact + friction force on the proxy
+  Vec3 f_device = Vec3::Zero();      // force of T1 (fed back to the device)
+  Vec3 f_observer = Vec3::Zero();    // observer estimate F1_hat (force part)
+  double max_depth = 0.0;            // deepest penetration of the proxy [m]
+  double device_depth = 0.0;         // deepest penetration of the device's own tip [m]
   int contacts = 0;
   Pose device, proxy;
   double energy_virtual_j = 0.0;  // the loop's E_v after this tick's predecessor
   long stage_ns[kStageCount] = {};
-  bool faulted = false;             // the loop had latched a fault after this tick
-  const char* fault_name = "";      // ClosedLoop::fault_name() (a static string)
+  bool faulted = false;         // the loop had latched a fault after this tick
+  const char* fault_name = "";  // ClosedLoop::fault_name() (a static string)
   double fault_t = 0.0;
 };
 

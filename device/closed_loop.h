@@ -19,11 +19,11 @@
 // With a safety chain (set_safety_chain; device/safety_chain.h, one definition for every backend)
 // the tick's torque passes through it before the device (its watchdog fed with the previous
 // tick's execution time: the CPU time the pipeline's tick took on this thread, so that being
-// preempted by other programs is not read as an overrun of the tick's own work): the chain's guards on the sample (clock
-// not advancing or going backwards, encoder jumps, velocity, workspace) and on the command latch
-// a device fault (named after its flag: "non_monotonic_time", "encoder_jump", ...) with zero
-// torque on that very tick; a fault the device itself reports after a tick (a lost device, its
-// own command chain) latches too, and zero torque is written at once.
+// preempted by other programs is not read as an overrun of the tick's own work): the chain's guards
+// on the sample (clock not advancing or going backwards, encoder jumps, velocity, workspace) and on
+// the command latch a device fault (named after its flag: "non_monotonic_time", "encoder_jump",
+// ...) with zero torque on that very tick; a fault the device itself reports after a tick (a lost
+// device, its own command chain) latches too, and zero torque is written at once.
 //
 // Passivity observer at the device port: E_v = sum_k (tau_k - tau_g,k)^T (q_k+1 - q_k), the
 // energy the virtual side put into the device through the motors, from the torque actually
@@ -97,8 +97,8 @@ class ClosedLoop {
   bool nominal_ = false;
   SafetyChain* safety_ = nullptr;
   VecX tau_safe_;
-  VecX tau_gravity_prev_;
-  double last_exec_s_ = -1.0;  // the previous tick's CPU time (the watchdog's input) [s]  // callback form: the previous tick's gravity compensation
+  VecX tau_gravity_prev_;      // callback form: the previous tick's gravity compensation
+  double last_exec_s_ = -1.0;  // the previous tick's CPU time (the watchdog's input) [s]
   std::uint32_t device_faults_ = kFaultNone;
 };
 

@@ -36,15 +36,15 @@ enum DeviceFault : std::uint32_t {
   kFaultNonMonotonicTime = 1u << 2,   // sample time did not increase (t_k <= t_k-1)
   kFaultEncoderJump = 1u << 3,        // |q_k - q_k-1| > max_joint_step on some joint
   // The safety chain (device/safety_chain.h).
-  kFaultVelocityLimit = 1u << 4,      // |qd_i| > qd_max_i
-  kFaultWorkspaceLimit = 1u << 5,     // q_i outside [q_min_i, q_max_i]
-  kFaultWatchdog = 1u << 6,           // a tick did not finish within its time budget
-  kFaultMotorTemperature = 1u << 7,   // the device reported a motor at or above its limit
-  kFaultSchedulerStopped = 1u << 8,   // the device's clock stopped calling the servo tick
+  kFaultVelocityLimit = 1u << 4,         // |qd_i| > qd_max_i
+  kFaultWorkspaceLimit = 1u << 5,        // q_i outside [q_min_i, q_max_i]
+  kFaultWatchdog = 1u << 6,              // a tick did not finish within its time budget
+  kFaultMotorTemperature = 1u << 7,      // the device reported a motor at or above its limit
+  kFaultSchedulerStopped = 1u << 8,      // the device's clock stopped calling the servo tick
+  kFaultSustainedSaturation = 1u << 10,  // a joint held at its torque limit longer than allowed
   // Errors of the OpenHaptics HDAPI (device/hdapi/): one flag per HD error code, named after the
   // code in lower case (HD_COMM_ERROR -> "hd_comm_error"); hd_fault_for_error() maps a code.
-  kFaultHdUnknownError = 1u << 9,     // an HD error code not in the list below
-  kFaultSustainedSaturation = 1u << 10,  // a joint held at its torque limit longer than allowed
+  kFaultHdUnknownError = 1u << 9,  // an HD error code not in the list below
   kFaultHdInvalidEnum = 1u << 11,
   kFaultHdInvalidValue = 1u << 12,
   kFaultHdInvalidOperation = 1u << 13,

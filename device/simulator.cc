@@ -388,8 +388,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     if (rec.faulted) {
       // The loop latched a fault and commanded zero torque: end the run here; the report and the
       // time series up to the fault are kept.
-      res.faults.push_back(std::string(rec.fault_name) +
-                           " at t = " + std::to_string(rec.fault_t) + " s");
+      res.faults.push_back(std::string(rec.fault_name) + " at t = " + std::to_string(rec.fault_t) +
+                           " s");
       return false;
     }
     res.hand_work_min_j = std::min(res.hand_work_min_j, hand_work);
@@ -526,7 +526,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       const TickResult& r = loop.step();
       if (pacer) pacer->tick_done();
       const double step_us = 1e-3 * std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                        std::chrono::steady_clock::now() - t0).count();
+                                        std::chrono::steady_clock::now() - t0)
+                                        .count();
       // Hand port: the hand's joint torques (averaged over the tick) times the true joint motion.
       if (truth) hand_work += device.hand_joint_torque().dot(device.true_q() - q_true_prev);
       // The servo tick is what a real loop computes: the pipeline's stages and drilling. The

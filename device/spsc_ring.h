@@ -1,7 +1,8 @@
 // A lock-free single-producer single-consumer ring of records of fixed size (copying one must not
-// allocate: plain structs, fixed-size Eigen types), of fixed capacity allocated up front: push() (the servo thread, e.g. inside the vendor's scheduler
-// callback) never allocates, blocks or throws, and returns false when the ring is full (the
-// caller counts the drop); pop() (one other thread) takes the oldest record.
+// allocate: plain structs, fixed-size Eigen types), of fixed capacity allocated up front: push()
+// (the servo thread, e.g. inside the vendor's scheduler callback) never allocates, blocks or
+// throws, and returns false when the ring is full (the caller counts the drop); pop() (one other
+// thread) takes the oldest record.
 //
 // Indices only grow (head: next slot to fill, tail: next to take; both modulo the power-of-two
 // capacity): head - tail is the number of records held. The producer publishes a record with a
@@ -25,8 +26,7 @@ class SpscRing {
  public:
   // At least `capacity` records (rounded up to a power of two, at least 2).
   explicit SpscRing(std::size_t capacity)
-      : slots_(std::bit_ceil(capacity < 2 ? std::size_t{2} : capacity)),
-        mask_(slots_.size() - 1) {}
+      : slots_(std::bit_ceil(capacity < 2 ? std::size_t{2} : capacity)), mask_(slots_.size() - 1) {}
   SpscRing(const SpscRing&) = delete;
   SpscRing& operator=(const SpscRing&) = delete;
 

@@ -216,8 +216,7 @@ const Vec3& SurfaceProxy::update(const VoxelTooth& tooth, const Vec3& c) {
   // admissible stays where it was (found by the full contact sweep: g stuck at phi = 0.73 rho).
   {
     const Vec3 before = g_;
-    if (push_out(tooth, &g_) < -skin_ &&
-        signed_distance(tooth, before, rho_).phi >= rho_ - skin_) {
+    if (push_out(tooth, &g_) < -skin_ && signed_distance(tooth, before, rho_).phi >= rho_ - skin_) {
       g_ = before;
     }
   }

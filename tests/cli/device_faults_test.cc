@@ -94,8 +94,8 @@ TEST(DeviceFaults, TorqueSaturatedForSecondsStopsSafely) {
   ASSERT_GE(pushes, 2);
   const fs::path file = dir / "probe_12n.json";
   std::ofstream(file) << scene.dump(1);
-  const auto r = dentsim::testing::run_dentsim("run " + file.string() + " --out " +
-                                               (dir / "out").string());
+  const auto r =
+      dentsim::testing::run_dentsim("run " + file.string() + " --out " + (dir / "out").string());
   EXPECT_EQ(r.status, 1) << r.output;
   const nlohmann::json report = dentsim::testing::read_json_file(dir / "out" / "report.json");
   ASSERT_EQ(report["faults"].size(), 1u) << report;

@@ -130,12 +130,12 @@ TEST(HdapiRun, DrillSceneInTheCallbackMatchesTheDirectRun) {
   EXPECT_LT(rel(e["rms_contact_force_n"], d["rms_contact_force_n"]), 0.20);
   EXPECT_LT(rel(e["contact_ticks"], d["contact_ticks"]), 0.20);
   EXPECT_LT(rel(e["removed_volume_mm3"]["total"], d["removed_volume_mm3"]["total"]), 0.30);
-  std::printf("drill, emulator (callback) vs direct: removed %.3f / %.3f mm^3, stiffness %.0f / %.0f "
-              "N/m, rms force %.3f / %.3f N\n",
-              e["removed_volume_mm3"]["total"].get<double>(), removed,
-              e["rendered_stiffness_n_per_m"].get<double>(),
-              d["rendered_stiffness_n_per_m"].get<double>(),
-              e["rms_contact_force_n"].get<double>(), d["rms_contact_force_n"].get<double>());
+  std::printf(
+      "drill, emulator (callback) vs direct: removed %.3f / %.3f mm^3, stiffness %.0f / %.0f "
+      "N/m, rms force %.3f / %.3f N\n",
+      e["removed_volume_mm3"]["total"].get<double>(), removed,
+      e["rendered_stiffness_n_per_m"].get<double>(), d["rendered_stiffness_n_per_m"].get<double>(),
+      e["rms_contact_force_n"].get<double>(), d["rms_contact_force_n"].get<double>());
 }
 
 TEST(HdapiRun, CallerLoopMatchesTheDirectRunAtHalfTheRate) {
@@ -240,12 +240,12 @@ TEST(HdapiRun, ExcitationRunsThroughTheBackendAndStopsOnAFault) {
 TEST(HdapiRun, InitFailureNamesTheCodeAndTheUsualCauses) {
   const fs::path a = fresh("init_failure");
   ::setenv("DENTSIM_HD_EMU_INIT_FAIL", "1", 1);
-  const auto r = dentsim::testing::run_dentsim("run probe --duration 1" + kEmulator + " --out " +
-                                               a.string());
+  const auto r =
+      dentsim::testing::run_dentsim("run probe --duration 1" + kEmulator + " --out " + a.string());
   ::unsetenv("DENTSIM_HD_EMU_INIT_FAIL");
   EXPECT_EQ(r.status, 1) << r.output;
-  for (const char* part : {"hdInitDevice", "hd_device_fault (0x0300)", "not connected",
-                           "permissions"}) {
+  for (const char* part :
+       {"hdInitDevice", "hd_device_fault (0x0300)", "not connected", "permissions"}) {
     EXPECT_NE(r.output.find(part), std::string::npos) << part << "\n" << r.output;
   }
   EXPECT_FALSE(fs::exists(a / "report.json"));

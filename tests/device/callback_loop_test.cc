@@ -7,8 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
-#include <memory>
 #include <cstdlib>
+#include <memory>
 #include <new>
 #include <thread>
 
@@ -175,9 +175,10 @@ TEST(CallbackServo, DrillSceneTicksInTheSchedulerCallbackWithoutAllocating) {
   EXPECT_TRUE(hd.servo_done());
   const long allocations = g_allocs.load();
   const long removed = removed_voxels() - removed_before;
-  std::printf("callback loop: %ld ticks counted, %ld in contact, %ld voxels removed, E_v %.3g J, "
-              "%ld allocations on the scheduler thread (1 the control)\n",
-              counted_ticks, contact_ticks, removed, energy, allocations);
+  std::printf(
+      "callback loop: %ld ticks counted, %ld in contact, %ld voxels removed, E_v %.3g J, "
+      "%ld allocations on the scheduler thread (1 the control)\n",
+      counted_ticks, contact_ticks, removed, energy, allocations);
   EXPECT_EQ(out_of_order, 0);
   // What the test is for: ticks in contact and drilling, inside the callback.
   EXPECT_GT(counted_ticks, 2500);

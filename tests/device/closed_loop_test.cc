@@ -4,7 +4,6 @@
 #include "device/closed_loop.h"
 
 #include <gtest/gtest.h>
-
 #include <time.h>
 
 #include <memory>

@@ -104,7 +104,8 @@ TEST(SafetyChain, SustainedSaturationLatchesZero) {
   const VecX beyond = (VecX(2) << 0.125, 0.75).finished();     // beyond (clipped to 0.25)
   const VecX below = (VecX(2) << 0.125, 0.25 - 1.0 / 1024).finished();
   int k = 0;
-  for (; k <= 40; ++k) ASSERT_EQ(chain.apply(sample(k * T), at_limit, 0.0, nullptr, out), kFaultNone);
+  for (; k <= 40; ++k)
+    ASSERT_EQ(chain.apply(sample(k * T), at_limit, 0.0, nullptr, out), kFaultNone);
   ASSERT_EQ(chain.apply(sample(k * T), below, 0.0, nullptr, out), kFaultNone);  // count restarts
   ++k;
   const int start = k;

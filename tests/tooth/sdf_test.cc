@@ -132,9 +132,8 @@ TEST(SurfaceProxy, NeverCrossesAWallOneVoxelThick) {
 // 128^3 before the guard), and stay out of the material.
 TEST(SurfaceProxy, StaysOutOfTheSkinInASlotWhereThePushOutCannotConverge) {
   const double rho = 0.39e-3;
-  const VoxelTooth tooth = make_tooth(64, [](const Vec3& p) {
-    return p.z() < 3.2e-3 && !(p.x() > 3.0e-3 && p.x() < 3.7e-3);
-  });
+  const VoxelTooth tooth = make_tooth(
+      64, [](const Vec3& p) { return p.z() < 3.2e-3 && !(p.x() > 3.0e-3 && p.x() < 3.7e-3); });
   SurfaceProxy proxy(rho, tooth.grid().voxel_size);
   ASSERT_NEAR(proxy.skin(), 0.05e-3, 1e-15);
   const double floor_phi = rho - proxy.skin();

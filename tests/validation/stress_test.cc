@@ -40,9 +40,10 @@ TEST(LoopStress, EveryTickKeepsTheInvariants) {
     std::printf("  %s: %ld runs, %ld with the proxy exploded\n", method.c_str(), n,
                 e == r.exploded.end() ? 0L : e->second);
   }
-  std::printf("  rendered tip outside the tooth: %ld ticks checked, min clearance (phi(g) - rho) / "
-              "rho = %.4f\n",
-              r.surface_checks, r.min_clearance_over_radius);
+  std::printf(
+      "  rendered tip outside the tooth: %ld ticks checked, min clearance (phi(g) - rho) / "
+      "rho = %.4f\n",
+      r.surface_checks, r.min_clearance_over_radius);
   for (const auto& [method, depth] : r.worst_depth_by_method) {
     std::printf("  deepest contact under %s: %.2f rho in %s\n", method.c_str(), depth,
                 r.worst_depth_run.at(method).c_str());
