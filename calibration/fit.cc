@@ -5,6 +5,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <memory>
 
@@ -242,18 +243,45 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
   FitResult res;
   std::vector<Regressor> A;
   std::vector<Vec6> b;
+  std::vector<Vec6> used_qd;  // the low-passed qd of the samples used (diagnostics)
   // The filters' start and end transients: samples within one cut-off period of either end of
   // the log are not used.
+  if (!(opt.exclude_slow_fraction >= 0.0 && opt.exclude_slow_fraction < 1.0)) {
+    throw InputError("calibrate: exclude_slow_fraction must be in [0, 1)");
+  }
   const int trim = opt.lowpass_hz > 0.0
                        ? static_cast<int>(std::min(n / 4.0, std::ceil(1.0 / (opt.lowpass_hz * dt))))
                        : 0;
+  // FitOptions::exclude_slow_fraction: per joint, the speed below which its rows are dropped.
+  Vec6 slow_below = Vec6::Constant(-1.0);
+  if (opt.exclude_slow_fraction > 0.0) {
+    for (int j = 0; j < 6; ++j) {
+      std::vector<double> speeds;
+      for (int k = std::max(1, trim); k + 1 < n - trim; k += stride) {
+        speeds.push_back(std::abs(qd[k](j)));
+      }
+      if (speeds.empty()) continue;
+      const std::size_t at = std::min(
+          speeds.size() - 1, static_cast<std::size_t>(opt.exclude_slow_fraction * speeds.size()));
+      std::nth_element(speeds.begin(), speeds.begin() + at, speeds.end());
+      slow_below(j) = speeds[at];
+    }
+  }
   for (int k = std::max(1, trim); k + 1 < n - trim; k += stride) {
     const Vec6 qdd = (qd[k + 1] - qd[k - 1]) / (log.t[k + 1] - log.t[k - 1]);
     Regressor Y = calib_regressor(prior, q[k], qd[k], qdd);
     for (int j = 0; j < 6; ++j) Y(j, kCoulomb + j) = coulomb_col[k](j);
+    Vec6 tk = tau[k];
+    for (int j = 0; j < 6; ++j) {
+      if (std::abs(qd[k](j)) < slow_below(j)) {  // a dropped row: no residual
+        Y.row(j).setZero();
+        tk(j) = 0.0;
+      }
+    }
     A.push_back(Y * s.asDiagonal());
-    b.push_back(tau[k]);
+    b.push_back(tk);
     res.t.push_back(log.t[k]);
+    used_qd.push_back(qd[k]);
   }
   const int m = static_cast<int>(A.size());
 
@@ -366,8 +394,67 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
   for (int i = 0; i < kCalibParams; ++i) {
     FitParameter& fp = res.params[i];
     fp.std_white = s(i) * std::sqrt(std::max(0.0, cov(i, i)) * sigma2);
-    fp.std = s(i) * std::sqrt(std::max(0.0, cov_hac(i, i)));
-    // Practically identifiable: the data pin it to better than max_rel_std of its prior.
+    fp.std_statistical = s(i) * std::sqrt(std::max(0.0, cov_hac(i, i)));
+    fp.std = fp.std_statistical;
+  }
+
+  // Residual diagnostics: lag-1 autocorrelation, and the residual at low vs high joint speed.
+  for (int j = 0; j < 6; ++j) {
+    double c0 = 0.0, c1 = 0.0;
+    std::vector<std::pair<double, double>> speed_res(m);
+    for (int k = 0; k < m; ++k) {
+      const double r = res.tau_predicted[k](j) - res.tau_measured[k](j);
+      c0 += r * r;
+      if (k > 0) c1 += r * (res.tau_predicted[k - 1](j) - res.tau_measured[k - 1](j));
+      speed_res[k] = {std::abs(used_qd[k](j)), r};
+    }
+    res.diagnostics.lag1_autocorrelation(j) = c0 > 0.0 ? c1 / c0 : 0.0;
+    std::sort(speed_res.begin(), speed_res.end());
+    const int quarter = std::max(1, m / 4);
+    double slow = 0.0, fast = 0.0;
+    for (int k = 0; k < quarter && k < m; ++k) {
+      slow += speed_res[k].second * speed_res[k].second;
+      fast += speed_res[m - 1 - k].second * speed_res[m - 1 - k].second;
+    }
+    res.diagnostics.rms_slow(j) = std::sqrt(slow / quarter);
+    res.diagnostics.rms_fast(j) = std::sqrt(fast / quarter);
+    if (res.diagnostics.rms_slow(j) > 2.0 * res.diagnostics.rms_fast(j)) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "joint %d: residual %.3g N m at low speed, %.3g at high", j + 1,
+                    res.diagnostics.rms_slow(j), res.diagnostics.rms_fast(j));
+      res.model_mismatch_reasons.emplace_back(buf);
+    }
+  }
+
+  // The model-mismatch term (FitOptions::model_mismatch_term).
+  if (opt.model_mismatch_term) {
+    FitOptions reduced = opt;
+    reduced.exclude_slow_fraction = 0.25;
+    reduced.model_mismatch_term = false;
+    const FitResult alt = fit_calibration(log, prior, reduced);
+    for (int i = 0; i < kCalibParams; ++i) {
+      FitParameter& fp = res.params[i];
+      const double d = alt.params[i].value - fp.value;
+      const double var_d = std::max(0.0, alt.params[i].std_statistical * alt.params[i].std_statistical -
+                                             fp.std_statistical * fp.std_statistical);
+      fp.std_model = std::sqrt(std::max(0.0, d * d - var_d));
+      fp.std = std::hypot(fp.std_statistical, fp.std_model);
+      const double z = var_d > 0.0 ? std::abs(d) / std::sqrt(var_d) : 0.0;
+      if (fp.identifiable && fp.std_statistical <= opt.max_rel_std * s(i) && z > 3.0) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf,
+                      "%s: moves %.3g (%.1f std of the difference) without the slow rows",
+                      fp.name.c_str(), d, z);
+        res.model_mismatch_reasons.emplace_back(buf);
+      }
+    }
+  }
+  res.model_mismatch = !res.model_mismatch_reasons.empty();
+
+  // Practically identifiable: the data pin it to better than max_rel_std of its prior, all
+  // uncertainty included.
+  for (int i = 0; i < kCalibParams; ++i) {
+    FitParameter& fp = res.params[i];
     if (fp.identifiable && !(fp.std <= opt.max_rel_std * s(i))) {
       fp.identifiable = false;
       --res.identifiable;

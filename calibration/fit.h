@@ -103,14 +103,37 @@ struct FitOptions {
   // (errors in variables; docs/calibration.md has the numbers).
   bool coulomb_from_filtered_velocity = true;
   double max_rel_std = 0.1;  // std / |prior| above which a parameter counts as not identifiable
+  // Drop, per joint, the torque rows of the slowest `exclude_slow_fraction` of the used samples
+  // (by |qd_j|): where a joint reverses, its friction law matters most. 0: every row.
+  double exclude_slow_fraction = 0.0;
+  // Model-mismatch term (issue #17): refit without each joint's slowest quarter of rows and
+  // compare (a Hausman-type test). With the right friction law both fits estimate the same
+  // parameters and differ only by noise: Var(d) = Var(reduced) - Var(full) for d = reduced -
+  // full. A real joint's friction is never the model's tanh, and the fit then moves with the
+  // rows near reversals: std_model = sqrt(max(0, d^2 - Var(d))) is added to each parameter's std,
+  // and |d| / sqrt(Var(d)) > 3 on a parameter the data pin is reported as a mismatch. Off: the
+  // statistical std alone.
+  bool model_mismatch_term = true;
 };
 
 struct FitParameter {
   std::string name;
   double prior = 0.0, value = 0.0;
-  double std = 0.0;        // Newey-West (autocorrelation-consistent) standard deviation
+  // Reported uncertainty: sqrt(std_statistical^2 + std_model^2) (std_statistical alone when the
+  // model-mismatch term is off).
+  double std = 0.0;
+  double std_statistical = 0.0;  // Newey-West (autocorrelation-consistent) standard deviation
+  double std_model = 0.0;        // the model-mismatch term (FitOptions::model_mismatch_term)
   double std_white = 0.0;  // textbook std, residuals assumed independent (for comparison)
   bool identifiable = false;
+};
+
+// What the residuals say about the model, per joint.
+struct ResidualDiagnostics {
+  Vec6 lag1_autocorrelation = Vec6::Zero();  // of the residual over the used samples
+  // RMS residual over the used samples in the slowest and the fastest quarter of |qd_j|: a
+  // friction law that does not fit shows where the joint reverses (slow), not where it moves.
+  Vec6 rms_slow = Vec6::Zero(), rms_fast = Vec6::Zero();
 };
 
 struct FitResult {
@@ -125,6 +148,12 @@ struct FitResult {
   int samples = 0;
   int identifiable = 0;
   int hac_lags = 0;  // L of the Newey-West standard deviations (in used samples)
+  ResidualDiagnostics diagnostics;
+  // The residuals say the model is not the plant: some parameter the data pin statistically moves
+  // by more than 3 std of the difference when the slow rows are dropped (listed), or a joint's
+  // residual at low speed is more than twice its residual at high speed (listed).
+  bool model_mismatch = false;
+  std::vector<std::string> model_mismatch_reasons;
   // The samples used: time, measured (filtered) and predicted torque.
   std::vector<double> t;
   std::vector<Vec6> tau_measured, tau_predicted;

@@ -158,6 +158,7 @@ struct CalibrateOptions {
   std::string velocity_lag = "auto";
   int lowpass_order = 2;
   std::string coulomb_velocity = "filtered";
+  bool no_model_mismatch = false;
 };
 
 // The zero-phase low-pass needs its cut-off below the Nyquist frequency (the Butterworth's
@@ -248,6 +249,10 @@ void setup_calibrate(CLI::App& app) {
   sub->add_option("--coulomb-velocity", opt->coulomb_velocity,
                   "velocity of the Coulomb column tanh(v / v_s): 'filtered' (the low-passed qd,\n"
                   "default) or 'raw' (the logged qd)");
+  sub->add_flag("--no-model-mismatch", opt->no_model_mismatch,
+                "report the statistical std only (the default refits without each joint's slowest\n"
+                "quarter of samples and adds the change beyond noise to each parameter's std,\n"
+                "flagging a model mismatch: docs/calibration.md)");
   sub->add_option("--max-iterations", opt->max_iterations,
                   "Ceres iteration limit (default 100); a fit that hits it did not converge");
   sub->callback([opt] {
@@ -282,6 +287,7 @@ void setup_calibrate(CLI::App& app) {
                        opt->coulomb_velocity + "'");
     }
     fo.coulomb_from_filtered_velocity = opt->coulomb_velocity == "filtered";
+    fo.model_mismatch_term = !opt->no_model_mismatch;
     double velocity_lag = 0.0;
     if (opt->velocity_lag == "auto") {
       const double T = (log.t.back() - log.t.front()) / (log.size() - 1);
@@ -336,19 +342,35 @@ void setup_calibrate(CLI::App& app) {
     double max_rel = 0.0;
     for (int i = 0; i < kCalibParams; ++i) {
       const FitParameter& fp = r.params[i];
-      nlohmann::json e{{"name", fp.name},           {"prior", fp.prior},
-                       {"value", fp.value},         {"std", fp.std},
-                       {"std_white", fp.std_white}, {"identifiable", fp.identifiable}};
+      nlohmann::json e{{"name", fp.name},
+                       {"prior", fp.prior},
+                       {"value", fp.value},
+                       {"std", fp.std},
+                       {"std_statistical", fp.std_statistical},
+                       {"std_model", fp.std_model},
+                       {"std_white", fp.std_white},
+                       {"identifiable", fp.identifiable}};
       if (!fp.identifiable) not_id.push_back(fp.name);
       if (truth && fp.identifiable) {
         const double rel = std::abs(fp.value - xt(i)) / std::max(std::abs(xt(i)), 1e-300);
         e["truth"] = xt(i);
         e["rel_error"] = rel;
+        e["error_over_std"] = fp.std > 0.0 ? std::abs(fp.value - xt(i)) / fp.std : INFINITY;
         max_rel = std::max(max_rel, rel);
       }
       params.push_back(e);
     }
     j["parameters"] = params;
+    j["model_mismatch"] = r.model_mismatch;
+    j["model_mismatch_reasons"] = r.model_mismatch_reasons;
+    j["model_mismatch_term"] = fo.model_mismatch_term;
+    {
+      const auto v = [](const Vec6& x) { return std::vector<double>(x.data(), x.data() + 6); };
+      j["residual_diagnostics"] = {
+          {"lag1_autocorrelation", v(r.diagnostics.lag1_autocorrelation)},
+          {"rms_slow_quarter_n_m", v(r.diagnostics.rms_slow)},
+          {"rms_fast_quarter_n_m", v(r.diagnostics.rms_fast)}};
+    }
     j["not_identifiable_left_at_prior"] = not_id;
     if (truth) {
       j["max_rel_error"] = max_rel;
@@ -387,6 +409,9 @@ void setup_calibrate(CLI::App& app) {
         "  residual RMS %.3g N m%s\n",
         r.samples, r.identifiable, kCalibParams, r.condition_number, r.residual_rms,
         truth ? (", max_rel_error " + std::to_string(max_rel)).c_str() : "");
+    for (const std::string& why : r.model_mismatch_reasons) {
+      std::printf("  model mismatch: %s\n", why.c_str());
+    }
     if (!r.converged) {
       throw std::runtime_error("calibrate: the fit did not converge (" + r.report +
                                "); no model file written, see " + opt->json);
