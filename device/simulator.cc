@@ -110,6 +110,13 @@ constexpr double kHardwareWatchdogPeriods = 20.0;
 // The safety chain's sustained-saturation guard in every scene run.
 constexpr double kMaxSaturationS = 2.0;
 
+double SceneRig::tip_depth(const Pose& pose) {
+  tip_contacts(pose, &measure_contacts);
+  double d = 0.0;
+  for (const Contact& c : measure_contacts) d = std::max(d, c.depth);
+  return d;
+}
+
 std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOptions& options) {
   auto rig = std::make_unique<SceneRig>();
   SceneRig& g = *rig;
@@ -143,6 +150,7 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   g.tooth_before = grid;
   g.tooth = std::make_unique<VoxelTooth>(std::move(grid));
   g.tip.radius = scene.tool.bur_radius;
+  g.measure_contacts.reserve(4096);
   g.k_tooth = scene.tooth.k_tooth;
   g.b_tooth = scene.tooth.b_tooth;
   DrillParams drill;
@@ -315,8 +323,6 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   ClosedLoop& loop = *rig->loop;
   const Pipeline& pipeline = *rig->pipeline;
   const ToothProviderBase& contacts = *rig->contacts;
-  std::vector<Contact> device_contacts;
-  device_contacts.reserve(4096);
 
   const long n_ticks = static_cast<long>(std::ceil(duration / T));
   std::vector<double> stage_us[kStageCount + 2];
@@ -477,13 +483,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     // consumes the records until the device's clock has covered the duration.
     HdapiDevice& hd = static_cast<HdapiDevice&>(*rig->backend);
     auto depth = [](void* ctx, const Pose& pose) {
-      auto& g = *static_cast<SceneRig*>(ctx);
-      g.tip_contacts(pose, &g.measure_contacts);
-      double d = 0.0;
-      for (const Contact& c : g.measure_contacts) d = std::max(d, c.depth);
-      return d;
+      return static_cast<SceneRig*>(ctx)->tip_depth(pose);
     };
-    rig->measure_contacts.reserve(4096);
     CallbackServo servo(hd, loop, pipeline, depth, rig.get(),
                         static_cast<std::size_t>(std::min<long>(max_ticks + 16, 1L << 16)));
     servo.start();
@@ -537,11 +538,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       // stiffness) is measured outside the tick.
       long tick_ns = 0;
       for (int s = 0; s < kStageCount; ++s) tick_ns += r.stage_ns[s];
-      double d_dev = 0.0;
-      if (!loop.faulted()) {
-        rig->tip_contacts(r.device, &device_contacts);
-        for (const Contact& c : device_contacts) d_dev = std::max(d_dev, c.depth);
-      }
+      const double d_dev = loop.faulted() ? 0.0 : rig->tip_depth(r.device);
       fill_tick_record(k, step_in, r, loop, pipeline, d_dev, record);
       t_end = loop.sample().t;
       if (!consume(record, step_us - 1e-3 * tick_ns)) break;

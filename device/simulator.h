@@ -188,7 +188,11 @@ struct SceneRig {
   // it (for measurements outside the tick; same code as the pipeline's collision stage).
   const VoxelGrid& tooth_grid() const;
   void tip_contacts(const Pose& pose, std::vector<Contact>* out);
-  std::vector<Contact> measure_contacts;  // run_scene's buffer for tip_contacts in the callback
+  // The deepest contact of the tool tip at `pose` [m] (0 when none): the device tip's own
+  // penetration, for the rendered stiffness. Uses measure_contacts (reserved once: no allocation
+  // when warm, so it may run in the vendor's callback).
+  double tip_depth(const Pose& pose);
+  std::vector<Contact> measure_contacts;
 
  private:
   CollisionScratch scratch_;
