@@ -9,40 +9,16 @@
 #include <atomic>
 #include <cstdlib>
 #include <memory>
-#include <new>
 #include <thread>
 
 #include "device/hdapi/hdapi_device.h"
 #include "device/scene.h"
 #include "device/simulator.h"
 
-// Allocation counter for the threads that switch it on (the scheduler thread, from inside its
-// callback): operator new and, outside the sanitizer build, malloc itself (Eigen's dynamic
-// matrices call std::malloc; under ASan malloc is intercepted, so only operator new is counted
-// there). GCC cannot see that the replaced operator new pairs with the replaced delete below.
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-namespace {
-thread_local bool t_count_allocs = false;
-std::atomic<long> g_allocs{0};
-}  // namespace
+#include "tests/support/thread_alloc_counter.h"
 
-#if !defined(__SANITIZE_ADDRESS__)
-extern "C" void* __libc_malloc(std::size_t n);
-extern "C" void* malloc(std::size_t n) noexcept {
-  if (t_count_allocs) g_allocs.fetch_add(1, std::memory_order_relaxed);
-  return __libc_malloc(n);
-}
-#endif
-
-void* operator new(std::size_t n) {
-#if defined(__SANITIZE_ADDRESS__)
-  if (t_count_allocs) g_allocs.fetch_add(1, std::memory_order_relaxed);
-#endif
-  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+using dentsim::testing::g_thread_allocs;
+using dentsim::testing::t_count_thread_allocs;
 
 namespace dentsim {
 namespace {
@@ -117,14 +93,11 @@ struct DepthProbe {
   static double run(void* self, const Pose& pose) {
     auto& p = *static_cast<DepthProbe*>(self);
     if (p.calls.fetch_add(1) == p.warm) {
-      t_count_allocs = true;
-      g_allocs.store(0);
+      t_count_thread_allocs = true;
+      g_thread_allocs.store(0);
       p.control = std::make_unique<int>(7);  // one allocation on purpose: the counter's control
     }
-    p.rig->tip_contacts(pose, &p.rig->measure_contacts);
-    double d = 0.0;
-    for (const Contact& c : p.rig->measure_contacts) d = std::max(d, c.depth);
-    return d;
+    return p.rig->tip_depth(pose);
   }
 };
 
@@ -136,7 +109,6 @@ TEST(CallbackServo, DrillSceneTicksInTheSchedulerCallbackWithoutAllocating) {
   o.pipeline = "fast";
   const std::unique_ptr<SceneRig> rig = build_scene_rig(scene, o);
   auto& hd = static_cast<HdapiDevice&>(*rig->backend);
-  rig->measure_contacts.reserve(4096);
   DepthProbe probe;
   probe.rig = rig.get();
   rig->loop->start();
@@ -173,7 +145,7 @@ TEST(CallbackServo, DrillSceneTicksInTheSchedulerCallbackWithoutAllocating) {
     EXPECT_EQ(servo.dropped(), 0);
   }
   EXPECT_TRUE(hd.servo_done());
-  const long allocations = g_allocs.load();
+  const long allocations = g_thread_allocs.load();
   const long removed = removed_voxels() - removed_before;
   std::printf(
       "callback loop: %ld ticks counted, %ld in contact, %ld voxels removed, E_v %.3g J, "

@@ -24,23 +24,12 @@
 #include "device/simulated_phantom.h"
 #include "reference/phantom/phantom_model.h"
 
-// Allocation counter (as tests/device/simulated_phantom_test.cc), counting only on threads that
-// switched it on: the servo test switches it on from inside the scheduler callback, so every
-// allocation of the scheduler thread (the backend's tick and the emulator's) is counted. GCC cannot
-// see that the replaced operator new pairs with the replaced operator delete below.
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-namespace {
-thread_local bool t_count_allocs = false;
-std::atomic<long> g_allocs{0};
-}  // namespace
+// Allocation counter for the scheduler thread (the servo test switches it on from inside the
+// callback, so every allocation of that thread, the backend's tick and the emulator's, counts).
+#include "tests/support/thread_alloc_counter.h"
 
-void* operator new(std::size_t n) {
-  if (t_count_allocs) g_allocs.fetch_add(1);
-  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+using dentsim::testing::g_thread_allocs;
+using dentsim::testing::t_count_thread_allocs;
 
 namespace dentsim {
 namespace {
@@ -300,7 +289,7 @@ struct AllocationProbe {
   std::unique_ptr<int> control;
   static bool run(void* self, const DeviceSample&, VecX& tau) {
     auto* p = static_cast<AllocationProbe*>(self);
-    t_count_allocs = true;
+    t_count_thread_allocs = true;
     if (p->calls.load() == 0) p->control = std::make_unique<int>(7);
     tau.setZero();
     p->calls.fetch_add(1);
@@ -315,8 +304,8 @@ TEST(HdapiDevice, SchedulerTicksDoNotAllocate) {
   dev.set_servo_function(&AllocationProbe::run, &probe);
   for (int i = 0; i < 100 && probe.calls.load() < 2; ++i) dev.wait_ticks(1);
   ASSERT_GE(probe.calls.load(), 2);
-  EXPECT_GE(g_allocs.load(), 1);  // the control
-  g_allocs = 0;
+  EXPECT_GE(g_thread_allocs.load(), 1);  // the control
+  g_thread_allocs = 0;
   // 100 ticks through the servo function ...
   const int first = probe.calls.load();
   for (int i = 0; i < 1000 && probe.calls.load() < first + 100; ++i) dev.wait_ticks(1);
@@ -329,7 +318,7 @@ TEST(HdapiDevice, SchedulerTicksDoNotAllocate) {
     dev.advance();
   }
   EXPECT_EQ(dev.faults(), kFaultNone);
-  EXPECT_EQ(g_allocs.load(), 0);
+  EXPECT_EQ(g_thread_allocs.load(), 0);
 }
 
 // Records (tick index, q) from inside the scheduler callback into preallocated storage.
