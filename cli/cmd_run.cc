@@ -40,6 +40,7 @@ struct RunCliOptions {
   std::string device;  // "" = the scene's device.type
   std::string hd_library;
   std::string hd_loop = "callback";
+  bool no_skip = false;  // --no-skip
 };
 
 nlohmann::json report_json(const Scene& scene, const RunResult& r) {
@@ -49,6 +50,7 @@ nlohmann::json report_json(const Scene& scene, const RunResult& r) {
   j["method"] = method_name(scene.method.method);
   j["device_model"] = r.device_model;
   j["pipeline"] = r.pipeline;
+  j["skip_unneeded"] = r.skip_unneeded;
   j["tick_hz"] = scene.tick_hz;
   j["simulated_s"] = r.simulated_s;
   j["wall_s"] = r.wall_s;
@@ -69,13 +71,14 @@ nlohmann::json report_json(const Scene& scene, const RunResult& r) {
       r.has_ground_truth ? nlohmann::json(r.hand_work_min_j) : nlohmann::json(nullptr);
   // Passive toward the hand: it never got back more energy than it put in (tolerance: 1 uJ).
   // Unknown (null) on a real device: the hand's force is not measured.
-  j["passive_at_hand"] = r.has_ground_truth ? nlohmann::json(r.hand_work_min_j >= -1e-6)
-                                            : nlohmann::json(nullptr);
+  j["passive_at_hand"] =
+      r.has_ground_truth ? nlohmann::json(r.hand_work_min_j >= -1e-6) : nlohmann::json(nullptr);
   j["passive_at_motors"] = r.virtual_energy_generated_j <= 0.0;
   j["observer_rms_error_n"] =
       r.has_ground_truth ? nlohmann::json(r.observer_rms_error_n) : nlohmann::json(nullptr);
   nlohmann::json rv;
-  for (int m = 1; m < kMaterialCount; ++m) rv[material_properties(m).name] = r.removed_volume_mm3[m];
+  for (int m = 1; m < kMaterialCount; ++m)
+    rv[material_properties(m).name] = r.removed_volume_mm3[m];
   rv["total"] = r.removed_volume_total_mm3;
   j["removed_volume_mm3"] = rv;
   j["pulp_exposed_at_s"] =
@@ -127,8 +130,8 @@ std::string csv_of(const RunResult& r) {
       << x.proxy_rotvec.y() << ',' << x.proxy_rotvec.z() << ',' << x.device_rotvec.x() << ','
       << x.device_rotvec.y() << ',' << x.device_rotvec.z() << ',' << x.hand_force_n.x() << ','
       << x.hand_force_n.y() << ',' << x.hand_force_n.z() << ',' << x.observer_force_n.x() << ','
-      << x.observer_force_n.y() << ',' << x.observer_force_n.z() << ',' << x.energy_virtual_j
-      << ',' << x.hand_work_j << '\n';
+      << x.observer_force_n.y() << ',' << x.observer_force_n.z() << ',' << x.energy_virtual_j << ','
+      << x.hand_work_j << '\n';
   }
   return s.str();
 }
@@ -147,9 +150,16 @@ void write_drill_plot(const RunResult& r, const std::string& dir) {
     removed_mm3.push_back(n * voxel_mm3);
   }
   plot::Figure force{"Drilling: contact force against depth (colour: material under the bur)",
-                     "depth below the first contact [mm]", "force [N]", {}, false, false};
+                     "depth below the first contact [mm]",
+                     "force [N]",
+                     {},
+                     false,
+                     false};
   plot::Figure rate{"Drilling: removal rate against depth (moving window of 100 ticks)",
-                    "depth below the first contact [mm]", "removal rate [mm^3/s]", {}, false,
+                    "depth below the first contact [mm]",
+                    "removal rate [mm^3/s]",
+                    {},
+                    false,
                     false};
   double window_sum = 0.0;
   std::vector<double> rates;
@@ -193,21 +203,33 @@ void write_plots(const RunResult& r, const std::string& dir) {
     ox.push_back(x.observer_force_n.x());
     oz.push_back(x.observer_force_n.z());
   }
-  plot::Figure force{"Contact force (proxy) and force fed back (device)", "time [s]", "force [N]",
-                     {}, false, false};
+  plot::Figure force{"Contact force (proxy) and force fed back (device)",
+                     "time [s]",
+                     "force [N]",
+                     {},
+                     false,
+                     false};
   force.series.push_back({"contact force on proxy", t, fc, false, 0, false});
   force.series.push_back({"force on device", t, fd, false, 1, true});
   plot::Figure depth{"Penetration of the tooth", "time [s]", "depth [mm]", {}, false, false};
   depth.series.push_back({"proxy tip", t, pen, false, 0, false});
   depth.series.push_back({"device tip", t, dpen, false, 1, true});
   plot::Figure energy{"Passivity observers: hand port W_h (>= 0: passive), motor port E_v",
-                      "time [s]", "energy [mJ]", {}, false, false};
+                      "time [s]",
+                      "energy [mJ]",
+                      {},
+                      false,
+                      false};
   energy.series.push_back({"W_h: work done by the hand", t, wh, false, 2, false});
   energy.series.push_back({"E_v: motors, net of gravity", t, e, false, 4, true});
   plot::write_png({force, depth, energy}, dir + "/force_penetration.png", 1, 900, 320);
 
-  plot::Figure ob{"Human force: observer estimate vs true hand force", "time [s]", "force [N]",
-                  {}, false, false};
+  plot::Figure ob{"Human force: observer estimate vs true hand force",
+                  "time [s]",
+                  "force [N]",
+                  {},
+                  false,
+                  false};
   ob.series.push_back({"hand f_z (true)", t, hz, false, 0, false});
   ob.series.push_back({"observer f_z", t, oz, false, 1, true});
   ob.series.push_back({"hand f_x (true)", t, hx, false, 2, false});
@@ -268,6 +290,7 @@ void run(const RunCliOptions& o) {
   ro.device = o.device;
   ro.hd_library = o.hd_library;
   ro.hd_loop = o.hd_loop;
+  ro.skip_unneeded = !o.no_skip;
   ro.progress = [&bar](double f) { bar.update(f); };
   const RunResult r = run_scene_with_view(scene, ro, o.view);
   bar.finish();
@@ -282,11 +305,12 @@ void run(const RunCliOptions& o) {
               scene.name.c_str(), r.ticks, r.contact_ticks, r.simulated_s, r.wall_s);
   std::printf("  contact force max %.3f N, rms %.3f N; penetration max %.3f mm\n",
               r.max_contact_force_n, r.rms_contact_force_n, r.max_penetration_m * 1e3);
-  std::printf("  rendered stiffness %.0f N/m; energy from the motors %.3g J; hand port min %.3g J (%s)\n",
-              r.rendered_stiffness_n_per_m, r.virtual_energy_generated_j, r.hand_work_min_j,
-              !r.has_ground_truth        ? "the hand's force is not measured on this device"
-              : r.hand_work_min_j >= -1e-6 ? "passive toward the hand"
-                                           : "ACTIVE toward the hand");
+  std::printf(
+      "  rendered stiffness %.0f N/m; energy from the motors %.3g J; hand port min %.3g J (%s)\n",
+      r.rendered_stiffness_n_per_m, r.virtual_energy_generated_j, r.hand_work_min_j,
+      !r.has_ground_truth          ? "the hand's force is not measured on this device"
+      : r.hand_work_min_j >= -1e-6 ? "passive toward the hand"
+                                   : "ACTIVE toward the hand");
   std::printf("  removed %.4f mm^3 (enamel %.4f, dentin %.4f, pulp %.4f)\n",
               r.removed_volume_total_mm3, r.removed_volume_mm3[kEnamel],
               r.removed_volume_mm3[kDentin], r.removed_volume_mm3[kPulp]);
@@ -297,10 +321,12 @@ void run(const RunCliOptions& o) {
     }
   }
   std::printf("  faults: %s\n", r.faults.empty() ? "none" : r.faults.front().c_str());
-  std::printf("  outputs in %s/: report.json timeseries.csv force_penetration.png observer.png "
-              "tooth_before.png tooth_after.png%s\n",
-              o.out.c_str(), r.drill_log.empty() ? "" : " drill_depth.png");
-  if (!r.faults.empty()) throw std::runtime_error("the device faulted (safe stop): " + r.faults.front());
+  std::printf(
+      "  outputs in %s/: report.json timeseries.csv force_penetration.png observer.png "
+      "tooth_before.png tooth_after.png%s\n",
+      o.out.c_str(), r.drill_log.empty() ? "" : " drill_depth.png");
+  if (!r.faults.empty())
+    throw std::runtime_error("the device faulted (safe stop): " + r.faults.front());
 }
 
 void setup_run(CLI::App& app) {
@@ -322,15 +348,21 @@ void setup_run(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--pipeline", o->pipeline, "The tick's implementation: " + stage_table_names())
       ->capture_default_str();
+  sub->add_flag("--no-skip", o->no_skip,
+                "Run every stage the scene does not need (observer without a gain, grip detector "
+                "without a hand mass, decomposition, friction at mu = 0, drilling, the tooth's "
+                "free-space early out) and discard what the method does not use: the same run, "
+                "slower (report.json skip_unneeded; fast pipeline)");
   sub->add_option("--inject-fault", o->inject_fault,
                   "Inject a device fault, KIND@T (T [s]): nan-sample, inf-sample, encoder-jump, "
                   "frozen, clock-backwards, device-loss end in a named fault with zero torque and "
                   "the report written; late-tick (one sample 5 periods late) is ridden through "
                   "(device/fault_injection.h)");
-  sub->add_option("--device", o->device,
-                  "The device: simulated-phantom (the embedded default) or hdapi (a Phantom through "
-                  "OpenHaptics, or the project's emulator; docs/hardware.md); default: the "
-                  "scene's device.type")
+  sub->add_option(
+         "--device", o->device,
+         "The device: simulated-phantom (the embedded default) or hdapi (a Phantom through "
+         "OpenHaptics, or the project's emulator; docs/hardware.md); default: the "
+         "scene's device.type")
       ->check(CLI::IsMember({"simulated-phantom", "hdapi"}));
   sub->add_option("--hd-library", o->hd_library,
                   "With --device hdapi: the HDAPI library to load (default: DENTSIM_HD_LIBRARY, "
@@ -351,7 +383,8 @@ void setup_run(CLI::App& app) {
   sub->add_flag("--view-close", o->view.close, "Close the window when the run ends");
   sub->add_option("--view-shots", o->view.shots_dir,
                   "With --view: write DIR/first.png and DIR/last.png of the window, then close it");
-  sub->add_flag("--show", o->show, "Print the scene file (e.g. to start a new scene from a built-in one)");
+  sub->add_flag("--show", o->show,
+                "Print the scene file (e.g. to start a new scene from a built-in one)");
   sub->callback([o] { run(*o); });
 }
 DENTSIM_REGISTER_COMMAND(setup_run);

@@ -162,6 +162,7 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   // model has no fast twin yet, so both pipelines use the reference provider for it.
   if (options.pipeline == "fast" && contact_model == ContactModel::kFaces) {
     g.brick = std::make_unique<fast::BrickTooth>(*g.tooth);
+    g.brick->set_free_space_early_out(options.skip_unneeded);
     g.contacts = std::make_unique<fast::ToothContactProvider>(*g.brick, g.tip, g.k_tooth, g.b_tooth,
                                                               drilling);
   } else {
@@ -230,6 +231,8 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   pc.observer_input = matched_observer_input(g.device->capabilities());
   pc.torque_limit = g.params.torque_limit_n_m;
   if (detect) pc.grasp_model = g.grasp.get();
+  pc.skip_unneeded = options.skip_unneeded;
+  if (options.configure_pipeline) options.configure_pipeline(pc);
   g.pipeline = make_pipeline(options.pipeline, belief, pc);
   SafetyLimits limits;
   limits.tau_max = g.params.torque_limit_n_m;
@@ -304,6 +307,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   rig_options.pipeline = options.pipeline;
   rig_options.fault = options.fault;
   rig_options.float_device_terms = options.float_device_terms;
+  rig_options.skip_unneeded = options.skip_unneeded;
   rig_options.device = options.device;
   rig_options.hd_library = options.hd_library;
   const std::unique_ptr<SceneRig> rig = build_scene_rig(scene, rig_options);
@@ -311,9 +315,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   res.device_model =
       scene.device.model_file.empty() ? "default Phantom Premium 1.5A" : scene.device.model_file;
   res.pipeline = rig->pipeline->name();
+  res.skip_unneeded = options.skip_unneeded;
   res.tooth_before = rig->tooth_before;
   SimulatedPhantom& device = *rig->device;  // the simulator's ground truth (unless a backend)
-  Device& driven = *rig->loop_device;        // what the loop drives
+  Device& driven = *rig->loop_device;       // what the loop drives
   const bool truth = rig->backend == nullptr;
   // With HDAPI the tick runs inside the vendor's scheduler callback (RunOptions::hd_loop).
   const bool callback = !truth && options.hd_loop == "callback";
@@ -350,8 +355,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
                                     {"pipeline", res.pipeline},
                                     {"duration_s", duration}};
     h.context = context.dump();
-    const std::size_t capacity =
-        static_cast<std::size_t>(std::min<long>(n_ticks + 2, 1L << 18));
+    const std::size_t capacity = static_cast<std::size_t>(std::min<long>(n_ticks + 2, 1L << 18));
     recorder = std::make_unique<SessionWriter>(options.record_path, h, capacity);
   }
   loop.start();

@@ -61,8 +61,8 @@ struct RunOptions {
   // thread, through read/write/advance: one loop tick per two scheduler ticks). The caller form
   // is needed for --inject-fault, the view and --realtime, which wrap or pace that thread.
   std::string hd_loop = "callback";
-  InjectedFault fault;                 // a device fault to inject (device/fault_injection.h)
-  bool realtime = false;           // pace the loop at the tick rate (device/servo_pacer.h)
+  InjectedFault fault;    // a device fault to inject (device/fault_injection.h)
+  bool realtime = false;  // pace the loop at the tick rate (device/servo_pacer.h)
   // With realtime: ask for SCHED_FIFO and locked memory (a warning where refused).
   bool realtime_priority = false;
   double duration_override = 0.0;  // > 0: run this long instead of the scene's duration [s]
@@ -70,6 +70,9 @@ struct RunOptions {
   // The fast pipeline's device terms in float (fast::PhantomModelFloat): a point on the
   // time-against-error curve (`dentsim bench`), never a default. Fast pipeline only.
   bool float_device_terms = false;
+  // Skip what the scene does not need (PipelineModel::skip_unneeded; `dentsim run --no-skip`
+  // turns every skip off: the same run, slower, for checking the skips).
+  bool skip_unneeded = true;
   // Non-empty: record every tick's device sample, command and contact count to this file
   // (device/session_record.h; the context holds the scene's JSON and the pipeline, so that
   // `dentsim replay` can rebuild the environment). The file is complete up to a fault.
@@ -91,8 +94,8 @@ struct RunSample {
   double device_penetration_m;  // device tip
   Vec3 proxy_x, device_x;
   Vec3 proxy_rotvec, device_rotvec;  // orientations as rotation vectors log(R) [rad]
-  Vec3 hand_force_n;            // true hand force (simulator ground truth), world
-  Vec3 observer_force_n;        // observer estimate F1_hat (force part), world
+  Vec3 hand_force_n;                 // true hand force (simulator ground truth), world
+  Vec3 observer_force_n;             // observer estimate F1_hat (force part), world
   int contacts;
   double energy_virtual_j;
   double hand_work_j;
@@ -108,38 +111,39 @@ struct RunResult {
   long ticks = 0;
   long contact_ticks = 0;
   double max_contact_force_n = 0.0;
-  double rms_contact_force_n = 0.0;         // over contact ticks
+  double rms_contact_force_n = 0.0;  // over contact ticks
   double max_penetration_m = 0.0;
   double rendered_stiffness_n_per_m = 0.0;
   double virtual_energy_generated_j = 0.0;
-  double hand_work_j = 0.0;                 // W_h at the end
-  double hand_work_min_j = 0.0;             // min over the run of W_h(t) (<= 0)
+  double hand_work_j = 0.0;                                 // W_h at the end
+  double hand_work_min_j = 0.0;                             // min over the run of W_h(t) (<= 0)
   std::array<double, kMaterialCount> removed_volume_mm3{};  // per Material id (0 unused)
   double removed_volume_total_mm3 = 0.0;
   // Scene time at the end of the tick whose drilling first opened the pulp (nominal ticks of
   // 1/tick_hz); empty if it never did.
   std::optional<double> pulp_exposed_at_s;
-  std::vector<DrillRecord> drill_log;       // every drilling tick (reference/tooth/tooth_contacts.h)
-  double tick_s = 0.0;                      // nominal tick 1/tick_hz [s]
+  std::vector<DrillRecord> drill_log;  // every drilling tick (reference/tooth/tooth_contacts.h)
+  double tick_s = 0.0;                 // nominal tick 1/tick_hz [s]
   std::vector<std::pair<std::string, StageStats>> timing;  // stages, "tick", "device_simulation"
   std::vector<std::string> faults;
-  double observer_rms_error_n = 0.0;        // |F1_hat - F_hand| (force part), RMS over the run
+  double observer_rms_error_n = 0.0;  // |F1_hat - F_hand| (force part), RMS over the run
   double simulated_s = 0.0;
   double wall_s = 0.0;
   std::vector<RunSample> series;
-  std::string hd_loop;              // hdapi: "callback" or "caller" (empty for a simulated run)
-  long callback_dropped_ticks = 0;  // hdapi callback loop: records the full ring dropped
-  VoxelGrid tooth_before, tooth_after;      // for pictures
-  std::string device_model;                 // which device model file
-  std::string pipeline;                     // the tick's implementation that ran
-  std::string device;                       // the backend that ran ("simulated-phantom", "hdapi")
+  std::string hd_loop;                  // hdapi: "callback" or "caller" (empty for a simulated run)
+  long callback_dropped_ticks = 0;      // hdapi callback loop: records the full ring dropped
+  VoxelGrid tooth_before, tooth_after;  // for pictures
+  std::string device_model;             // which device model file
+  std::string pipeline;                 // the tick's implementation that ran
+  bool skip_unneeded = true;            // RunOptions::skip_unneeded
+  std::string device;                   // the backend that ran ("simulated-phantom", "hdapi")
   // false on a device without the simulator's ground truth (hdapi): the hand's work, the
   // passivity at the hand and the observer's error against the true hand force are not known.
   bool has_ground_truth = true;
-  double torque_after_fault_n_m = 0.0;      // |tau| applied over the faulting tick (0 expected)
-  std::optional<ServoTimingStats> realtime; // --realtime: period and execution-time statistics
-  long recorded_ticks = 0;                  // ticks written to RunOptions::record_path
-  long record_dropped_ticks = 0;            // ticks the recorder's ring had no room for
+  double torque_after_fault_n_m = 0.0;       // |tau| applied over the faulting tick (0 expected)
+  std::optional<ServoTimingStats> realtime;  // --realtime: period and execution-time statistics
+  long recorded_ticks = 0;                   // ticks written to RunOptions::record_path
+  long record_dropped_ticks = 0;             // ticks the recorder's ring had no room for
 };
 
 // Everything a scene runs on, built once: the simulated Phantom (behind a fault injector when
@@ -155,6 +159,10 @@ struct SceneRigOptions {
   std::string pipeline = "reference";
   InjectedFault fault;
   bool float_device_terms = false;  // RunOptions::float_device_terms
+  bool skip_unneeded = true;        // RunOptions::skip_unneeded
+  // Adjusts the pipeline's configuration after the scene has set it (tests and benchmarks:
+  // variants no scene file expresses, e.g. a method without an observer). Null: none.
+  std::function<void(PipelineConfig&)> configure_pipeline;
 };
 
 struct SceneRig {

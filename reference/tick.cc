@@ -87,6 +87,11 @@ PipelineModel make_pipeline_model(const SixDofDeviceModel& device, const Pipelin
     m.torque_limit = config.torque_limit;
   }
   m.compensate_gravity = config.compensate_gravity;
+  m.skip_unneeded = config.skip_unneeded;
+  if (!m.skip_unneeded && config.method != Method::kPmiPd) {
+    // The decomposition runs (and is discarded) with skips off: it needs M_d factorised.
+    m.tool_Md_llt.compute(config.tool.M_d);
+  }
   return m;
 }
 
@@ -198,13 +203,14 @@ TickStatus assemble_given_contact(const PipelineModel& m, PipelineData& d) {
 }  // namespace detail
 
 TickStatus solve(const PipelineModel& m, PipelineData& d) {
-  return detail::solve_with(m, d, pmi_try_solve);
+  return detail::solve_with(m, d, pmi_try_solve, m.friction);
 }
 
 namespace detail {
 
 TickStatus solve_with(const PipelineModel& m, PipelineData& d,
-                      bool (*pmi_solver)(const PmiSystem&, Vec6*)) {
+                      bool (*pmi_solver)(const PmiSystem&, Vec6*), const FrictionParams& friction,
+                      bool even_without_contacts) {
   TickResult& r = d.r;
   r.friction_sliding = false;
   if (m.method == Method::kExplicitVc) {
@@ -220,10 +226,9 @@ TickStatus solve_with(const PipelineModel& m, PipelineData& d,
   }
   // PMI (4.9): one linear solve for V_hat, friction as tangential multipliers (2.21)-(2.22).
   Vec6 friction_wrench = Vec6::Zero();
-  if (m.friction.enabled && !r.contacts.empty()) {
+  if (friction.enabled && (!r.contacts.empty() || even_without_contacts)) {
     FrictionSolution fs;
-    if (!solve_with_friction_unchecked(d.sys, r.contacts, d.proxy.pose, d.contact, m.friction,
-                                       &fs)) {
+    if (!solve_with_friction_unchecked(d.sys, r.contacts, d.proxy.pose, d.contact, friction, &fs)) {
       return TickStatus::kSolverFailure;
     }
     r.V_hat = fs.V;

@@ -39,10 +39,10 @@ struct PipelineConfig {
   ProxyParams proxy;
   CouplingGains coupling;
   FrictionParams friction;
-  ToolDynamics tool;            // desired locked dynamics (kPmiPd)
-  VecX observer_gain;           // L per joint [1/s] (kPmiPd; also run for the estimate when set)
+  ToolDynamics tool;             // desired locked dynamics (kPmiPd)
+  VecX observer_gain;            // L per joint [1/s] (kPmiPd; also run for the estimate when set)
   ObserverInput observer_input;  // input matched to the driver's velocity estimate (observer.h)
-  VecX torque_limit;            // |tau_i| <= torque_limit_i [N m]; empty = no saturation
+  VecX torque_limit;             // |tau_i| <= torque_limit_i [N m]; empty = no saturation
   // Add the model's gravity torque g(q) to the command: the thesis assumes gravity compensated
   // (2.1); the observer accounts for it either way since it sees the total torque.
   bool compensate_gravity = true;
@@ -52,6 +52,7 @@ struct PipelineConfig {
   // tick, the estimate and the mass matrix of the hypothesis it judges true.
   const GraspMassModel* grasp_model = nullptr;
   GripDetectorParams grip_detector;
+  bool skip_unneeded = true;  // PipelineModel::skip_unneeded
 };
 
 // Validates `config` against `device` and builds the constant model of the tick. Throws
@@ -78,9 +79,12 @@ TickStatus reset(const PipelineModel& m, PipelineData& d);
 namespace detail {
 // assemble with d.contact already computed.
 TickStatus assemble_given_contact(const PipelineModel& m, PipelineData& d);
-// solve with `pmi_solver` for the frictionless PMI system (4.9).
+// solve with `pmi_solver` for the frictionless PMI system (4.9) and `friction` (m.friction, or
+// fast/'s mu = 0 stand-in when skips are off). The friction solver runs when friction is enabled
+// and the contact set is not empty (or `even_without_contacts`).
 TickStatus solve_with(const PipelineModel& m, PipelineData& d,
-                      bool (*pmi_solver)(const PmiSystem&, Vec6*));
+                      bool (*pmi_solver)(const PmiSystem&, Vec6*), const FrictionParams& friction,
+                      bool even_without_contacts = false);
 }  // namespace detail
 }  // namespace reference
 

@@ -43,8 +43,8 @@ namespace dentsim::fast {
 
 class BrickTooth {
  public:
-  static constexpr int kBrick = 4;             // brick edge [voxels]
-  static constexpr int kMaxBrickLevels = 8;    // N <= 1024 -> B <= 256
+  static constexpr int kBrick = 4;           // brick edge [voxels]
+  static constexpr int kMaxBrickLevels = 8;  // N <= 1024 -> B <= 256
 
   // Copies the grid and codes of a reference tooth (validated and encoded there).
   explicit BrickTooth(const VoxelTooth& tooth);
@@ -66,6 +66,11 @@ class BrickTooth {
   const Vec3& solid_box_min() const { return box_min_; }
   const Vec3& solid_box_max() const { return box_max_; }
   double inv_voxel_size() const { return inv_h_; }
+  // The queries' free-space early out (fast/tooth/collision.h; on by default). Off, a query far
+  // from the solid still clips its box to the solid and finds it empty: the same (empty) set, a
+  // few more flops (PipelineModel::skip_unneeded; tests/fast/skip_test.cc, bench/skip_bench.cc).
+  bool free_space_early_out() const { return early_out_; }
+  void set_free_space_early_out(bool on) { early_out_ = on; }
 
   // Removes voxel (i, j, k) (see the header comment). Returns the material it held; kEmpty (no
   // change) if it was empty or outside the grid.
@@ -77,11 +82,12 @@ class BrickTooth {
   void for_each_surface_voxel(const int lo[3], const int hi[3], Visit&& visit) const;
 
  private:
+  bool early_out_ = true;
   std::size_t brick_index(int bx, int by, int bz) const {
     return static_cast<std::size_t>(bx) +
            static_cast<std::size_t>(bricks_) *
-               (static_cast<std::size_t>(by) + static_cast<std::size_t>(bricks_) *
-                                                   static_cast<std::size_t>(bz));
+               (static_cast<std::size_t>(by) +
+                static_cast<std::size_t>(bricks_) * static_cast<std::size_t>(bz));
   }
   std::size_t node_index(int level, int x, int y, int z) const {
     const std::size_t s = std::size_t{1} << level;

@@ -65,7 +65,8 @@ bool sphere_voxel_box(const BrickTooth& tooth, const Vec3& c, double rho, int lo
   // compares; false for NaN too, whose comparisons fail).
   const Vec3& bmin = tooth.solid_box_min();
   const Vec3& bmax = tooth.solid_box_max();
-  if (!(c.x() + rho > bmin.x() && c.x() - rho < bmax.x() && c.y() + rho > bmin.y() &&
+  if (tooth.free_space_early_out() &&
+      !(c.x() + rho > bmin.x() && c.x() - rho < bmax.x() && c.y() + rho > bmin.y() &&
         c.y() - rho < bmax.y() && c.z() + rho > bmin.z() && c.z() - rho < bmax.z())) {
     return false;
   }

@@ -109,6 +109,12 @@ struct PipelineModel {
   bool saturate = false;
   Vec6 torque_limit = Vec6::Zero();  // [N m]
   bool compensate_gravity = true;
+  // Skip what the scene does not need (fast/ only; fast/README.md "Skips"): the observer without
+  // a gain, the grip detector without a hand mass, the decomposition unless the method uses it,
+  // friction when off, contact work on an empty set, drilling unless the tool drills, the tooth's
+  // free-space early out. false runs every one of them and discards what the method does not
+  // use: the same torques (tests/fast/skip_test.cc), for checks and for bench/skip_bench.cc.
+  bool skip_unneeded = true;
 };
 
 // ---- data ----------------------------------------------------------------------------------
