@@ -2,6 +2,7 @@
 // scene's states and in closed loop on the built-in scenes (validation/crosscheck_fast.h).
 // Prints and writes (--json) per stage `max_rel`, per scene `max_force_diff_n` and `ticks`; exit
 // status 1 when a bound is broken.
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <stdexcept>
@@ -9,6 +10,7 @@
 
 #include "cli/registry.h"
 #include "reference/core/io.h"
+#include "reference/tooth/materials.h"
 #include "validation/crosscheck_fast.h"
 
 namespace dentsim::cli {
@@ -38,6 +40,39 @@ void run(const Options& o) {
                        {"contact_samples", s.contact_samples},
                        {"count_mismatches", s.count_mismatches}};
   }
+  // Adversarial states: per perturbation, the worst stage and every stage's max_rel.
+  nlohmann::json adversarial = nlohmann::json::object();
+  for (const AdversarialCrosscheck& a : r.adversarial) {
+    nlohmann::json& p = adversarial[a.perturbation];
+    if (p.is_null()) {
+      p = {{"implementation", a.implementation},
+           {"samples", a.samples},
+           {"contact_samples", a.contact_samples},
+           {"saturated_samples", a.saturated_samples},
+           {"max_rel", 0.0},
+           {"count_mismatches", 0},
+           {"stages", nlohmann::json::object()}};
+    }
+    p["stages"][a.stage] = a.max_rel;
+    p["max_rel"] = std::max(p["max_rel"].get<double>(), a.max_rel);
+    p["count_mismatches"] = p["count_mismatches"].get<long>() + a.count_mismatches;
+    if (a.stage == "command") {
+      p["saturated_samples"] = a.saturated_samples;
+      std::printf(
+          "  %-6s adversarial %-17s max_rel %.3e over %ld samples (%ld in contact, %ld "
+          "saturated)\n",
+          a.implementation.c_str(), a.perturbation.c_str(), p["max_rel"].get<double>(), a.samples,
+          a.contact_samples, a.saturated_samples);
+    }
+  }
+  nlohmann::json materials = nlohmann::json::object();
+  std::printf("  contact members seen stage by stage, per material:");
+  for (int m = 1; m < kMaterialCount; ++m) {
+    const long n = r.contact_members_per_material[static_cast<std::size_t>(m)];
+    materials[material_properties(static_cast<std::uint8_t>(m)).name] = n;
+    std::printf(" %s %ld", material_properties(static_cast<std::uint8_t>(m)).name, n);
+  }
+  std::printf("\n");
   nlohmann::json scenes = nlohmann::json::object();
   for (const SceneCrosscheck& c : r.scenes) {
     std::printf(
@@ -61,6 +96,8 @@ void run(const Options& o) {
   if (!o.json.empty()) {
     write_json(o.json, {{"stages", stages},
                         {"scenes", scenes},
+                        {"adversarial", adversarial},
+                        {"contact_members_per_material", materials},
                         {"max_rel_bound", o.check.max_rel_bound},
                         {"ok", r.ok},
                         {"failures", r.failures}});

@@ -1,8 +1,11 @@
 #include "validation/crosscheck_fast.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <memory>
+#include <numbers>
 
 #include "device/scene.h"
 #include "device/simulator.h"
@@ -120,6 +123,36 @@ void compare_stage(int stage, const PipelineData& a, const PipelineData& b, Diff
   }
 }
 
+// The adversarial perturbations (crosscheck_fast.h), applied to a copy of a tick's starting state.
+struct Perturbation {
+  const char* name;
+  double T;              // > 0: the tick length
+  double angle;          // >= 0: the proxy's rotation off the device's orientation [rad]
+  bool saturate;         // the model with torque limits at 1 %
+  double proxy_depth_m;  // > 0: the proxy moved this far down (-z)
+};
+constexpr Perturbation kPerturbations[] = {
+    {"tick_1e-5", 1e-5, -1.0, false, 0.0},
+    {"tick_1e-4", 1e-4, -1.0, false, 0.0},
+    {"tick_1e-2", 1e-2, -1.0, false, 0.0},
+    {"rotation_near_0", 0.0, 1e-9, false, 0.0},
+    {"rotation_near_pi", 0.0, std::numbers::pi - 1e-9, false, 0.0},
+    {"saturation", 0.0, -1.0, true, 0.0},
+    {"proxy_offset", 0.0, -1.0, false, 3e-4},
+};
+constexpr int kPerturbationCount = static_cast<int>(std::size(kPerturbations));
+
+void perturb(const Perturbation& p, long k, PipelineData* d) {
+  if (p.T > 0.0) d->T = p.T;
+  if (p.angle >= 0.0) {
+    // A different axis each time (a fixed sequence: reproducible).
+    const double a = 0.7 * static_cast<double>(k);
+    const Vec3 axis = Vec3(std::cos(a), std::sin(a), 0.5 * std::cos(1.3 * a)).normalized();
+    d->proxy.pose.R = d->r.device.R * Eigen::AngleAxisd(p.angle, axis).toRotationMatrix();
+  }
+  if (p.proxy_depth_m > 0.0) d->proxy.pose.x.z() -= p.proxy_depth_m;
+}
+
 const StagedPipeline& staged(const SceneRig& rig) {
   return dynamic_cast<const StagedPipeline&>(*rig.pipeline);
 }
@@ -145,6 +178,14 @@ void check_stages(const FastCrosscheckOptions& o, FastCrosscheckResult* out) {
     const PipelineModel& m_other = staged(*other).model();
     Diff diffs[kStageCount];
     long samples = 0, contact_samples = 0;
+    // Adversarial: the models with torque limits at 1 %, the diffs per perturbation and stage.
+    PipelineModel m_ref_sat = m_ref, m_other_sat = m_other;
+    m_ref_sat.torque_limit *= 0.01;
+    m_other_sat.torque_limit *= 0.01;
+    Diff adv[kPerturbationCount][kStageCount - 1];
+    long adv_samples[kPerturbationCount] = {}, adv_contact[kPerturbationCount] = {};
+    long adv_saturated[kPerturbationCount] = {};
+    auto P = std::make_unique<PipelineData>();
     Device& dev = *ref->device;
     DeviceSample s = dev.make_sample();
     dev.read(s);
@@ -162,6 +203,29 @@ void check_stages(const FastCrosscheckOptions& o, FastCrosscheckResult* out) {
       D->t = s.t;
       D->T = T;
       D->env = ref->contacts.get();
+      if (o.adversarial && k > 0) {
+        // One perturbation per tick, in turn, on a copy of the tick's starting state; every stage
+        // but drill (it would cut the teeth the main comparison drills).
+        const int pi = static_cast<int>(k % kPerturbationCount);
+        const Perturbation& pt = kPerturbations[pi];
+        *P = *D;
+        perturb(pt, k, P.get());
+        const PipelineModel& mr = pt.saturate ? m_ref_sat : m_ref;
+        const PipelineModel& mo = pt.saturate ? m_other_sat : m_other;
+        bool ok_adv = true;
+        for (int i = 0; i < kStageCount - 1 && ok_adv; ++i) {
+          *C = *P;
+          C->env = other->contacts.get();
+          const TickStatus so = table->stage[i](mo, *C);
+          const TickStatus sr = ref_table.stage[i](mr, *P);
+          if (so != sr) adv[pi][i].mismatches++;
+          ok_adv = sr == TickStatus::kOk && so == TickStatus::kOk;
+          compare_stage(i, *P, *C, &adv[pi][i]);
+        }
+        ++adv_samples[pi];
+        if (!P->r.contacts.empty()) ++adv_contact[pi];
+        if (ok_adv && P->r.saturated) ++adv_saturated[pi];
+      }
       bool ok = true;
       for (int i = 0; i < kStageCount && ok; ++i) {
         *C = *D;
@@ -174,6 +238,12 @@ void check_stages(const FastCrosscheckOptions& o, FastCrosscheckResult* out) {
       }
       ++samples;
       if (!D->r.contacts.empty()) ++contact_samples;
+      for (const Contact& c : D->r.contacts) {
+        const auto m = static_cast<std::size_t>(c.material);
+        if (c.material >= 0 && m < out->contact_members_per_material.size()) {
+          ++out->contact_members_per_material[m];
+        }
+      }
       if (!ok) break;
       dev.write(D->r.tau);
       dev.advance();
@@ -196,6 +266,26 @@ void check_stages(const FastCrosscheckOptions& o, FastCrosscheckResult* out) {
                                 std::to_string(c.count_mismatches));
       }
       out->stages.push_back(c);
+    }
+    for (int pi = 0; pi < kPerturbationCount && o.adversarial; ++pi) {
+      for (int i = 0; i < kStageCount - 1; ++i) {
+        AdversarialCrosscheck c;
+        c.implementation = table->implementation;
+        c.perturbation = kPerturbations[pi].name;
+        c.stage = tick_stage_name(i);
+        c.max_rel = adv[pi][i].max_rel;
+        c.samples = adv_samples[pi];
+        c.contact_samples = adv_contact[pi];
+        c.count_mismatches = adv[pi][i].mismatches;
+        c.saturated_samples = adv_saturated[pi];
+        if (!(c.max_rel <= o.max_rel_bound) || c.count_mismatches != 0) {
+          out->ok = false;
+          out->failures.push_back(c.implementation + " " + c.perturbation + " stage " + c.stage +
+                                  ": max_rel " + std::to_string(c.max_rel) + ", count mismatches " +
+                                  std::to_string(c.count_mismatches));
+        }
+        out->adversarial.push_back(c);
+      }
     }
   }
 }

@@ -41,6 +41,23 @@ TEST(FastTick, EveryStageAndTheClosedLoopAgreeWithTheReference) {
     // A check that barely met contact would prove little (STYLE.md "MISTRUSTED").
     EXPECT_GT(s.contact_samples, s.samples / 10) << s.stage;
   }
+  // Adversarial states (validation/crosscheck_fast.h): tick lengths 1e-5 to 1e-2 s, the proxy's
+  // rotation near 0 and near pi, saturation, a deeper proxy; every stage but drill.
+  ASSERT_EQ(r.adversarial.size(), 7u * (kStageCount - 1) * (stage_tables().size() - 1));
+  for (const AdversarialCrosscheck& a : r.adversarial) {
+    EXPECT_LE(a.max_rel, 1e-9) << a.perturbation << " " << a.stage;
+    EXPECT_EQ(a.count_mismatches, 0) << a.perturbation << " " << a.stage;
+    EXPECT_GT(a.samples, o.stage_ticks / 8) << a.perturbation;
+    EXPECT_GT(a.contact_samples, a.samples / 2) << a.perturbation;
+    if (a.perturbation == "saturation" || a.perturbation == "rotation_near_pi") {
+      EXPECT_EQ(a.saturated_samples, a.samples) << a.perturbation;
+    }
+    if (a.stage == "command") {
+      std::printf("%s adversarial %-17s samples %ld (%ld in contact, %ld saturated)\n",
+                  a.implementation.c_str(), a.perturbation.c_str(), a.samples, a.contact_samples,
+                  a.saturated_samples);
+    }
+  }
   ASSERT_EQ(r.scenes.size(), o.scenes.size() * (stage_tables().size() - 1));
   for (const SceneCrosscheck& c : r.scenes) {
     std::printf("%s %s: max force diff %.3e N (largest force %.3f N), before contact %.3e N\n",
