@@ -20,6 +20,7 @@
 #include "device/session_record.h"
 #include "device/simulated_phantom.h"
 #include "fast/registry.h"
+#include "fast/tooth/sdf.h"
 #include "reference/core/io.h"
 #include "reference/core/so3.h"
 #include "reference/grasp_mass_model.h"
@@ -158,16 +159,19 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   drill.cutting_coefficient = scene.tool.cutting_coefficient;
   const DrillParams* drilling = scene.tool.drills() ? &drill : nullptr;
   const ContactModel contact_model = parse_contact_model(scene.tooth.contact_model);
-  // The fast pipeline's tooth is the fast twin of the face model; the surface-proxy ("sdf")
-  // model has no fast twin yet, so both pipelines use the reference provider for it.
+  // The fast pipeline's tooth: for the face model the brick tooth (fast/tooth/brick_tooth.h); for
+  // the surface-proxy ("sdf") model the same provider as the reference's with the fast signed
+  // distance (fast/tooth/sdf.h) on the same octree.
   if (options.pipeline == "fast" && contact_model == ContactModel::kFaces) {
     g.brick = std::make_unique<fast::BrickTooth>(*g.tooth);
     g.brick->set_free_space_early_out(options.skip_unneeded);
     g.contacts = std::make_unique<fast::ToothContactProvider>(*g.brick, g.tip, g.k_tooth, g.b_tooth,
                                                               drilling);
   } else {
+    const SignedDistanceFn sd =
+        options.pipeline == "fast" ? &fast::signed_distance : &dentsim::signed_distance;
     g.contacts = std::make_unique<ToothContactProvider>(*g.tooth, g.tip, g.k_tooth, g.b_tooth,
-                                                        drilling, contact_model);
+                                                        drilling, contact_model, sd);
   }
 
   // Hand.

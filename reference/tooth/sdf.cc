@@ -9,7 +9,7 @@
 #include "reference/tooth/materials.h"
 
 namespace dentsim {
-namespace {
+namespace sdf_detail {
 
 // Squared distance from x to the box of cells [i0, i1) x [j0, j1) x [k0, k1), and its nearest
 // point.
@@ -36,6 +36,12 @@ bool voxel_of(const VoxelGrid& grid, const Vec3& x, int idx[3]) {
   return true;
 }
 
+}  // namespace sdf_detail
+
+namespace {
+
+using sdf_detail::box_distance2;
+
 // Outside: nearest point of the solid (union of solid voxel boxes) within `reach`, by a
 // depth-first octree descent pruning every node at distance >= the best so far.
 SignedDistance outside_distance(const FullOctree& octree, const Vec3& x, double reach) {
@@ -60,10 +66,11 @@ SignedDistance outside_distance(const FullOctree& octree, const Vec3& x, double 
     if (node.level == L) {  // a leaf pushed by a single-voxel grid (L = 0)
       const int lo[3] = {node.x, node.y, node.z}, hi[3] = {node.x + 1, node.y + 1, node.z + 1};
       const double d2 = box_distance2(grid, lo, hi, x, &q);
-      if (d2 < best2) {
+      const std::size_t v = grid.index(node.x, node.y, node.z);
+      if (sdf_detail::sdf_nearer(d2, v, best2, out)) {
         best2 = d2;
         out.nearest = q;
-        out.voxel = grid.index(node.x, node.y, node.z);
+        out.voxel = v;
         out.found = true;
       }
       continue;
@@ -72,7 +79,9 @@ SignedDistance outside_distance(const FullOctree& octree, const Vec3& x, double 
     {
       const int lo[3] = {node.x * s_node, node.y * s_node, node.z * s_node};
       const int hi[3] = {lo[0] + s_node, lo[1] + s_node, lo[2] + s_node};
-      if (!(box_distance2(grid, lo, hi, x, nullptr) < best2)) continue;  // pruned since pushed
+      if (sdf_detail::sdf_prunable(box_distance2(grid, lo, hi, x, nullptr), best2, out)) {
+        continue;  // pruned since pushed
+      }
     }
     const std::uint8_t mask = octree.child_mask(node.level, node.x, node.y, node.z);
     const int child_level = node.level + 1;
@@ -84,11 +93,13 @@ SignedDistance outside_distance(const FullOctree& octree, const Vec3& x, double 
       const int cz = 2 * node.z + ((child >> 2) & 1);
       const int lo[3] = {cx * s, cy * s, cz * s}, hi[3] = {lo[0] + s, lo[1] + s, lo[2] + s};
       const double d2 = box_distance2(grid, lo, hi, x, child_level == L ? &q : nullptr);
-      if (!(d2 < best2)) continue;
+      if (sdf_detail::sdf_prunable(d2, best2, out)) continue;
       if (child_level == L) {
+        const std::size_t v = grid.index(cx, cy, cz);
+        if (!sdf_detail::sdf_nearer(d2, v, best2, out)) continue;
         best2 = d2;
         out.nearest = q;
-        out.voxel = grid.index(cx, cy, cz);
+        out.voxel = v;
         out.found = true;
       } else {
         stack[top++] = {child_level, cx, cy, cz};
@@ -98,6 +109,10 @@ SignedDistance outside_distance(const FullOctree& octree, const Vec3& x, double 
   if (out.found) out.phi = std::sqrt(best2);
   return out;
 }
+
+}  // namespace
+
+namespace sdf_detail {
 
 // Inside solid voxel idx: nearest point of the complement (empty voxels and the outside of the
 // grid) within `reach`, by shells of Chebyshev radius m around idx. A voxel of shell m is at
@@ -141,13 +156,14 @@ SignedDistance inside_distance(const VoxelGrid& grid, const Vec3& x, const int i
   return out;
 }
 
-}  // namespace
+}  // namespace sdf_detail
 
 SignedDistance signed_distance(const VoxelTooth& tooth, const Vec3& x, double reach) {
   const VoxelGrid& grid = tooth.grid();
   int idx[3];
-  if (voxel_of(grid, x, idx) && grid.voxels[grid.index(idx[0], idx[1], idx[2])] != kEmpty) {
-    return inside_distance(grid, x, idx, reach);
+  if (sdf_detail::voxel_of(grid, x, idx) &&
+      grid.voxels[grid.index(idx[0], idx[1], idx[2])] != kEmpty) {
+    return sdf_detail::inside_distance(grid, x, idx, reach);
   }
   return outside_distance(tooth.octree, x, reach);
 }
@@ -165,19 +181,19 @@ Vec3 distance_gradient(const VoxelTooth& tooth, const Vec3& x, const SignedDista
   return out.norm() > 0.0 ? Vec3(out.normalized()) : Vec3::UnitZ();
 }
 
-SurfaceProxy::SurfaceProxy(double rho, double voxel_size)
-    : rho_(rho), skin_(std::min(0.25 * rho, 0.5 * voxel_size)), tol_(1e-9 * rho) {}
+SurfaceProxy::SurfaceProxy(double rho, double voxel_size, SignedDistanceFn sd)
+    : rho_(rho), skin_(std::min(0.25 * rho, 0.5 * voxel_size)), tol_(1e-9 * rho), sd_(sd) {}
 
 double SurfaceProxy::push_out(const VoxelTooth& tooth, Vec3* x) const {
   // Inside, the shortest way out may be long: search as far as the grid's extent.
   const double far = tooth.grid().voxel_size * tooth.grid().n;
   for (int it = 0; it < kSurfaceProxyPushOuts; ++it) {
-    const SignedDistance sd = signed_distance(tooth, *x, far);
+    const SignedDistance sd = sd_(tooth, *x, far);
     if (!sd.found || sd.phi >= rho_) return (sd.found ? sd.phi : far) - rho_;
     const Vec3 u = distance_gradient(tooth, *x, sd);
     *x = sd.nearest + rho_ * u;  // the nearest surface point, then rho out along the normal
   }
-  const SignedDistance sd = signed_distance(tooth, *x, rho_);
+  const SignedDistance sd = sd_(tooth, *x, rho_);
   return sd.phi - rho_;
 }
 
@@ -192,7 +208,7 @@ bool SurfaceProxy::sweep(const VoxelTooth& tooth, Vec3* from, const Vec3& to) co
       return true;
     }
     const double reach = floor_phi + std::min(left, 4.0 * h) + skin_;
-    const SignedDistance sd = signed_distance(tooth, *from, reach);
+    const SignedDistance sd = sd_(tooth, *from, reach);
     const double clearance = sd.phi - floor_phi;  // a step this long stays in A_skin (SD1)
     if (clearance >= left) {
       // The end itself must be admissible too (it is, by SD1, within A_skin).
@@ -216,7 +232,7 @@ const Vec3& SurfaceProxy::update(const VoxelTooth& tooth, const Vec3& c) {
   // admissible stays where it was (found by the full contact sweep: g stuck at phi = 0.73 rho).
   {
     const Vec3 before = g_;
-    if (push_out(tooth, &g_) < -skin_ && signed_distance(tooth, before, rho_).phi >= rho_ - skin_) {
+    if (push_out(tooth, &g_) < -skin_ && sd_(tooth, before, rho_).phi >= rho_ - skin_) {
       g_ = before;
     }
   }
@@ -230,7 +246,7 @@ const Vec3& SurfaceProxy::update(const VoxelTooth& tooth, const Vec3& c) {
     if (push_out(tooth, &g_) < -skin_) g_ = y;
     if (reached && (target - c).norm() <= tol_) break;  // the tool itself is admissible
     // Blocked (or a slide target reached): slide towards c on the tangent plane at g.
-    const SignedDistance sd = signed_distance(tooth, g_, rho_ + skin_);
+    const SignedDistance sd = sd_(tooth, g_, rho_ + skin_);
     if (!sd.found) {
       target = c;
       continue;
@@ -245,13 +261,14 @@ const Vec3& SurfaceProxy::update(const VoxelTooth& tooth, const Vec3& c) {
 }
 
 bool surface_proxy_contact(const VoxelTooth& tooth, const Pose& proxy, const ToolTip& tip,
-                           const Vec3& g, double k_tooth, double b_tooth, Contact* out) {
+                           const Vec3& g, double k_tooth, double b_tooth, Contact* out,
+                           SignedDistanceFn sd_fn) {
   const Vec3 c = proxy.x + proxy.R * tip.offset_body;
   const Vec3 gap = g - c;
   const double depth = gap.norm();
   if (!(depth > 1e-9 * tip.radius)) return false;
   const Vec3 n = gap / depth;
-  const SignedDistance sd = signed_distance(tooth, g, 2.0 * tip.radius);
+  const SignedDistance sd = sd_fn(tooth, g, 2.0 * tip.radius);
   // The material under the proxy (enamel if, after a slide, no solid is within 2 rho of g).
   std::uint8_t material = sd.found ? tooth.grid().voxels[sd.voxel] : std::uint8_t{kEmpty};
   if (material == kEmpty) material = kEnamel;

@@ -54,6 +54,32 @@ struct SignedDistance {
 // otherwise.
 SignedDistance signed_distance(const VoxelTooth& tooth, const Vec3& x, double reach);
 
+// A signed-distance query with signed_distance's contract: the surface proxy and its contact take
+// one, so that the fast pipeline can give its twin (fast/tooth/sdf.h) to the same algorithm.
+using SignedDistanceFn = SignedDistance (*)(const VoxelTooth& tooth, const Vec3& x, double reach);
+
+// The parts of signed_distance its twins share (same arithmetic, so the same doubles).
+namespace sdf_detail {
+// Squared distance from x to the box of cells [lo, hi) (voxel indices), and its nearest point.
+double box_distance2(const VoxelGrid& grid, const int lo_idx[3], const int hi_idx[3], const Vec3& x,
+                     Vec3* nearest);
+// The voxel holding x (floor of the grid coordinates); false outside the grid.
+bool voxel_of(const VoxelGrid& grid, const Vec3& x, int idx[3]);
+// The outside search's order-free rule: a box at squared distance d2 holding solid voxel v beats
+// the best so far if it is nearer, or as near with a smaller flat index (boxes exactly as near are
+// common where the surface proxy sits between walls: the rule makes the answer the same whatever
+// order a search visits them in). A node's box at d2 may hold such a box iff prunable() is false.
+inline bool sdf_nearer(double d2, std::size_t v, double best2, const SignedDistance& best) {
+  return d2 < best2 || (best.found && d2 == best2 && v < best.voxel);
+}
+inline bool sdf_prunable(double d2, double best2, const SignedDistance& best) {
+  return !(d2 < best2 || (best.found && d2 == best2));
+}
+// Inside solid voxel idx: the nearest point of the complement within reach (shell search).
+SignedDistance inside_distance(const VoxelGrid& grid, const Vec3& x, const int idx[3],
+                               double reach);
+}  // namespace sdf_detail
+
 // The outward unit normal at x from its nearest point (phi != 0); for phi == 0 (x on S) the
 // direction from the centre of `voxel` to x.
 Vec3 distance_gradient(const VoxelTooth& tooth, const Vec3& x, const SignedDistance& sd);
@@ -65,8 +91,9 @@ inline constexpr int kSurfaceProxySweepSteps = 64;  // conservative-advancement 
 // The surface proxy of one tip sphere on one tooth (state: g).
 class SurfaceProxy {
  public:
-  // rho [m] > 0 (checked by the owner). Skin s = min(0.25 rho, 0.5 h).
-  SurfaceProxy(double rho, double voxel_size);
+  // rho [m] > 0 (checked by the owner). Skin s = min(0.25 rho, 0.5 h). `sd`: the signed-distance
+  // query every step uses (the reference's, or the fast pipeline's twin).
+  SurfaceProxy(double rho, double voxel_size, SignedDistanceFn sd = &signed_distance);
 
   // Steps 1-3 for the tool's tip centre c; returns g. The first call starts from g = c.
   const Vec3& update(const VoxelTooth& tooth, const Vec3& c);
@@ -87,14 +114,16 @@ class SurfaceProxy {
   double rho_;
   double skin_;
   double tol_;  // distance below which two points are the same [m]
+  SignedDistanceFn sd_;
   bool valid_ = false;
   Vec3 g_ = Vec3::Zero();
 };
 
 // The contact of the tool's sphere at tip centre c with surface proxy g (header comment); false
 // (and *out untouched) when g == c. k_tooth [N/m], b_tooth [N s/m] are scaled by the material of
-// the solid voxel nearest to g.
+// the solid voxel nearest to g (found by `sd`).
 bool surface_proxy_contact(const VoxelTooth& tooth, const Pose& proxy, const ToolTip& tip,
-                           const Vec3& g, double k_tooth, double b_tooth, Contact* out);
+                           const Vec3& g, double k_tooth, double b_tooth, Contact* out,
+                           SignedDistanceFn sd = &signed_distance);
 
 }  // namespace dentsim

@@ -51,11 +51,12 @@ std::size_t ToothProviderBase::begin_query(std::vector<Contact>& out) {
 
 ToothContactProvider::ToothContactProvider(VoxelTooth& tooth, ToolTip tip, double k_tooth,
                                            double b_tooth, const DrillParams* drill,
-                                           ContactModel model)
+                                           ContactModel model, SignedDistanceFn sd)
     : ToothProviderBase(tooth.grid(), tip, k_tooth, b_tooth, drill),
       tooth_(tooth),
       model_(model),
-      surface_(tip.radius, tooth.grid().voxel_size) {
+      surface_(tip.radius, tooth.grid().voxel_size, sd),
+      sd_(sd) {
   drill_contacts_.reserve(kContactCapacity);
   drill_voxels_.reserve(kContactCapacity);
 }
@@ -71,7 +72,9 @@ bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out
   const Vec3 c = proxy.x + proxy.R * tip_.offset_body;
   const Vec3& g = surface_.update(tooth_, c);
   Contact contact;
-  if (!surface_proxy_contact(tooth_, proxy, tip_, g, k_tooth_, b_tooth_, &contact)) return true;
+  if (!surface_proxy_contact(tooth_, proxy, tip_, g, k_tooth_, b_tooth_, &contact, sd_)) {
+    return true;
+  }
   if (out.capacity() < 1) return false;
   out.push_back(contact);
   if (!drills_) return true;
@@ -120,9 +123,9 @@ int ToothContactProvider::drill(std::span<const Contact> contacts, double T) {
   return removed;
 }
 
-void ToothProviderBase::record_drill(
-    std::span<const Contact> contacts, std::uint8_t material,
-    const std::array<std::int64_t, kMaterialCount>& removed_before, bool pulp_before) {
+void ToothProviderBase::record_drill(std::span<const Contact> contacts, std::uint8_t material,
+                                     const std::array<std::int64_t, kMaterialCount>& removed_before,
+                                     bool pulp_before) {
   if (drill_state_.pulp_exposed && !pulp_before) pulp_exposed_tick_ = ticks_;
   if (drill_log_.size() >= drill_log_.capacity()) return;  // full: never grow in the tick
   DrillRecord rec;

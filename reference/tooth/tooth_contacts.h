@@ -84,7 +84,7 @@ class ToothProviderBase : public ContactProvider {
   DrillState drill_state_;
   std::vector<std::size_t> voxels_;
   std::vector<std::size_t> removed_;  // voxels removed by the last drill()
-  long ticks_ = 0;  // contacts() calls
+  long ticks_ = 0;                    // contacts() calls
   long pulp_exposed_tick_ = 0;
   bool have_surface_z_ = false;
   double first_surface_z_ = 0.0;
@@ -99,10 +99,13 @@ class ToothContactProvider : public ToothProviderBase {
   // `tooth` must outlive the provider (drilling changes it); k_tooth [N/m] and b_tooth [N s/m]
   // are the scene's stiffness and damping (scaled per material by the collision stage). With
   // `drill` set the tool cuts the tooth (DrillParams validated here: InputError). Throws
-  // InputError for a non-positive or non-finite tip radius.
+  // InputError for a non-positive or non-finite tip radius. `sd`: the signed-distance query of the
+  // surface proxy (kSurfaceProxy): the reference's, or the fast pipeline's twin
+  // (fast::signed_distance, fast/tooth/sdf.h).
   ToothContactProvider(VoxelTooth& tooth, ToolTip tip, double k_tooth, double b_tooth,
                        const DrillParams* drill = nullptr,
-                       ContactModel model = ContactModel::kFaces);
+                       ContactModel model = ContactModel::kFaces,
+                       SignedDistanceFn sd = &signed_distance);
 
   bool contacts(const Pose& proxy, std::vector<Contact>& out) override;
   int drill(std::span<const Contact> contacts, double T) override;
@@ -116,6 +119,7 @@ class ToothContactProvider : public ToothProviderBase {
   CollisionScratch scratch_;
   ContactModel model_;
   SurfaceProxy surface_;
+  SignedDistanceFn sd_;
   std::vector<Contact> drill_contacts_;  // kSurfaceProxy: the drilled voxels' force shares
   std::vector<std::size_t> drill_voxels_;
 };
