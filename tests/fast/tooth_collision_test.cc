@@ -2,20 +2,21 @@
 // collision.h): the same contact set -- members, order, voxel indices, every double bitwise --
 // over seeded random poses and bur radii on the procedural molar and on a real mesh, and on
 // adversarial poses: the tip centre on voxel faces, edges and corners, grazing contact, a tip deep
-// inside, a one-voxel-thick wall, a full buffer. Tolerance: exact (docs/tolerance_policy.md 1; the
+// inside, a one-voxel-thick wall, a full buffer, every material. Tolerance: exact (docs/tolerance_policy.md 1; the
 // fast path evaluates the reference's expressions, see fast/tooth/collision.cc).
-#include "fast/tooth/collision.h"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <random>
 #include <string>
 
+#include "fast/tooth/collision.h"
 #include "reference/core/io.h"
+#include "reference/tooth/materials.h"
 #include "reference/tooth/mesh.h"
 #include "reference/tooth/procedural_molar.h"
 #include "reference/tooth/voxelize.h"
@@ -261,6 +262,41 @@ TEST(FastToothCollision, OneVoxelWallEqualsReference) {
     if (!a.contacts.empty()) ++touching;
   }
   EXPECT_GT(touching, 10);
+}
+
+// Every material (enamel, dentin, pulp, caries: each scales stiffness and damping differently):
+// a ball whose voxels take a random material each, so every contact set mixes them.
+TEST(FastToothCollision, EveryMaterialEqualsReference) {
+  std::mt19937 rng(kSeed + 7);
+  std::uniform_int_distribution<int> material(kEnamel, kCaries);
+  VoxelGrid g(32, Vec3::Zero(), 0.1e-3);
+  const Vec3 centre(1.6e-3, 1.6e-3, 1.6e-3);
+  for (int k = 0; k < 32; ++k) {
+    for (int j = 0; j < 32; ++j) {
+      for (int i = 0; i < 32; ++i) {
+        if ((g.center(i, j, k) - centre).norm() < 1.2e-3) {
+          g.set(i, j, k, static_cast<std::uint8_t>(material(rng)));
+        }
+      }
+    }
+  }
+  const VoxelTooth ref(g);
+  const fast::BrickTooth fst(ref);
+  const std::vector<std::size_t> surface = surface_voxels_of(ref.codes);
+  std::array<long, kMaterialCount> seen{};
+  std::uniform_real_distribution<double> radius(0.1e-3, 0.6e-3);
+  for (int p = 0; p < 300; ++p) {
+    ToolTip tip;
+    tip.radius = radius(rng);
+    const Pose pose = random_pose_near(ref.grid(), surface, tip.radius, tip.offset_body, rng);
+    const ContactSet a = reference_set(ref, pose, tip);
+    ASSERT_TRUE(same_set(a, fast_set(fst, pose, tip), "pose " + std::to_string(p)));
+    for (const Contact& c : a.contacts) ++seen[static_cast<std::size_t>(c.material)];
+  }
+  for (int m = kEnamel; m < kMaterialCount; ++m) {
+    EXPECT_GT(seen[static_cast<std::size_t>(m)], 100)
+        << material_properties(static_cast<std::uint8_t>(m)).name;
+  }
 }
 
 // A buffer too small: both stop at the same member and report false.
