@@ -2,10 +2,12 @@
 // the drill scene's closed loop (simulated Phantom, procedural molar at 128^3, 0.5 mm bur: ~68
 // contacts, drilling): the same registry that drives the differential tests.
 //
-// BM_Tick/<impl>/<kind>: one servo tick (the pipeline's seven stages; the simulated device's
-// physics runs between ticks and is not timed: manual time = the tick's own stage times).
-// kind 0: free space (ticks before the first contact), 1: in contact (and drilling). Counters:
-// the mean time of each stage over the timed ticks [ns], and the mean contact count.
+// BM_Tick/<impl>/<method>/<model>/<free|contact>: one servo tick (the pipeline's seven stages;
+// the simulated device's physics runs between ticks and is not timed: manual time = the tick's own
+// stage times). model: sdf (the scene's surface proxy) or faces (the thesis's face model, ~68
+// contacts for this bur); free: ticks before the first contact, contact: in contact (and
+// drilling). Counters: the mean time of each stage over the timed ticks [ns], and the mean
+// contact count.
 // Results: docs/benchmarks.md "The tick, stage by stage".
 #include <benchmark/benchmark.h>
 
@@ -20,9 +22,11 @@
 namespace dentsim {
 namespace {
 
-void BM_Tick(benchmark::State& state, const StageTable* table, bool contact, const char* method) {
+void BM_Tick(benchmark::State& state, const StageTable* table, bool contact, const char* method,
+             const char* model) {
   Scene scene = load_scene("drill");
   scene.method.method = parse_method(method);
+  scene.tooth.contact_model = model;
   SceneRigOptions options;
   options.pipeline = table->implementation;
   std::unique_ptr<SceneRig> rig;
@@ -60,19 +64,21 @@ void BM_Tick(benchmark::State& state, const StageTable* table, bool contact, con
     state.counters[std::string(tick_stage_name(i)) + "_ns"] = stage_sum[i] / std::max(1L, timed);
   }
   state.counters["contacts"] = contacts / std::max(1L, timed);
-  state.SetLabel(std::string(table->implementation) + ", " + method +
+  state.SetLabel(std::string(table->implementation) + ", " + method + ", " + model +
                  (contact ? ", contact + drilling" : ", free space"));
 }
 
 const int kRegistered = [] {
   for (const StageTable* t : stage_tables()) {
     for (const char* method : {"pmi-pd", "pmi"}) {
-      for (const bool contact : {false, true}) {
-        const std::string name = std::string("BM_Tick/") + t->implementation + "/" + method +
-                                 (contact ? "/contact" : "/free");
-        benchmark::RegisterBenchmark(name.c_str(), BM_Tick, t, contact, method)
-            ->UseManualTime()
-            ->Unit(benchmark::kMicrosecond);
+      for (const char* model : {"sdf", "faces"}) {
+        for (const bool contact : {false, true}) {
+          const std::string name = std::string("BM_Tick/") + t->implementation + "/" + method +
+                                   "/" + model + (contact ? "/contact" : "/free");
+          benchmark::RegisterBenchmark(name.c_str(), BM_Tick, t, contact, method, model)
+              ->UseManualTime()
+              ->Unit(benchmark::kMicrosecond);
+        }
       }
     }
   }

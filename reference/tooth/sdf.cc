@@ -185,11 +185,19 @@ SurfaceProxy::SurfaceProxy(double rho, double voxel_size, SignedDistanceFn sd)
     : rho_(rho), skin_(std::min(0.25 * rho, 0.5 * voxel_size)), tol_(1e-9 * rho), sd_(sd) {}
 
 double SurfaceProxy::push_out(const VoxelTooth& tooth, Vec3* x) const {
-  // Inside, the shortest way out may be long: search as far as the grid's extent.
+  // Inside, the shortest way out may be long: search as far as the grid's extent. Outside, all
+  // that matters is whether phi >= rho (then x stays where it is): a search within rho finds the
+  // nearest point exactly when it is nearer than rho and stops early otherwise (in free space the
+  // whole-grid search was most of the tick).
   const double far = tooth.grid().voxel_size * tooth.grid().n;
+  const VoxelGrid& grid = tooth.grid();
   for (int it = 0; it < kSurfaceProxyPushOuts; ++it) {
-    const SignedDistance sd = sd_(tooth, *x, far);
-    if (!sd.found || sd.phi >= rho_) return (sd.found ? sd.phi : far) - rho_;
+    int idx[3];
+    const bool inside = sdf_detail::voxel_of(grid, *x, idx) &&
+                        grid.voxels[grid.index(idx[0], idx[1], idx[2])] != kEmpty;
+    const double reach = inside ? far : rho_;
+    const SignedDistance sd = sd_(tooth, *x, reach);
+    if (!sd.found || sd.phi >= rho_) return (sd.found ? sd.phi : reach) - rho_;
     const Vec3 u = distance_gradient(tooth, *x, sd);
     *x = sd.nearest + rho_ * u;  // the nearest surface point, then rho out along the normal
   }

@@ -104,7 +104,8 @@ class SurfaceProxy {
   double skin() const { return skin_; }
 
   // Moves x into A along the shortest way (step 1); returns the final phi(x) - rho (>= 0 unless
-  // the iteration cap was hit, which the crosscheck counts as penetration).
+  // the iteration cap was hit, which the crosscheck counts as penetration; 0 when x is outside
+  // with phi >= rho: only the sign matters there, and the search stops at rho).
   double push_out(const VoxelTooth& tooth, Vec3* x) const;
   // Conservative advancement from `from` towards `to` within A_skin; returns true if `to` was
   // reached, else leaves *from at the last point reached.
