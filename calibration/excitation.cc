@@ -1,10 +1,13 @@
 #include "calibration/excitation.h"
 
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <string>
 
+#include "calibration/fit.h"
 #include "reference/core/io.h"
 #include "reference/phantom/phantom_model.h"
 
@@ -26,10 +29,7 @@ void window(double t, double Tr, double* s, double* ds, double* dds) {
   *dds = 0.5 * w * w * std::cos(w * t);
 }
 
-}  // namespace
-
-Excitation::Excitation(const PhantomParams& p, const Vec6& q0, const ExcitationParams& e)
-    : e_(e), q0_(q0) {
+void check_params(const PhantomParams& p, const Vec6& q0, const ExcitationParams& e) {
   if (e.harmonics < 1 || !(e.base_frequency_hz > 0.0) || e.ramp_s < 0.0) {
     throw InputError("excitation: harmonics >= 1, base_frequency_hz > 0 and ramp_s >= 0 expected");
   }
@@ -40,6 +40,13 @@ Excitation::Excitation(const PhantomParams& p, const Vec6& q0, const ExcitationP
                        " is not inside the joint limits minus the margin");
     }
   }
+}
+
+}  // namespace
+
+Excitation::Excitation(const PhantomParams& p, const Vec6& q0, const ExcitationParams& e)
+    : e_(e), q0_(q0) {
+  check_params(p, q0, e);
   std::mt19937_64 rng(e.seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   a_.resize(6, e.harmonics);
@@ -50,6 +57,22 @@ Excitation::Excitation(const PhantomParams& p, const Vec6& q0, const ExcitationP
       b_(j, l) = u(rng) / (l + 1);
     }
   }
+  fit_to_limits(p);
+}
+
+Excitation::Excitation(const PhantomParams& p, const Vec6& q0, const ExcitationParams& e,
+                       const CoefficientMatrix& a, const CoefficientMatrix& b)
+    : e_(e), q0_(q0), a_(a), b_(b) {
+  check_params(p, q0, e);
+  if (a.cols() != e.harmonics || b.cols() != e.harmonics || !a.allFinite() || !b.allFinite()) {
+    throw InputError("excitation: coefficients must be finite, 6 x harmonics");
+  }
+  fit_to_limits(p);
+}
+
+void Excitation::fit_to_limits(const PhantomParams& p) {
+  const ExcitationParams& e = e_;
+  const Vec6& q0 = q0_;
   // Position and velocity bounds over the ramp and one period after it, with the window applied
   // (q - q0 and qd are linear in the per-joint scale), on a 0.5 ms grid, with a 2 % safety factor
   // for what the grid misses.
@@ -175,6 +198,77 @@ CalibrationLog synthesize_log(const PhantomParams& truth, const Excitation& exc,
     log.tau.push_back(model.M(q) * qdd + model.bias(q, qd) + model.g(q) + model.friction(qd));
   }
   return log;
+}
+
+ExcitationCondition excitation_condition(const PhantomParams& p, const Excitation& exc, int samples,
+                                         int rank, double null_tol) {
+  if (samples < 10) throw InputError("excitation_condition: at least 10 samples");
+  const ExcitationParams& e = exc.params();
+  const double period = 1.0 / e.base_frequency_hz;
+  Eigen::MatrixXd Y(6 * samples, kCalibParams);
+  for (int k = 0; k < samples; ++k) {
+    Vec6 q, qd, qdd;
+    exc.eval(e.ramp_s + period * k / samples, &q, &qd, &qdd);
+    Y.middleRows<6>(6 * k) = calib_regressor(p, q, qd, qdd);
+  }
+  for (int i = 0; i < kCalibParams; ++i) {  // column-normalised, as the fit does (fit.cc)
+    const double c = Y.col(i).norm();
+    if (c > 0.0) Y.col(i) /= c;
+  }
+  const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(Y).singularValues();
+  ExcitationCondition out;
+  out.rank = rank;
+  if (out.rank <= 0) {
+    while (out.rank < sv.size() && sv(out.rank) >= null_tol * sv(0)) ++out.rank;
+  }
+  out.rank = std::min<int>(out.rank, static_cast<int>(sv.size()));
+  out.condition_number = out.rank > 0 && sv(out.rank - 1) > 0.0
+                             ? sv(0) / sv(out.rank - 1)
+                             : std::numeric_limits<double>::infinity();
+  return out;
+}
+
+ExcitationDesign design_excitation(const PhantomParams& p, const Vec6& q0,
+                                   const ExcitationParams& e, int iterations,
+                                   const std::function<void(int, double)>& progress) {
+  // 100 points over the period: 20 per period of the highest harmonic (5), enough for the
+  // condition number to rank candidates at half the cost of 200.
+  constexpr int kDesignSamples = 100;
+  if (iterations < 0) throw InputError("excitation design: iterations must be >= 0");
+  ExcitationDesign d{Excitation(p, q0, e)};
+  const ExcitationCondition c0 = excitation_condition(p, d.excitation, kDesignSamples);
+  d.rank = c0.rank;
+  d.condition_seeded = d.condition_designed = c0.condition_number;
+  // The search's own stream, derived from the excitation's seed (reproducible, independent).
+  std::mt19937_64 rng(e.seed ^ 0x9e3779b97f4a7c15ULL);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  double sigma = 0.3;
+  for (int it = 0; it < iterations; ++it) {
+    CoefficientMatrix a = d.excitation.a(), b = d.excitation.b();
+    for (int j = 0; j < 6; ++j) {
+      for (int l = 0; l < e.harmonics; ++l) {
+        a(j, l) += sigma * gauss(rng) / (l + 1);
+        b(j, l) += sigma * gauss(rng) / (l + 1);
+      }
+    }
+    ++d.iterations;
+    bool better = false;
+    try {
+      Excitation candidate(p, q0, e, a, b);
+      const double c = excitation_condition(p, candidate, kDesignSamples, d.rank).condition_number;
+      if (c < d.condition_designed) {
+        d.excitation = std::move(candidate);
+        d.condition_designed = c;
+        ++d.accepted;
+        better = true;
+      }
+    } catch (const InputError&) {
+      // No amplitude fits the torque limit: not a candidate.
+    }
+    sigma = better ? std::min(1.0, sigma * 1.5) : std::max(0.02, sigma * 0.85);
+    if (progress) progress(it + 1, d.condition_designed);
+  }
+  return d;
 }
 
 }  // namespace dentsim

@@ -20,6 +20,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "calibration/log.h"
@@ -38,26 +39,64 @@ struct ExcitationParams {
   std::uint64_t seed = 1;
 };
 
+using CoefficientMatrix = Eigen::Matrix<double, 6, Eigen::Dynamic>;
+
 class Excitation {
  public:
   // Draws and scales the coefficients for the model `p` around `q0`. Throws InputError if the
   // home pose is outside the limits or no scale satisfies the torque limit.
   Excitation(const PhantomParams& p, const Vec6& q0, const ExcitationParams& e);
+  // The same with the unit coefficients given (6 x e.harmonics each; design_excitation).
+  Excitation(const PhantomParams& p, const Vec6& q0, const ExcitationParams& e,
+             const CoefficientMatrix& a, const CoefficientMatrix& b);
 
   void eval(double t, Vec6* q, Vec6* qd, Vec6* qdd) const;
   const Vec6& q0() const { return q0_; }
   const ExcitationParams& params() const { return e_; }
   // Per-joint amplitude scale applied to the unit coefficients.
   const Vec6& scale() const { return scale_; }
+  const CoefficientMatrix& a() const { return a_; }
+  const CoefficientMatrix& b() const { return b_; }
 
  private:
+  void fit_to_limits(const PhantomParams& p);
   void eval_unscaled(double t, Vec6* d, Vec6* dd, Vec6* ddd) const;
 
   ExcitationParams e_;
   Vec6 q0_;
-  Eigen::Matrix<double, 6, Eigen::Dynamic> a_, b_;
+  CoefficientMatrix a_, b_;
   Vec6 scale_ = Vec6::Ones();
 };
+
+// How well an excitation identifies the model (issue #17): the condition number of the regressor
+// Y(q, qd, qdd) of calibration/fit.h, columns normalised as the fit normalises them, stacked over
+// `samples` points of one period after the ramp: sigma_1 / sigma_rank. rank 0 takes the singular
+// values above null_tol sigma_1 (the fit's identifiable subspace) and returns how many that was;
+// the design fixes the rank of the seeded series so that it cannot improve the number by pushing a
+// direction below the threshold.
+struct ExcitationCondition {
+  double condition_number = 0.0;
+  int rank = 0;
+};
+ExcitationCondition excitation_condition(const PhantomParams& p, const Excitation& exc,
+                                         int samples = 200, int rank = 0, double null_tol = 1e-6);
+
+// An excitation designed for identification: from the seeded series, `iterations` steps of a
+// seeded random local search on the unit coefficients (Gaussian steps, 1/l roll-off, step size
+// grown on success and shrunk on failure), each candidate scaled into the joint, velocity and
+// torque limits as the constructor does, kept when it lowers the condition number at the seeded
+// series' rank (evaluated on 100 samples of the period). `progress` (optional) gets (iteration,
+// best condition number).
+struct ExcitationDesign {
+  Excitation excitation;
+  double condition_seeded = 0.0;    // the seeded series'
+  double condition_designed = 0.0;  // the result's
+  int rank = 0;
+  int iterations = 0, accepted = 0;
+};
+ExcitationDesign design_excitation(const PhantomParams& p, const Vec6& q0,
+                                   const ExcitationParams& e, int iterations,
+                                   const std::function<void(int, double)>& progress = {});
 
 struct TrackingParams {
   double bandwidth_rad_s = 2.0 * 3.14159265358979323846 * 5.0;  // w_c

@@ -40,14 +40,37 @@ struct ExciteOptions {
   std::uint64_t seed = 1;
   bool no_friction = false, ideal_sensing = false;
   std::string friction_law = "frictionloss";
+  int design_iterations = 40;
 };
+
+// The excitation: the seeded series, then designed for identification (design_excitation) unless
+// --design-iterations 0; prints and returns the condition numbers for the log's comments.
+Excitation make_excitation(const PhantomParams& p, const Vec6& q0, const ExciteOptions& o,
+                           std::vector<std::string>* comments) {
+  ExcitationParams ep;
+  ep.seed = o.seed;
+  ExcitationDesign d = design_excitation(p, q0, ep, o.design_iterations);
+  std::string what = "excitation: Fourier f_base " + std::to_string(ep.base_frequency_hz) +
+                     " Hz, " + std::to_string(ep.harmonics) + " harmonics, seed " +
+                     std::to_string(o.seed);
+  char buf[200];
+  std::snprintf(buf, sizeof buf,
+                "regressor condition number %.4g (seeded series) -> %.4g (designed: %d "
+                "iterations, %d kept), rank %d",
+                d.condition_seeded, d.condition_designed, d.iterations, d.accepted, d.rank);
+  std::printf("excite: %s\n", buf);
+  comments->push_back(" " + what);
+  comments->push_back(std::string(" ") + buf);
+  return std::move(d.excitation);
+}
 
 void setup_excite(CLI::App& app) {
   auto opt = std::make_shared<ExciteOptions>();
   CLI::App* sub = app.add_subcommand(
       "excite",
-      "Run a safe excitation trajectory (seeded Fourier series within the joint, velocity and\n"
-      "torque limits) under joint-space PD tracking on the simulated Phantom and log t, q, qd\n"
+      "Run a safe excitation trajectory (Fourier series within the joint, velocity and torque\n"
+      "limits, designed for a low regressor condition number) under joint-space PD tracking on the "
+      "simulated Phantom and log t, q, qd\n"
       "(driver estimate) and the applied torque to a CSV calibration log");
   sub->add_option("--device", opt->device,
                   "device model file of the simulated Phantom (default: built-in Premium 1.5A),\n"
@@ -64,6 +87,10 @@ void setup_excite(CLI::App& app) {
   sub->add_option("--duration", opt->duration, "length of the run [s] (default 30)");
   sub->add_option("--seed", opt->seed, "seed of the Fourier coefficients, 0..2^64-1 (default 1)")
       ->check(CLI::NonNegativeNumber);
+  sub->add_option("--design-iterations", opt->design_iterations,
+                  "steps of the search that lowers the regressor's condition number from the\n"
+                  "seeded series within the limits (0: the seeded series as drawn; default 40)")
+      ->check(CLI::Range(0, 100000));
   sub->add_flag("--no-friction", opt->no_friction,
                 "simulate the device without Coulomb friction (MuJoCo frictionloss off)");
   sub->add_option(
@@ -93,17 +120,13 @@ void setup_excite(CLI::App& app) {
       dev.read(s0);
       const PhantomModel hold_model(p);
       dev.write(hold_model.gravity(s0.q));
-      ExcitationParams ep;
-      ep.seed = opt->seed;
-      const Excitation exc(p, Vec6(s0.q), ep);
+      std::vector<std::string> exc_comments;
+      const Excitation exc = make_excitation(p, Vec6(s0.q), *opt, &exc_comments);
       CalibrationLog log = run_excitation(dev, p, exc, opt->duration);
       log.comments.push_back(" device: hdapi (" + dev.info().library + ", model " +
                              dev.info().model + ", serial " + dev.info().serial + ")");
       log.comments.push_back(" feed-forward model: " + p.name);
-      log.comments.push_back(" excitation: Fourier f_base " +
-                             std::to_string(ep.base_frequency_hz) + " Hz, " +
-                             std::to_string(ep.harmonics) + " harmonics, seed " +
-                             std::to_string(opt->seed));
+      log.comments.insert(log.comments.end(), exc_comments.begin(), exc_comments.end());
       write_calibration_log(opt->out, log);
       std::printf("excite: %d samples over %.3f s on the hdapi device -> %s\n", log.size(),
                   log.t.back() - log.t.front(), opt->out.c_str());
@@ -117,9 +140,8 @@ void setup_excite(CLI::App& app) {
         opt->device.empty() ? default_phantom_params() : load_phantom_params(opt->device);
     const VecX home = phantom_home_q(p);
     const Vec6 q0 = home;
-    ExcitationParams ep;
-    ep.seed = opt->seed;
-    const Excitation exc(p, q0, ep);
+    std::vector<std::string> exc_comments;
+    const Excitation exc = make_excitation(p, q0, *opt, &exc_comments);
     SimulatedDeviceConfig dc = phantom_device_config(p);
     dc.friction_on = !opt->no_friction;
     if (opt->friction_law == "tanh") {
@@ -139,9 +161,7 @@ void setup_excite(CLI::App& app) {
     if (opt->ideal_sensing) log.comments.push_back(" ideal sensing: exact q and qd logged");
     log.comments.push_back(" device: " + p.name +
                            (opt->device.empty() ? "" : " (" + opt->device + ")"));
-    log.comments.push_back(" excitation: Fourier f_base " + std::to_string(ep.base_frequency_hz) +
-                           " Hz, " + std::to_string(ep.harmonics) + " harmonics, seed " +
-                           std::to_string(opt->seed));
+    log.comments.insert(log.comments.end(), exc_comments.begin(), exc_comments.end());
     write_calibration_log(opt->out, log);
     std::printf("excite: %d samples over %.3f s -> %s\n", log.size(), log.t.back(),
                 opt->out.c_str());
@@ -366,10 +386,9 @@ void setup_calibrate(CLI::App& app) {
     j["model_mismatch_term"] = fo.model_mismatch_term;
     {
       const auto v = [](const Vec6& x) { return std::vector<double>(x.data(), x.data() + 6); };
-      j["residual_diagnostics"] = {
-          {"lag1_autocorrelation", v(r.diagnostics.lag1_autocorrelation)},
-          {"rms_slow_quarter_n_m", v(r.diagnostics.rms_slow)},
-          {"rms_fast_quarter_n_m", v(r.diagnostics.rms_fast)}};
+      j["residual_diagnostics"] = {{"lag1_autocorrelation", v(r.diagnostics.lag1_autocorrelation)},
+                                   {"rms_slow_quarter_n_m", v(r.diagnostics.rms_slow)},
+                                   {"rms_fast_quarter_n_m", v(r.diagnostics.rms_fast)}};
     }
     j["not_identifiable_left_at_prior"] = not_id;
     if (truth) {
