@@ -43,8 +43,12 @@ namespace {
 using sdf_detail::box_distance2;
 
 // Outside: nearest point of the solid (union of solid voxel boxes) within `reach`, by a
-// depth-first octree descent pruning every node at distance >= the best so far.
-SignedDistance outside_distance(const FullOctree& octree, const Vec3& x, double reach) {
+// depth-first octree descent pruning every node at distance >= the best so far (ties: the
+// order-free rule of sdf_nearer). A node's children are pushed in child order 0..7 (popped 7..0)
+// or, with `nearest_first`, sorted so that the nearest is popped first (the fast pipeline's
+// order: the bound tightens sooner; the answer is the same).
+SignedDistance outside_distance(const FullOctree& octree, const Vec3& x, double reach,
+                                bool nearest_first) {
   SignedDistance out;
   out.phi = reach;
   const VoxelGrid& grid = octree.grid();
@@ -53,16 +57,20 @@ SignedDistance outside_distance(const FullOctree& octree, const Vec3& x, double 
   double best2 = reach * reach;
   const int L = octree.levels();
   const int root_lo[3] = {0, 0, 0}, root_hi[3] = {n, n, n};
-  if (!(box_distance2(grid, root_lo, root_hi, x, nullptr) < best2)) return out;
+  const double root2 = box_distance2(grid, root_lo, root_hi, x, nullptr);
+  if (!(root2 < best2)) return out;
   struct Node {
+    double d2;  // the node box's squared distance (a lower bound for its voxels)
     int level, x, y, z;
   };
-  std::array<Node, 8 * 11> stack;
+  // At most 8 pending children per level (levels <= 10 for N <= 1024), and the root.
+  std::array<Node, 8 * 11 + 1> stack;
   int top = 0;
-  stack[top++] = {0, 0, 0, 0};
+  stack[top++] = {root2, 0, 0, 0, 0};
   Vec3 q;
   while (top > 0) {
     const Node node = stack[--top];
+    if (sdf_detail::sdf_prunable(node.d2, best2, out)) continue;  // pruned since pushed
     if (node.level == L) {  // a leaf pushed by a single-voxel grid (L = 0)
       const int lo[3] = {node.x, node.y, node.z}, hi[3] = {node.x + 1, node.y + 1, node.z + 1};
       const double d2 = box_distance2(grid, lo, hi, x, &q);
@@ -75,17 +83,11 @@ SignedDistance outside_distance(const FullOctree& octree, const Vec3& x, double 
       }
       continue;
     }
-    const int s_node = 1 << (L - node.level);
-    {
-      const int lo[3] = {node.x * s_node, node.y * s_node, node.z * s_node};
-      const int hi[3] = {lo[0] + s_node, lo[1] + s_node, lo[2] + s_node};
-      if (sdf_detail::sdf_prunable(box_distance2(grid, lo, hi, x, nullptr), best2, out)) {
-        continue;  // pruned since pushed
-      }
-    }
     const std::uint8_t mask = octree.child_mask(node.level, node.x, node.y, node.z);
     const int child_level = node.level + 1;
     const int s = 1 << (L - child_level);
+    Node kids[8];
+    int nk = 0;
     for (int child = 0; child < 8; ++child) {
       if ((mask & (1u << child)) == 0) continue;
       const int cx = 2 * node.x + (child & 1);
@@ -101,10 +103,17 @@ SignedDistance outside_distance(const FullOctree& octree, const Vec3& x, double 
         out.nearest = q;
         out.voxel = v;
         out.found = true;
-      } else {
-        stack[top++] = {child_level, cx, cy, cz};
+        continue;
       }
+      // nearest_first: insertion by decreasing distance, so the nearest is pushed last.
+      int at = nk++;
+      while (nearest_first && at > 0 && kids[at - 1].d2 < d2) {
+        kids[at] = kids[at - 1];
+        --at;
+      }
+      kids[at] = {d2, child_level, cx, cy, cz};
     }
+    for (int i = 0; i < nk; ++i) stack[top++] = kids[i];
   }
   if (out.found) out.phi = std::sqrt(best2);
   return out;
@@ -158,14 +167,22 @@ SignedDistance inside_distance(const VoxelGrid& grid, const Vec3& x, const int i
 
 }  // namespace sdf_detail
 
-SignedDistance signed_distance(const VoxelTooth& tooth, const Vec3& x, double reach) {
+namespace sdf_detail {
+
+SignedDistance signed_distance_ordered(const VoxelTooth& tooth, const Vec3& x, double reach,
+                                       bool nearest_first) {
   const VoxelGrid& grid = tooth.grid();
   int idx[3];
-  if (sdf_detail::voxel_of(grid, x, idx) &&
-      grid.voxels[grid.index(idx[0], idx[1], idx[2])] != kEmpty) {
-    return sdf_detail::inside_distance(grid, x, idx, reach);
+  if (voxel_of(grid, x, idx) && grid.voxels[grid.index(idx[0], idx[1], idx[2])] != kEmpty) {
+    return inside_distance(grid, x, idx, reach);
   }
-  return outside_distance(tooth.octree, x, reach);
+  return outside_distance(tooth.octree, x, reach, nearest_first);
+}
+
+}  // namespace sdf_detail
+
+SignedDistance signed_distance(const VoxelTooth& tooth, const Vec3& x, double reach) {
+  return sdf_detail::signed_distance_ordered(tooth, x, reach, false);
 }
 
 Vec3 distance_gradient(const VoxelTooth& tooth, const Vec3& x, const SignedDistance& sd) {

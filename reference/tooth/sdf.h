@@ -78,6 +78,10 @@ inline bool sdf_prunable(double d2, double best2, const SignedDistance& best) {
 // Inside solid voxel idx: the nearest point of the complement within reach (shell search).
 SignedDistance inside_distance(const VoxelGrid& grid, const Vec3& x, const int idx[3],
                                double reach);
+// signed_distance with the outside descent's child order chosen: fixed (0..7, the reference's)
+// or nearest first (fast::signed_distance). Same answer either way (sdf_nearer).
+SignedDistance signed_distance_ordered(const VoxelTooth& tooth, const Vec3& x, double reach,
+                                       bool nearest_first);
 }  // namespace sdf_detail
 
 // The outward unit normal at x from its nearest point (phi != 0); for phi == 0 (x on S) the
