@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 
+#include "bench/stage_times.h"
 #include "validation/skip_variants.h"
 
 namespace dentsim {
@@ -19,8 +20,7 @@ void BM_Skip(benchmark::State& state, const SkipVariant* v, bool skip) {
   std::unique_ptr<SceneRig> rig;
   long ticks_in_run = 0;
   const long run_ticks = 4000;
-  std::array<double, kStageCount> stage_sum{};
-  long timed = 0;
+  StageTimes times;
   for (auto _ : state) {
     if (!rig || ticks_in_run >= run_ticks) {
       rig = build_skip_variant_rig(*v, skip);  // not timed: manual time is the tick's stages
@@ -33,17 +33,9 @@ void BM_Skip(benchmark::State& state, const SkipVariant* v, bool skip) {
       state.SkipWithError(rig->loop->fault_name());
       return;
     }
-    long total = 0;
-    for (int i = 0; i < kStageCount; ++i) {
-      total += r.stage_ns[i];
-      stage_sum[i] += static_cast<double>(r.stage_ns[i]);
-    }
-    ++timed;
-    state.SetIterationTime(1e-9 * static_cast<double>(total));
+    state.SetIterationTime(times.add(r));
   }
-  for (int i = 0; i < kStageCount; ++i) {
-    state.counters[std::string(tick_stage_name(i)) + "_ns"] = stage_sum[i] / std::max(1L, timed);
-  }
+  times.set_counters(state);
   state.SetLabel(v->skips);
 }
 

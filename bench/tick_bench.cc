@@ -15,6 +15,7 @@
 #include <memory>
 #include <string>
 
+#include "bench/stage_times.h"
 #include "device/scene.h"
 #include "device/simulator.h"
 #include "fast/registry.h"
@@ -32,9 +33,8 @@ void BM_Tick(benchmark::State& state, const StageTable* table, bool contact, con
   std::unique_ptr<SceneRig> rig;
   long ticks_in_run = 0;
   const long run_ticks = static_cast<long>(scene.duration * scene.tick_hz);
-  std::array<double, kStageCount> stage_sum{};
+  StageTimes times;
   double contacts = 0.0;
-  long timed = 0;
   for (auto _ : state) {
     for (;;) {
       if (!rig || ticks_in_run >= run_ticks) {
@@ -49,21 +49,13 @@ void BM_Tick(benchmark::State& state, const StageTable* table, bool contact, con
         return;
       }
       if (r.contacts.empty() == contact) continue;
-      long total = 0;
-      for (int i = 0; i < kStageCount; ++i) {
-        total += r.stage_ns[i];
-        stage_sum[i] += static_cast<double>(r.stage_ns[i]);
-      }
       contacts += static_cast<double>(r.contacts.size());
-      ++timed;
-      state.SetIterationTime(1e-9 * static_cast<double>(total));
+      state.SetIterationTime(times.add(r));
       break;
     }
   }
-  for (int i = 0; i < kStageCount; ++i) {
-    state.counters[std::string(tick_stage_name(i)) + "_ns"] = stage_sum[i] / std::max(1L, timed);
-  }
-  state.counters["contacts"] = contacts / std::max(1L, timed);
+  times.set_counters(state);
+  state.counters["contacts"] = contacts / std::max(1L, times.ticks);
   state.SetLabel(std::string(table->implementation) + ", " + method + ", " + model +
                  (contact ? ", contact + drilling" : ", free space"));
 }
