@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <span>
 #include <sstream>
 
 #include "cli/plot.h"
@@ -14,6 +15,7 @@
 #include "cli/registry.h"
 #include "cli/run_view.h"
 #include "device/fault_injection.h"
+#include "device/run_report.h"
 #include "device/scene.h"
 #include "device/simulator.h"
 #include "fast/registry.h"
@@ -43,95 +45,24 @@ struct RunCliOptions {
   bool no_skip = false;  // --no-skip
 };
 
-nlohmann::json report_json(const Scene& scene, const RunResult& r) {
-  nlohmann::json j;
-  j["scene"] = scene.name;
-  j["scene_origin"] = scene.origin;
-  j["method"] = method_name(scene.method.method);
-  j["device_model"] = r.device_model;
-  j["pipeline"] = r.pipeline;
-  j["skip_unneeded"] = r.skip_unneeded;
-  j["tick_hz"] = scene.tick_hz;
-  j["simulated_s"] = r.simulated_s;
-  j["wall_s"] = r.wall_s;
-  j["ticks"] = r.ticks;
-  j["contact_ticks"] = r.contact_ticks;
-  j["max_contact_force_n"] = r.max_contact_force_n;
-  j["rms_contact_force_n"] = r.rms_contact_force_n;
-  j["max_penetration_m"] = r.max_penetration_m;
-  j["rendered_stiffness_n_per_m"] = r.rendered_stiffness_n_per_m;
-  j["virtual_energy_generated_j"] = r.virtual_energy_generated_j;
-  j["device"] = r.device;
-  if (!r.hd_loop.empty()) {
-    j["hd_loop"] = r.hd_loop;
-    j["callback_dropped_ticks"] = r.callback_dropped_ticks;
-  }
-  j["hand_work_j"] = r.has_ground_truth ? nlohmann::json(r.hand_work_j) : nlohmann::json(nullptr);
-  j["hand_work_min_j"] =
-      r.has_ground_truth ? nlohmann::json(r.hand_work_min_j) : nlohmann::json(nullptr);
-  // Passive toward the hand: it never got back more energy than it put in (tolerance: 1 uJ).
-  // Unknown (null) on a real device: the hand's force is not measured.
-  j["passive_at_hand"] =
-      r.has_ground_truth ? nlohmann::json(r.hand_work_min_j >= -1e-6) : nlohmann::json(nullptr);
-  j["passive_at_motors"] = r.virtual_energy_generated_j <= 0.0;
-  j["observer_rms_error_n"] =
-      r.has_ground_truth ? nlohmann::json(r.observer_rms_error_n) : nlohmann::json(nullptr);
-  nlohmann::json rv;
-  for (int m = 1; m < kMaterialCount; ++m)
-    rv[material_properties(m).name] = r.removed_volume_mm3[m];
-  rv["total"] = r.removed_volume_total_mm3;
-  j["removed_volume_mm3"] = rv;
-  j["pulp_exposed_at_s"] =
-      r.pulp_exposed_at_s ? nlohmann::json(*r.pulp_exposed_at_s) : nlohmann::json(nullptr);
-  nlohmann::json tj;
-  for (const auto& [name, s] : r.timing) {
-    tj[name] = {{"median", s.median_us}, {"p99", s.p99_us}, {"max", s.max_us}};
-  }
-  j["timing_us"] = tj;
-  j["faults"] = r.faults;
-  if (r.realtime) {
-    const ServoTimingStats& s = *r.realtime;
-    j["realtime"] = {
-        {"ticks", s.ticks},
-        {"overruns", s.overruns},
-        {"skipped_deadlines", s.skipped_deadlines},
-        {"period_us",
-         {{"median", s.period_median_us}, {"p99", s.period_p99_us}, {"max", s.period_max_us}}},
-        {"exec_us",
-         {{"median", s.exec_median_us},
-          {"p99", s.exec_p99_us},
-          {"max", s.exec_max_us},
-          {"mean", s.exec_mean_us}}},
-        {"sched_fifo", s.sched_fifo},
-        {"memory_locked", s.memory_locked},
-        {"warning", s.warning}};
-  }
-  if (r.recorded_ticks > 0 || r.record_dropped_ticks > 0) {
-    j["recorded_ticks"] = r.recorded_ticks;
-    j["record_dropped_ticks"] = r.record_dropped_ticks;
-  }
-  if (!r.faults.empty()) j["torque_after_fault_n_m"] = r.torque_after_fault_n_m;
-  return j;
-}
-
+// timeseries.csv: the columns of run_series_columns() (device/run_report.h, shared with the
+// Python module), 9 significant digits.
 std::string csv_of(const RunResult& r) {
+  const std::span<const RunSeriesColumn> cols = run_series_columns();
   std::ostringstream s;
   s.precision(9);
-  s << "t_s,phase,contacts,contact_force_n,device_force_n,penetration_m,device_penetration_m,"
-       "proxy_x_m,proxy_y_m,proxy_z_m,device_x_m,device_y_m,device_z_m,"
-       "proxy_rx_rad,proxy_ry_rad,proxy_rz_rad,device_rx_rad,device_ry_rad,device_rz_rad,"
-       "hand_fx_n,hand_fy_n,hand_fz_n,observer_fx_n,observer_fy_n,observer_fz_n,energy_virtual_j,"
-       "hand_work_j\n";
+  for (std::size_t c = 0; c < cols.size(); ++c) s << (c ? "," : "") << cols[c].name;
+  s << '\n';
   for (const RunSample& x : r.series) {
-    s << x.t << ',' << x.phase << ',' << x.contacts << ',' << x.contact_force_n << ','
-      << x.device_force_n << ',' << x.penetration_m << ',' << x.device_penetration_m << ','
-      << x.proxy_x.x() << ',' << x.proxy_x.y() << ',' << x.proxy_x.z() << ',' << x.device_x.x()
-      << ',' << x.device_x.y() << ',' << x.device_x.z() << ',' << x.proxy_rotvec.x() << ','
-      << x.proxy_rotvec.y() << ',' << x.proxy_rotvec.z() << ',' << x.device_rotvec.x() << ','
-      << x.device_rotvec.y() << ',' << x.device_rotvec.z() << ',' << x.hand_force_n.x() << ','
-      << x.hand_force_n.y() << ',' << x.hand_force_n.z() << ',' << x.observer_force_n.x() << ','
-      << x.observer_force_n.y() << ',' << x.observer_force_n.z() << ',' << x.energy_virtual_j << ','
-      << x.hand_work_j << '\n';
+    for (std::size_t c = 0; c < cols.size(); ++c) {
+      if (c) s << ',';
+      if (cols[c].value == nullptr) {
+        s << x.phase;
+      } else {
+        s << cols[c].value(x);
+      }
+    }
+    s << '\n';
   }
   return s.str();
 }
@@ -295,7 +226,7 @@ void run(const RunCliOptions& o) {
   const RunResult r = run_scene_with_view(scene, ro, o.view);
   bar.finish();
 
-  const nlohmann::json report = report_json(scene, r);
+  const nlohmann::json report = run_report_json(scene, r);
   write_json(o.out + "/report.json", report);
   write_file_atomic(o.out + "/timeseries.csv", csv_of(r));
   write_plots(r, o.out);
