@@ -6,10 +6,12 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "cli/mpi_sweep.h"
 #include "cli/plot.h"
 #include "cli/progress.h"
 #include "cli/registry.h"
@@ -57,6 +59,7 @@ void write_pareto(const TimeVsErrorResult& r, const std::string& path) {
 
 void run(Options& o) {
   if (o.list) {
+    if (!writes_outputs()) return;
     for (const std::string& n : time_vs_error_variant_names(o.config))
       std::printf("%s\n", n.c_str());
     return;
@@ -70,14 +73,27 @@ void run(Options& o) {
   }
   o.config.only = o.variants;
   o.config.smooth_s = 1e-3 * o.smooth_ms;
-  ProgressBar bar("bench");
-  const TimeVsErrorResult r =
-      run_time_vs_error(o.config, [&bar](int done, int total, const std::string& name) {
+  // The runs go through cli/mpi_sweep.h: under mpirun each rank simulates its share of them and
+  // every rank gets every run back (the errors against the finest run are computed from them);
+  // alone, this process runs them one after the other as before. Rank 0 reports the runs it
+  // starts; the others stay quiet.
+  const bool quiet = !writes_outputs();
+  ProgressBar bar("bench", !quiet);
+  const TimeVsErrorResult r = run_time_vs_error(
+      o.config,
+      [&bar, quiet](int done, int total, const std::string& name) {
+        if (quiet) return;
         bar.update(total > 0 ? static_cast<double>(done) / total : 1.0);
         if (!name.empty())
           std::fprintf(stderr, "bench: run %d/%d %s\n", done + 1, total, name.c_str());
+      },
+      [](int n, const std::function<nlohmann::json(int)>& job) {
+        SweepOptions so;
+        so.results_on_every_rank = true;
+        return sweep(n, job, {}, so);
       });
   bar.finish();
+  if (quiet) return;  // rank 0 prints and writes
   const std::string table = time_vs_error_table(r);
   std::fputs(table.c_str(), stdout);
   if (!o.json.empty()) write_json(o.json, time_vs_error_json(r));

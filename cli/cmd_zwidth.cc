@@ -9,11 +9,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "cli/mpi_sweep.h"
 #include "cli/plot.h"
 #include "cli/registry.h"
 #include "fast/registry.h"
@@ -313,9 +315,30 @@ void run_zwidth(const ZwidthOptions& o) {
   e.sensitivity = o.sensitivity;
   e.traces = !o.out.empty();
 
+  // The jobs go through cli/mpi_sweep.h: under mpirun each rank runs its share of the grid points
+  // (and of the re-runs at the best points) on its --threads workers, and every rank gets every
+  // result (the re-runs are enumerated from the grid's); alone, this process runs them all as
+  // before. Progress: per operator alone; rank 0's share of each stage under mpirun.
+  const bool alone = sweep_world().size == 1;
+  const ZwidthJobRunner runner = [&e, alone](const std::string& stage, int n,
+                                             const std::function<nlohmann::json(int)>& job) {
+    SweepOptions so;
+    so.threads = e.threads;
+    so.results_on_every_rank = true;
+    return sweep(
+        n, job,
+        [&stage, alone](int done, int owned) {
+          if (!alone) progress_bar(("rank 0 " + stage).c_str(), done, owned);
+        },
+        so);
+  };
   const ZwidthExperimentResult r = run_zwidth_experiment(
       e,
-      [](ZwidthOperator op, int done, int total) { progress_bar(operator_name(op), done, total); });
+      [alone](ZwidthOperator op, int done, int total) {
+        if (alone) progress_bar(operator_name(op), done, total);
+      },
+      runner);
+  if (!writes_outputs()) return;  // rank 0 prints and writes
   print_summary(r);
   if (!o.out.empty()) {
     write_plots(o.out, r);

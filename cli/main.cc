@@ -4,6 +4,7 @@
 #include <exception>
 #include <iostream>
 
+#include "cli/mpi_sweep.h"
 #include "cli/registry.h"
 #include "reference/core/io.h"
 
@@ -52,13 +53,15 @@ int main(int argc, char** argv) {
     for (char& c : msg) {
       if (c == '\n') c = ' ';
     }
-    std::fprintf(stderr, "dentsim: error: %s (see dentsim --help)\n", msg.c_str());
+    // Under mpirun every rank fails alike: rank 0 alone says so (cli/mpi_sweep.h).
+    if (dentsim::cli::launcher_rank() == 0)
+      std::fprintf(stderr, "dentsim: error: %s (see dentsim --help)\n", msg.c_str());
     return 2;
   } catch (const dentsim::InputError& e) {
-    std::fprintf(stderr, "dentsim: error: %s\n", e.what());
+    if (dentsim::cli::launcher_rank() == 0) std::fprintf(stderr, "dentsim: error: %s\n", e.what());
     return 2;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "dentsim: failed: %s\n", e.what());
+    if (dentsim::cli::launcher_rank() == 0) std::fprintf(stderr, "dentsim: failed: %s\n", e.what());
     return 1;
   }
   return 0;

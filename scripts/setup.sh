@@ -14,6 +14,10 @@ PACKAGES=(
   # the 3-D view (view/, issue #19): OpenGL 3.3 through GLVND, EGL (headless, Mesa's surfaceless
   # platform), GLFW (the window), Xvfb (the viewer's test under a virtual display)
   libgl-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libglfw3-dev xvfb xauth
+  # the library for other programs (issue #20): the Python module (pybind11, NumPy; pytest runs
+  # its suite, matplotlib the example plot), sweeps over MPI (OpenMPI; the build works without)
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib
+  libopenmpi-dev openmpi-bin
 )
 
 missing=()

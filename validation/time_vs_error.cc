@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <stdexcept>
 
 #include "device/scene.h"
 #include "device/simulator.h"
@@ -122,6 +124,76 @@ Run simulate(const TimeVsErrorConfig& c, const BenchSettings& s) {
   return run;
 }
 
+// A run as a job's JSON and back, exactly: finite doubles round-trip through JSON numbers bit for
+// bit; NaN and the infinities, which JSON lacks, go as strings. The force errors are not sent:
+// they are computed after the gather (compare).
+nlohmann::json wire(double x) {
+  if (std::isfinite(x)) return x;
+  return std::isnan(x) ? (std::signbit(x) ? "-nan" : "nan") : (x > 0 ? "inf" : "-inf");
+}
+
+double from_wire(const nlohmann::json& j) {
+  if (!j.is_string()) return j.get<double>();
+  const std::string s = j.get<std::string>();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  if (s == "nan" || s == "-nan") return s == "nan" ? nan : -nan;
+  if (s == "inf" || s == "-inf") return s == "inf" ? inf : -inf;
+  throw std::runtime_error("bench job result: expected a number, got '" + s + "'");
+}
+
+nlohmann::json run_to_wire(const Run& run) {
+  const BenchVariant& v = run.v;
+  nlohmann::json t = nlohmann::json::array(), f = nlohmann::json::array();
+  for (double x : run.t) t.push_back(wire(x));
+  for (const Vec3& x : run.f) {
+    for (int i = 0; i < 3; ++i) f.push_back(wire(x[i]));
+  }
+  return {{"name", v.name},
+          {"pipeline", v.settings.pipeline},
+          {"tick_hz", wire(v.settings.tick_hz)},
+          {"resolution", v.settings.resolution},
+          {"float_device_terms", v.settings.float_device_terms},
+          {"ticks", v.ticks},
+          {"simulated_s", wire(v.simulated_s)},
+          {"tick_us", {wire(v.tick_us_median), wire(v.tick_us_p99), wire(v.tick_us_mean)}},
+          {"cpu_s_per_simulated_s", wire(v.cpu_s_per_simulated_s)},
+          {"removed_volume_mm3", wire(v.removed_volume_mm3)},
+          {"max_force_n", wire(v.max_force_n)},
+          {"t", t},
+          {"f", f}};
+}
+
+Run run_from_wire(const nlohmann::json& j) {
+  Run run;
+  BenchVariant& v = run.v;
+  v.name = j.at("name").get<std::string>();
+  v.settings.pipeline = j.at("pipeline").get<std::string>();
+  v.settings.tick_hz = from_wire(j.at("tick_hz"));
+  v.settings.resolution = j.at("resolution").get<int>();
+  v.settings.float_device_terms = j.at("float_device_terms").get<bool>();
+  v.ticks = j.at("ticks").get<long>();
+  v.simulated_s = from_wire(j.at("simulated_s"));
+  const nlohmann::json& tick = j.at("tick_us");
+  v.tick_us_median = from_wire(tick.at(0));
+  v.tick_us_p99 = from_wire(tick.at(1));
+  v.tick_us_mean = from_wire(tick.at(2));
+  v.cpu_s_per_simulated_s = from_wire(j.at("cpu_s_per_simulated_s"));
+  v.removed_volume_mm3 = from_wire(j.at("removed_volume_mm3"));
+  v.max_force_n = from_wire(j.at("max_force_n"));
+  const nlohmann::json& t = j.at("t");
+  const nlohmann::json& f = j.at("f");
+  if (f.size() != 3 * t.size())
+    throw std::runtime_error("bench job result: t and f differ in size");
+  run.t.reserve(t.size());
+  run.f.reserve(t.size());
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    run.t.push_back(from_wire(t[i]));
+    run.f.push_back(Vec3(from_wire(f[3 * i]), from_wire(f[3 * i + 1]), from_wire(f[3 * i + 2])));
+  }
+  return run;
+}
+
 // The zero-order hold of (t, f) (f_i held over [t_i, t_i+1)) and its integral from t_0.
 struct Held {
   const Run& r;
@@ -188,7 +260,8 @@ std::vector<std::string> time_vs_error_variant_names(const TimeVsErrorConfig& co
 
 TimeVsErrorResult run_time_vs_error(
     const TimeVsErrorConfig& config,
-    const std::function<void(int, int, const std::string&)>& progress) {
+    const std::function<void(int, int, const std::string&)>& progress,
+    const BenchJobRunner& runner) {
   check_settings(config.base, "time vs error base");
   check_settings(config.finest, "time vs error finest run");
   if (!(config.compare_dt_s > 0.0) || !std::isfinite(config.compare_dt_s)) {
@@ -225,15 +298,27 @@ TimeVsErrorResult run_time_vs_error(
   TimeVsErrorResult res;
   res.config = config;
   res.reference_variant = name_of(config.finest);
-  const int total = static_cast<int>(runs.size()) + 1;
-  if (progress) progress(0, total, res.reference_variant);
-  Run finest = simulate(config, config.finest);
+  // Job 0 the finest run, job k the k-th variant: independent simulations, compared once all are
+  // back (in the order they were run one after the other before).
+  std::vector<BenchSettings> jobs{config.finest};
+  jobs.insert(jobs.end(), runs.begin(), runs.end());
+  const int total = static_cast<int>(jobs.size());
+  const auto job = [&](int k) -> nlohmann::json {
+    if (progress) progress(k, total, name_of(jobs[k]));
+    return run_to_wire(simulate(config, jobs[k]));
+  };
+  std::vector<nlohmann::json> results;
+  if (runner) {
+    results = runner(total, job);
+  } else {
+    for (int k = 0; k < total; ++k) results.push_back(job(k));
+  }
+  Run finest = run_from_wire(results.at(0));
   compare(finest, finest, config.compare_dt_s,
           config.smooth_s);  // zero by construction; computed all the same
   res.variants.push_back(finest.v);
-  for (std::size_t k = 0; k < runs.size(); ++k) {
-    if (progress) progress(static_cast<int>(k) + 1, total, name_of(runs[k]));
-    Run run = simulate(config, runs[k]);
+  for (int k = 1; k < total; ++k) {
+    Run run = run_from_wire(results.at(k));
     compare(finest, run, config.compare_dt_s, config.smooth_s);
     res.variants.push_back(run.v);
   }

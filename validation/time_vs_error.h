@@ -74,11 +74,22 @@ struct TimeVsErrorResult {
 // The names the variants of `config` would have, in order (for --help and validation).
 std::vector<std::string> time_vs_error_variant_names(const TimeVsErrorConfig& config);
 
-// Runs the finest reference run and every variant. progress(done, total, name) before each run.
-// Throws InputError for an unknown variant name, a bad setting or a bad scene.
+// Runs the jobs job(0), ..., job(n - 1) — independent simulations, each returning its run as
+// JSON — and returns the n results in index order, on every process that calls it. The default
+// runs them here one after the other; `dentsim bench` passes one that spreads them over MPI ranks
+// (cli/mpi_sweep.h). Job 0 is the finest run, job k the k-th variant; the errors against the
+// finest run are computed from the gathered runs, so they do not depend on where the jobs ran
+// (the tick times do: they are wall-clock times of whichever core ran the job).
+using BenchJobRunner = std::function<std::vector<nlohmann::json>(
+    int n, const std::function<nlohmann::json(int)>& job)>;
+
+// Runs the finest reference run and every variant. progress(done, total, name) before each run
+// (from the process that runs it) and progress(total, total, "") at the end. Throws InputError
+// for an unknown variant name, a bad setting or a bad scene.
 TimeVsErrorResult run_time_vs_error(
     const TimeVsErrorConfig& config,
-    const std::function<void(int, int, const std::string&)>& progress = {});
+    const std::function<void(int, int, const std::string&)>& progress = {},
+    const BenchJobRunner& runner = {});
 
 // The result as JSON: `variants` (each with `name`, `settings`, `tick_us_median`, `tick_us_p99`,
 // `force_rms_error_n`, `force_max_error_n`, `removed_volume_error_mm3`, ...) and

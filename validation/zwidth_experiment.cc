@@ -1,7 +1,14 @@
 #include "validation/zwidth_experiment.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <cstdint>
+#include <exception>
+#include <limits>
+#include <mutex>
+#include <thread>
+#include <type_traits>
 
 #include "reference/core/io.h"
 
@@ -99,28 +106,6 @@ double headline_of(const ZwidthExperimentResult& r, Method m) {
   return std::nan("");
 }
 
-// The grip detector's traces: the best release point of PMI + PD, if there is one.
-void run_grip_traces(ZwidthExperimentResult& r) {
-  const ZwidthExperiment& e = r.experiment;
-  for (std::size_t k = 0; k < e.operators.size(); ++k) {
-    if (e.operators[k] != ZwidthOperator::kRelease) continue;
-    for (const ZwidthMethodResult& mr : r.methods) {
-      const ZwidthSweep& rs = mr.sweeps[k];
-      if (mr.method != Method::kPmiPd || rs.best < 0) continue;
-      ZwidthScenario fixed = e.scenario;
-      fixed.grip_detector = false;
-      r.grip_trace_gains = rs.points[rs.best].gains;
-      r.grip_trace_fixed = ZwidthTrace{};
-      r.grip_trace_detector = ZwidthTrace{};
-      run_zwidth_once(Method::kPmiPd, ZwidthOperator::kRelease, r.grip_trace_gains, fixed, 0.0,
-                      &r.grip_trace_fixed);
-      run_zwidth_once(Method::kPmiPd, ZwidthOperator::kRelease, r.grip_trace_gains, e.scenario, 0.0,
-                      &r.grip_trace_detector);
-      r.has_grip_traces = true;
-    }
-  }
-}
-
 nlohmann::json gains_json(const ZwidthGains& g) {
   return {{"k_vc_n_per_m", g.k_vc}, {"b_vc_n_s_per_m", g.b_vc}, {"k_tooth_n_per_m", g.k_tooth}};
 }
@@ -129,32 +114,79 @@ nlohmann::json grid_json(const ZwidthGrid& g) {
   return {{"k_vc_n_per_m", g.k_vc}, {"b_vc_n_s_per_m", g.b_vc}, {"k_tooth_n_per_m", g.k_tooth}};
 }
 
+// Every field of a run, once: the JSON of `dentsim zwidth` (run_json) and the jobs' wire format
+// (zwidth_point_to_wire) are both made from this list, so a field added here reaches both.
+// `contact` travels on the wire only (it is not in the contract).
+template <class Run, class F>
+void run_fields(Run& r, F&& f) {
+  f("approach_speed_m_s", r.approach_speed_m_s);
+  f("finite", r.finite);
+  f("contact", r.contact);
+  f("faults", r.faults);
+  f("saturated", r.saturated);
+  f("growth_rate_per_s", r.growth_rate_per_s);
+  f("growth_limit_per_s", r.growth_limit_per_s);
+  f("last_amplitude_m", r.last_amplitude_m);
+  f("amplitude_bound_m", r.amplitude_bound_m);
+  f("energy_max_j", r.energy_max_j);
+  f("energy_final_j", r.energy_final_j);
+  f("energy_tol_j", r.energy_tol_j);
+  f("max_force_n", r.max_force_n);
+  f("max_penetration_m", r.max_penetration_m);
+  f("z_width_n_per_m", r.z_width_n_per_m);
+  f("static_stiffness_n_per_m", r.static_stiffness_n_per_m);
+  f("contact_time_s", r.contact_time_s);
+  f("proxy_tunnelled", r.proxy_tunnelled);
+  f("grip_switches", r.grip_switches);
+  f("grip_agreement", r.grip_agreement);
+  f("release_detected_after_s", r.release_detected_after_s);
+  f("grip_statistic_max_on", r.grip_statistic_max_on);
+  f("grip_statistic_min_on", r.grip_statistic_min_on);
+  f("grip_statistic_max_off", r.grip_statistic_max_off);
+  f("stable", r.stable);
+  f("passive", r.passive);
+}
+
 nlohmann::json run_json(const ZwidthRun& r) {
-  return {{"approach_speed_m_s", r.approach_speed_m_s},
-          {"finite", r.finite},
-          {"faults", r.faults},
-          {"saturated", r.saturated},
-          {"growth_rate_per_s", r.growth_rate_per_s},
-          {"growth_limit_per_s", r.growth_limit_per_s},
-          {"last_amplitude_m", r.last_amplitude_m},
-          {"amplitude_bound_m", r.amplitude_bound_m},
-          {"energy_max_j", r.energy_max_j},
-          {"energy_final_j", r.energy_final_j},
-          {"energy_tol_j", r.energy_tol_j},
-          {"max_force_n", r.max_force_n},
-          {"max_penetration_m", r.max_penetration_m},
-          {"z_width_n_per_m", r.z_width_n_per_m},
-          {"static_stiffness_n_per_m", r.static_stiffness_n_per_m},
-          {"contact_time_s", r.contact_time_s},
-          {"proxy_tunnelled", r.proxy_tunnelled},
-          {"grip_switches", r.grip_switches},
-          {"grip_agreement", r.grip_agreement},
-          {"release_detected_after_s", r.release_detected_after_s},
-          {"grip_statistic_max_on", r.grip_statistic_max_on},
-          {"grip_statistic_min_on", r.grip_statistic_min_on},
-          {"grip_statistic_max_off", r.grip_statistic_max_off},
-          {"stable", r.stable},
-          {"passive", r.passive}};
+  nlohmann::json j;
+  run_fields(r, [&j](const char* key, const auto& v) {
+    if (std::string(key) != "contact") j[key] = v;
+  });
+  return j;
+}
+
+// A double on the wire: JSON numbers carry finite doubles exactly (shortest round-trip digits);
+// NaN and the infinities, which JSON lacks (dump writes null), go as strings, NaN with its sign
+// (printf shows it).
+nlohmann::json wire(double x) {
+  if (std::isfinite(x)) return x;
+  if (std::isnan(x)) return std::signbit(x) ? "-nan" : "nan";
+  return x > 0 ? "inf" : "-inf";
+}
+
+double double_from_wire(const nlohmann::json& j) {
+  if (!j.is_string()) return j.get<double>();
+  const std::string s = j.get<std::string>();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  if (s == "nan") return nan;
+  if (s == "-nan") return -nan;
+  if (s == "inf") return inf;
+  if (s == "-inf") return -inf;
+  throw std::runtime_error("zwidth job result: expected a number, got '" + s + "'");
+}
+
+nlohmann::json wire(const std::vector<double>& xs) {
+  nlohmann::json a = nlohmann::json::array();
+  for (double x : xs) a.push_back(wire(x));
+  return a;
+}
+
+std::vector<double> doubles_from_wire(const nlohmann::json& j) {
+  std::vector<double> out;
+  out.reserve(j.size());
+  for (const nlohmann::json& x : j) out.push_back(double_from_wire(x));
+  return out;
 }
 
 nlohmann::json sweep_json(const ZwidthSweep& s) {
@@ -189,13 +221,130 @@ nlohmann::json finite_or_null(double x) {
   return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr);
 }
 
+// The default ZwidthJobRunner: the jobs on `threads` std::threads of this process. A failing job
+// stops the others from starting; the lowest failing index's exception is rethrown.
+std::vector<nlohmann::json> run_jobs_here(int n, const std::function<nlohmann::json(int)>& job,
+                                          int threads) {
+  std::vector<nlohmann::json> out(static_cast<std::size_t>(n));
+  std::atomic<int> next{0};
+  std::mutex mu;
+  int failed = -1;
+  std::exception_ptr error;
+  auto worker = [&] {
+    for (;;) {
+      const int i = next.fetch_add(1);
+      if (i >= n) return;
+      try {
+        out[i] = job(i);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mu);
+        if (failed < 0 || i < failed) {
+          failed = i;
+          error = std::current_exception();
+        }
+        next.store(n);
+        return;
+      }
+    }
+  };
+  const int nt = std::clamp(threads, 1, std::max(1, n));
+  std::vector<std::thread> pool;
+  for (int t = 0; t < nt; ++t) pool.emplace_back(worker);
+  for (std::thread& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+  return out;
+}
+
+// The best point of a sweep: stable, passive, the largest Z-width, the first in grid order on a
+// tie (as run_zwidth_sweep picks it).
+int best_point(const ZwidthSweep& sw) {
+  int best = -1;
+  for (std::size_t i = 0; i < sw.points.size(); ++i) {
+    const ZwidthPoint& p = sw.points[i];
+    if (p.stable && p.passive &&
+        (best < 0 || p.z_width_n_per_m > sw.points[best].z_width_n_per_m)) {
+      best = static_cast<int>(i);
+    }
+  }
+  return best;
+}
+
 }  // namespace
 
+nlohmann::json zwidth_point_to_wire(const ZwidthPoint& p) {
+  nlohmann::json runs = nlohmann::json::array();
+  for (const ZwidthRun& r : p.runs) {
+    nlohmann::json rj;
+    run_fields(r, [&rj](const char* key, const auto& v) {
+      if constexpr (std::is_same_v<std::decay_t<decltype(v)>, double>) {
+        rj[key] = wire(v);
+      } else {
+        rj[key] = v;
+      }
+    });
+    runs.push_back(rj);
+  }
+  return {{"gains", {wire(p.gains.k_vc), wire(p.gains.b_vc), wire(p.gains.k_tooth)}},
+          {"runs", runs},
+          {"stable", p.stable},
+          {"passive", p.passive},
+          {"z_width_n_per_m", wire(p.z_width_n_per_m)}};
+}
+
+ZwidthPoint zwidth_point_from_wire(const nlohmann::json& j) {
+  ZwidthPoint p;
+  const nlohmann::json& g = j.at("gains");
+  p.gains = {double_from_wire(g.at(0)), double_from_wire(g.at(1)), double_from_wire(g.at(2))};
+  for (const nlohmann::json& rj : j.at("runs")) {
+    ZwidthRun r;
+    run_fields(r, [&rj](const char* key, auto& v) {
+      using T = std::decay_t<decltype(v)>;
+      if constexpr (std::is_same_v<T, double>) {
+        v = double_from_wire(rj.at(key));
+      } else {
+        v = rj.at(key).get<T>();
+      }
+    });
+    p.runs.push_back(r);
+  }
+  p.stable = j.at("stable").get<bool>();
+  p.passive = j.at("passive").get<bool>();
+  p.z_width_n_per_m = double_from_wire(j.at("z_width_n_per_m"));
+  return p;
+}
+
+nlohmann::json zwidth_trace_to_wire(const ZwidthTrace& t) {
+  return {{"t", wire(t.t)},
+          {"penetration_m", wire(t.penetration_m)},
+          {"force_n", wire(t.force_n)},
+          {"energy_j", wire(t.energy_j)},
+          {"grip_state", t.grip_state},
+          {"grip_statistic", wire(t.grip_statistic)}};
+}
+
+ZwidthTrace zwidth_trace_from_wire(const nlohmann::json& j) {
+  ZwidthTrace t;
+  t.t = doubles_from_wire(j.at("t"));
+  t.penetration_m = doubles_from_wire(j.at("penetration_m"));
+  t.force_n = doubles_from_wire(j.at("force_n"));
+  t.energy_j = doubles_from_wire(j.at("energy_j"));
+  t.grip_state = j.at("grip_state").get<std::vector<int>>();
+  t.grip_statistic = doubles_from_wire(j.at("grip_statistic"));
+  return t;
+}
+
 ZwidthExperimentResult run_zwidth_experiment(
-    const ZwidthExperiment& e, const std::function<void(ZwidthOperator, int, int)>& progress) {
+    const ZwidthExperiment& e, const std::function<void(ZwidthOperator, int, int)>& progress,
+    const ZwidthJobRunner& runner) {
   if (e.methods.empty() || e.operators.empty()) {
     throw InputError("zwidth experiment: expected at least one method and one operator");
   }
+  const ZwidthJobRunner run_jobs =
+      runner ? runner
+             : ZwidthJobRunner(
+                   [&e](const std::string&, int n, const std::function<nlohmann::json(int)>& job) {
+                     return run_jobs_here(n, job, e.threads);
+                   });
   ZwidthExperimentResult r;
   r.experiment = e;
   r.device_tip_damping_n_s_per_m = testbed_tip_damping(e.scenario);
@@ -203,19 +352,48 @@ ZwidthExperimentResult run_zwidth_experiment(
   r.methods.resize(e.methods.size());
   for (std::size_t mi = 0; mi < e.methods.size(); ++mi) r.methods[mi].method = e.methods[mi];
 
-  // The strictest operator (force) on the full grid, the others on the small grid.
+  // Stage "grid": the strictest operator (force) on the full grid, the others on the small grid;
+  // one job per (operator, method, grid point), operator-major as the sweeps were run one after
+  // the other.
+  struct GridJob {
+    std::size_t op, method, point;
+  };
+  std::vector<GridJob> grid_jobs;
+  std::vector<int> op_total(e.operators.size(), 0), op_done(e.operators.size(), 0);
   for (std::size_t k = 0; k < e.operators.size(); ++k) {
-    const ZwidthOperator op = e.operators[k];
-    const bool strict = op == ZwidthOperator::kForce;
-    const std::vector<ZwidthSweep> sweeps =
-        run_zwidth_sweep(e.methods, {op}, strict ? e.grid : e.other_grid, e.scenario, e.threads,
-                         [&](int done, int total) {
-                           if (progress) progress(op, done, total);
-                         });
+    const ZwidthGrid& grid = e.operators[k] == ZwidthOperator::kForce ? e.grid : e.other_grid;
     for (std::size_t mi = 0; mi < e.methods.size(); ++mi) {
-      ZwidthMethodResult& mr = r.methods[mi];
-      mr.sweeps.push_back(sweeps[mi]);
-      if (strict) mr.headline = static_cast<int>(k);
+      ZwidthSweep s;
+      s.method = e.methods[mi];
+      s.op = e.operators[k];
+      s.points.resize(grid.size());
+      r.methods[mi].sweeps.push_back(std::move(s));
+      for (std::size_t i = 0; i < grid.size(); ++i) grid_jobs.push_back({k, mi, i});
+    }
+    op_total[k] = static_cast<int>(e.methods.size() * grid.size());
+  }
+  std::mutex progress_mu;
+  const std::vector<nlohmann::json> grid_results =
+      run_jobs("grid", static_cast<int>(grid_jobs.size()), [&](int j) -> nlohmann::json {
+        const GridJob& g = grid_jobs[j];
+        const ZwidthOperator op = e.operators[g.op];
+        const ZwidthGrid& grid = op == ZwidthOperator::kForce ? e.grid : e.other_grid;
+        nlohmann::json out = zwidth_point_to_wire(
+            run_zwidth_point(e.methods[g.method], op, grid.at(g.point), e.scenario));
+        if (progress) {
+          std::lock_guard<std::mutex> lock(progress_mu);
+          progress(op, ++op_done[g.op], op_total[g.op]);
+        }
+        return out;
+      });
+  for (std::size_t j = 0; j < grid_jobs.size(); ++j) {
+    const GridJob& g = grid_jobs[j];
+    r.methods[g.method].sweeps[g.op].points[g.point] = zwidth_point_from_wire(grid_results[j]);
+  }
+  for (ZwidthMethodResult& mr : r.methods) {
+    for (std::size_t k = 0; k < e.operators.size(); ++k) {
+      mr.sweeps[k].best = best_point(mr.sweeps[k]);
+      if (e.operators[k] == ZwidthOperator::kForce) mr.headline = static_cast<int>(k);
     }
   }
 
@@ -234,28 +412,94 @@ ZwidthExperimentResult run_zwidth_experiment(
   r.ratio_pmipd_over_explicit =
       z_explicit > 0 ? headline_of(r, Method::kPmiPd) / z_explicit : std::nan("");
 
-  // Sensitivity at each method's headline point (hand variants: grip operator).
+  // Stage "re-runs" at each method's headline point: the sensitivity variants (hand variants
+  // under the grip operator), the figures' traces, and the grip detector's pair of traces at the
+  // best `release` point of PMI + PD (model with the hand's mass fixed, and with the detector).
+  struct Rerun {
+    enum Kind { kSensitivity, kTrace, kGripFixed, kGripDetector } kind;
+    std::size_t method = 0, variant = 0;
+  };
+  std::vector<Rerun> reruns;
+  const auto& variants = zwidth_sensitivity_variants();
   if (e.sensitivity) {
-    for (ZwidthMethodResult& mr : r.methods) {
-      const ZwidthSweep& s = mr.headline_sweep();
-      if (s.best < 0) continue;
-      const ZwidthGains g = s.points[s.best].gains;
-      for (const ZwidthSensitivityVariant& variant : zwidth_sensitivity_variants()) {
-        ZwidthScenario v = e.scenario;
-        variant.apply(v);
-        mr.sensitivity.push_back(
-            {variant.name, variant.op, run_zwidth_point(mr.method, variant.op, g, v)});
+    for (std::size_t mi = 0; mi < r.methods.size(); ++mi) {
+      if (r.methods[mi].headline_sweep().best < 0) continue;
+      for (std::size_t v = 0; v < variants.size(); ++v) {
+        reruns.push_back({Rerun::kSensitivity, mi, v});
       }
     }
   }
-
   if (e.traces) {
-    for (ZwidthMethodResult& mr : r.methods) {
-      const ZwidthSweep& s = mr.headline_sweep();
-      if (s.best < 0) continue;
-      run_zwidth_once(s.method, s.op, s.points[s.best].gains, e.scenario, 0.0, &mr.trace);
+    for (std::size_t mi = 0; mi < r.methods.size(); ++mi) {
+      if (r.methods[mi].headline_sweep().best >= 0) reruns.push_back({Rerun::kTrace, mi, 0});
     }
-    if (e.scenario.grip_detector) run_grip_traces(r);
+    if (e.scenario.grip_detector) {
+      for (std::size_t k = 0; k < e.operators.size(); ++k) {
+        if (e.operators[k] != ZwidthOperator::kRelease) continue;
+        for (const ZwidthMethodResult& mr : r.methods) {
+          const ZwidthSweep& rs = mr.sweeps[k];
+          if (mr.method != Method::kPmiPd || rs.best < 0) continue;
+          // (Every match has the same gains: the same sweep; the last one's are kept.)
+          r.grip_trace_gains = rs.points[rs.best].gains;
+          r.has_grip_traces = true;
+        }
+      }
+      if (r.has_grip_traces) {
+        reruns.push_back({Rerun::kGripFixed, 0, 0});
+        reruns.push_back({Rerun::kGripDetector, 0, 0});
+      }
+    }
+  }
+  const std::vector<nlohmann::json> rerun_results =
+      run_jobs("re-runs", static_cast<int>(reruns.size()), [&](int j) -> nlohmann::json {
+        const Rerun& job = reruns[j];
+        const ZwidthMethodResult& mr = r.methods[job.method];
+        const ZwidthSweep& s = mr.headline_sweep();
+        switch (job.kind) {
+          case Rerun::kSensitivity: {
+            const ZwidthSensitivityVariant& variant = variants[job.variant];
+            ZwidthScenario v = e.scenario;
+            variant.apply(v);
+            return zwidth_point_to_wire(
+                run_zwidth_point(mr.method, variant.op, s.points[s.best].gains, v));
+          }
+          case Rerun::kTrace: {
+            ZwidthTrace trace;
+            run_zwidth_once(s.method, s.op, s.points[s.best].gains, e.scenario, 0.0, &trace);
+            return zwidth_trace_to_wire(trace);
+          }
+          case Rerun::kGripFixed:
+          case Rerun::kGripDetector: {
+            ZwidthScenario sc = e.scenario;
+            if (job.kind == Rerun::kGripFixed) sc.grip_detector = false;
+            ZwidthTrace trace;
+            run_zwidth_once(Method::kPmiPd, ZwidthOperator::kRelease, r.grip_trace_gains, sc, 0.0,
+                            &trace);
+            return zwidth_trace_to_wire(trace);
+          }
+        }
+        return nullptr;
+      });
+  for (std::size_t j = 0; j < reruns.size(); ++j) {
+    const Rerun& job = reruns[j];
+    ZwidthMethodResult& mr = r.methods[job.method];
+    switch (job.kind) {
+      case Rerun::kSensitivity: {
+        const ZwidthSensitivityVariant& variant = variants[job.variant];
+        mr.sensitivity.push_back(
+            {variant.name, variant.op, zwidth_point_from_wire(rerun_results[j])});
+        break;
+      }
+      case Rerun::kTrace:
+        mr.trace = zwidth_trace_from_wire(rerun_results[j]);
+        break;
+      case Rerun::kGripFixed:
+        r.grip_trace_fixed = zwidth_trace_from_wire(rerun_results[j]);
+        break;
+      case Rerun::kGripDetector:
+        r.grip_trace_detector = zwidth_trace_from_wire(rerun_results[j]);
+        break;
+    }
   }
   return r;
 }

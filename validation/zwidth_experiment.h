@@ -102,10 +102,30 @@ struct ZwidthExperimentResult {
   const ZwidthGrid& headline_grid() const;
 };
 
+// Runs the jobs job(0), ..., job(n - 1) of one stage of the experiment — independent of each
+// other, each returning its result as JSON — and returns the n results in index order, on every
+// process that calls it. The experiment has two stages: "grid" (every operator's grid points for
+// every method) and "re-runs" (the sensitivity variants and traces at each method's best point,
+// which depend on the grid). The default runs them in this process on e.threads std::threads;
+// `dentsim zwidth` passes one that spreads them over MPI ranks (cli/mpi_sweep.h). A job's JSON
+// carries every number bit for bit (non-finite values included), so the result does not depend
+// on where the jobs ran.
+using ZwidthJobRunner = std::function<std::vector<nlohmann::json>(
+    const std::string& stage, int n, const std::function<nlohmann::json(int)>& job)>;
+
 // Runs the experiment. `progress(op, done, total)` is called (serialised) after every grid point
-// of each operator's sweep. Throws InputError on an empty method or operator list.
+// of each operator's sweep that this process runs. Throws InputError on an empty method or
+// operator list; a job's exception reaches the caller (through the runner).
 ZwidthExperimentResult run_zwidth_experiment(
-    const ZwidthExperiment& e, const std::function<void(ZwidthOperator, int, int)>& progress = {});
+    const ZwidthExperiment& e, const std::function<void(ZwidthOperator, int, int)>& progress = {},
+    const ZwidthJobRunner& runner = {});
+
+// A grid point and a trace as a job's JSON and back, exactly (doubles bit for bit, NaN and
+// infinities as strings): the wire format of ZwidthJobRunner.
+nlohmann::json zwidth_point_to_wire(const ZwidthPoint& p);
+ZwidthPoint zwidth_point_from_wire(const nlohmann::json& j);
+nlohmann::json zwidth_trace_to_wire(const ZwidthTrace& t);
+ZwidthTrace zwidth_trace_from_wire(const nlohmann::json& j);
 
 // The result as `dentsim zwidth --json` writes it (keys: docs/zwidth_protocol.md).
 nlohmann::json zwidth_experiment_json(const ZwidthExperimentResult& r);
