@@ -9,6 +9,11 @@ velocity estimate); `dentsim calibrate --truth` with the model-mismatch term and
 identifiable parameters checked, those outside both 5 % and 3 reported std, the fitted M(q)
 error against the truth.
 
+Superseded by `dentsim calibrate-seeds` (calibration/seeds.h; docs/calibration.md), which runs
+the same chain in C++ and spreads the seeds over MPI ranks. Its perturbation draws from
+std::mt19937_64, not Python's random, so seed S is a different device there and here: this script
+stays only to re-run the table docs/calibration.md measured with it.
+
 Usage: scripts/calibration_seeds.py [--dentsim build/release/cli/dentsim] [--first 1]
                                     [--count 20] [--out /tmp/dentsim_calibration_seeds]
 """
