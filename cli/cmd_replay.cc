@@ -24,20 +24,7 @@ void replay(const ReplayOptions& o) {
   const Session session = read_session(o.file);
   bool scene = false;
   const ReplayResult r = replay_recorded_session(session, o.pipeline, &scene);
-  nlohmann::json j;
-  j["file"] = o.file;
-  j["pipeline"] = o.pipeline;
-  j["context"] = session.header.context;
-  j["environment"] = scene ? "the recorded scene (pipeline config, tooth, drilling)" : "free space";
-  j["dof"] = session.header.dof;
-  j["tick_rate_hz"] = session.header.tick_rate_hz;
-  j["ticks"] = r.ticks;
-  j["max_torque_diff_n_m"] = r.max_torque_diff_n_m;
-  j["max_force_diff_n"] = r.max_force_diff_n;
-  j["worst_tick"] = r.worst_tick;
-  j["contact_count_mismatches"] = r.contact_count_mismatches;
-  j["first_divergent_tick"] = r.first_divergent_tick;
-  j["max_force_diff_before_divergence_n"] = r.max_force_diff_before_divergence_n;
+  const nlohmann::json j = replay_report_json(o.file, o.pipeline, session, r, scene);
   if (!o.json.empty()) write_json(o.json, j);
   std::printf("%s: %ld ticks, max torque diff %.3g N m, max force diff %.3g N\n", o.file.c_str(),
               r.ticks, r.max_torque_diff_n_m, r.max_force_diff_n);

@@ -94,4 +94,25 @@ ReplayResult replay_recorded_session(const Session& session, const std::string& 
   return replay_session(session, *p, contacts, model);
 }
 
+nlohmann::json replay_report_json(const std::string& file, const std::string& pipeline,
+                                  const Session& session, const ReplayResult& r,
+                                  bool scene_replayed) {
+  nlohmann::json j;
+  j["file"] = file;
+  j["pipeline"] = pipeline;
+  j["context"] = session.header.context;
+  j["environment"] =
+      scene_replayed ? "the recorded scene (pipeline config, tooth, drilling)" : "free space";
+  j["dof"] = session.header.dof;
+  j["tick_rate_hz"] = session.header.tick_rate_hz;
+  j["ticks"] = r.ticks;
+  j["max_torque_diff_n_m"] = r.max_torque_diff_n_m;
+  j["max_force_diff_n"] = r.max_force_diff_n;
+  j["worst_tick"] = r.worst_tick;
+  j["contact_count_mismatches"] = r.contact_count_mismatches;
+  j["first_divergent_tick"] = r.first_divergent_tick;
+  j["max_force_diff_before_divergence_n"] = r.max_force_diff_before_divergence_n;
+  return j;
+}
+
 }  // namespace dentsim

@@ -11,6 +11,9 @@
 // pipeline (fast vs reference) gives their difference on the same inputs.
 #pragma once
 
+#include <nlohmann/json.hpp>
+#include <string>
+
 #include "device/session_record.h"
 #include "reference/core/contact_provider.h"
 #include "reference/tick.h"
@@ -53,5 +56,12 @@ ReplayResult replay_free_space_reference(const Session& session);
 // Throws InputError for an unknown pipeline or a context scene that does not parse.
 ReplayResult replay_recorded_session(const Session& session, const std::string& pipeline,
                                      bool* scene_replayed = nullptr);
+
+// The numbers of `dentsim replay FILE --pipeline P --json OUT` (and of the Python module's
+// dentsim.replay): the session `file` replayed through `pipeline`, `scene_replayed` as returned by
+// replay_recorded_session.
+nlohmann::json replay_report_json(const std::string& file, const std::string& pipeline,
+                                  const Session& session, const ReplayResult& r,
+                                  bool scene_replayed);
 
 }  // namespace dentsim

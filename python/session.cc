@@ -71,22 +71,7 @@ void bind_session(py::module_& m) {
           py::gil_scoped_release release;
           r = replay_recorded_session(session, pipeline, &scene);
         }
-        py::dict j;
-        j["file"] = path;
-        j["pipeline"] = pipeline;
-        j["context"] = session.header.context;
-        j["environment"] =
-            scene ? "the recorded scene (pipeline config, tooth, drilling)" : "free space";
-        j["dof"] = session.header.dof;
-        j["tick_rate_hz"] = session.header.tick_rate_hz;
-        j["ticks"] = r.ticks;
-        j["max_torque_diff_n_m"] = r.max_torque_diff_n_m;
-        j["max_force_diff_n"] = r.max_force_diff_n;
-        j["worst_tick"] = r.worst_tick;
-        j["contact_count_mismatches"] = r.contact_count_mismatches;
-        j["first_divergent_tick"] = r.first_divergent_tick;
-        j["max_force_diff_before_divergence_n"] = r.max_force_diff_before_divergence_n;
-        return j;
+        return json_to_py(replay_report_json(path, pipeline, session, r, scene));
       },
       py::arg("path"), py::arg("pipeline") = "reference",
       "Re-run a pipeline ('reference' or 'fast') open-loop on a recorded session and compare its "
