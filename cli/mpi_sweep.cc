@@ -332,4 +332,18 @@ void setup_launch_guard(CLI::App& app) {
 DENTSIM_REGISTER_COMMAND(setup_launch_guard);
 
 }  // namespace
+std::string mpi_build_description() {
+#ifdef DENTSIM_HAVE_MPI
+  // MPI_Get_library_version may be called before MPI_Init.
+  char lib[MPI_MAX_LIBRARY_VERSION_STRING];
+  int len = 0;
+  MPI_Get_library_version(lib, &len);
+  std::string first_line(lib, static_cast<std::size_t>(len));
+  first_line = first_line.substr(0, first_line.find_first_of(",\n"));
+  return "yes (" + first_line + "; launcher " + DENTSIM_MPIEXEC + ")";
+#else
+  return "no (sweeps run in one process)";
+#endif
+}
+
 }  // namespace dentsim::cli

@@ -65,4 +65,8 @@ inline bool writes_outputs() { return sweep_world().rank == 0; }
 // (0 without a launcher): main prints errors on rank 0 only.
 int launcher_rank();
 
+// What `dentsim info` says of MPI: "yes (<library, first line>; launcher <mpiexec>)" in an MPI
+// build, "no (sweeps run in one process)" without. Safe before MPI is initialised.
+std::string mpi_build_description();
+
 }  // namespace dentsim::cli
