@@ -142,6 +142,31 @@ TEST(MpiSweepWire, ZwidthPointsAndTracesRoundTripBitForBit) {
   EXPECT_TRUE(u.force_n.empty());
 }
 
+// `dentsim ARGS --json D/one.json [--out D/one]` in one process and the same with two.json (and
+// D/two) on two ranks; both must succeed. The JSON documents and the outputs of both.
+struct OneAndTwo {
+  CliRun one, two;
+  nlohmann::json a, b;  // one.json, two.json
+};
+OneAndTwo run_one_and_two(const std::string& mpiexec, const fs::path& d, const std::string& args,
+                          bool with_out) {
+  const auto outputs = [&](const std::string& name) {
+    std::string o = "--json " + (d / (name + ".json")).string();
+    if (with_out) o += " --out " + (d / name).string();
+    return o;
+  };
+  OneAndTwo r;
+  r.one = run_dentsim(args + outputs("one"));
+  EXPECT_EQ(r.one.status, 0) << r.one.output;
+  r.two = run_two_ranks(mpiexec, args + outputs("two"));
+  EXPECT_EQ(r.two.status, 0) << r.two.output;
+  if (r.one.status == 0 && r.two.status == 0) {
+    r.a = read_json_file(d / "one.json");
+    r.b = read_json_file(d / "two.json");
+  }
+  return r;
+}
+
 TEST(MpiSweep, ZwidthOnTwoRanksEqualsOneProcess) {
   const std::string mpiexec = launcher();
   SKIP_WITHOUT_MPI(mpiexec);
@@ -149,12 +174,11 @@ TEST(MpiSweep, ZwidthOnTwoRanksEqualsOneProcess) {
   // The simulated Phantom: 2 methods x 2 operators x 2 K_vc (8 closed loops of 5 s contact).
   const std::string args =
       "zwidth --methods explicit pmi-pd --operators force grip --k-vc 400 1600 --b-vc 2 "
-      "--k-tooth 3000 --hold 5 --threads 1 --json ";
-  const CliRun one = run_dentsim(args + (d / "one.json").string());
-  ASSERT_EQ(one.status, 0) << one.output;
-  const CliRun two = run_two_ranks(mpiexec, args + (d / "two.json").string());
-  ASSERT_EQ(two.status, 0) << two.output;
-  const nlohmann::json a = read_json_file(d / "one.json"), b = read_json_file(d / "two.json");
+      "--k-tooth 3000 --hold 5 --threads 1 ";
+  const OneAndTwo r = run_one_and_two(mpiexec, d, args, false);
+  ASSERT_FALSE(HasFailure());
+  const nlohmann::json &a = r.a, &b = r.b;
+  const CliRun& two = r.two;
   ASSERT_EQ(a["methods"]["pmi-pd"]["operators"]["force"]["points"].size(), 2u);
   EXPECT_EQ(a, b) << "diff (one process -> two ranks): " << nlohmann::json::diff(a, b).dump(1);
   // The table is printed once (rank 0), as by one process.
@@ -173,13 +197,9 @@ TEST(MpiSweep, ZwidthReRunsOnTwoRanksEqualOneProcess) {
   const std::string args =
       "zwidth --testbed axis --methods pmi-pd --operators force release --k-vc 1600 --b-vc 2 "
       "--k-tooth 1500 3000 --grasp-mass 1 --grip-detector --sensitivity --threads 2 ";
-  const CliRun one =
-      run_dentsim(args + "--json " + (d / "one.json").string() + " --out " + (d / "one").string());
-  ASSERT_EQ(one.status, 0) << one.output;
-  const CliRun two = run_two_ranks(
-      mpiexec, args + "--json " + (d / "two.json").string() + " --out " + (d / "two").string());
-  ASSERT_EQ(two.status, 0) << two.output;
-  const nlohmann::json a = read_json_file(d / "one.json"), b = read_json_file(d / "two.json");
+  const OneAndTwo r = run_one_and_two(mpiexec, d, args, true);
+  ASSERT_FALSE(HasFailure());
+  const nlohmann::json &a = r.a, &b = r.b;
   // The re-runs ran: 11 sensitivity variants of PMI + PD, and its grip detector pair drawn.
   ASSERT_EQ(a["methods"]["pmi-pd"]["sensitivity"].size(), 11u) << a.dump(1);
   EXPECT_EQ(a, b) << "diff (one process -> two ranks): " << nlohmann::json::diff(a, b).dump(1);
@@ -198,13 +218,9 @@ TEST(MpiSweep, BenchOnTwoRanksEqualsOneProcessButForTickTimes) {
   const std::string args =
       "bench --duration 1 --reference-tick-hz 2000 --reference-resolution 64 --base-resolution 64 "
       "--variants fast@1kHz/r64 fast-float@1kHz/r64 ";
-  const CliRun one =
-      run_dentsim(args + "--json " + (d / "one.json").string() + " --out " + (d / "one").string());
-  ASSERT_EQ(one.status, 0) << one.output;
-  const CliRun two = run_two_ranks(
-      mpiexec, args + "--json " + (d / "two.json").string() + " --out " + (d / "two").string());
-  ASSERT_EQ(two.status, 0) << two.output;
-  nlohmann::json a = read_json_file(d / "one.json"), b = read_json_file(d / "two.json");
+  OneAndTwo r = run_one_and_two(mpiexec, d, args, true);
+  ASSERT_FALSE(HasFailure());
+  nlohmann::json &a = r.a, &b = r.b;
   ASSERT_EQ(a["variants"].size(), 3u);  // 3 jobs: 2 on rank 0, 1 on rank 1
   // The variants differ from the yardstick (else the comparison would be vacuous).
   EXPECT_GT(a["variants"][1]["force_rms_error_raw_n"].get<double>(), 0.0);
