@@ -10,7 +10,6 @@
 #include "device/phantom_device.h"
 #include "device/simulated_phantom.h"
 #include "reference/core/io.h"
-#include "reference/phantom/phantom_model.h"
 
 namespace dentsim {
 namespace {
@@ -61,29 +60,6 @@ PerturbedDevice perturb_device(const PhantomParams& base, std::uint64_t seed) {
   return d;
 }
 
-ModelError truth_model_error(const PhantomParams& truth, const PhantomParams& model, int poses) {
-  // The same poses as `dentsim calibrate --truth` (cli/cmd_calibrate.cc), so that the numbers
-  // agree with the command's JSON.
-  const PhantomModelD mt(truth), mm(model);
-  std::mt19937_64 rng(1);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  ModelError e;
-  for (int k = 0; k < poses; ++k) {
-    Vec6 q;
-    for (int i = 0; i < 6; ++i)
-      q(i) = truth.q_min_rad(i) + u(rng) * (truth.q_max_rad(i) - truth.q_min_rad(i));
-    const Mat6 Mt = mt.M(q);
-    const Mat6 M = mm.M(q);
-    e.mass_matrix = std::max(e.mass_matrix, (M - Mt).norm() / Mt.norm());
-    e.arm_mass_matrix =
-        std::max(e.arm_mass_matrix, (M.topLeftCorner<3, 3>() - Mt.topLeftCorner<3, 3>()).norm() /
-                                        Mt.topLeftCorner<3, 3>().norm());
-    const Vec6 gt = mt.g(q);
-    e.gravity = std::max(e.gravity, (mm.g(q) - gt).norm() / gt.norm());
-  }
-  return e;
-}
-
 bool within_bar(const SeedParameter& p) {
   return p.rel_error <= kParameterRelBar || p.error_over_std <= kParameterStdBar;
 }
@@ -125,29 +101,21 @@ SeedRun run_seed(const PhantomParams& base, std::uint64_t seed, const SeedRunOpt
                              " (designed: " + std::to_string(design.iterations) + " iterations)");
 
   // `dentsim calibrate LOG --truth truth [--no-model-mismatch]` with the command's defaults.
-  const PhantomParams prior = base;
-  FitOptions fo;
-  fo.lowpass_hz = o.lowpass_hz;
-  fo.lowpass_order = 2;
-  fo.max_samples = o.max_samples;
-  fo.max_iterations = o.max_iterations;
-  fo.coulomb_from_filtered_velocity = true;
-  fo.model_mismatch_term = o.model_mismatch_term;
-  // --velocity-lag auto: the simulated device's driver (what `excite` runs).
-  const double T = (run.log.t.back() - run.log.t.front()) / (run.log.size() - 1);
-  const VelocityEstimatorParams vp = phantom_device_config(prior).velocity;
-  const double lag =
-      driver_velocity_lag_ticks(vp.filter == VelocityFilter::kFirstOrderLowPass, vp.cutoff_hz, T);
-  fo.position_shift_samples = lag;
-  fo.torque_shift_samples = lag + 0.5;
-  const FitResult fit = fit_calibration(run.log, prior, fo);
-  bool finite = std::isfinite(fit.residual_rms);
-  for (const FitParameter& fp : fit.params) finite = finite && std::isfinite(fp.value);
-  if (!finite) {
+  const PhantomParams& prior = base;
+  CalibrateOptions co;
+  co.lowpass_hz = o.lowpass_hz;
+  co.max_samples = o.max_samples;
+  co.max_iterations = o.max_iterations;
+  co.model_mismatch_term = o.model_mismatch_term;
+  const CalibrateOutcome c =
+      calibrate_log(run.log, "the log of seed " + std::to_string(seed), prior, co);
+  if (!c.finite()) {
     throw std::runtime_error("calibrate-seeds: seed " + std::to_string(seed) +
                              ": the fit ended with a non-finite residual or parameter");
   }
+  const FitResult& fit = c.fit;
   run.fitted = fit.fitted;
+  const TruthComparison truth = compare_with_truth(fit, prior, p);
 
   SeedResult& r = run.result;
   r.seed = seed;
@@ -159,27 +127,22 @@ SeedRun run_seed(const PhantomParams& base, std::uint64_t seed, const SeedRunOpt
   r.excitation_condition_designed = design.condition_designed;
   r.model_mismatch = fit.model_mismatch;
   r.model_mismatch_reasons = fit.model_mismatch_reasons;
-  const CalibVec xt = pack_calib_params(p);
-  for (int i = 0; i < kCalibParams; ++i) {
+  for (std::size_t i = 0; i < fit.params.size(); ++i) {
     const FitParameter& fp = fit.params[i];
     SeedParameter sp;
     sp.name = fp.name;
     sp.identifiable = fp.identifiable;
-    sp.truth = xt(i);
+    sp.truth = truth.params[i].truth;
     sp.value = fp.value;
     sp.std = fp.std;
     sp.std_statistical = fp.std_statistical;
     sp.std_model = fp.std_model;
-    if (fp.identifiable) {
-      // As `calibrate --truth` computes them.
-      const double err = std::abs(fp.value - xt(i));
-      sp.rel_error = err / std::max(std::abs(xt(i)), 1e-300);
-      sp.error_over_std = fp.std > 0.0 ? err / fp.std : std::numeric_limits<double>::infinity();
-    }
+    sp.rel_error = truth.params[i].rel_error;
+    sp.error_over_std = truth.params[i].error_over_std;
     r.params.push_back(sp);
   }
-  r.fitted = truth_model_error(p, fit.fitted);
-  r.prior = truth_model_error(p, prior);
+  r.fitted = truth.fitted;
+  r.prior = truth.prior;
   return run;
 }
 
@@ -208,12 +171,6 @@ SeedSummary summarize(const std::vector<SeedResult>& results) {
 }
 
 namespace {
-
-nlohmann::json model_error_json(const ModelError& e) {
-  return {{"mass_matrix", e.mass_matrix},
-          {"arm_mass_matrix", e.arm_mass_matrix},
-          {"gravity", e.gravity}};
-}
 
 ModelError model_error_from_json(const nlohmann::json& j) {
   return {j.at("mass_matrix").get<double>(), j.at("arm_mass_matrix").get<double>(),
@@ -251,7 +208,7 @@ nlohmann::json seed_result_to_json(const SeedResult& r) {
           {"model_mismatch", r.model_mismatch},
           {"model_mismatch_reasons", r.model_mismatch_reasons},
           {"truth_model_error",
-           {{"fitted", model_error_json(r.fitted)}, {"prior", model_error_json(r.prior)}}},
+           {{"fitted", model_error_to_json(r.fitted)}, {"prior", model_error_to_json(r.prior)}}},
           {"parameters", params}};
 }
 

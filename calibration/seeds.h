@@ -11,9 +11,10 @@
 //      quantised encoders, the driver's velocity estimate);
 //   3. `dentsim calibrate LOG --truth truth` with the calibrate command's defaults (prior = the
 //      base model, zero-phase 10 Hz Butterworth, velocity lag `auto`, Coulomb column from the
-//      low-passed velocity, with or without the model-mismatch term);
+//      low-passed velocity, with or without the model-mismatch term): calibrate.h calibrate_log;
 //   4. each identifiable parameter's error against the truth, and the fitted and prior M(q), arm
-//      M(q) block and g(q) against the truth's over 200 seeded poses (truth_model_error).
+//      M(q) block and g(q) against the truth's over 200 seeded poses (calibrate.h
+//      compare_with_truth).
 // The numbers equal those of the two commands run on the same truth file (the log's CSV re-reads
 // exactly). Deterministic: the same seed and options give bit-identical results.
 //
@@ -28,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "calibration/calibrate.h"  // ModelError, truth_model_error
 #include "calibration/fit.h"
 #include "calibration/log.h"
 #include "reference/phantom/phantom_params.h"
@@ -56,16 +58,6 @@ struct PerturbedDevice {
 };
 // Throws InputError if the perturbed model fails validate_phantom_params.
 PerturbedDevice perturb_device(const PhantomParams& base, std::uint64_t seed);
-
-// The max relative error (Frobenius / Euclidean) of `model`'s M(q), its arm 3x3 block and g(q)
-// against `truth`'s over `poses` poses drawn uniform in the truth's joint-limit box
-// (std::mt19937_64 seeded 1: the poses of `dentsim calibrate --truth`).
-struct ModelError {
-  double mass_matrix = 0.0, arm_mass_matrix = 0.0, gravity = 0.0;
-  bool operator==(const ModelError&) const = default;
-};
-ModelError truth_model_error(const PhantomParams& truth, const PhantomParams& model,
-                             int poses = 200);
 
 // The options that matter of `dentsim excite` and `dentsim calibrate` (their defaults).
 struct SeedRunOptions {

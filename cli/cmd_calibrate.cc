@@ -5,8 +5,9 @@
 //     the simulated Phantom built from MODEL (default: the built-in Premium 1.5A model) and
 //     writes the calibration log (calibration/log.h).
 //   dentsim calibrate LOG --json FILE -o MODEL [--prior MODEL] [--truth MODEL] [--plots DIR]
-//     fits the inertial and friction parameters (calibration/fit.h), writes the fitted device
-//     model file and the report; with --truth adds each identifiable parameter's true value and
+//     fits the inertial and friction parameters (calibration/calibrate.h: the options' checks, the
+//     velocity lag, the fit of calibration/fit.h, the report), writes the fitted device model
+//     file and the report; with --truth adds each identifiable parameter's true value and
 //     max_rel_error. A fit that did not converge writes the JSON (converged: false), no model file,
 //     and exits with status 1.
 #include <algorithm>
@@ -14,10 +15,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-#include <random>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
+#include "calibration/calibrate.h"
 #include "calibration/excitation.h"
 #include "calibration/fit.h"
 #include "calibration/log.h"
@@ -169,37 +171,12 @@ void setup_excite(CLI::App& app) {
 }
 DENTSIM_REGISTER_COMMAND(setup_excite);
 
-struct CalibrateOptions {
+// The command's files and flags; the fit's options are the library's (calibration/calibrate.h).
+struct CalibrateFlags {
   std::string log, json, out, prior, truth, plots;
-  double lowpass_hz = 10.0;
-  int max_samples = 3000;
-  int max_iterations = 100;
-  double torque_shift = 0.0;
-  std::string velocity_lag = "auto";
-  int lowpass_order = 2;
-  std::string coulomb_velocity = "filtered";
+  CalibrateOptions fit;
   bool no_model_mismatch = false;
 };
-
-// The zero-phase low-pass needs its cut-off below the Nyquist frequency (the Butterworth's
-// prewarping tan(pi fc T) has a pole at fc T = 1/2) and its transient, one cut-off period trimmed
-// at each end of the log, shorter than a quarter of the log.
-void check_lowpass(double fc, const CalibrationLog& log, const std::string& path) {
-  if (fc == 0.0) return;
-  const double duration = log.t.back() - log.t.front();
-  const double T = duration / (log.size() - 1);
-  if (!(fc * T <= 0.45)) {
-    throw InputError("--lowpass " + std::to_string(fc) + " Hz: above 0.45 / (time step " +
-                     std::to_string(T) + " s of " + path + ") = " + std::to_string(0.45 / T) +
-                     " Hz; expected a cut-off below the Nyquist frequency");
-  }
-  if (!(fc * duration >= 4.0)) {
-    throw InputError("--lowpass " + std::to_string(fc) + " Hz: below 4 / (duration " +
-                     std::to_string(duration) + " s of " + path +
-                     ") = " + std::to_string(4.0 / duration) +
-                     " Hz; the filter's transient would cover the whole log");
-  }
-}
 
 void write_plots(const FitResult& r, const std::string& dir) {
   std::filesystem::create_directories(dir);
@@ -236,7 +213,7 @@ void write_plots(const FitResult& r, const std::string& dir) {
 }
 
 void setup_calibrate(CLI::App& app) {
-  auto opt = std::make_shared<CalibrateOptions>();
+  auto opt = std::make_shared<CalibrateFlags>();
   CLI::App* sub = app.add_subcommand(
       "calibrate",
       "Fit the device's inertial parameters, viscous and Coulomb friction to a calibration log\n"
@@ -249,185 +226,57 @@ void setup_calibrate(CLI::App& app) {
   sub->add_option("--truth", opt->truth,
                   "true device model (simulated data): adds true values and max_rel_error");
   sub->add_option("--plots", opt->plots, "directory for PNG plots (torque fit, residuals)");
-  sub->add_option("--lowpass", opt->lowpass_hz,
+  sub->add_option("--lowpass", opt->fit.lowpass_hz,
                   "zero-phase low-pass of qd and tau before differentiating [Hz], 0 = off, else\n"
                   "between 4 / (log duration) and 0.45 / (time step) (default 10)");
-  sub->add_option("--max-samples", opt->max_samples, "samples used (default 3000)");
-  sub->add_option("--torque-shift", opt->torque_shift,
+  sub->add_option("--max-samples", opt->fit.max_samples, "samples used (default 3000)");
+  sub->add_option("--torque-shift", opt->fit.torque_shift,
                   "use the torque logged this many more ticks earlier with each sample\n"
                   "(fractional, added to the shift --velocity-lag sets; default 0)");
   sub->add_option(
-      "--velocity-lag", opt->velocity_lag,
+      "--velocity-lag", opt->fit.velocity_lag,
       "lag d [ticks] of the logged velocity behind the logged angle, or 'auto' (the\n"
       "simulated Phantom's driver: backward difference + 200 Hz low-pass, 0.898 ticks at\n"
       "1 kHz): q is taken d ticks and tau d + 1/2 + --torque-shift ticks earlier (the\n"
       "torque is held over the tick); 0 = no alignment (exact logged velocities);\n"
       "default auto");
-  sub->add_option("--lowpass-order", opt->lowpass_order,
+  sub->add_option("--lowpass-order", opt->fit.lowpass_order,
                   "1: first-order zero-phase low-pass, 2: second-order Butterworth (zero-phase)\n"
                   "(default 2)");
-  sub->add_option("--coulomb-velocity", opt->coulomb_velocity,
+  sub->add_option("--coulomb-velocity", opt->fit.coulomb_velocity,
                   "velocity of the Coulomb column tanh(v / v_s): 'filtered' (the low-passed qd,\n"
                   "default) or 'raw' (the logged qd)");
   sub->add_flag("--no-model-mismatch", opt->no_model_mismatch,
                 "report the statistical std only (the default refits without each joint's slowest\n"
                 "quarter of samples and adds the change beyond noise to each parameter's std,\n"
                 "flagging a model mismatch: docs/calibration.md)");
-  sub->add_option("--max-iterations", opt->max_iterations,
+  sub->add_option("--max-iterations", opt->fit.max_iterations,
                   "Ceres iteration limit (default 100); a fit that hits it did not converge");
   sub->callback([opt] {
-    if (!(opt->lowpass_hz >= 0.0 && std::isfinite(opt->lowpass_hz))) {
-      throw InputError("--lowpass: expected a finite frequency >= 0 Hz, got " +
-                       std::to_string(opt->lowpass_hz));
-    }
-    if (opt->max_samples < 100) throw InputError("--max-samples: expected >= 100");
+    opt->fit.model_mismatch_term = !opt->no_model_mismatch;
+    check_calibrate_options(opt->fit);
     check_output_paths({{"--json", opt->json}, {"-o", opt->out}},
                        {{"LOG", opt->log}, {"--prior", opt->prior}, {"--truth", opt->truth}});
     const CalibrationLog log = read_calibration_log(opt->log);
-    check_lowpass(opt->lowpass_hz, log, opt->log);
     const PhantomParams prior =
         opt->prior.empty() ? default_phantom_params() : load_phantom_params(opt->prior);
-    std::unique_ptr<PhantomParams> truth;
-    if (!opt->truth.empty())
-      truth = std::make_unique<PhantomParams>(load_phantom_params(opt->truth));
-    FitOptions fo;
-    fo.lowpass_hz = opt->lowpass_hz;
-    fo.max_samples = opt->max_samples;
-    if (opt->max_iterations < 1) throw InputError("--max-iterations: expected >= 1");
-    fo.max_iterations = opt->max_iterations;
-    if (!(std::abs(opt->torque_shift) <= 100.0))
-      throw InputError("--torque-shift: expected |s| <= 100");
-    fo.torque_shift_samples = opt->torque_shift;
-    if (opt->lowpass_order != 1 && opt->lowpass_order != 2)
-      throw InputError("--lowpass-order: expected 1 or 2, got " +
-                       std::to_string(opt->lowpass_order));
-    fo.lowpass_order = opt->lowpass_order;
-    if (opt->coulomb_velocity != "filtered" && opt->coulomb_velocity != "raw") {
-      throw InputError("--coulomb-velocity: expected 'filtered' or 'raw', got '" +
-                       opt->coulomb_velocity + "'");
-    }
-    fo.coulomb_from_filtered_velocity = opt->coulomb_velocity == "filtered";
-    fo.model_mismatch_term = !opt->no_model_mismatch;
-    double velocity_lag = 0.0;
-    if (opt->velocity_lag == "auto") {
-      const double T = (log.t.back() - log.t.front()) / (log.size() - 1);
-      // The simulated device's driver (the estimator `dentsim excite` runs).
-      const VelocityEstimatorParams vp = phantom_device_config(prior).velocity;
-      velocity_lag = driver_velocity_lag_ticks(vp.filter == VelocityFilter::kFirstOrderLowPass,
-                                               vp.cutoff_hz, T);
-    } else {
-      std::size_t used = 0;
-      try {
-        velocity_lag = std::stod(opt->velocity_lag, &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      if (used != opt->velocity_lag.size() || !(velocity_lag >= 0.0 && velocity_lag <= 100.0)) {
-        throw InputError("--velocity-lag: expected 'auto' or 0 <= TICKS <= 100, got '" +
-                         opt->velocity_lag + "'");
-      }
-    }
-    if (velocity_lag > 0.0) {
-      fo.position_shift_samples = velocity_lag;
-      fo.torque_shift_samples += velocity_lag + 0.5;
-    }
-    const FitResult r = fit_calibration(log, prior, fo);
-    bool finite = std::isfinite(r.residual_rms);
-    for (const FitParameter& fp : r.params) finite = finite && std::isfinite(fp.value);
-    if (!finite) {
+    std::optional<PhantomParams> truth;
+    if (!opt->truth.empty()) truth = load_phantom_params(opt->truth);
+    const CalibrateOutcome c = calibrate_log(log, opt->log, prior, opt->fit);
+    const FitResult& r = c.fit;
+    if (!c.finite()) {
       throw std::runtime_error("calibrate: the fit of " + opt->log +
                                " ended with a non-finite residual or parameter; no file written");
     }
-
-    nlohmann::json j;
-    j["log"] = opt->log;
-    j["converged"] = r.converged;
-    j["solver_report"] = r.report;
-    j["iterations"] = r.iterations;
-    j["samples"] = r.samples;
-    j["lowpass_hz"] = opt->lowpass_hz;
-    j["lowpass_order"] = fo.lowpass_order;
-    j["velocity_lag_ticks"] = velocity_lag;
-    j["coulomb_velocity"] = opt->coulomb_velocity;
-    j["position_shift_samples"] = fo.position_shift_samples;
-    j["torque_shift_samples"] = fo.torque_shift_samples;
-    j["residual_rms_n_m"] = r.residual_rms;
-    j["residual_rms_joint_n_m"] =
-        std::vector<double>(r.residual_rms_joint.data(), r.residual_rms_joint.data() + 6);
-    j["condition_number"] = r.condition_number;
-    j["identifiable_count"] = r.identifiable;
-    j["std_newey_west_lags"] = r.hac_lags;
-    nlohmann::json params = nlohmann::json::array(), not_id = nlohmann::json::array();
-    const CalibVec xt = truth ? pack_calib_params(*truth) : CalibVec::Zero();
-    double max_rel = 0.0;
-    for (int i = 0; i < kCalibParams; ++i) {
-      const FitParameter& fp = r.params[i];
-      nlohmann::json e{{"name", fp.name},
-                       {"prior", fp.prior},
-                       {"value", fp.value},
-                       {"std", fp.std},
-                       {"std_statistical", fp.std_statistical},
-                       {"std_model", fp.std_model},
-                       {"std_white", fp.std_white},
-                       {"identifiable", fp.identifiable}};
-      if (!fp.identifiable) not_id.push_back(fp.name);
-      if (truth && fp.identifiable) {
-        const double rel = std::abs(fp.value - xt(i)) / std::max(std::abs(xt(i)), 1e-300);
-        e["truth"] = xt(i);
-        e["rel_error"] = rel;
-        e["error_over_std"] = fp.std > 0.0 ? std::abs(fp.value - xt(i)) / fp.std : INFINITY;
-        max_rel = std::max(max_rel, rel);
-      }
-      params.push_back(e);
-    }
-    j["parameters"] = params;
-    j["model_mismatch"] = r.model_mismatch;
-    j["model_mismatch_reasons"] = r.model_mismatch_reasons;
-    j["model_mismatch_term"] = fo.model_mismatch_term;
-    {
-      const auto v = [](const Vec6& x) { return std::vector<double>(x.data(), x.data() + 6); };
-      j["residual_diagnostics"] = {{"lag1_autocorrelation", v(r.diagnostics.lag1_autocorrelation)},
-                                   {"rms_slow_quarter_n_m", v(r.diagnostics.rms_slow)},
-                                   {"rms_fast_quarter_n_m", v(r.diagnostics.rms_fast)}};
-    }
-    j["not_identifiable_left_at_prior"] = not_id;
-    if (truth) {
-      j["max_rel_error"] = max_rel;
-      // The base parameters (what the observer uses): M(q) and g(q) of the fitted model and of
-      // the prior against the truth, max relative error (Frobenius / Euclidean) over 200 poses
-      // drawn uniformly in the joint-limit box (seeded); the arm's 3x3 block of M separately.
-      const PhantomModelD mt(*truth), mf(r.fitted), m0(prior);
-      std::mt19937_64 rng(1);
-      std::uniform_real_distribution<double> u(0.0, 1.0);
-      double e[2][3] = {{0, 0, 0}, {0, 0, 0}};
-      for (int k = 0; k < 200; ++k) {
-        Vec6 q;
-        for (int i = 0; i < 6; ++i)
-          q(i) = truth->q_min_rad(i) + u(rng) * (truth->q_max_rad(i) - truth->q_min_rad(i));
-        const Mat6 Mt = mt.M(q);
-        const Vec6 gt = mt.g(q);
-        const PhantomModelD* m[2] = {&mf, &m0};
-        for (int w = 0; w < 2; ++w) {
-          const Mat6 M = m[w]->M(q);
-          e[w][0] = std::max(e[w][0], (M - Mt).norm() / Mt.norm());
-          e[w][1] = std::max(e[w][1], (M.topLeftCorner<3, 3>() - Mt.topLeftCorner<3, 3>()).norm() /
-                                          Mt.topLeftCorner<3, 3>().norm());
-          e[w][2] = std::max(e[w][2], (m[w]->g(q) - gt).norm() / gt.norm());
-        }
-      }
-      j["truth_model_error"] = {
-          {"fitted",
-           {{"mass_matrix", e[0][0]}, {"arm_mass_matrix", e[0][1]}, {"gravity", e[0][2]}}},
-          {"prior",
-           {{"mass_matrix", e[1][0]}, {"arm_mass_matrix", e[1][1]}, {"gravity", e[1][2]}}}};
-    }
-    write_json(opt->json, j);
+    std::optional<TruthComparison> cmp;
+    if (truth) cmp = compare_with_truth(r, prior, *truth);
+    write_json(opt->json, calibration_report_json(c, cmp ? &*cmp : nullptr));
     if (!opt->plots.empty()) write_plots(r, opt->plots);
     std::printf(
         "calibrate: %d samples, %d of %d parameters identifiable, condition number %.3g,\n"
         "  residual RMS %.3g N m%s\n",
         r.samples, r.identifiable, kCalibParams, r.condition_number, r.residual_rms,
-        truth ? (", max_rel_error " + std::to_string(max_rel)).c_str() : "");
+        cmp ? (", max_rel_error " + std::to_string(cmp->max_rel_error)).c_str() : "");
     for (const std::string& why : r.model_mismatch_reasons) {
       std::printf("  model mismatch: %s\n", why.c_str());
     }

@@ -156,7 +156,7 @@ void setup_calibrate_seeds(CLI::App& app) {
     const PhantomParams base =
         opt->device.empty() ? default_phantom_params() : load_phantom_params(opt->device);
     opt->run.model_mismatch_term = !opt->no_model_mismatch;
-    // The low-pass bounds of `calibrate` (cli/cmd_calibrate.cc), checked before any work: below
+    // The low-pass bounds of `calibrate` (calibration/calibrate.cc), checked before any work: below
     // the Nyquist frequency of the device's tick, and a transient (one cut-off period at each
     // end) shorter than a quarter of the log.
     const double fc = opt->run.lowpass_hz, T = phantom_device_config(base).jitter.period;

@@ -8,7 +8,8 @@
 //                   tick, in free space or in a scene's environment (device/simulator.h's rig)
 //   run.cc          run(scene): device/simulator.h's run_scene, report.json's document
 //                   (device/run_report.h) and the time series as arrays; the built-in scenes
-//   calibration.cc  calibration logs (calibration/log.h) and the Ceres fit (calibration/fit.h)
+//   calibration.cc  calibration logs (calibration/log.h) and `dentsim calibrate`'s fit and report
+//                   (calibration/calibrate.h)
 //   session.cc      recorded sessions (device/session_record.h) and their replay
 //                   (device/session_replay.h)
 // Errors: InputError (reference/core/io.h: a bad file, value or name; the message names what and

@@ -1,0 +1,225 @@
+#include "calibration/calibrate.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <random>
+#include <stdexcept>
+
+#include "device/phantom_device.h"
+#include "device/velocity_estimator.h"
+#include "reference/core/io.h"
+#include "reference/phantom/phantom_model.h"
+
+namespace dentsim {
+namespace {
+
+// The lag --velocity-lag gives in ticks; empty for 'auto'.
+std::optional<double> fixed_velocity_lag(const std::string& text, const std::string& name) {
+  if (text == "auto") return std::nullopt;
+  double lag = 0.0;
+  std::size_t used = 0;
+  try {
+    lag = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !(lag >= 0.0 && lag <= 100.0)) {
+    throw InputError(name + ": expected 'auto' or 0 <= TICKS <= 100, got '" + text + "'");
+  }
+  return lag;
+}
+
+// The zero-phase low-pass needs its cut-off below the Nyquist frequency (the Butterworth's
+// prewarping tan(pi fc T) has a pole at fc T = 1/2) and its transient, one cut-off period trimmed
+// at each end of the log, shorter than a quarter of the log.
+void check_lowpass(double fc, const CalibrationLog& log, const std::string& path,
+                   const std::string& name) {
+  if (fc == 0.0) return;
+  const double duration = log.t.back() - log.t.front();
+  const double T = duration / (log.size() - 1);
+  if (!(fc * T <= 0.45)) {
+    throw InputError(name + " " + std::to_string(fc) + " Hz: above 0.45 / (time step " +
+                     std::to_string(T) + " s of " + path + ") = " + std::to_string(0.45 / T) +
+                     " Hz; expected a cut-off below the Nyquist frequency");
+  }
+  if (!(fc * duration >= 4.0)) {
+    throw InputError(name + " " + std::to_string(fc) + " Hz: below 4 / (duration " +
+                     std::to_string(duration) + " s of " + path +
+                     ") = " + std::to_string(4.0 / duration) +
+                     " Hz; the filter's transient would cover the whole log");
+  }
+}
+
+std::vector<double> vec6_list(const Vec6& x) { return std::vector<double>(x.data(), x.data() + 6); }
+
+}  // namespace
+
+void check_calibrate_options(const CalibrateOptions& o, const CalibrateOptionNames& names) {
+  if (!(o.lowpass_hz >= 0.0 && std::isfinite(o.lowpass_hz))) {
+    throw InputError(names.lowpass_hz + ": expected a finite frequency >= 0 Hz, got " +
+                     std::to_string(o.lowpass_hz));
+  }
+  if (o.max_samples < 100) throw InputError(names.max_samples + ": expected >= 100");
+  if (o.max_iterations < 1) throw InputError(names.max_iterations + ": expected >= 1");
+  if (!(std::abs(o.torque_shift) <= 100.0))
+    throw InputError(names.torque_shift + ": expected |s| <= 100");
+  if (o.lowpass_order != 1 && o.lowpass_order != 2) {
+    throw InputError(names.lowpass_order + ": expected 1 or 2, got " +
+                     std::to_string(o.lowpass_order));
+  }
+  if (o.coulomb_velocity != "filtered" && o.coulomb_velocity != "raw") {
+    throw InputError(names.coulomb_velocity + ": expected 'filtered' or 'raw', got '" +
+                     o.coulomb_velocity + "'");
+  }
+  fixed_velocity_lag(o.velocity_lag, names.velocity_lag);
+}
+
+bool CalibrateOutcome::finite() const {
+  bool ok = std::isfinite(fit.residual_rms);
+  for (const FitParameter& fp : fit.params) ok = ok && std::isfinite(fp.value);
+  return ok;
+}
+
+CalibrateOutcome calibrate_log(const CalibrationLog& log, const std::string& log_path,
+                               const PhantomParams& prior, const CalibrateOptions& o,
+                               const CalibrateOptionNames& names) {
+  check_calibrate_options(o, names);
+  check_lowpass(o.lowpass_hz, log, log_path, names.lowpass_hz);
+  CalibrateOutcome c;
+  c.log_path = log_path;
+  c.options = o;
+  FitOptions& fo = c.fit_options;
+  fo.lowpass_hz = o.lowpass_hz;
+  fo.lowpass_order = o.lowpass_order;
+  fo.max_samples = o.max_samples;
+  fo.max_iterations = o.max_iterations;
+  fo.torque_shift_samples = o.torque_shift;
+  fo.coulomb_from_filtered_velocity = o.coulomb_velocity == "filtered";
+  fo.model_mismatch_term = o.model_mismatch_term;
+  if (const std::optional<double> lag = fixed_velocity_lag(o.velocity_lag, names.velocity_lag)) {
+    c.velocity_lag_ticks = *lag;
+  } else {
+    // The simulated device's driver (the estimator `dentsim excite` runs).
+    const double T = (log.t.back() - log.t.front()) / (log.size() - 1);
+    const VelocityEstimatorParams vp = phantom_device_config(prior).velocity;
+    c.velocity_lag_ticks =
+        driver_velocity_lag_ticks(vp.filter == VelocityFilter::kFirstOrderLowPass, vp.cutoff_hz, T);
+  }
+  if (c.velocity_lag_ticks > 0.0) {
+    fo.position_shift_samples = c.velocity_lag_ticks;
+    fo.torque_shift_samples += c.velocity_lag_ticks + 0.5;
+  }
+  c.fit = fit_calibration(log, prior, fo);
+  return c;
+}
+
+ModelError truth_model_error(const PhantomParams& truth, const PhantomParams& model, int poses) {
+  const PhantomModelD mt(truth), mm(model);
+  std::mt19937_64 rng(1);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  ModelError e;
+  for (int k = 0; k < poses; ++k) {
+    Vec6 q;
+    for (int i = 0; i < 6; ++i)
+      q(i) = truth.q_min_rad(i) + u(rng) * (truth.q_max_rad(i) - truth.q_min_rad(i));
+    const Mat6 Mt = mt.M(q);
+    const Mat6 M = mm.M(q);
+    e.mass_matrix = std::max(e.mass_matrix, (M - Mt).norm() / Mt.norm());
+    e.arm_mass_matrix =
+        std::max(e.arm_mass_matrix, (M.topLeftCorner<3, 3>() - Mt.topLeftCorner<3, 3>()).norm() /
+                                        Mt.topLeftCorner<3, 3>().norm());
+    const Vec6 gt = mt.g(q);
+    e.gravity = std::max(e.gravity, (mm.g(q) - gt).norm() / gt.norm());
+  }
+  return e;
+}
+
+nlohmann::json model_error_to_json(const ModelError& e) {
+  return {{"mass_matrix", e.mass_matrix},
+          {"arm_mass_matrix", e.arm_mass_matrix},
+          {"gravity", e.gravity}};
+}
+
+TruthComparison compare_with_truth(const FitResult& fit, const PhantomParams& prior,
+                                   const PhantomParams& truth) {
+  TruthComparison c;
+  const CalibVec xt = pack_calib_params(truth);
+  for (std::size_t i = 0; i < fit.params.size(); ++i) {
+    const FitParameter& fp = fit.params[i];
+    ParameterTruth pt;
+    pt.truth = xt(static_cast<Eigen::Index>(i));
+    if (fp.identifiable) {
+      const double err = std::abs(fp.value - pt.truth);
+      pt.rel_error = err / std::max(std::abs(pt.truth), 1e-300);
+      pt.error_over_std = fp.std > 0.0 ? err / fp.std : std::numeric_limits<double>::infinity();
+      c.max_rel_error = std::max(c.max_rel_error, pt.rel_error);
+    }
+    c.params.push_back(pt);
+  }
+  c.fitted = truth_model_error(truth, fit.fitted);
+  c.prior = truth_model_error(truth, prior);
+  return c;
+}
+
+nlohmann::json calibration_report_json(const CalibrateOutcome& c, const TruthComparison* truth) {
+  const FitResult& r = c.fit;
+  const FitOptions& fo = c.fit_options;
+  nlohmann::json j;
+  j["log"] = c.log_path;
+  j["converged"] = r.converged;
+  j["solver_report"] = r.report;
+  j["iterations"] = r.iterations;
+  j["samples"] = r.samples;
+  j["lowpass_hz"] = c.options.lowpass_hz;
+  j["lowpass_order"] = fo.lowpass_order;
+  j["velocity_lag_ticks"] = c.velocity_lag_ticks;
+  j["coulomb_velocity"] = c.options.coulomb_velocity;
+  j["position_shift_samples"] = fo.position_shift_samples;
+  j["torque_shift_samples"] = fo.torque_shift_samples;
+  j["residual_rms_n_m"] = r.residual_rms;
+  j["residual_rms_joint_n_m"] = vec6_list(r.residual_rms_joint);
+  j["condition_number"] = r.condition_number;
+  j["identifiable_count"] = r.identifiable;
+  j["std_newey_west_lags"] = r.hac_lags;
+  nlohmann::json params = nlohmann::json::array(), not_id = nlohmann::json::array();
+  for (std::size_t i = 0; i < r.params.size(); ++i) {
+    const FitParameter& fp = r.params[i];
+    nlohmann::json e{{"name", fp.name},
+                     {"prior", fp.prior},
+                     {"value", fp.value},
+                     {"std", fp.std},
+                     {"std_statistical", fp.std_statistical},
+                     {"std_model", fp.std_model},
+                     {"std_white", fp.std_white},
+                     {"identifiable", fp.identifiable}};
+    if (!fp.identifiable) not_id.push_back(fp.name);
+    if (truth && fp.identifiable) {
+      const ParameterTruth& pt = truth->params[i];
+      e["truth"] = pt.truth;
+      e["rel_error"] = pt.rel_error;
+      e["error_over_std"] = pt.error_over_std;
+    }
+    params.push_back(e);
+  }
+  j["parameters"] = params;
+  j["model_mismatch"] = r.model_mismatch;
+  j["model_mismatch_reasons"] = r.model_mismatch_reasons;
+  j["model_mismatch_term"] = fo.model_mismatch_term;
+  j["residual_diagnostics"] = {
+      {"lag1_autocorrelation", vec6_list(r.diagnostics.lag1_autocorrelation)},
+      {"rms_slow_quarter_n_m", vec6_list(r.diagnostics.rms_slow)},
+      {"rms_fast_quarter_n_m", vec6_list(r.diagnostics.rms_fast)}};
+  j["not_identifiable_left_at_prior"] = not_id;
+  if (truth) {
+    j["max_rel_error"] = truth->max_rel_error;
+    // The base parameters (what the observer uses): M(q) and g(q) of the fitted model and of the
+    // prior against the truth (truth_model_error).
+    j["truth_model_error"] = {{"fitted", model_error_to_json(truth->fitted)},
+                              {"prior", model_error_to_json(truth->prior)}};
+  }
+  return j;
+}
+
+}  // namespace dentsim
