@@ -20,6 +20,7 @@
 #include "cli/registry.h"
 #include "fast/registry.h"
 #include "reference/core/io.h"
+#include "reference/phantom/phantom_params.h"
 #include "validation/zwidth_experiment.h"
 
 namespace dentsim::cli {
@@ -45,6 +46,8 @@ struct ZwidthOptions {
   bool grip_detector = false;
   std::vector<double> tap_speeds;
   double proxy_damping = -1.0;  // < 0: the rule b_2 = k_vc T / 2
+  std::string device_model;     // --device MODEL ("" = the default model)
+  std::string pipeline_model;   // --pipeline-model MODEL ("" = the device's)
 };
 
 bool show_progress() { return isatty(2) && std::getenv("CI") == nullptr; }
@@ -332,6 +335,14 @@ void run_zwidth(const ZwidthOptions& o) {
         },
         so);
   };
+  if (!o.device_model.empty() || !o.pipeline_model.empty()) {
+    if (sc.testbed != ZwidthTestbed::kPhantom) {
+      throw InputError("--device/--pipeline-model: device model files need --testbed phantom");
+    }
+    if (!o.device_model.empty()) sc.phantom_device_params = load_phantom_params(o.device_model);
+    if (!o.pipeline_model.empty())
+      sc.phantom_pipeline_params = load_phantom_params(o.pipeline_model);
+  }
   const ZwidthExperimentResult r = run_zwidth_experiment(
       e,
       [alone](ZwidthOperator op, int done, int total) {
@@ -392,6 +403,12 @@ void setup_zwidth(CLI::App& app) {
   sub->add_option("--proxy-damping", o->proxy_damping,
                   "A fixed proxy damping b_2 [N s/m] for every method instead of the rule "
                   "b_2 = K_vc T / 2");
+  sub->add_option("--device", o->device_model,
+                  "Device model file of the simulated Phantom (default: the built-in model; "
+                  "`dentsim device show`)");
+  sub->add_option("--pipeline-model", o->pipeline_model,
+                  "Device model file the pipeline believes (observer, decomposition; default: "
+                  "the device's, e.g. a `dentsim calibrate -o` fit)");
   sub->add_flag("--observer-unmatched", o->observer_unmatched,
                 "Observer input as the thesis discretises it, not matched to the driver's "
                 "velocity estimate (pmi-pd)");

@@ -112,16 +112,21 @@ class AxisRig : public Rig {
 };
 
 PhantomParams phantom_truth(const ZwidthScenario& sc) {
-  PhantomParams p = default_phantom_params();
+  PhantomParams p = sc.phantom_device_params ? *sc.phantom_device_params : default_phantom_params();
   p.gravity_on = false;  // a gravity-compensated device, as the thesis assumes (2.1)
   if (sc.phantom_damping.minCoeff() >= 0.0) p.damping_n_m_s_per_rad = sc.phantom_damping;
   return p;
 }
 
-// What the pipeline believes: every inertia (masses, body inertias, armature) and the damping
-// scaled; the geometry (kinematics) exact.
+// What the pipeline believes: its model file (gravity-compensated like the device) or the
+// device's, with every inertia (masses, body inertias, armature) and the damping scaled; the
+// geometry (kinematics) exact.
 PhantomParams phantom_belief(const ZwidthScenario& sc) {
   PhantomParams p = phantom_truth(sc);
+  if (sc.phantom_pipeline_params) {
+    p = *sc.phantom_pipeline_params;
+    p.gravity_on = false;
+  }
   const double s = sc.model_mass_scale;
   for (PhantomBody* b : {&p.base, &p.upper_arm, &p.forearm, &p.crank, &p.parallel_link,
                          &p.gimbal_yaw, &p.gimbal_pitch, &p.gimbal_roll}) {

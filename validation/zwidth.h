@@ -45,12 +45,14 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "device/scripted_hand.h"
 #include "reference/core/params.h"
 #include "reference/grip_detector.h"
+#include "reference/phantom/phantom_params.h"
 #include "validation/zwidth_1dof.h"
 
 namespace dentsim {
@@ -88,6 +90,13 @@ struct ZwidthScenario {
   // What the pipeline believes about the device (model error): mass/inertia and damping scales.
   double model_mass_scale = 1.0;
   double model_damping_scale = 1.0;
+  // Phantom testbed, from device model files (`dentsim zwidth --device MODEL --pipeline-model
+  // MODEL`; issue #17: the Z-width with a calibrated model): the simulated device (empty = the
+  // default model with phantom_damping) and what the pipeline believes (empty = the device's
+  // model with the scales above). Both are used gravity-compensated, as the thesis assumes (2.1);
+  // the scales and phantom_damping still apply on top of a file.
+  std::optional<PhantomParams> phantom_device_params;
+  std::optional<PhantomParams> phantom_pipeline_params;
 
   // Pipeline.
   // The tick's implementation (fast/registry.h: "reference", "fast"). With "fast" on the Phantom

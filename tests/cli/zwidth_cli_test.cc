@@ -72,5 +72,47 @@ TEST(ZwidthCli, BadFlagsExitTwoWithTheFlagNamed) {
   EXPECT_NE(d.output.find("--grip-detector"), std::string::npos) << d.output;
 }
 
+// --device and --pipeline-model (issue #17: the Z-width with a calibrated model): the default
+// model's file reproduces the built-in run exactly; a perturbed device changes what the loop
+// sees (its tip damping, the run); the pipeline believing another model changes the run but not
+// the device.
+TEST(ZwidthCli, ModelFilesSelectTheDeviceAndWhatThePipelineBelieves) {
+  const fs::path d = testing::fresh_temp_dir("dentsim_zwidth_models");
+  const std::string base = std::string(DENTSIM_SOURCE_DIR) + "/tests/fuzz/corpus/device_model/";
+  const std::string def = base + "premium_1_5a.json";       // == `dentsim device show`
+  const std::string pert = base + "perturbed_phantom.json";  // masses, damping, friction scaled
+  const std::string args =
+      "zwidth --push 1.0 --methods pmi-pd --operators force --k-vc 2400 --b-vc 4 --k-tooth 12000 "
+      "--threads 1 ";
+  const auto run = [&](const std::string& extra, const std::string& name) {
+    const auto r = run_dentsim(args + extra + " --json " + (d / name).string());
+    EXPECT_EQ(r.status, 0) << r.output;
+    return testing::read_json_file(d / name);
+  };
+  const nlohmann::json builtin = run("", "builtin.json");
+  const nlohmann::json files = run("--device " + def + " --pipeline-model " + def, "files.json");
+  const nlohmann::json device = run("--device " + pert, "device.json");
+  const nlohmann::json belief = run("--pipeline-model " + pert, "belief.json");
+  ASSERT_FALSE(HasFailure());
+  EXPECT_EQ(builtin, files) << nlohmann::json::diff(builtin, files).dump(1);
+  const auto point = [](const nlohmann::json& j) {
+    return j["methods"]["pmi-pd"]["operators"]["force"]["points"][0]["runs"][0];
+  };
+  // The device's own damping is in the perturbed file (the rig reports it at the tip)...
+  EXPECT_NE(device["device_tip_damping_n_s_per_m"], builtin["device_tip_damping_n_s_per_m"]);
+  EXPECT_NE(point(device)["energy_final_j"], point(builtin)["energy_final_j"]);
+  // ... the pipeline's belief is not: same device, another run.
+  EXPECT_EQ(belief["device_tip_damping_n_s_per_m"], builtin["device_tip_damping_n_s_per_m"]);
+  EXPECT_NE(point(belief)["energy_final_j"], point(builtin)["energy_final_j"]);
+
+  const auto missing = run_dentsim(args + "--device " + (d / "nope.json").string());
+  EXPECT_EQ(missing.status, 2);
+  EXPECT_NE(missing.output.find("nope.json"), std::string::npos) << missing.output;
+  const auto axis = run_dentsim("zwidth --testbed axis --pipeline-model " + def);
+  EXPECT_EQ(axis.status, 2);
+  EXPECT_NE(axis.output.find("--testbed phantom"), std::string::npos) << axis.output;
+  fs::remove_all(d);
+}
+
 }  // namespace
 }  // namespace dentsim
