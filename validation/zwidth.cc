@@ -493,6 +493,40 @@ ZwidthPoint run_zwidth_point(Method method, ZwidthOperator op, const ZwidthGains
   return pt;
 }
 
+void run_jobs_on_threads(int n, int threads, const std::function<void(int)>& job,
+                         const std::function<void(int, int)>& progress) {
+  std::atomic<int> next{0};
+  std::mutex mu;
+  int done = 0;
+  int failed = -1;
+  std::exception_ptr error;
+  auto worker = [&] {
+    for (;;) {
+      const int i = next.fetch_add(1);
+      if (i >= n) return;
+      try {
+        job(i);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mu);
+        if (failed < 0 || i < failed) {
+          failed = i;
+          error = std::current_exception();
+        }
+        next.store(n);
+        return;
+      }
+      std::lock_guard<std::mutex> lock(mu);
+      ++done;
+      if (progress) progress(done, n);
+    }
+  };
+  const int nt = std::clamp(threads, 1, std::max(1, n));
+  std::vector<std::thread> pool;
+  for (int t = 0; t < nt; ++t) pool.emplace_back(worker);
+  for (std::thread& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+}
+
 std::vector<ZwidthSweep> run_zwidth_sweep(const std::vector<Method>& methods,
                                           const std::vector<ZwidthOperator>& ops,
                                           const ZwidthGrid& grid, const ZwidthScenario& sc,
@@ -509,34 +543,14 @@ std::vector<ZwidthSweep> run_zwidth_sweep(const std::vector<Method>& methods,
     }
   }
   const int total = static_cast<int>(out.size() * grid.size());
-  std::atomic<int> next{0};
-  std::mutex mu;
-  int done = 0;
-  std::exception_ptr error;
-  auto worker = [&] {
-    for (;;) {
-      const int job = next.fetch_add(1);
-      if (job >= total) return;
-      ZwidthSweep& sw = out[job / grid.size()];
-      const std::size_t i = job % grid.size();
-      try {
+  run_jobs_on_threads(
+      total, threads,
+      [&](int job) {
+        ZwidthSweep& sw = out[job / grid.size()];
+        const std::size_t i = job % grid.size();
         sw.points[i] = run_zwidth_point(sw.method, sw.op, grid.at(i), sc);
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(mu);
-        if (!error) error = std::current_exception();
-        next.store(total);
-        return;
-      }
-      std::lock_guard<std::mutex> lock(mu);
-      ++done;
-      if (progress) progress(done, total);
-    }
-  };
-  const int nt = std::max(1, threads);
-  std::vector<std::thread> pool;
-  for (int i = 0; i < nt; ++i) pool.emplace_back(worker);
-  for (std::thread& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
+      },
+      progress);
   for (ZwidthSweep& sw : out) {
     for (std::size_t i = 0; i < sw.points.size(); ++i) {
       const ZwidthPoint& p = sw.points[i];

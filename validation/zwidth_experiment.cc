@@ -1,7 +1,6 @@
 #include "validation/zwidth_experiment.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <exception>
@@ -221,37 +220,12 @@ nlohmann::json finite_or_null(double x) {
   return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr);
 }
 
-// The default ZwidthJobRunner: the jobs on `threads` std::threads of this process. A failing job
-// stops the others from starting; the lowest failing index's exception is rethrown.
+// The default ZwidthJobRunner: the jobs on `threads` std::threads of this process
+// (run_jobs_on_threads: the lowest failing index's exception is rethrown).
 std::vector<nlohmann::json> run_jobs_here(int n, const std::function<nlohmann::json(int)>& job,
                                           int threads) {
   std::vector<nlohmann::json> out(static_cast<std::size_t>(n));
-  std::atomic<int> next{0};
-  std::mutex mu;
-  int failed = -1;
-  std::exception_ptr error;
-  auto worker = [&] {
-    for (;;) {
-      const int i = next.fetch_add(1);
-      if (i >= n) return;
-      try {
-        out[i] = job(i);
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(mu);
-        if (failed < 0 || i < failed) {
-          failed = i;
-          error = std::current_exception();
-        }
-        next.store(n);
-        return;
-      }
-    }
-  };
-  const int nt = std::clamp(threads, 1, std::max(1, n));
-  std::vector<std::thread> pool;
-  for (int t = 0; t < nt; ++t) pool.emplace_back(worker);
-  for (std::thread& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
+  run_jobs_on_threads(n, threads, [&](int i) { out[static_cast<std::size_t>(i)] = job(i); });
   return out;
 }
 
