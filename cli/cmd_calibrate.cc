@@ -148,7 +148,6 @@ void setup_excite(CLI::App& app) {
     dc.friction_on = !opt->no_friction;
     if (opt->friction_law == "tanh") {
       dc.friction_law = SimulatedDeviceConfig::FrictionLaw::kTanh;
-      dc.coulomb_velocity = p.coulomb_smoothing_rad_s;
     } else if (opt->friction_law != "frictionloss") {
       throw InputError("--friction-law: expected 'frictionloss' or 'tanh', got '" +
                        opt->friction_law + "'");

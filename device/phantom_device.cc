@@ -59,6 +59,7 @@ SimulatedDeviceConfig phantom_device_config(const PhantomParams& p) {
   c.tau_max = p.torque_limit_n_m;
   c.tau_fault = 4.0 * p.torque_limit_n_m;
   c.gravity = p.gravity_on;
+  c.coulomb_velocity = p.coulomb_smoothing_rad_s;
   return c;
 }
 

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "reference/core/io.h"
+#include "reference/phantom/phantom_model.h"
 
 namespace dentsim {
 namespace {
@@ -133,8 +134,13 @@ SimulatedPhantom::SimulatedPhantom(const MujocoPlant& plant, SimulatedDeviceConf
     if (!cfg_.friction_on) m->dof_frictionloss[j] = 0.0;
   }
   if (cfg_.friction_law == SimulatedDeviceConfig::FrictionLaw::kTanh) {
-    if (!(std::isfinite(cfg_.coulomb_velocity) && cfg_.coulomb_velocity > 0.0)) {
-      throw InputError("simulated device: config.coulomb_velocity must be finite and > 0");
+    if (cfg_.coulomb_velocity.size() == 0) cfg_.coulomb_velocity = VecX::Constant(n, 0.01);
+    check_size(cfg_.coulomb_velocity, n, "coulomb_velocity");
+    for (int i = 0; i < n; ++i) {
+      if (!(std::isfinite(cfg_.coulomb_velocity[i]) && cfg_.coulomb_velocity[i] >= 0.0)) {
+        throw InputError("simulated device: config.coulomb_velocity must be finite and >= 0 (joint " +
+                         std::to_string(i + 1) + ")");
+      }
     }
     coulomb_tanh_ = VecX::Zero(n);
     for (int i = 0; i < n; ++i) {
@@ -329,7 +335,8 @@ void SimulatedPhantom::advance() {
         for (int i = 0; i < n; ++i) {
           const int dof = plant_.device_dof[i];
           d->qfrc_applied[dof] =
-              tau_applied_[i] - coulomb_tanh_[i] * std::tanh(d->qvel[dof] / cfg_.coulomb_velocity);
+              tau_applied_[i] - phantom_joint_friction(0.0, coulomb_tanh_[i],
+                                                       cfg_.coulomb_velocity[i], d->qvel[dof]);
         }
       }
       mj_step(m, d);

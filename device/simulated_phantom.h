@@ -80,12 +80,14 @@ struct SimulatedDeviceConfig {
   VecX frictionloss;  // [N m] (empty: the MJCF's dof_frictionloss)
   // How the device dofs' Coulomb friction f_c acts. kFrictionloss (default): MuJoCo's
   // dof_frictionloss, a soft constraint solved with the dynamics (it holds a joint at rest with
-  // any torque up to f_c). kTanh: the device model's law -f_c tanh(qd / coulomb_velocity) as an
+  // any torque up to f_c). kTanh: the device model's law -f_c tanh(qd / coulomb_velocity_i) as an
   // applied torque, evaluated at the start of every substep (explicit; calibration harness:
   // docs/calibration.md). Either way friction_on = false removes it.
   enum class FrictionLaw { kFrictionloss, kTanh };
   FrictionLaw friction_law = FrictionLaw::kFrictionloss;
-  double coulomb_velocity = 0.01;  // v_s [rad/s] of kTanh
+  // v_s [rad/s] per device dof of kTanh (empty: 0.01 each; 0 = sign); phantom_device_config
+  // sets the model's coulomb_smoothing_rad_s. The law is the model's own (phantom_joint_friction).
+  VecX coulomb_velocity;
   // Servo clock.
   TickJitter jitter;
 };

@@ -123,7 +123,7 @@ PhantomDynamics<T>::PhantomDynamics(const PhantomParams& params)
   armature_ = tree.armature.cast<T>();
   damping_ = tree.damping.cast<T>();
   coulomb_ = tree.coulomb.cast<T>();
-  coulomb_smoothing_ = T(tree.coulomb_smoothing);
+  coulomb_smoothing_ = tree.coulomb_smoothing.cast<T>();
   gravity_ = T(tree.gravity);
 }
 
@@ -280,7 +280,7 @@ void PhantomDynamics<T>::terms(const Vec6& q_in, const Vec6& qd_in, bool with_ja
   out.CTqd = tree_to_joint(ct).template cast<double>();
   for (int j = 0; j < 6; ++j) {
     out.tau_f(j) =
-        double(phantom_joint_friction(damping_(j), coulomb_(j), coulomb_smoothing_, qd(j)));
+        double(phantom_joint_friction(damping_(j), coulomb_(j), coulomb_smoothing_(j), qd(j)));
   }
 
   // 4. Tool pose, J_t and dJ_t/dt (header section 4).

@@ -119,7 +119,7 @@ class PhantomDynamics : public SixDofDeviceModel {
   std::array<Body, kPhantomTreeDof> body_;
   V3 tip_;
   V6 armature_, damping_, coulomb_;
-  T coulomb_smoothing_;
+  V6 coulomb_smoothing_;
   T gravity_;
   // The full matrix C (not a servo-tick quantity: only coriolis_matrix() needs it) comes from
   // the reference model, which defines which factorisation C is.

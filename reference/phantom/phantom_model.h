@@ -75,7 +75,7 @@ struct PhantomTreeT {
   std::array<V3, kPhantomTreeDof> inertia;  // principal moments about the CoM, own axes
   V3 tip;                                   // tool tip in the roll frame
   V6 armature, damping, coulomb;            // per device joint
-  T coulomb_smoothing;                      // v_s [rad/s]
+  V6 coulomb_smoothing;                     // v_s per device joint [rad/s]
   T gravity;                                // |g| [m/s^2], 0 when gravity is off
 };
 
@@ -234,7 +234,7 @@ PhantomTreeT<T> phantom_tree(const PhantomParams& p) {
   t.armature = p.armature_kg_m2.cast<T>();
   t.damping = p.damping_n_m_s_per_rad.cast<T>();
   t.coulomb = p.coulomb_n_m.cast<T>();
-  t.coulomb_smoothing = T(p.coulomb_smoothing_rad_s);
+  t.coulomb_smoothing = p.coulomb_smoothing_rad_s.cast<T>();
   t.gravity = T(p.gravity_on ? p.gravity_m_s2 : 0.0);
   return t;
 }
@@ -337,7 +337,7 @@ typename PhantomModelT<T>::V6 PhantomModelT<T>::friction(const V6& qd) const {
   V6 f;
   for (int j = 0; j < 6; ++j) {
     f(j) =
-        phantom_joint_friction(tree_.damping(j), tree_.coulomb(j), tree_.coulomb_smoothing, qd(j));
+        phantom_joint_friction(tree_.damping(j), tree_.coulomb(j), tree_.coulomb_smoothing(j), qd(j));
   }
   return f;
 }

@@ -112,7 +112,7 @@ PhantomParams default_phantom_params() {
   // friction (unverified) times ~0.2 m.
   p.damping_n_m_s_per_rad << 5.0e-4, 5.0e-4, 5.0e-4, 1.0e-5, 1.0e-5, 5.0e-6;
   p.coulomb_n_m << 0.008, 0.006, 0.006, 2.0e-4, 2.0e-4, 1.0e-4;
-  p.coulomb_smoothing_rad_s = 0.01;
+  p.coulomb_smoothing_rad_s.setConstant(0.01);
   // Box inside which J1 is regular (no stretched elbow, tip off the yaw axis, no gimbal lock).
   p.q_min_rad << -0.9, -0.2, -0.4, -2.4, -1.0, -2.6;
   p.q_max_rad << 0.9, 0.9, 1.0, 2.4, 1.0, 2.6;
@@ -153,7 +153,9 @@ std::string phantom_params_to_text(const PhantomParams& p) {
   s << "    \"armature_kg_m2\": " << vec(p.armature_kg_m2) << ",\n";
   s << "    \"damping_n_m_s_per_rad\": " << vec(p.damping_n_m_s_per_rad) << ",\n";
   s << "    \"coulomb_n_m\": " << vec(p.coulomb_n_m) << ",\n";
-  s << "    \"coulomb_smoothing_rad_s\": " << num(p.coulomb_smoothing_rad_s) << ",\n";
+  const Vec6& vs = p.coulomb_smoothing_rad_s;
+  s << "    \"coulomb_smoothing_rad_s\": "
+    << ((vs.array() == vs(0)).all() ? num(vs(0)) : vec(vs)) << ",\n";
   s << "    \"q_min_rad\": " << vec(p.q_min_rad) << ",\n";
   s << "    \"q_max_rad\": " << vec(p.q_max_rad) << ",\n";
   s << "    \"torque_limit_n_m\": " << vec(p.torque_limit_n_m) << ",\n";
@@ -218,7 +220,12 @@ PhantomParams parse_phantom_params(const std::string& text, const std::string& o
   p.armature_kg_m2 = r.vector<6>(joints, "joints", "armature_kg_m2");
   p.damping_n_m_s_per_rad = r.vector<6>(joints, "joints", "damping_n_m_s_per_rad");
   p.coulomb_n_m = r.vector<6>(joints, "joints", "coulomb_n_m");
-  p.coulomb_smoothing_rad_s = r.number(joints, "joints", "coulomb_smoothing_rad_s");
+  // One number (every joint) or one per joint.
+  if (r.has(joints, "coulomb_smoothing_rad_s") && joints.at("coulomb_smoothing_rad_s").is_array()) {
+    p.coulomb_smoothing_rad_s = r.vector<6>(joints, "joints", "coulomb_smoothing_rad_s");
+  } else {
+    p.coulomb_smoothing_rad_s.setConstant(r.number(joints, "joints", "coulomb_smoothing_rad_s"));
+  }
   p.q_min_rad = r.vector<6>(joints, "joints", "q_min_rad");
   p.q_max_rad = r.vector<6>(joints, "joints", "q_max_rad");
   p.torque_limit_n_m = r.vector<6>(joints, "joints", "torque_limit_n_m");
@@ -293,9 +300,13 @@ void validate_phantom_params(const PhantomParams& p, const std::string& origin,
   non_negative6(p.armature_kg_m2, "joints.armature_kg_m2");
   non_negative6(p.damping_n_m_s_per_rad, "joints.damping_n_m_s_per_rad");
   non_negative6(p.coulomb_n_m, "joints.coulomb_n_m");
-  if (!(p.coulomb_smoothing_rad_s >= 0.0) || !std::isfinite(p.coulomb_smoothing_rad_s)) {
-    r.fail("joints.coulomb_smoothing_rad_s",
-           "expected a non-negative number (0 = sign), got " + num(p.coulomb_smoothing_rad_s));
+  for (int j = 0; j < 6; ++j) {
+    const double vs = p.coulomb_smoothing_rad_s(j);
+    if (!(vs >= 0.0) || !std::isfinite(vs)) {
+      r.fail("joints.coulomb_smoothing_rad_s",
+             "expected non-negative numbers (0 = sign), got " + num(vs) + " for joint " +
+                 std::to_string(j + 1));
+    }
   }
   for (int j = 0; j < 6; ++j) {
     std::string idx("[");  // (built by appending: GCC 12's -Wrestrict misfires on "[" + s)

@@ -69,7 +69,9 @@ struct PhantomParams {
   Vec6 armature_kg_m2 = Vec6::Zero();         // reflected rotor inertia (+ link excess, docs)
   Vec6 damping_n_m_s_per_rad = Vec6::Zero();  // viscous b_j
   Vec6 coulomb_n_m = Vec6::Zero();            // Coulomb f_c,j
-  double coulomb_smoothing_rad_s = 0.0;       // f_c tanh(qd / v_s); 0 = f_c sign(qd)
+  // v_s per joint of f_c tanh(qd / v_s); 0 = f_c sign(qd). The model file takes one number (every
+  // joint) or six; it writes one number when all six are equal.
+  Vec6 coulomb_smoothing_rad_s = Vec6::Zero();
   Vec6 q_min_rad = Vec6::Constant(-1.0);
   Vec6 q_max_rad = Vec6::Constant(1.0);
   Vec6 torque_limit_n_m = Vec6::Zero();

@@ -33,7 +33,6 @@ TEST(CalibrationMujocoRecovery, TanhFrictionExactSensingRecoversWithinTwoPercent
   SimulatedDeviceConfig dc = phantom_device_config(truth);
   dc.quantize = false;
   dc.friction_law = SimulatedDeviceConfig::FrictionLaw::kTanh;
-  dc.coulomb_velocity = truth.coulomb_smoothing_rad_s;
   SimulatedPhantom dev(phantom_plant(truth), dc, home);
   const CalibrationLog log =
       run_excitation(dev, truth, exc, 20.0, TrackingParams{}, {&dev.true_q(), &dev.true_qd()});

@@ -139,7 +139,7 @@ TEST(FastPhantomModel, GravityOff) {
 // the friction law is the reference's own function, so tau_f agrees bitwise.
 TEST(FastPhantomModel, SignFrictionIsTheReferenceLaw) {
   PhantomParams p = default_phantom_params();
-  p.coulomb_smoothing_rad_s = 0.0;
+  p.coulomb_smoothing_rad_s.setZero();
   p.coulomb_n_m << 0.01, 0.02, 0.03, 0.004, 0.005, 0.006;
   const fast::PhantomModel f(p);
   const PhantomModel r(p);

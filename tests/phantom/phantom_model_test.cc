@@ -272,7 +272,7 @@ TEST(PhantomModel, DeviceModelAdapter) {
   for (int j = 0; j < 6; ++j) {
     EXPECT_DOUBLE_EQ(m.friction(qd)(j),
                      p.damping_n_m_s_per_rad(j) * qd(j) +
-                         p.coulomb_n_m(j) * std::tanh(qd(j) / p.coulomb_smoothing_rad_s));
+                         p.coulomb_n_m(j) * std::tanh(qd(j) / p.coulomb_smoothing_rad_s(j)));
   }
 }
 

@@ -74,6 +74,31 @@ TEST(PhantomParams, WrongTypeIsNamed) {
   EXPECT_THAT(error_of(bad2), AllOf(HasSubstr("joints.coulomb_n_m"), HasSubstr("6 numbers")));
 }
 
+// v_s of the Coulomb law per joint (issue #17): one number stands for all six joints (the files
+// written before), six numbers give each joint its own; the file is written back either way, one
+// number when all six agree; a bad entry is named with its joint.
+TEST(PhantomParams, CoulombSmoothingIsOneNumberOrOnePerJoint) {
+  const std::string one = default_phantom_model_file();
+  ASSERT_NE(one.find("\"coulomb_smoothing_rad_s\": 0.01,"), std::string::npos);
+  EXPECT_EQ(parse_phantom_params(one, "one").coulomb_smoothing_rad_s, Vec6::Constant(0.01));
+  const std::string six = replace(one, "\"coulomb_smoothing_rad_s\": 0.01,",
+                                  "\"coulomb_smoothing_rad_s\": [0.01, 0.02, 0.03, 0.5, 0.25, 0.0],");
+  const PhantomParams p = parse_phantom_params(six, "six");
+  Vec6 expected;
+  expected << 0.01, 0.02, 0.03, 0.5, 0.25, 0.0;
+  EXPECT_EQ(p.coulomb_smoothing_rad_s, expected);
+  EXPECT_EQ(phantom_params_to_text(p), six);
+  EXPECT_TRUE(parse_phantom_params(phantom_params_to_text(p), "back") == p);
+  const std::string bad = replace(one, "\"coulomb_smoothing_rad_s\": 0.01,",
+                                  "\"coulomb_smoothing_rad_s\": [0.01, 0.02, 0.03, -0.5, 0.25, 0],");
+  EXPECT_THAT(error_of(bad), AllOf(HasSubstr("joints.coulomb_smoothing_rad_s"),
+                                   HasSubstr("joint 4"), HasSubstr("-0.5")));
+  const std::string five = replace(one, "\"coulomb_smoothing_rad_s\": 0.01,",
+                                   "\"coulomb_smoothing_rad_s\": [0.01, 0.02, 0.03, 0.5, 0.25],");
+  EXPECT_THAT(error_of(five), AllOf(HasSubstr("joints.coulomb_smoothing_rad_s"),
+                                    HasSubstr("6 numbers")));
+}
+
 TEST(PhantomParams, PhysicallyImpossibleInertiaIsNamed) {
   // The published be moments about the shoulder, as CoM moments, break the triangle inequality.
   const std::string bad = replace(default_phantom_model_file(), "\"inertia_kg_m2\": [0.000745,",
