@@ -73,6 +73,14 @@ void check_calibrate_options(const CalibrateOptions& o, const CalibrateOptionNam
     throw InputError(names.coulomb_velocity + ": expected 'filtered' or 'raw', got '" +
                      o.coulomb_velocity + "'");
   }
+  if (!(o.min_speed >= 0.0 && o.min_speed <= 10.0)) {
+    throw InputError(names.min_speed + ": expected a speed in [0, 10] rad/s, got " +
+                     std::to_string(o.min_speed));
+  }
+  if (o.coulomb_smoothing != "fit" && o.coulomb_smoothing != "prior") {
+    throw InputError(names.coulomb_smoothing + ": expected 'fit' or 'prior', got '" +
+                     o.coulomb_smoothing + "'");
+  }
   fixed_velocity_lag(o.velocity_lag, names.velocity_lag);
 }
 
@@ -98,6 +106,8 @@ CalibrateOutcome calibrate_log(const CalibrationLog& log, const std::string& log
   fo.torque_shift_samples = o.torque_shift;
   fo.coulomb_from_filtered_velocity = o.coulomb_velocity == "filtered";
   fo.model_mismatch_term = o.model_mismatch_term;
+  fo.min_speed_rad_s = o.min_speed;
+  fo.fit_coulomb_smoothing = o.coulomb_smoothing == "fit";
   if (const std::optional<double> lag = fixed_velocity_lag(o.velocity_lag, names.velocity_lag)) {
     c.velocity_lag_ticks = *lag;
   } else {
@@ -130,6 +140,9 @@ ModelError truth_model_error(const PhantomParams& truth, const PhantomParams& mo
     e.arm_mass_matrix =
         std::max(e.arm_mass_matrix, (M.topLeftCorner<3, 3>() - Mt.topLeftCorner<3, 3>()).norm() /
                                         Mt.topLeftCorner<3, 3>().norm());
+    e.gimbal_mass_matrix = std::max(
+        e.gimbal_mass_matrix, (M.bottomRightCorner<3, 3>() - Mt.bottomRightCorner<3, 3>()).norm() /
+                                  Mt.bottomRightCorner<3, 3>().norm());
     const Vec6 gt = mt.g(q);
     e.gravity = std::max(e.gravity, (mm.g(q) - gt).norm() / gt.norm());
   }
@@ -139,6 +152,7 @@ ModelError truth_model_error(const PhantomParams& truth, const PhantomParams& mo
 nlohmann::json model_error_to_json(const ModelError& e) {
   return {{"mass_matrix", e.mass_matrix},
           {"arm_mass_matrix", e.arm_mass_matrix},
+          {"gimbal_mass_matrix", e.gimbal_mass_matrix},
           {"gravity", e.gravity}};
 }
 
@@ -212,6 +226,18 @@ nlohmann::json calibration_report_json(const CalibrateOutcome& c, const TruthCom
       {"rms_slow_quarter_n_m", vec6_list(r.diagnostics.rms_slow)},
       {"rms_fast_quarter_n_m", vec6_list(r.diagnostics.rms_fast)}};
   j["not_identifiable_left_at_prior"] = not_id;
+  // The friction law's shape: rows dropped near stiction, v_s per joint and its profile.
+  j["min_speed_rad_s"] = fo.min_speed_rad_s;
+  j["rows_used"] = std::vector<int>(r.rows_used.data(), r.rows_used.data() + 6);
+  nlohmann::json smoothing{{"fitted", fo.fit_coulomb_smoothing},
+                           {"v_s_rad_s", vec6_list(r.coulomb_smoothing_rad_s)}};
+  if (fo.fit_coulomb_smoothing) {
+    nlohmann::json rss = nlohmann::json::array();
+    for (const std::vector<double>& curve : r.coulomb_smoothing_profile.rss) rss.push_back(curve);
+    smoothing["profile"] = {{"v_s_rad_s", r.coulomb_smoothing_profile.v_s_rad_s},
+                            {"rss_n2_m2", rss}};
+  }
+  j["coulomb_smoothing"] = smoothing;
   if (truth) {
     j["max_rel_error"] = truth->max_rel_error;
     // The base parameters (what the observer uses): M(q) and g(q) of the fitted model and of the

@@ -28,6 +28,10 @@ struct CalibrateOptions {
   double torque_shift = 0.0;                  // --torque-shift [ticks], |s| <= 100
   std::string coulomb_velocity = "filtered";  // --coulomb-velocity: 'filtered' or 'raw'
   bool model_mismatch_term = true;            // false: --no-model-mismatch
+  double min_speed = 0.2;                     // --min-speed [rad/s], 0..10 (FitOptions)
+  // --coulomb-smoothing: 'fit' (v_s per joint by profile, FitOptions::fit_coulomb_smoothing) or
+  // 'prior' (the prior model's v_s)
+  std::string coulomb_smoothing = "fit";
 };
 
 // What the error messages call each option: the command's flags by default (a binding passes its
@@ -40,6 +44,8 @@ struct CalibrateOptionNames {
   std::string velocity_lag = "--velocity-lag";
   std::string torque_shift = "--torque-shift";
   std::string coulomb_velocity = "--coulomb-velocity";
+  std::string min_speed = "--min-speed";
+  std::string coulomb_smoothing = "--coulomb-smoothing";
 };
 
 // The checks that need no log. Throws InputError "<name>: expected ..., got ...".
@@ -70,11 +76,15 @@ CalibrateOutcome calibrate_log(const CalibrationLog& log, const std::string& log
 // (std::mt19937_64 seeded 1: the poses of `dentsim calibrate --truth`).
 struct ModelError {
   double mass_matrix = 0.0, arm_mass_matrix = 0.0, gravity = 0.0;
+  // The gimbal's 3x3 block (joints 4-6): a few 1e-6 kg m^2 next to the arm's 1e-3, so the whole
+  // matrix's relative error does not see it (a nearly singular gimbal block reads as 0 % there).
+  double gimbal_mass_matrix = 0.0;
   bool operator==(const ModelError&) const = default;
 };
 ModelError truth_model_error(const PhantomParams& truth, const PhantomParams& model,
                              int poses = 200);
-// {"mass_matrix", "arm_mass_matrix", "gravity"} (the report's truth_model_error entries).
+// {"mass_matrix", "arm_mass_matrix", "gimbal_mass_matrix", "gravity"} (the report's
+// truth_model_error entries).
 nlohmann::json model_error_to_json(const ModelError& e);
 
 // A fit against the true model (`dentsim calibrate --truth`).

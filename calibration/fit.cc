@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <memory>
 
@@ -114,6 +115,110 @@ std::vector<Vec6> shifted(const std::vector<Vec6>& x, double shift) {
   return y;
 }
 
+using RowMask = Eigen::Matrix<bool, 6, 1>;
+
+// FitOptions::fit_coulomb_smoothing: v_s per joint by profile least squares. For a fixed v_s the
+// model is linear in p, so each candidate is one linear solve: the normal equations of the kept
+// rows (A0: the regressor without its Coulomb columns, scaled; the Coulomb column of joint j
+// enters only joint j's rows) with the ridge of the weak prior, the cost the residual sum of
+// squares over the kept rows. Candidates: a log grid 0.001..1 rad/s (21 values) and the prior's
+// values; coordinate descent over the joints until no joint changes (at most 4 passes).
+Vec6 profile_coulomb_smoothing(const std::vector<Regressor>& A0, const std::vector<RowMask>& kept,
+                               const std::vector<int>& at_sample, const std::vector<Vec6>& tau,
+                               const CalibVec& s, const CalibVec& x0, double prior_weight,
+                               const Vec6& vs_prior,
+                               const std::function<std::vector<Vec6>(const Vec6&)>& columns,
+                               CoulombSmoothingProfile* profile) {
+  std::vector<double> cand;
+  for (int i = 0; i <= 20; ++i) cand.push_back(1e-3 * std::pow(10.0, 3.0 * i / 20.0));
+  for (int j = 0; j < 6; ++j) cand.push_back(vs_prior(j));
+  std::sort(cand.begin(), cand.end());
+  cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+  const int nc = static_cast<int>(cand.size()), m = static_cast<int>(A0.size());
+  // col[c][i](j): the (scaled) Coulomb column of joint j at used sample i for candidate c.
+  std::vector<std::vector<Vec6>> col(nc, std::vector<Vec6>(m));
+  for (int c = 0; c < nc; ++c) {
+    const std::vector<Vec6> full = columns(Vec6::Constant(cand[c]));
+    for (int i = 0; i < m; ++i) {
+      for (int j = 0; j < 6; ++j) {
+        col[c][i](j) = kept[i](j) ? full[at_sample[i]](j) * s(kCoulomb + j) : 0.0;
+      }
+    }
+  }
+  using Mat = Eigen::Matrix<double, kCalibParams, kCalibParams>;
+  Mat N0 = Mat::Zero();
+  CalibVec r0 = CalibVec::Zero();
+  std::vector<Vec6> b(m);
+  for (int i = 0; i < m; ++i) {
+    for (int j = 0; j < 6; ++j) b[i](j) = kept[i](j) ? tau[at_sample[i]](j) : 0.0;
+    N0.noalias() += A0[i].transpose() * A0[i];
+    r0.noalias() += A0[i].transpose() * b[i];
+  }
+  // Per joint and candidate: the cross terms of the Coulomb column with the other columns.
+  std::vector<std::vector<CalibVec>> u(6, std::vector<CalibVec>(nc, CalibVec::Zero()));
+  std::vector<std::vector<double>> c2(6, std::vector<double>(nc, 0.0)), cb = c2;
+  for (int j = 0; j < 6; ++j) {
+    for (int c = 0; c < nc; ++c) {
+      for (int i = 0; i < m; ++i) {
+        const double v = col[c][i](j);
+        u[j][c].noalias() += v * A0[i].row(j).transpose();
+        c2[j][c] += v * v;
+        cb[j][c] += v * b[i](j);
+      }
+    }
+  }
+  const double w2 = prior_weight * prior_weight;
+  const auto cost = [&](const std::array<int, 6>& ch) {
+    Mat N = N0;
+    CalibVec r = r0;
+    for (int j = 0; j < 6; ++j) {
+      const int cj = kCoulomb + j;
+      N.col(cj) += u[j][ch[j]];
+      N.row(cj) += u[j][ch[j]].transpose();
+      N(cj, cj) += c2[j][ch[j]];
+      r(cj) += cb[j][ch[j]];
+    }
+    N.diagonal().array() += w2;
+    r += w2 * x0;
+    const CalibVec x = N.ldlt().solve(r);
+    double rss = 0.0;
+    for (int i = 0; i < m; ++i) {
+      Vec6 e = A0[i] * x - b[i];
+      for (int j = 0; j < 6; ++j) e(j) += col[ch[j]][i](j) * x(kCoulomb + j);
+      rss += e.squaredNorm();
+    }
+    return rss;
+  };
+  std::array<int, 6> ch{};
+  for (int j = 0; j < 6; ++j) {
+    ch[j] = static_cast<int>(std::find(cand.begin(), cand.end(), vs_prior(j)) - cand.begin());
+  }
+  std::array<std::vector<double>, 6> curve;
+  for (int pass = 0; pass < 4; ++pass) {
+    bool changed = false;
+    for (int j = 0; j < 6; ++j) {
+      std::array<int, 6> t = ch;
+      curve[j].assign(nc, 0.0);
+      int best = ch[j];
+      for (int c = 0; c < nc; ++c) {
+        t[j] = c;
+        curve[j][c] = cost(t);
+        if (curve[j][c] < curve[j][best]) best = c;
+      }
+      changed = changed || best != ch[j];
+      ch[j] = best;
+    }
+    if (!changed) break;
+  }
+  Vec6 vs;
+  for (int j = 0; j < 6; ++j) vs(j) = cand[ch[j]];
+  if (profile != nullptr) {
+    profile->v_s_rad_s = cand;
+    profile->rss = curve;
+  }
+  return vs;
+}
+
 }  // namespace
 
 double driver_velocity_lag_ticks(bool lowpass, double cutoff_hz, double T) {
@@ -217,15 +322,17 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
   // the filtered velocity (they differ around every velocity reversal, and the difference would
   // be absorbed by the viscous damping); v the low-passed qd by default (its sign is right where
   // the logged qd's noise flips it, options.coulomb_from_filtered_velocity).
-  std::vector<Vec6> coulomb_col(n);
-  for (int k = 0; k < n; ++k) {
-    for (int j = 0; j < 6; ++j) {
-      const double v = opt.coulomb_from_filtered_velocity ? qd[k](j) : log.qd[k](j);
-      const double vs = prior.coulomb_smoothing_rad_s;
-      coulomb_col[k](j) = vs > 0.0 ? std::tanh(v / vs) : (v > 0.0) - (v < 0.0);
+  const auto coulomb_columns = [&](const Vec6& vs) {
+    std::vector<Vec6> col(n);
+    for (int k = 0; k < n; ++k) {
+      for (int j = 0; j < 6; ++j) {
+        const double v = opt.coulomb_from_filtered_velocity ? qd[k](j) : log.qd[k](j);
+        col[k](j) = phantom_joint_friction(0.0, 1.0, vs(j), v);
+      }
     }
-  }
-  zero_phase_lowpass(coulomb_col, dt, opt.lowpass_hz, opt.lowpass_order);
+    zero_phase_lowpass(col, dt, opt.lowpass_hz, opt.lowpass_order);
+    return col;
+  };
   const int stride = std::max(1, (n - 2) / std::max(1, opt.max_samples));  // before trimming
 
   const CalibVec p0 = pack_calib_params(prior);
@@ -252,13 +359,17 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
   const int trim = opt.lowpass_hz > 0.0
                        ? static_cast<int>(std::min(n / 4.0, std::ceil(1.0 / (opt.lowpass_hz * dt))))
                        : 0;
-  // FitOptions::exclude_slow_fraction: per joint, the speed below which its rows are dropped.
-  Vec6 slow_below = Vec6::Constant(-1.0);
+  if (!(opt.min_speed_rad_s >= 0.0 && std::isfinite(opt.min_speed_rad_s))) {
+    throw InputError("calibrate: min_speed_rad_s must be a finite number >= 0");
+  }
+  // FitOptions::min_speed_rad_s, then exclude_slow_fraction of the rows left: per joint, the
+  // speed below which its rows are dropped.
+  Vec6 slow_below = Vec6::Constant(opt.min_speed_rad_s);
   if (opt.exclude_slow_fraction > 0.0) {
     for (int j = 0; j < 6; ++j) {
       std::vector<double> speeds;
       for (int k = std::max(1, trim); k + 1 < n - trim; k += stride) {
-        speeds.push_back(std::abs(qd[k](j)));
+        if (std::abs(qd[k](j)) >= opt.min_speed_rad_s) speeds.push_back(std::abs(qd[k](j)));
       }
       if (speeds.empty()) continue;
       const std::size_t at = std::min(
@@ -267,22 +378,48 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
       slow_below(j) = speeds[at];
     }
   }
+  // The regressor without its Coulomb columns (they depend on v_s), the rows kept.
+  std::vector<int> at_sample;
+  std::vector<Regressor> A0;
+  std::vector<RowMask> kept_rows;
   for (int k = std::max(1, trim); k + 1 < n - trim; k += stride) {
     const Vec6 qdd = (qd[k + 1] - qd[k - 1]) / (log.t[k + 1] - log.t[k - 1]);
     Regressor Y = calib_regressor(prior, q[k], qd[k], qdd);
-    for (int j = 0; j < 6; ++j) Y(j, kCoulomb + j) = coulomb_col[k](j);
+    RowMask keep;
+    for (int j = 0; j < 6; ++j) {
+      keep(j) = !(std::abs(qd[k](j)) < slow_below(j));
+      Y(j, kCoulomb + j) = 0.0;
+      if (!keep(j)) Y.row(j).setZero();  // a dropped row: no residual
+    }
+    A0.push_back(Y * s.asDiagonal());
+    kept_rows.push_back(keep);
+    at_sample.push_back(k);
+  }
+  // v_s per joint: the prior's, or chosen by profile least squares (FitOptions).
+  Vec6 vs = prior.coulomb_smoothing_rad_s;
+  if (opt.fit_coulomb_smoothing) {
+    vs = profile_coulomb_smoothing(A0, kept_rows, at_sample, tau, s, x0, opt.prior_weight, vs,
+                                   coulomb_columns, &res.coulomb_smoothing_profile);
+  }
+  res.coulomb_smoothing_rad_s = vs;
+  const std::vector<Vec6> coulomb_col = coulomb_columns(vs);
+  for (std::size_t i = 0; i < A0.size(); ++i) {
+    const int k = at_sample[i];
+    Regressor Ai = A0[i];
     Vec6 tk = tau[k];
     for (int j = 0; j < 6; ++j) {
-      if (std::abs(qd[k](j)) < slow_below(j)) {  // a dropped row: no residual
-        Y.row(j).setZero();
+      if (kept_rows[i](j)) {
+        Ai(j, kCoulomb + j) = coulomb_col[k](j) * s(kCoulomb + j);
+      } else {
         tk(j) = 0.0;
       }
     }
-    A.push_back(Y * s.asDiagonal());
+    A.push_back(Ai);
     b.push_back(tk);
     res.t.push_back(log.t[k]);
     used_qd.push_back(qd[k]);
   }
+  A0.clear();
   const int m = static_cast<int>(A.size());
 
   ceres::Problem problem;
@@ -320,12 +457,15 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
     const Vec6 r = pred - b[k];
     rss += r.squaredNorm();
     res.residual_rms_joint += r.cwiseAbs2();
+    res.rows_used += kept_rows[k].cast<int>();
     res.tau_measured.push_back(b[k]);
     res.tau_predicted.push_back(pred);
   }
   res.samples = m;
-  res.residual_rms = std::sqrt(rss / (6.0 * m));
-  res.residual_rms_joint = (res.residual_rms_joint / m).cwiseSqrt();
+  const int rows = std::max(1, res.rows_used.sum());
+  res.residual_rms = std::sqrt(rss / rows);
+  res.residual_rms_joint =
+      res.residual_rms_joint.cwiseQuotient(res.rows_used.cwiseMax(1).cast<double>()).cwiseSqrt();
 
   // Identifiability: near-null space of the column-normalised Jacobian.
   CalibVec cn;
@@ -353,6 +493,7 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
 
   const CalibVec p = x.cwiseProduct(s);
   res.fitted = unpack_calib_params(prior, p);
+  res.fitted.coulomb_smoothing_rad_s = vs;
   const auto names = calib_param_names();
   for (int i = 0; i < kCalibParams; ++i) {
     FitParameter fp;
@@ -370,7 +511,7 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
   // (Newey-West) sandwich C S C, S = sum_{|l| <= L} w_l sum_k g_k g_{k+l}^T with g_k = A_k^T r_k
   // (the per-sample score) and Bartlett weights w_l = 1 - |l| / (L + 1); L covers three cut-off
   // periods of the low-pass (in used samples) and at least the usual 4 (m/100)^(2/9).
-  const double dof = std::max(1, 6 * m - res.identifiable);
+  const double dof = std::max(1, rows - res.identifiable);
   const double sigma2 = rss / dof;
   const double corr_s = opt.lowpass_hz > 0.0 ? 3.0 / opt.lowpass_hz : 0.0;
   const double used_dt = m > 1 ? (res.t.back() - res.t.front()) / (m - 1) : dt;
@@ -390,7 +531,7 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
     S += w * (Sl + Sl.transpose());
   }
   const Eigen::Matrix<double, kCalibParams, kCalibParams> C = cov;
-  const Eigen::Matrix<double, kCalibParams, kCalibParams> cov_hac = (6.0 * m / dof) * (C * S * C);
+  const Eigen::Matrix<double, kCalibParams, kCalibParams> cov_hac = (rows / dof) * (C * S * C);
   for (int i = 0; i < kCalibParams; ++i) {
     FitParameter& fp = res.params[i];
     fp.std_white = s(i) * std::sqrt(std::max(0.0, cov(i, i)) * sigma2);
@@ -401,20 +542,24 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
   // Residual diagnostics: lag-1 autocorrelation, and the residual at low vs high joint speed.
   for (int j = 0; j < 6; ++j) {
     double c0 = 0.0, c1 = 0.0;
-    std::vector<std::pair<double, double>> speed_res(m);
+    // Over the rows kept (a dropped row has no residual).
+    std::vector<std::pair<double, double>> speed_res;
     for (int k = 0; k < m; ++k) {
+      if (!kept_rows[k](j)) continue;
       const double r = res.tau_predicted[k](j) - res.tau_measured[k](j);
       c0 += r * r;
-      if (k > 0) c1 += r * (res.tau_predicted[k - 1](j) - res.tau_measured[k - 1](j));
-      speed_res[k] = {std::abs(used_qd[k](j)), r};
+      if (k > 0 && kept_rows[k - 1](j))
+        c1 += r * (res.tau_predicted[k - 1](j) - res.tau_measured[k - 1](j));
+      speed_res.emplace_back(std::abs(used_qd[k](j)), r);
     }
     res.diagnostics.lag1_autocorrelation(j) = c0 > 0.0 ? c1 / c0 : 0.0;
     std::sort(speed_res.begin(), speed_res.end());
-    const int quarter = std::max(1, m / 4);
+    const int mj = static_cast<int>(speed_res.size());
+    const int quarter = std::max(1, mj / 4);
     double slow = 0.0, fast = 0.0;
-    for (int k = 0; k < quarter && k < m; ++k) {
+    for (int k = 0; k < quarter && k < mj; ++k) {
       slow += speed_res[k].second * speed_res[k].second;
-      fast += speed_res[m - 1 - k].second * speed_res[m - 1 - k].second;
+      fast += speed_res[mj - 1 - k].second * speed_res[mj - 1 - k].second;
     }
     res.diagnostics.rms_slow(j) = std::sqrt(slow / quarter);
     res.diagnostics.rms_fast(j) = std::sqrt(fast / quarter);
@@ -431,6 +576,8 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
     FitOptions reduced = opt;
     reduced.exclude_slow_fraction = 0.25;
     reduced.model_mismatch_term = false;
+    // v_s is chosen again on the reduced rows: how much the choice moves the parameters is part
+    // of what the rows near reversal say about the law.
     const FitResult alt = fit_calibration(log, prior, reduced);
     for (int i = 0; i < kCalibParams; ++i) {
       FitParameter& fp = res.params[i];

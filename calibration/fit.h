@@ -9,7 +9,9 @@
 //     I = (d_y + d_z, d_x + d_z, d_x + d_y): d >= 0 is exactly the physical (triangle-inequality)
 //     set of principal inertias, and I is linear in d;
 //     armature_j [kg m^2], viscous damping b_j [N m s/rad], Coulomb f_c,j [N m] for j = 1..6.
-// Geometry (lengths, CoM positions, axes) and v_s stay at the prior model file's values. With the
+// v_s per joint is chosen by profile least squares (FitOptions::fit_coulomb_smoothing) or kept at
+// the prior's; rows of joint j with |qd_j| < min_speed_rad_s (stiction) are dropped.
+// Geometry (lengths, CoM positions, axes) stays at the prior model file's values. With the
 // CoM fixed, tau is linear in p: tau_k = Y_k p. Y_k (6 x 50) is obtained by differentiating the
 // templated model with ceres::Jet at the prior (exact for a linear map; tested against the double
 // inverse dynamics). The Ceres problem is then, in relative units x_i = p_i / s_i
@@ -33,6 +35,7 @@
 // chosen); std_white = sqrt(C RSS / (m - n_identifiable)) is the textbook value for comparison.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -114,6 +117,24 @@ struct FitOptions {
   // and |d| / sqrt(Var(d)) > 3 on a parameter the data pin is reported as a mismatch. Off: the
   // statistical std alone.
   bool model_mismatch_term = true;
+  // Drop joint j's torque row where its low-passed speed |qd_j| is below this [rad/s]: in and
+  // near stiction a joint's Coulomb friction is any torque within +-f_c, set by what holds the
+  // joint, not by its velocity (MuJoCo's frictionloss, a real joint's static friction), so no
+  // law of qd describes those rows and fitting them bends the inertias (docs/calibration.md,
+  // "Stiction and the smooth sign"). Applied before exclude_slow_fraction. 0: every row.
+  double min_speed_rad_s = 0.2;
+  // Fit v_s of f_c tanh(qd / v_s) per joint (profile least squares over a grid, the fitted model
+  // file carries it) instead of keeping the prior's: a joint whose velocity dithers (quantised
+  // sensing, a stiff tracking loop, a light gimbal link) feels Coulomb friction averaged over the
+  // dither, a smoother sign than its static law.
+  bool fit_coulomb_smoothing = true;
+};
+
+// The profile of FitOptions::fit_coulomb_smoothing: the residual sum of squares [N^2 m^2] of
+// the kept rows for each candidate v_s of each joint (the others at their chosen values).
+struct CoulombSmoothingProfile {
+  std::vector<double> v_s_rad_s;
+  std::array<std::vector<double>, 6> rss;
 };
 
 struct FitParameter {
@@ -149,6 +170,12 @@ struct FitResult {
   int identifiable = 0;
   int hac_lags = 0;  // L of the Newey-West standard deviations (in used samples)
   ResidualDiagnostics diagnostics;
+  // v_s of each joint's Coulomb law used by the fit (FitOptions::fit_coulomb_smoothing: chosen
+  // by the profile, else the prior's); `fitted` carries it.
+  Vec6 coulomb_smoothing_rad_s = Vec6::Zero();
+  CoulombSmoothingProfile coulomb_smoothing_profile;  // empty unless fitted
+  // Rows used per joint (rows dropped by min_speed_rad_s / exclude_slow_fraction not counted).
+  Eigen::Matrix<int, 6, 1> rows_used = Eigen::Matrix<int, 6, 1>::Zero();
   // The residuals say the model is not the plant: some parameter the data pin statistically moves
   // by more than 3 std of the difference when the slow rows are dropped (listed), or a joint's
   // residual at low speed is more than twice its residual at high speed (listed).

@@ -107,6 +107,8 @@ SeedRun run_seed(const PhantomParams& base, std::uint64_t seed, const SeedRunOpt
   co.max_samples = o.max_samples;
   co.max_iterations = o.max_iterations;
   co.model_mismatch_term = o.model_mismatch_term;
+  co.min_speed = o.min_speed;
+  co.coulomb_smoothing = o.coulomb_smoothing;
   const CalibrateOutcome c =
       calibrate_log(run.log, "the log of seed " + std::to_string(seed), prior, co);
   if (!c.finite()) {
@@ -159,6 +161,7 @@ SeedSummary summarize(const std::vector<SeedResult>& results) {
     }
     m.push_back(r.fitted.mass_matrix);
     s.mass_matrix_within_bar += r.fitted.mass_matrix <= kMassMatrixBar;
+    s.gimbal_mass_matrix_max = std::max(s.gimbal_mass_matrix_max, r.fitted.gimbal_mass_matrix);
     s.model_mismatch_flagged += r.model_mismatch;
   }
   if (!m.empty()) {
@@ -173,8 +176,12 @@ SeedSummary summarize(const std::vector<SeedResult>& results) {
 namespace {
 
 ModelError model_error_from_json(const nlohmann::json& j) {
-  return {j.at("mass_matrix").get<double>(), j.at("arm_mass_matrix").get<double>(),
-          j.at("gravity").get<double>()};
+  ModelError e;
+  e.mass_matrix = j.at("mass_matrix").get<double>();
+  e.arm_mass_matrix = j.at("arm_mass_matrix").get<double>();
+  e.gimbal_mass_matrix = j.at("gimbal_mass_matrix").get<double>();
+  e.gravity = j.at("gravity").get<double>();
+  return e;
 }
 
 }  // namespace
@@ -251,6 +258,7 @@ nlohmann::json seed_summary_to_json(const SeedSummary& s) {
           {"mass_matrix_error_median", s.mass_matrix_median},
           {"mass_matrix_error_max", s.mass_matrix_max},
           {"mass_matrix_within_bar", s.mass_matrix_within_bar},
+          {"gimbal_mass_matrix_error_max", s.gimbal_mass_matrix_max},
           {"model_mismatch_flagged", s.model_mismatch_flagged},
           {"bar",
            {{"parameter_rel_error", kParameterRelBar},

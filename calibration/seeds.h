@@ -67,6 +67,8 @@ struct SeedRunOptions {
   int max_samples = 3000;           // calibrate --max-samples
   int max_iterations = 100;         // calibrate --max-iterations
   bool model_mismatch_term = true;  // calibrate without --no-model-mismatch
+  double min_speed = 0.2;                  // calibrate --min-speed [rad/s]
+  std::string coulomb_smoothing = "fit";   // calibrate --coulomb-smoothing
 };
 
 // One fitted parameter against the truth (fields as in `dentsim calibrate --truth`'s JSON; the
@@ -120,6 +122,7 @@ struct SeedSummary {
   int outside_gimbal_coulomb = 0;                          // of those, gimbal Coulomb friction
   double mass_matrix_median = 0.0, mass_matrix_max = 0.0;  // fitted M(q) error
   int mass_matrix_within_bar = 0;                          // fits with M(q) within 2 %
+  double gimbal_mass_matrix_max = 0.0;                     // worst fitted gimbal-block error
   int model_mismatch_flagged = 0;
   bool operator==(const SeedSummary&) const = default;
 };

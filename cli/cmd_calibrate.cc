@@ -251,6 +251,14 @@ void setup_calibrate(CLI::App& app) {
                 "flagging a model mismatch: docs/calibration.md)");
   sub->add_option("--max-iterations", opt->fit.max_iterations,
                   "Ceres iteration limit (default 100); a fit that hits it did not converge");
+  sub->add_option("--min-speed", opt->fit.min_speed,
+                  "drop each joint's torque rows where its low-passed speed is below this [rad/s]:\n"
+                  "near stiction Coulomb friction is any torque within +-f_c, which no law of the\n"
+                  "velocity predicts; 0 = keep every row (default 0.2)");
+  sub->add_option("--coulomb-smoothing", opt->fit.coulomb_smoothing,
+                  "v_s of each joint's f_c tanh(qd / v_s): 'fit' (chosen per joint by profile\n"
+                  "least squares over 0.001..1 rad/s and written to the fitted model, default) or\n"
+                  "'prior' (the prior model's)");
   sub->callback([opt] {
     opt->fit.model_mismatch_term = !opt->no_model_mismatch;
     check_calibrate_options(opt->fit);

@@ -42,13 +42,16 @@ CalibrateOptionNames argument_names() {
   n.velocity_lag = "calibrate: velocity_lag";
   n.torque_shift = "calibrate: torque_shift";
   n.coulomb_velocity = "calibrate: coulomb_velocity";
+  n.min_speed = "calibrate: min_speed";
+  n.coulomb_smoothing = "calibrate: coulomb_smoothing";
   return n;
 }
 
 py::dict calibrate(const py::handle& log_arg, const py::object& prior_arg, double lowpass_hz,
                    int lowpass_order, int max_samples, int max_iterations,
                    const py::object& velocity_lag, double torque_shift,
-                   const std::string& coulomb_velocity, bool model_mismatch_term) {
+                   const std::string& coulomb_velocity, bool model_mismatch_term,
+                   double min_speed, const std::string& coulomb_smoothing) {
   const std::string path = path_arg(log_arg, "calibrate: log");
   const CalibrateOptionNames names = argument_names();
   CalibrateOptions o;
@@ -59,6 +62,8 @@ py::dict calibrate(const py::handle& log_arg, const py::object& prior_arg, doubl
   o.torque_shift = torque_shift;
   o.coulomb_velocity = coulomb_velocity;
   o.model_mismatch_term = model_mismatch_term;
+  o.min_speed = min_speed;
+  o.coulomb_smoothing = coulomb_smoothing;
   // 'auto' or a number of ticks, as the command's text (17 significant digits read back exactly).
   if (py::isinstance<py::str>(velocity_lag)) {
     o.velocity_lag = velocity_lag.cast<std::string>();
@@ -109,12 +114,14 @@ void bind_calibration(py::module_& m) {
         py::arg("lowpass_hz") = 10.0, py::arg("lowpass_order") = 2, py::arg("max_samples") = 3000,
         py::arg("max_iterations") = 100, py::arg("velocity_lag") = "auto",
         py::arg("torque_shift") = 0.0, py::arg("coulomb_velocity") = "filtered",
-        py::arg("model_mismatch_term") = true,
+        py::arg("model_mismatch_term") = true, py::arg("min_speed") = 0.2,
+        py::arg("coulomb_smoothing") = "fit",
         R"(Fit the device's inertial and friction parameters to a calibration log (Ceres), as
 `dentsim calibrate LOG --json FILE -o MODEL` with the same options and defaults:
 prior (model file; None: the shipped default), lowpass_hz, lowpass_order, max_samples,
 max_iterations, velocity_lag ('auto' or ticks), torque_shift, coulomb_velocity ('filtered' or
-'raw'), model_mismatch_term (False: --no-model-mismatch).
+'raw'), model_mismatch_term (False: --no-model-mismatch), min_speed [rad/s] (--min-speed),
+coulomb_smoothing ('fit' or 'prior').
 
 Returns the CLI's JSON report as a dict (converged, residual_rms_n_m, condition_number,
 parameters [name, prior, value, std, ..., identifiable], ...) plus "fitted_model" (the fitted
