@@ -213,9 +213,10 @@ const std::vector<SeedResult>& short_results() {
       const SeedResult& s = r.back();
       std::printf(
           "seed %llu: converged %d, model_mismatch %d, %d identifiable, M(q) error fitted "
-          "%.3f %% (prior %.3f %%), g(q) %.3f %%\n",
+          "%.3f %% (prior %.3f %%), gimbal block %.3f %% (prior %.3f %%), g(q) %.3f %%\n",
           static_cast<unsigned long long>(s.seed), s.converged, s.model_mismatch, s.checked(),
-          100 * s.fitted.mass_matrix, 100 * s.prior.mass_matrix, 100 * s.fitted.gravity);
+          100 * s.fitted.mass_matrix, 100 * s.prior.mass_matrix, 100 * s.fitted.gimbal_mass_matrix,
+          100 * s.prior.gimbal_mass_matrix, 100 * s.fitted.gravity);
       for (const SeedParameter& p : s.params) {
         if (!p.identifiable) continue;
         std::printf("  %-26s %+8.3f %% %7.2f std%s\n", p.name.c_str(),
@@ -229,11 +230,11 @@ const std::vector<SeedResult>& short_results() {
 }
 
 // What holds today, in one test (ctest runs each test in its own process: the fits run once).
-TEST(CalibrationSeedsProperty, NonGimbalCoulombWithin5PercentOr3StdAndMassMatrixWithin3Percent) {
+TEST(CalibrationSeedsProperty, NonGimbalCoulombWithin5PercentOr3StdAndMassMatrixWithin2Percent) {
   for (const SeedResult& r : short_results()) {
     EXPECT_TRUE(r.converged) << "seed " << r.seed;
-    // Issue #17's parameter bar, except coulomb_n_m.4..6: the gimbal joints' Coulomb friction is
-    // the friction-law mismatch the fit cannot represent (DISABLED_Issue17FullBar).
+    // Issue #17's parameter bar, except coulomb_n_m.4..6: the gimbal joints' Coulomb friction
+    // still misses it on some seeds (DISABLED_Issue17FullBar).
     int others = 0;
     for (const SeedParameter& p : r.params) {
       if (!p.identifiable || is_gimbal_coulomb(p.name)) continue;
@@ -241,25 +242,27 @@ TEST(CalibrationSeedsProperty, NonGimbalCoulombWithin5PercentOr3StdAndMassMatrix
       EXPECT_TRUE(within_bar(p)) << "seed " << r.seed << ": " << p.name << " " << 100 * p.rel_error
                                  << " % off at " << p.error_over_std << " reported std";
     }
-    // Not met by checking nothing: at least 4 such parameters per seed (measured 4-6).
+    // Not met by checking nothing: at least 4 such parameters per seed (measured 7-9).
     EXPECT_GE(others, 4) << "seed " << r.seed;
-    // M(q): a stated bound above issue #17's 2 % (measured on seeds 1..3: 1.88, 2.10, 2.35 %;
-    // 1.26-2.44 % on seeds 1..6 in this short form; the 20-s long form's numbers are in
-    // docs/calibration.md), and well below the prior's error (measured 4.2-6.7 %).
-    EXPECT_LE(r.fitted.mass_matrix, 0.03) << "seed " << r.seed;
-    EXPECT_LT(r.fitted.mass_matrix, 0.6 * r.prior.mass_matrix) << "seed " << r.seed;
+    // M(q): issue #17's 2 % (measured on seeds 1..3: 0.12, 0.20, 0.22 %; 1.9-2.4 % before the
+    // rows near stiction were dropped), and well below the prior's error (4.2-6.7 %).
+    EXPECT_LE(r.fitted.mass_matrix, kMassMatrixBar) << "seed " << r.seed;
+    EXPECT_LT(r.fitted.mass_matrix, 0.1 * r.prior.mass_matrix) << "seed " << r.seed;
+    // The gimbal's block, which the whole matrix cannot see: not degenerate (the fit used to put
+    // the gimbal inertias at their lower bound, 1e-3 of the prior). Measured 17.7, 10.1, 3.8 %
+    // (prior 4.2, 15.7, 9.3 %): 8 s of excitation pins it loosely; bound 30 %.
+    EXPECT_LE(r.fitted.gimbal_mass_matrix, 0.3) << "seed " << r.seed;
     // MuJoCo's frictionloss is not the model's tanh law: the fit says so on every seed.
     EXPECT_TRUE(r.model_mismatch) << "seed " << r.seed;
   }
 }
 
-// Issue #17's full bar. Disabled because it fails today on the short form (measured):
-//   seed 1: coulomb_n_m.4 -48.6 % at 8.9 std, coulomb_n_m.5 -36.8 % at 4.6 std;
-//   fitted M(q) 2.10 % (seed 2) and 2.35 % (seed 3) against the truth.
-// MuJoCo's frictionloss (a soft constraint) is not the fit's f_c tanh(qd / v_s): on the gimbal's
-// tiny inertias it leaves their Coulomb friction 30-50 % low at every speed, and leaks into the
-// inertias (docs/calibration.md, "Calibration over seeded held-out devices"). Enable it when the
-// friction model is fixed (issue #17).
+// Issue #17's full bar. Disabled because it fails today on the short form (measured): seed 2:
+// coulomb_n_m.5 +5.5 % at 5.3 std, coulomb_n_m.6 -7.9 % at 4.2 std (M(q) is within 2 % on every
+// seed now). With the rows near stiction dropped and v_s fitted per joint the gimbal Coulomb
+// friction is mostly within the bar, but on some seeds the profile settles on a v_s that trades
+// f_c against the viscous term (docs/calibration.md, "Calibration over seeded held-out
+// devices"). Enable it when that is fixed (issue #17).
 TEST(CalibrationSeedsProperty, DISABLED_Issue17FullBar) {
   for (const SeedResult& r : short_results()) {
     for (const SeedParameter& p : r.outside()) {
