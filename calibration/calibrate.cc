@@ -81,6 +81,11 @@ void check_calibrate_options(const CalibrateOptions& o, const CalibrateOptionNam
     throw InputError(names.coulomb_smoothing + ": expected 'fit' or 'prior', got '" +
                      o.coulomb_smoothing + "'");
   }
+  if (o.coulomb_sign != "erf" && o.coulomb_sign != "tanh" && o.coulomb_sign != "prior" &&
+      o.coulomb_sign != "fit") {
+    throw InputError(names.coulomb_sign + ": expected 'erf', 'tanh', 'fit' or 'prior', got '" +
+                     o.coulomb_sign + "'");
+  }
   fixed_velocity_lag(o.velocity_lag, names.velocity_lag);
 }
 
@@ -108,6 +113,12 @@ CalibrateOutcome calibrate_log(const CalibrationLog& log, const std::string& log
   fo.model_mismatch_term = o.model_mismatch_term;
   fo.min_speed_rad_s = o.min_speed;
   fo.fit_coulomb_smoothing = o.coulomb_smoothing == "fit";
+  if (o.coulomb_sign == "prior") {
+    fo.coulomb_sign.reset();
+  } else {
+    fo.coulomb_sign = o.coulomb_sign == "tanh" ? CoulombSign::kTanh : CoulombSign::kErf;
+  }
+  fo.fit_coulomb_sign = o.coulomb_sign == "fit";
   if (const std::optional<double> lag = fixed_velocity_lag(o.velocity_lag, names.velocity_lag)) {
     c.velocity_lag_ticks = *lag;
   } else {
@@ -231,10 +242,15 @@ nlohmann::json calibration_report_json(const CalibrateOutcome& c, const TruthCom
   j["rows_used"] = std::vector<int>(r.rows_used.data(), r.rows_used.data() + 6);
   nlohmann::json smoothing{{"fitted", fo.fit_coulomb_smoothing},
                            {"v_s_rad_s", vec6_list(r.coulomb_smoothing_rad_s)}};
+  smoothing["sign"] = nlohmann::json::array();
+  for (CoulombSign cs : r.coulomb_sign) smoothing["sign"].push_back(coulomb_sign_name(cs));
   if (fo.fit_coulomb_smoothing) {
     nlohmann::json rss = nlohmann::json::array();
     for (const std::vector<double>& curve : r.coulomb_smoothing_profile.rss) rss.push_back(curve);
+    nlohmann::json cand_sign = nlohmann::json::array();
+    for (CoulombSign cs : r.coulomb_smoothing_profile.sign) cand_sign.push_back(coulomb_sign_name(cs));
     smoothing["profile"] = {{"v_s_rad_s", r.coulomb_smoothing_profile.v_s_rad_s},
+                            {"sign", cand_sign},
                             {"rss_n2_m2", rss}};
   }
   j["coulomb_smoothing"] = smoothing;

@@ -32,6 +32,7 @@ struct CalibrateOptions {
   // --coulomb-smoothing: 'fit' (v_s per joint by profile, FitOptions::fit_coulomb_smoothing) or
   // 'prior' (the prior model's v_s)
   std::string coulomb_smoothing = "fit";
+  std::string coulomb_sign = "prior";  // --coulomb-sign: erf, tanh, fit or prior (FitOptions)
 };
 
 // What the error messages call each option: the command's flags by default (a binding passes its
@@ -46,6 +47,7 @@ struct CalibrateOptionNames {
   std::string coulomb_velocity = "--coulomb-velocity";
   std::string min_speed = "--min-speed";
   std::string coulomb_smoothing = "--coulomb-smoothing";
+  std::string coulomb_sign = "--coulomb-sign";
 };
 
 // The checks that need no log. Throws InputError "<name>: expected ..., got ...".

@@ -117,28 +117,41 @@ std::vector<Vec6> shifted(const std::vector<Vec6>& x, double shift) {
 
 using RowMask = Eigen::Matrix<bool, 6, 1>;
 
-// FitOptions::fit_coulomb_smoothing: v_s per joint by profile least squares. For a fixed v_s the
-// model is linear in p, so each candidate is one linear solve: the normal equations of the kept
-// rows (A0: the regressor without its Coulomb columns, scaled; the Coulomb column of joint j
-// enters only joint j's rows) with the ridge of the weak prior, the cost the residual sum of
-// squares over the kept rows. Candidates: a log grid 0.001..1 rad/s (21 values) and the prior's
-// values; coordinate descent over the joints until no joint changes (at most 4 passes).
+// FitOptions::fit_coulomb_smoothing: v_s (and with fit_coulomb_sign the smooth sign) per joint by
+// profile least squares. For a fixed law the model is linear in p, so each candidate is one
+// linear solve: the normal equations of the kept rows (A0: the regressor without its Coulomb
+// columns, scaled; the Coulomb column of joint j enters only joint j's rows) with the ridge of the
+// weak prior, the cost the residual sum of squares over the kept rows. Candidates: each shape in
+// `shapes` times a log grid 0.001..1 rad/s (21 values) and the prior's v_s; coordinate descent
+// over the joints until no joint changes (at most 4 passes), from the prior's v_s and `*sign`.
+using ColumnsFn =
+    std::function<std::vector<Vec6>(const Vec6&, const std::array<CoulombSign, 6>&)>;
 Vec6 profile_coulomb_smoothing(const std::vector<Regressor>& A0, const std::vector<RowMask>& kept,
                                const std::vector<int>& at_sample, const std::vector<Vec6>& tau,
                                const CalibVec& s, const CalibVec& x0, double prior_weight,
-                               const Vec6& vs_prior,
-                               const std::function<std::vector<Vec6>(const Vec6&)>& columns,
+                               const Vec6& vs_prior, const std::vector<CoulombSign>& shapes,
+                               std::array<CoulombSign, 6>* sign, const ColumnsFn& columns,
                                CoulombSmoothingProfile* profile) {
+  std::vector<double> grid;
+  for (int i = 0; i <= 20; ++i) grid.push_back(1e-3 * std::pow(10.0, 3.0 * i / 20.0));
+  for (int j = 0; j < 6; ++j) grid.push_back(vs_prior(j));
+  std::sort(grid.begin(), grid.end());
+  grid.erase(std::unique(grid.begin(), grid.end()), grid.end());
   std::vector<double> cand;
-  for (int i = 0; i <= 20; ++i) cand.push_back(1e-3 * std::pow(10.0, 3.0 * i / 20.0));
-  for (int j = 0; j < 6; ++j) cand.push_back(vs_prior(j));
-  std::sort(cand.begin(), cand.end());
-  cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+  std::vector<CoulombSign> cand_sign;
+  for (CoulombSign sh : shapes) {
+    for (double v : grid) {
+      cand.push_back(v);
+      cand_sign.push_back(sh);
+    }
+  }
   const int nc = static_cast<int>(cand.size()), m = static_cast<int>(A0.size());
   // col[c][i](j): the (scaled) Coulomb column of joint j at used sample i for candidate c.
   std::vector<std::vector<Vec6>> col(nc, std::vector<Vec6>(m));
   for (int c = 0; c < nc; ++c) {
-    const std::vector<Vec6> full = columns(Vec6::Constant(cand[c]));
+    std::array<CoulombSign, 6> same;
+    same.fill(cand_sign[c]);
+    const std::vector<Vec6> full = columns(Vec6::Constant(cand[c]), same);
     for (int i = 0; i < m; ++i) {
       for (int j = 0; j < 6; ++j) {
         col[c][i](j) = kept[i](j) ? full[at_sample[i]](j) * s(kCoulomb + j) : 0.0;
@@ -191,7 +204,10 @@ Vec6 profile_coulomb_smoothing(const std::vector<Regressor>& A0, const std::vect
   };
   std::array<int, 6> ch{};
   for (int j = 0; j < 6; ++j) {
-    ch[j] = static_cast<int>(std::find(cand.begin(), cand.end(), vs_prior(j)) - cand.begin());
+    ch[j] = 0;
+    for (int c = 0; c < nc; ++c) {
+      if (cand[c] == vs_prior(j) && cand_sign[c] == (*sign)[j]) ch[j] = c;
+    }
   }
   std::array<std::vector<double>, 6> curve;
   for (int pass = 0; pass < 4; ++pass) {
@@ -211,9 +227,13 @@ Vec6 profile_coulomb_smoothing(const std::vector<Regressor>& A0, const std::vect
     if (!changed) break;
   }
   Vec6 vs;
-  for (int j = 0; j < 6; ++j) vs(j) = cand[ch[j]];
+  for (int j = 0; j < 6; ++j) {
+    vs(j) = cand[ch[j]];
+    (*sign)[j] = cand_sign[ch[j]];
+  }
   if (profile != nullptr) {
     profile->v_s_rad_s = cand;
+    profile->sign = cand_sign;
     profile->rss = curve;
   }
   return vs;
@@ -322,12 +342,14 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
   // the filtered velocity (they differ around every velocity reversal, and the difference would
   // be absorbed by the viscous damping); v the low-passed qd by default (its sign is right where
   // the logged qd's noise flips it, options.coulomb_from_filtered_velocity).
-  const auto coulomb_columns = [&](const Vec6& vs) {
+  std::array<CoulombSign, 6> sign = prior.coulomb_sign;
+  if (opt.coulomb_sign) sign.fill(*opt.coulomb_sign);
+  const auto coulomb_columns = [&](const Vec6& vs, const std::array<CoulombSign, 6>& law) {
     std::vector<Vec6> col(n);
     for (int k = 0; k < n; ++k) {
       for (int j = 0; j < 6; ++j) {
         const double v = opt.coulomb_from_filtered_velocity ? qd[k](j) : log.qd[k](j);
-        col[k](j) = phantom_joint_friction(0.0, 1.0, vs(j), v);
+        col[k](j) = phantom_joint_friction(0.0, 1.0, vs(j), v, law[static_cast<std::size_t>(j)]);
       }
     }
     zero_phase_lowpass(col, dt, opt.lowpass_hz, opt.lowpass_order);
@@ -398,11 +420,15 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
   // v_s per joint: the prior's, or chosen by profile least squares (FitOptions).
   Vec6 vs = prior.coulomb_smoothing_rad_s;
   if (opt.fit_coulomb_smoothing) {
+    std::vector<CoulombSign> shapes{sign[0]};
+    if (opt.fit_coulomb_sign) shapes = {CoulombSign::kTanh, CoulombSign::kErf};
     vs = profile_coulomb_smoothing(A0, kept_rows, at_sample, tau, s, x0, opt.prior_weight, vs,
-                                   coulomb_columns, &res.coulomb_smoothing_profile);
+                                   shapes, &sign, coulomb_columns,
+                                   &res.coulomb_smoothing_profile);
   }
   res.coulomb_smoothing_rad_s = vs;
-  const std::vector<Vec6> coulomb_col = coulomb_columns(vs);
+  res.coulomb_sign = sign;
+  const std::vector<Vec6> coulomb_col = coulomb_columns(vs, sign);
   for (std::size_t i = 0; i < A0.size(); ++i) {
     const int k = at_sample[i];
     Regressor Ai = A0[i];
@@ -494,6 +520,7 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
   const CalibVec p = x.cwiseProduct(s);
   res.fitted = unpack_calib_params(prior, p);
   res.fitted.coulomb_smoothing_rad_s = vs;
+  res.fitted.coulomb_sign = sign;
   const auto names = calib_param_names();
   for (int i = 0; i < kCalibParams; ++i) {
     FitParameter fp;

@@ -36,6 +36,7 @@
 #pragma once
 
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -128,12 +129,22 @@ struct FitOptions {
   // sensing, a stiff tracking loop, a light gimbal link) feels Coulomb friction averaged over the
   // dither, a smoother sign than its static law.
   bool fit_coulomb_smoothing = true;
+  // The smooth sign of every joint's Coulomb law (CoulombSign; the fitted model carries it), or
+  // nullopt: the prior's. erf is the sign averaged over a Gaussian velocity dither of std
+  // v_s / sqrt(2) (what a dithering joint feels); tanh the default model's law. Over 20 seeded
+  // devices neither wins on the gimbal Coulomb friction (docs/calibration.md): the prior's by
+  // default.
+  std::optional<CoulombSign> coulomb_sign;
+  // With fit_coulomb_smoothing: the profile also chooses each joint's sign, tanh or erf
+  // (coulomb_sign then only sets where the search starts).
+  bool fit_coulomb_sign = false;
 };
 
 // The profile of FitOptions::fit_coulomb_smoothing: the residual sum of squares [N^2 m^2] of
 // the kept rows for each candidate v_s of each joint (the others at their chosen values).
 struct CoulombSmoothingProfile {
   std::vector<double> v_s_rad_s;
+  std::vector<CoulombSign> sign;  // of each candidate
   std::array<std::vector<double>, 6> rss;
 };
 
@@ -173,6 +184,7 @@ struct FitResult {
   // v_s of each joint's Coulomb law used by the fit (FitOptions::fit_coulomb_smoothing: chosen
   // by the profile, else the prior's); `fitted` carries it.
   Vec6 coulomb_smoothing_rad_s = Vec6::Zero();
+  std::array<CoulombSign, 6> coulomb_sign{};          // the smooth sign used per joint
   CoulombSmoothingProfile coulomb_smoothing_profile;  // empty unless fitted
   // Rows used per joint (rows dropped by min_speed_rad_s / exclude_slow_fraction not counted).
   Eigen::Matrix<int, 6, 1> rows_used = Eigen::Matrix<int, 6, 1>::Zero();

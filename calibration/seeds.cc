@@ -109,6 +109,7 @@ SeedRun run_seed(const PhantomParams& base, std::uint64_t seed, const SeedRunOpt
   co.model_mismatch_term = o.model_mismatch_term;
   co.min_speed = o.min_speed;
   co.coulomb_smoothing = o.coulomb_smoothing;
+  co.coulomb_sign = o.coulomb_sign;
   const CalibrateOutcome c =
       calibrate_log(run.log, "the log of seed " + std::to_string(seed), prior, co);
   if (!c.finite()) {

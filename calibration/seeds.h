@@ -69,6 +69,7 @@ struct SeedRunOptions {
   bool model_mismatch_term = true;  // calibrate without --no-model-mismatch
   double min_speed = 0.2;                  // calibrate --min-speed [rad/s]
   std::string coulomb_smoothing = "fit";   // calibrate --coulomb-smoothing
+  std::string coulomb_sign = "prior";      // calibrate --coulomb-sign
 };
 
 // One fitted parameter against the truth (fields as in `dentsim calibrate --truth`'s JSON; the

@@ -259,6 +259,10 @@ void setup_calibrate(CLI::App& app) {
                   "v_s of each joint's f_c tanh(qd / v_s): 'fit' (chosen per joint by profile\n"
                   "least squares over 0.001..1 rad/s and written to the fitted model, default) or\n"
                   "'prior' (the prior model's)");
+  sub->add_option("--coulomb-sign", opt->fit.coulomb_sign,
+                  "the smooth sign s of f_c s(qd / v_s), written to the fitted model: 'erf' (the\n"
+                  "sign averaged over a Gaussian velocity dither), 'tanh', 'fit' (either, per\n"
+                  "joint, by the profile) or 'prior' (the prior model's; default)");
   sub->callback([opt] {
     opt->fit.model_mismatch_term = !opt->no_model_mismatch;
     check_calibrate_options(opt->fit);

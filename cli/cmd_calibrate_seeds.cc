@@ -143,6 +143,9 @@ void setup_calibrate_seeds(CLI::App& app) {
   sub->add_option("--coulomb-smoothing", opt->run.coulomb_smoothing,
                   "calibrate --coulomb-smoothing: 'fit' (default) or 'prior'")
       ->check(CLI::IsMember({"fit", "prior"}));
+  sub->add_option("--coulomb-sign", opt->run.coulomb_sign,
+                  "calibrate --coulomb-sign: 'erf', 'tanh', 'fit' or 'prior' (default prior)")
+      ->check(CLI::IsMember({"erf", "tanh", "fit", "prior"}));
   sub->add_option("--out", opt->out,
                   "directory for each seed's truth.json, log.csv, fit.json and model.json\n"
                   "(DIR/seedS/)");
@@ -226,6 +229,7 @@ void setup_calibrate_seeds(CLI::App& app) {
                     {"model_mismatch_term", opt->run.model_mismatch_term},
                     {"min_speed_rad_s", opt->run.min_speed},
                     {"coulomb_smoothing", opt->run.coulomb_smoothing},
+                    {"coulomb_sign", opt->run.coulomb_sign},
                     {"lowpass_hz", opt->run.lowpass_hz},
                     {"max_samples", opt->run.max_samples},
                     {"max_iterations", opt->run.max_iterations}};

@@ -60,6 +60,7 @@ SimulatedDeviceConfig phantom_device_config(const PhantomParams& p) {
   c.tau_fault = 4.0 * p.torque_limit_n_m;
   c.gravity = p.gravity_on;
   c.coulomb_velocity = p.coulomb_smoothing_rad_s;
+  c.coulomb_sign.assign(p.coulomb_sign.begin(), p.coulomb_sign.end());
   return c;
 }
 

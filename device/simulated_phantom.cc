@@ -142,6 +142,12 @@ SimulatedPhantom::SimulatedPhantom(const MujocoPlant& plant, SimulatedDeviceConf
                          std::to_string(i + 1) + ")");
       }
     }
+    if (cfg_.coulomb_sign.empty()) cfg_.coulomb_sign.assign(n, CoulombSign::kTanh);
+    if (static_cast<int>(cfg_.coulomb_sign.size()) != n) {
+      throw InputError("simulated device: config.coulomb_sign has " +
+                       std::to_string(cfg_.coulomb_sign.size()) + " entries, expected " +
+                       std::to_string(n));
+    }
     coulomb_tanh_ = VecX::Zero(n);
     for (int i = 0; i < n; ++i) {
       const int dof = plant_.device_dof[i];
@@ -336,7 +342,8 @@ void SimulatedPhantom::advance() {
           const int dof = plant_.device_dof[i];
           d->qfrc_applied[dof] =
               tau_applied_[i] - phantom_joint_friction(0.0, coulomb_tanh_[i],
-                                                       cfg_.coulomb_velocity[i], d->qvel[dof]);
+                                                       cfg_.coulomb_velocity[i], d->qvel[dof],
+                                                       cfg_.coulomb_sign[static_cast<std::size_t>(i)]);
         }
       }
       mj_step(m, d);

@@ -42,6 +42,7 @@
 #include "device/scripted_hand.h"
 #include "device/velocity_estimator.h"
 #include "plant/mujoco_plant.h"
+#include "reference/phantom/phantom_params.h"
 
 namespace dentsim {
 
@@ -88,6 +89,9 @@ struct SimulatedDeviceConfig {
   // v_s [rad/s] per device dof of kTanh (empty: 0.01 each; 0 = sign); phantom_device_config
   // sets the model's coulomb_smoothing_rad_s. The law is the model's own (phantom_joint_friction).
   VecX coulomb_velocity;
+  // The smooth sign per device dof of kTanh (empty: tanh each); phantom_device_config sets the
+  // model's coulomb_sign.
+  std::vector<CoulombSign> coulomb_sign;
   // Servo clock.
   TickJitter jitter;
 };

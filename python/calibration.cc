@@ -44,6 +44,7 @@ CalibrateOptionNames argument_names() {
   n.coulomb_velocity = "calibrate: coulomb_velocity";
   n.min_speed = "calibrate: min_speed";
   n.coulomb_smoothing = "calibrate: coulomb_smoothing";
+  n.coulomb_sign = "calibrate: coulomb_sign";
   return n;
 }
 
@@ -51,7 +52,8 @@ py::dict calibrate(const py::handle& log_arg, const py::object& prior_arg, doubl
                    int lowpass_order, int max_samples, int max_iterations,
                    const py::object& velocity_lag, double torque_shift,
                    const std::string& coulomb_velocity, bool model_mismatch_term,
-                   double min_speed, const std::string& coulomb_smoothing) {
+                   double min_speed, const std::string& coulomb_smoothing,
+                   const std::string& coulomb_sign) {
   const std::string path = path_arg(log_arg, "calibrate: log");
   const CalibrateOptionNames names = argument_names();
   CalibrateOptions o;
@@ -64,6 +66,7 @@ py::dict calibrate(const py::handle& log_arg, const py::object& prior_arg, doubl
   o.model_mismatch_term = model_mismatch_term;
   o.min_speed = min_speed;
   o.coulomb_smoothing = coulomb_smoothing;
+  o.coulomb_sign = coulomb_sign;
   // 'auto' or a number of ticks, as the command's text (17 significant digits read back exactly).
   if (py::isinstance<py::str>(velocity_lag)) {
     o.velocity_lag = velocity_lag.cast<std::string>();
@@ -115,13 +118,13 @@ void bind_calibration(py::module_& m) {
         py::arg("max_iterations") = 100, py::arg("velocity_lag") = "auto",
         py::arg("torque_shift") = 0.0, py::arg("coulomb_velocity") = "filtered",
         py::arg("model_mismatch_term") = true, py::arg("min_speed") = 0.2,
-        py::arg("coulomb_smoothing") = "fit",
+        py::arg("coulomb_smoothing") = "fit", py::arg("coulomb_sign") = "prior",
         R"(Fit the device's inertial and friction parameters to a calibration log (Ceres), as
 `dentsim calibrate LOG --json FILE -o MODEL` with the same options and defaults:
 prior (model file; None: the shipped default), lowpass_hz, lowpass_order, max_samples,
 max_iterations, velocity_lag ('auto' or ticks), torque_shift, coulomb_velocity ('filtered' or
 'raw'), model_mismatch_term (False: --no-model-mismatch), min_speed [rad/s] (--min-speed),
-coulomb_smoothing ('fit' or 'prior').
+coulomb_smoothing ('fit' or 'prior'), coulomb_sign ('erf', 'tanh' or 'prior').
 
 Returns the CLI's JSON report as a dict (converged, residual_rms_n_m, condition_number,
 parameters [name, prior, value, std, ..., identifiable], ...) plus "fitted_model" (the fitted

@@ -124,6 +124,7 @@ PhantomDynamics<T>::PhantomDynamics(const PhantomParams& params)
   damping_ = tree.damping.cast<T>();
   coulomb_ = tree.coulomb.cast<T>();
   coulomb_smoothing_ = tree.coulomb_smoothing.cast<T>();
+  coulomb_sign_ = tree.coulomb_sign;
   gravity_ = T(tree.gravity);
 }
 
@@ -280,7 +281,8 @@ void PhantomDynamics<T>::terms(const Vec6& q_in, const Vec6& qd_in, bool with_ja
   out.CTqd = tree_to_joint(ct).template cast<double>();
   for (int j = 0; j < 6; ++j) {
     out.tau_f(j) =
-        double(phantom_joint_friction(damping_(j), coulomb_(j), coulomb_smoothing_(j), qd(j)));
+        double(phantom_joint_friction(damping_(j), coulomb_(j), coulomb_smoothing_(j), qd(j),
+                                      coulomb_sign_[j]));
   }
 
   // 4. Tool pose, J_t and dJ_t/dt (header section 4).

@@ -120,6 +120,7 @@ class PhantomDynamics : public SixDofDeviceModel {
   V3 tip_;
   V6 armature_, damping_, coulomb_;
   V6 coulomb_smoothing_;
+  std::array<CoulombSign, 6> coulomb_sign_{};
   T gravity_;
   // The full matrix C (not a servo-tick quantity: only coriolis_matrix() needs it) comes from
   // the reference model, which defines which factorisation C is.

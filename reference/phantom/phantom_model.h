@@ -76,6 +76,7 @@ struct PhantomTreeT {
   V3 tip;                                   // tool tip in the roll frame
   V6 armature, damping, coulomb;            // per device joint
   V6 coulomb_smoothing;                     // v_s per device joint [rad/s]
+  std::array<CoulombSign, 6> coulomb_sign;  // the smooth sign per device joint
   T gravity;                                // |g| [m/s^2], 0 when gravity is off
 };
 
@@ -83,15 +84,18 @@ struct PhantomTreeT {
 template <typename T>
 PhantomTreeT<T> phantom_tree(const PhantomParams& p);
 
-// Friction of one device joint (the one definition of the law, used by PhantomModelT and by
-// fast/phantom): tau_f = b qd + f_c tanh(qd / v_s) [N m], or f_c sign(qd) when v_s = 0
-// (b [N m s/rad], f_c [N m], v_s [rad/s], qd [rad/s]).
+// Friction of one device joint (the one definition of the law, used by PhantomModelT, by
+// fast/phantom, by the simulated device's kTanh law and by the calibration's Coulomb column):
+// tau_f = b qd + f_c s(qd / v_s) [N m] with the smooth sign s = tanh or erf (CoulombSign), or
+// f_c sign(qd) when v_s = 0 (b [N m s/rad], f_c [N m], v_s [rad/s], qd [rad/s]).
 template <typename T>
-T phantom_joint_friction(const T& b, const T& f_c, const T& v_s, const T& qd) {
+T phantom_joint_friction(const T& b, const T& f_c, const T& v_s, const T& qd,
+                         CoulombSign sign = CoulombSign::kTanh) {
+  using std::erf;
   using std::tanh;
   T s;
   if (v_s > T(0)) {
-    s = tanh(qd / v_s);
+    s = sign == CoulombSign::kErf ? erf(qd / v_s) : tanh(qd / v_s);
   } else {
     s = qd > T(0) ? T(1) : (qd < T(0) ? T(-1) : T(0));
   }
@@ -235,6 +239,7 @@ PhantomTreeT<T> phantom_tree(const PhantomParams& p) {
   t.damping = p.damping_n_m_s_per_rad.cast<T>();
   t.coulomb = p.coulomb_n_m.cast<T>();
   t.coulomb_smoothing = p.coulomb_smoothing_rad_s.cast<T>();
+  t.coulomb_sign = p.coulomb_sign;
   t.gravity = T(p.gravity_on ? p.gravity_m_s2 : 0.0);
   return t;
 }
@@ -337,7 +342,8 @@ typename PhantomModelT<T>::V6 PhantomModelT<T>::friction(const V6& qd) const {
   V6 f;
   for (int j = 0; j < 6; ++j) {
     f(j) =
-        phantom_joint_friction(tree_.damping(j), tree_.coulomb(j), tree_.coulomb_smoothing(j), qd(j));
+        phantom_joint_friction(tree_.damping(j), tree_.coulomb(j), tree_.coulomb_smoothing(j), qd(j),
+                               tree_.coulomb_sign[j]);
   }
   return f;
 }

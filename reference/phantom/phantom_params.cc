@@ -3,6 +3,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <nlohmann/json.hpp>
@@ -25,6 +26,12 @@ constexpr int kVersion = 1;
 // ---- writing -----------------------------------------------------------------------------------
 
 std::string num(double v) { return Json(v).dump(); }  // shortest round-trip representation
+
+}  // namespace
+
+const char* coulomb_sign_name(CoulombSign s) { return s == CoulombSign::kErf ? "erf" : "tanh"; }
+
+namespace {
 
 template <typename V>
 std::string vec(const V& v) {
@@ -156,6 +163,18 @@ std::string phantom_params_to_text(const PhantomParams& p) {
   const Vec6& vs = p.coulomb_smoothing_rad_s;
   s << "    \"coulomb_smoothing_rad_s\": "
     << ((vs.array() == vs(0)).all() ? num(vs(0)) : vec(vs)) << ",\n";
+  const auto& sign = p.coulomb_sign;
+  if (std::any_of(sign.begin(), sign.end(), [](CoulombSign c) { return c != CoulombSign::kTanh; })) {
+    s << "    \"coulomb_sign\": ";
+    if (std::all_of(sign.begin(), sign.end(), [&](CoulombSign c) { return c == sign[0]; })) {
+      s << '"' << coulomb_sign_name(sign[0]) << '"';
+    } else {
+      s << "[";
+      for (int j = 0; j < 6; ++j) s << (j ? ", " : "") << '"' << coulomb_sign_name(sign[j]) << '"';
+      s << "]";
+    }
+    s << ",\n";
+  }
   s << "    \"q_min_rad\": " << vec(p.q_min_rad) << ",\n";
   s << "    \"q_max_rad\": " << vec(p.q_max_rad) << ",\n";
   s << "    \"torque_limit_n_m\": " << vec(p.torque_limit_n_m) << ",\n";
@@ -216,7 +235,8 @@ PhantomParams parse_phantom_params(const std::string& text, const std::string& o
   const auto& joints = r.object(root, "", "joints");
   r.only_keys(joints, "joints",
               {"armature_kg_m2", "damping_n_m_s_per_rad", "coulomb_n_m", "coulomb_smoothing_rad_s",
-               "q_min_rad", "q_max_rad", "torque_limit_n_m", "encoder_counts_per_rev"});
+               "coulomb_sign", "q_min_rad", "q_max_rad", "torque_limit_n_m",
+               "encoder_counts_per_rev"});
   p.armature_kg_m2 = r.vector<6>(joints, "joints", "armature_kg_m2");
   p.damping_n_m_s_per_rad = r.vector<6>(joints, "joints", "damping_n_m_s_per_rad");
   p.coulomb_n_m = r.vector<6>(joints, "joints", "coulomb_n_m");
@@ -225,6 +245,27 @@ PhantomParams parse_phantom_params(const std::string& text, const std::string& o
     p.coulomb_smoothing_rad_s = r.vector<6>(joints, "joints", "coulomb_smoothing_rad_s");
   } else {
     p.coulomb_smoothing_rad_s.setConstant(r.number(joints, "joints", "coulomb_smoothing_rad_s"));
+  }
+  // Optional: "tanh" or "erf", one for every joint or one per joint.
+  if (r.has(joints, "coulomb_sign")) {
+    const auto& cs = joints.at("coulomb_sign");
+    const auto one = [&](const JsonReader::Json& e, const std::string& where) {
+      if (e.is_string() && e.get<std::string>() == "tanh") return CoulombSign::kTanh;
+      if (e.is_string() && e.get<std::string>() == "erf") return CoulombSign::kErf;
+      r.fail(where, "expected \"tanh\" or \"erf\", got " + JsonReader::shown(e));
+      return CoulombSign::kTanh;
+    };
+    if (cs.is_array()) {
+      if (cs.size() != 6) {
+        r.fail("joints.coulomb_sign", "expected one sign or 6, got " + JsonReader::shown(cs));
+      }
+      for (int j = 0; j < 6; ++j) {
+        p.coulomb_sign[j] = one(cs[static_cast<std::size_t>(j)],
+                                "joints.coulomb_sign[" + std::to_string(j) + "]");
+      }
+    } else {
+      p.coulomb_sign.fill(one(cs, "joints.coulomb_sign"));
+    }
   }
   p.q_min_rad = r.vector<6>(joints, "joints", "q_min_rad");
   p.q_max_rad = r.vector<6>(joints, "joints", "q_max_rad");

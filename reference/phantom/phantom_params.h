@@ -23,6 +23,7 @@
 // box; failures throw InputError naming the file and the field.
 #pragma once
 
+#include <array>
 #include <string>
 
 #include "reference/core/types.h"
@@ -30,6 +31,9 @@
 namespace dentsim {
 
 // Inertial parameters of one rigid body, in that body's frame.
+enum class CoulombSign { kTanh, kErf };
+const char* coulomb_sign_name(CoulombSign s);  // "tanh", "erf"
+
 struct PhantomBody {
   double mass_kg = 0.0;
   Vec3 com_m = Vec3::Zero();          // centre of mass in the body frame [m]
@@ -69,9 +73,15 @@ struct PhantomParams {
   Vec6 armature_kg_m2 = Vec6::Zero();         // reflected rotor inertia (+ link excess, docs)
   Vec6 damping_n_m_s_per_rad = Vec6::Zero();  // viscous b_j
   Vec6 coulomb_n_m = Vec6::Zero();            // Coulomb f_c,j
-  // v_s per joint of f_c tanh(qd / v_s); 0 = f_c sign(qd). The model file takes one number (every
-  // joint) or six; it writes one number when all six are equal.
+  // v_s per joint of the smooth sign s(qd / v_s); 0 = f_c sign(qd). The model file takes one
+  // number (every joint) or six; it writes one number when all six are equal.
   Vec6 coulomb_smoothing_rad_s = Vec6::Zero();
+  // The smooth sign per joint (phantom_joint_friction): tanh, or erf, the sign averaged over a
+  // Gaussian velocity dither of std v_s / sqrt(2) (E[sign(v + n)] = erf(v / v_s)): what a joint
+  // whose velocity dithers (quantised sensing, a light link) feels. Model file key
+  // joints.coulomb_sign: "tanh" or "erf" (every joint) or six of them; optional, default tanh,
+  // written only when a joint is not tanh (the files written before read the same).
+  std::array<CoulombSign, 6> coulomb_sign{};
   Vec6 q_min_rad = Vec6::Constant(-1.0);
   Vec6 q_max_rad = Vec6::Constant(1.0);
   Vec6 torque_limit_n_m = Vec6::Zero();

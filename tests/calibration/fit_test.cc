@@ -207,6 +207,38 @@ TEST(CalibFit, ProfileFindsEachJointsCoulombSmoothing) {
   EXPECT_GT(worst_fixed, 0.05);
 }
 
+// FitOptions::fit_coulomb_sign: the profile also tells tanh from erf per joint on a noise-free
+// log of a device that has both.
+TEST(CalibFit, ProfileFindsEachJointsSmoothSign) {
+  const PhantomParams prior = default_phantom_params();
+  PhantomParams truth = perturbed(prior, 22);
+  const auto grid = [](int i) { return 1e-3 * std::pow(10.0, 3.0 * i / 20.0); };
+  truth.coulomb_smoothing_rad_s << grid(10), grid(11), grid(9), grid(15), grid(16), grid(13);
+  truth.coulomb_sign = {CoulombSign::kErf, CoulombSign::kTanh, CoulombSign::kErf,
+                        CoulombSign::kErf, CoulombSign::kTanh, CoulombSign::kErf};
+  ExcitationParams ep;
+  ep.seed = 22;
+  const Excitation exc(truth, phantom_home_q(prior), ep);
+  const CalibrationLog log = synthesize_log(truth, exc, 11.0, 1e-3);
+  FitOptions fo;
+  fo.max_samples = 1000;
+  fo.min_speed_rad_s = 0.0;
+  fo.fit_coulomb_sign = true;
+  fo.model_mismatch_term = false;
+  const FitResult r = fit_calibration(log, prior, fo);
+  ASSERT_TRUE(r.converged) << r.report;
+  const CalibVec xt = pack_calib_params(truth);
+  for (int j = 0; j < 6; ++j) {
+    EXPECT_EQ(r.coulomb_sign[j], truth.coulomb_sign[j]) << "joint " << j + 1;
+    EXPECT_EQ(r.fitted.coulomb_sign[j], truth.coulomb_sign[j]) << "joint " << j + 1;
+    EXPECT_NEAR(r.coulomb_smoothing_rad_s(j), truth.coulomb_smoothing_rad_s(j),
+                1e-12 * truth.coulomb_smoothing_rad_s(j))
+        << "joint " << j + 1;
+    EXPECT_NEAR(r.params[44 + j].value / xt(44 + j), 1.0, 1e-3) << "joint " << j + 1;
+  }
+  EXPECT_EQ(r.coulomb_smoothing_profile.sign.size(), r.coulomb_smoothing_profile.v_s_rad_s.size());
+}
+
 TEST(CalibFit, TorqueShiftRealignsADelayedTorqueLog) {
   // A log whose torque column runs 1 sample ahead of the state (tau_log[k] = tau[k + 1]): the
   // fit with torque_shift_samples = 1 recovers the parameters as from the aligned log.

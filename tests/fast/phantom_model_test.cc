@@ -135,6 +135,30 @@ TEST(FastPhantomModel, GravityOff) {
   EXPECT_LT(worst.max(), kRoundOff);
 }
 
+// Per-joint v_s and smooth sign (tanh on some joints, erf on others): fast/ evaluates the
+// reference's own law, bitwise, and the erf joints follow b qd + f_c erf(qd / v_s).
+TEST(FastPhantomModel, PerJointSmoothSignIsTheReferenceLaw) {
+  PhantomParams p = default_phantom_params();
+  p.coulomb_smoothing_rad_s << 0.01, 0.05, 0.02, 0.3, 0.5, 0.1;
+  p.coulomb_sign = {CoulombSign::kTanh, CoulombSign::kErf, CoulombSign::kTanh,
+                    CoulombSign::kErf,  CoulombSign::kErf, CoulombSign::kTanh};
+  const fast::PhantomModel f(p);
+  const PhantomModel r(p);
+  States s(p, kSeed + 4);
+  for (int k = 0; k < 100; ++k) {
+    const Vec6 q = s.q(), qd = s.qd(1.0);
+    DeviceTerms tf, tr;
+    f.terms(q, qd, false, tf);
+    r.terms(q, qd, false, tr);
+    ASSERT_EQ(tf.tau_f, tr.tau_f) << "k " << k;
+    for (int j : {1, 3, 4}) {
+      ASSERT_DOUBLE_EQ(tr.tau_f(j), p.damping_n_m_s_per_rad(j) * qd(j) +
+                                        p.coulomb_n_m(j) *
+                                            std::erf(qd(j) / p.coulomb_smoothing_rad_s(j)));
+    }
+  }
+}
+
 // Zero Coulomb smoothing (f_c sign(qd)), including joints at exactly qd = 0, where sign is 0:
 // the friction law is the reference's own function, so tau_f agrees bitwise.
 TEST(FastPhantomModel, SignFrictionIsTheReferenceLaw) {

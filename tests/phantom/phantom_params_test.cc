@@ -99,6 +99,33 @@ TEST(PhantomParams, CoulombSmoothingIsOneNumberOrOnePerJoint) {
                                     HasSubstr("6 numbers")));
 }
 
+// The smooth sign per joint: absent (the files written before) is tanh on every joint and the
+// default file does not carry the key; "erf" or six names round-trip; anything else is named.
+TEST(PhantomParams, CoulombSignIsOptionalOneOrSixNames) {
+  const std::string text = default_phantom_model_file();
+  EXPECT_EQ(text.find("coulomb_sign"), std::string::npos);
+  for (CoulombSign c : parse_phantom_params(text, "default").coulomb_sign) {
+    EXPECT_EQ(c, CoulombSign::kTanh);
+  }
+  const std::string key = "\"coulomb_smoothing_rad_s\": 0.01,\n";
+  const std::string erf = replace(text, key, key + "    \"coulomb_sign\": \"erf\",\n");
+  const PhantomParams pe = parse_phantom_params(erf, "erf");
+  for (CoulombSign c : pe.coulomb_sign) EXPECT_EQ(c, CoulombSign::kErf);
+  EXPECT_EQ(phantom_params_to_text(pe), erf);
+  const std::string mixed = replace(
+      text, key,
+      key + "    \"coulomb_sign\": [\"tanh\", \"tanh\", \"tanh\", \"erf\", \"erf\", \"tanh\"],\n");
+  const PhantomParams pm = parse_phantom_params(mixed, "mixed");
+  EXPECT_EQ(pm.coulomb_sign[3], CoulombSign::kErf);
+  EXPECT_EQ(pm.coulomb_sign[5], CoulombSign::kTanh);
+  EXPECT_EQ(phantom_params_to_text(pm), mixed);
+  EXPECT_THAT(error_of(replace(text, key, key + "    \"coulomb_sign\": \"sign\",\n")),
+              AllOf(HasSubstr("joints.coulomb_sign"), HasSubstr("\"tanh\" or \"erf\""),
+                    HasSubstr("sign")));
+  EXPECT_THAT(error_of(replace(text, key, key + "    \"coulomb_sign\": [\"erf\", 3],\n")),
+              HasSubstr("joints.coulomb_sign"));
+}
+
 TEST(PhantomParams, PhysicallyImpossibleInertiaIsNamed) {
   // The published be moments about the shoulder, as CoM moments, break the triangle inequality.
   const std::string bad = replace(default_phantom_model_file(), "\"inertia_kg_m2\": [0.000745,",
