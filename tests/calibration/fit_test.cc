@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -165,21 +166,45 @@ TEST(CalibFit, RecoversIdentifiableParametersNoiseFree) {
   }
 }
 
+// A perturbation of the default model (seed) whose joints have their own v_s, grid(i_j) with
+// grid(i) = 1e-3 x 10^(3 i / 20) (the profile's grid), and the given smooth signs; its
+// noise-free 11 s log.
+struct LawDevice {
+  PhantomParams truth;
+  CalibrationLog log;
+};
+LawDevice law_device(std::uint64_t seed, const std::array<int, 6>& grid_index,
+                     const std::array<CoulombSign, 6>& sign) {
+  LawDevice d;
+  d.truth = perturbed(default_phantom_params(), seed);
+  for (int j = 0; j < 6; ++j) {
+    d.truth.coulomb_smoothing_rad_s(j) = 1e-3 * std::pow(10.0, 3.0 * grid_index[j] / 20.0);
+  }
+  d.truth.coulomb_sign = sign;
+  ExcitationParams ep;
+  ep.seed = seed;
+  const Excitation exc(d.truth, phantom_home_q(default_phantom_params()), ep);
+  d.log = synthesize_log(d.truth, exc, 11.0, 1e-3);
+  return d;
+}
+// Fit options of the profile tests: the rows near reversal are where v_s shows, so all are kept.
+FitOptions law_fit_options() {
+  FitOptions fo;
+  fo.max_samples = 1000;
+  fo.min_speed_rad_s = 0.0;
+  return fo;
+}
+
 // FitOptions::fit_coulomb_smoothing: on a noise-free log of a device whose joints have their own
 // v_s (values on the profile's grid, 1e-3 x 10^(3 i / 20)), the profile picks each joint's v_s
 // exactly and the fit recovers f_c; the fit with the prior's v_s (0.01 on every joint) cannot.
 TEST(CalibFit, ProfileFindsEachJointsCoulombSmoothing) {
   const PhantomParams prior = default_phantom_params();
-  PhantomParams truth = perturbed(prior, 21);
-  const auto grid = [](int i) { return 1e-3 * std::pow(10.0, 3.0 * i / 20.0); };
-  truth.coulomb_smoothing_rad_s << grid(9), grid(11), grid(10), grid(15), grid(16), grid(14);
-  ExcitationParams ep;
-  ep.seed = 21;
-  const Excitation exc(truth, phantom_home_q(prior), ep);
-  const CalibrationLog log = synthesize_log(truth, exc, 11.0, 1e-3);
-  FitOptions fo;
-  fo.max_samples = 1000;
-  fo.min_speed_rad_s = 0.0;  // the rows near reversal are where v_s shows
+  constexpr CoulombSign t = CoulombSign::kTanh;
+  const LawDevice d = law_device(21, {9, 11, 10, 15, 16, 14}, {t, t, t, t, t, t});
+  const PhantomParams& truth = d.truth;
+  const CalibrationLog& log = d.log;
+  FitOptions fo = law_fit_options();
   const FitResult r = fit_calibration(log, prior, fo);
   ASSERT_TRUE(r.converged) << r.report;
   fo.fit_coulomb_smoothing = false;
@@ -211,18 +236,11 @@ TEST(CalibFit, ProfileFindsEachJointsCoulombSmoothing) {
 // log of a device that has both.
 TEST(CalibFit, ProfileFindsEachJointsSmoothSign) {
   const PhantomParams prior = default_phantom_params();
-  PhantomParams truth = perturbed(prior, 22);
-  const auto grid = [](int i) { return 1e-3 * std::pow(10.0, 3.0 * i / 20.0); };
-  truth.coulomb_smoothing_rad_s << grid(10), grid(11), grid(9), grid(15), grid(16), grid(13);
-  truth.coulomb_sign = {CoulombSign::kErf, CoulombSign::kTanh, CoulombSign::kErf,
-                        CoulombSign::kErf, CoulombSign::kTanh, CoulombSign::kErf};
-  ExcitationParams ep;
-  ep.seed = 22;
-  const Excitation exc(truth, phantom_home_q(prior), ep);
-  const CalibrationLog log = synthesize_log(truth, exc, 11.0, 1e-3);
-  FitOptions fo;
-  fo.max_samples = 1000;
-  fo.min_speed_rad_s = 0.0;
+  constexpr CoulombSign t = CoulombSign::kTanh, e = CoulombSign::kErf;
+  const LawDevice d = law_device(22, {10, 11, 9, 15, 16, 13}, {e, t, e, e, t, e});
+  const PhantomParams& truth = d.truth;
+  const CalibrationLog& log = d.log;
+  FitOptions fo = law_fit_options();
   fo.fit_coulomb_sign = true;
   fo.model_mismatch_term = false;
   const FitResult r = fit_calibration(log, prior, fo);

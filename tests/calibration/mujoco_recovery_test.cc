@@ -9,10 +9,12 @@
 // the frictionloss device exactly.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
 #include <string>
+#include <utility>
 
 #include "calibration/excitation.h"
 #include "calibration/fit.h"
@@ -24,30 +26,39 @@
 namespace dentsim {
 namespace {
 
-TEST(CalibrationMujocoRecovery, TanhFrictionExactSensingRecoversWithinTwoPercent) {
-  const PhantomParams truth = load_phantom_params(std::string(DENTSIM_SOURCE_DIR) +
-                                                  "/tests/calibration/data/perturbed_phantom.json");
-  const PhantomParams prior = default_phantom_params();
+PhantomParams truth_model() {
+  return load_phantom_params(std::string(DENTSIM_SOURCE_DIR) +
+                             "/tests/calibration/data/perturbed_phantom.json");
+}
+
+// 20 s of the seeded excitation (seed 2) on the simulated Phantom of `truth` with exact sensing
+// and its Coulomb friction acting by `law`, logged with the exact state.
+CalibrationLog exact_log(const PhantomParams& truth, SimulatedDeviceConfig::FrictionLaw law) {
   ExcitationParams ep;
   ep.seed = 2;
   const VecX home = phantom_home_q(truth);
   const Excitation exc(truth, Vec6(home), ep);
   SimulatedDeviceConfig dc = phantom_device_config(truth);
   dc.quantize = false;
-  dc.friction_law = SimulatedDeviceConfig::FrictionLaw::kTanh;
+  dc.friction_law = law;
   SimulatedPhantom dev(phantom_plant(truth), dc, home);
-  const CalibrationLog log =
-      run_excitation(dev, truth, exc, 20.0, TrackingParams{}, {&dev.true_q(), &dev.true_qd()});
-  // Exact velocities need no low-pass. (With calibrate's 10 Hz on this exact log, the weakly
-  // excited gimbal second moments and armature 5, identifiable now that the rows near reversal
-  // are dropped, come out 7-23 % off at 2-4 reported std: the filter's distortion, which their
-  // std does not cover; docs/calibration.md.)
+  return run_excitation(dev, truth, exc, 20.0, TrackingParams{}, {&dev.true_q(), &dev.true_qd()});
+}
+
+// Exact velocities need no low-pass; the torque is held over [t_k, t_k+1] after the exact state
+// at t_k. (With calibrate's 10 Hz on an exact log, the weakly excited gimbal second moments and
+// armature 5, identifiable now that the rows near reversal are dropped, come out 7-23 % off at
+// 2-4 reported std: the filter's distortion, which their std does not cover; docs/calibration.md.)
+FitOptions exact_fit_options() {
   FitOptions fo;
   fo.lowpass_hz = 0.0;
   fo.max_samples = 1500;
-  fo.torque_shift_samples = 0.5;  // exact state at t_k, torque held over [t_k, t_k+1]
-  const FitResult r = fit_calibration(log, prior, fo);
-  ASSERT_TRUE(r.converged) << r.report;
+  fo.torque_shift_samples = 0.5;
+  return fo;
+}
+
+// The largest relative error over the identifiable parameters, and its name.
+std::pair<double, std::string> worst_identifiable(const FitResult& r, const PhantomParams& truth) {
   const CalibVec xt = pack_calib_params(truth);
   double max_rel = 0.0;
   std::string worst;
@@ -56,8 +67,13 @@ TEST(CalibrationMujocoRecovery, TanhFrictionExactSensingRecoversWithinTwoPercent
     const double rel = std::abs(r.params[i].value / xt(i) - 1.0);
     if (rel > max_rel) max_rel = rel, worst = r.params[i].name;
   }
-  // The base parameters the observer uses: M(q), g(q) over random poses in the joint box.
-  const PhantomModelD mt(truth), mf(r.fitted);
+  return {max_rel, worst};
+}
+
+// The base parameters the observer uses: the largest relative error of M(q) and of g(q) over 100
+// random poses in the joint box.
+std::pair<double, double> model_errors(const PhantomParams& truth, const PhantomParams& fitted) {
+  const PhantomModelD mt(truth), mf(fitted);
   std::mt19937_64 rng(1);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   double m_err = 0.0, g_err = 0.0;
@@ -68,6 +84,16 @@ TEST(CalibrationMujocoRecovery, TanhFrictionExactSensingRecoversWithinTwoPercent
     m_err = std::max(m_err, (mf.M(q) - mt.M(q)).norm() / mt.M(q).norm());
     g_err = std::max(g_err, (mf.g(q) - mt.g(q)).norm() / mt.g(q).norm());
   }
+  return {m_err, g_err};
+}
+
+TEST(CalibrationMujocoRecovery, TanhFrictionExactSensingRecoversWithinTwoPercent) {
+  const PhantomParams truth = truth_model();
+  const CalibrationLog log = exact_log(truth, SimulatedDeviceConfig::FrictionLaw::kTanh);
+  const FitResult r = fit_calibration(log, default_phantom_params(), exact_fit_options());
+  ASSERT_TRUE(r.converged) << r.report;
+  const auto [max_rel, worst] = worst_identifiable(r, truth);
+  const auto [m_err, g_err] = model_errors(truth, r.fitted);
   std::printf(
       "%d identifiable, residual %.3g N m, max rel. error %.4f (%s), M(q) %.2e, g(q) %.2e\n",
       r.identifiable, r.residual_rms, max_rel, worst.c_str(), m_err, g_err);
@@ -84,49 +110,16 @@ TEST(CalibrationMujocoRecovery, TanhFrictionExactSensingRecoversWithinTwoPercent
 // and M(q) within 0.01 % (4.4e-6); with them kept (min_speed 0) the same log gives M(q) > 1 %
 // (measured 4.5 %).
 TEST(CalibrationMujocoRecovery, FrictionlossExactSensingRecoversOnceStictionRowsAreDropped) {
-  const PhantomParams truth = load_phantom_params(std::string(DENTSIM_SOURCE_DIR) +
-                                                  "/tests/calibration/data/perturbed_phantom.json");
-  const PhantomParams prior = default_phantom_params();
-  ExcitationParams ep;
-  ep.seed = 2;
-  const VecX home = phantom_home_q(truth);
-  const Excitation exc(truth, Vec6(home), ep);
-  SimulatedDeviceConfig dc = phantom_device_config(truth);
-  dc.quantize = false;
-  SimulatedPhantom dev(phantom_plant(truth), dc, home);
-  const CalibrationLog log =
-      run_excitation(dev, truth, exc, 20.0, TrackingParams{}, {&dev.true_q(), &dev.true_qd()});
-  FitOptions fo;
-  fo.lowpass_hz = 0.0;
-  fo.max_samples = 1500;
-  fo.torque_shift_samples = 0.5;
-  const CalibVec xt = pack_calib_params(truth);
-  const auto mass_matrix_error = [&](const PhantomParams& fitted) {
-    const PhantomModelD mt(truth), mf(fitted);
-    std::mt19937_64 rng(1);
-    std::uniform_real_distribution<double> u(0.0, 1.0);
-    double e = 0.0;
-    for (int k = 0; k < 100; ++k) {
-      Vec6 q;
-      for (int j = 0; j < 6; ++j)
-        q(j) = truth.q_min_rad(j) + u(rng) * (truth.q_max_rad(j) - truth.q_min_rad(j));
-      e = std::max(e, (mf.M(q) - mt.M(q)).norm() / mt.M(q).norm());
-    }
-    return e;
-  };
-  const FitResult r = fit_calibration(log, prior, fo);
+  const PhantomParams truth = truth_model();
+  const CalibrationLog log = exact_log(truth, SimulatedDeviceConfig::FrictionLaw::kFrictionloss);
+  FitOptions fo = exact_fit_options();
+  const FitResult r = fit_calibration(log, default_phantom_params(), fo);
   ASSERT_TRUE(r.converged) << r.report;
-  double max_rel = 0.0;
-  std::string worst;
-  for (int i = 0; i < kCalibParams; ++i) {
-    if (!r.params[i].identifiable) continue;
-    const double rel = std::abs(r.params[i].value / xt(i) - 1.0);
-    if (rel > max_rel) max_rel = rel, worst = r.params[i].name;
-  }
-  const double m_err = mass_matrix_error(r.fitted);
+  const auto [max_rel, worst] = worst_identifiable(r, truth);
+  const double m_err = model_errors(truth, r.fitted).first;
   fo.min_speed_rad_s = 0.0;
-  const FitResult kept = fit_calibration(log, prior, fo);
-  const double m_err_kept = mass_matrix_error(kept.fitted);
+  const FitResult kept = fit_calibration(log, default_phantom_params(), fo);
+  const double m_err_kept = model_errors(truth, kept.fitted).first;
   std::printf(
       "rows near stiction dropped: %d identifiable, max rel. error %.4f (%s), M(q) %.2e, v_s "
       "%.3g..%.3g rad/s; kept: M(q) %.2e\n",
