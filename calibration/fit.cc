@@ -558,7 +558,12 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
     S += w * (Sl + Sl.transpose());
   }
   const Eigen::Matrix<double, kCalibParams, kCalibParams> C = cov;
-  const Eigen::Matrix<double, kCalibParams, kCalibParams> cov_hac = (rows / dof) * (C * S * C);
+  // Named steps, not one expression: GCC's -O1 (the sanitizer build) warns maybe-uninitialized
+  // inside Eigen's product of a scaled product.
+  Eigen::Matrix<double, kCalibParams, kCalibParams> CS, cov_hac;
+  CS.noalias() = C * S;
+  cov_hac.noalias() = CS * C;
+  cov_hac *= rows / dof;
   for (int i = 0; i < kCalibParams; ++i) {
     FitParameter& fp = res.params[i];
     fp.std_white = s(i) * std::sqrt(std::max(0.0, cov(i, i)) * sigma2);
