@@ -121,15 +121,16 @@ using RowMask = Eigen::Matrix<bool, 6, 1>;
 // profile least squares. For a fixed law the model is linear in p, so each candidate is one
 // linear solve: the normal equations of the kept rows (A0: the regressor without its Coulomb
 // columns, scaled; the Coulomb column of joint j enters only joint j's rows) with the ridge of the
-// weak prior, the cost the residual sum of squares over the kept rows. Candidates: each shape in
-// `shapes` times a log grid 0.001..1 rad/s (21 values) and the prior's v_s; coordinate descent
-// over the joints until no joint changes (at most 4 passes), from the prior's v_s and `*sign`.
+// weak prior, the cost the residual sum of squares over the kept rows. Candidates: each smooth
+// sign times a log grid 0.001..1 rad/s (21 values) and the prior's v_s; joint j takes only its
+// own sign `(*sign)[j]` unless `fit_sign` (then either). Coordinate descent over the joints until
+// no joint changes (at most 4 passes), from the prior's v_s and `*sign`.
 using ColumnsFn =
     std::function<std::vector<Vec6>(const Vec6&, const std::array<CoulombSign, 6>&)>;
 Vec6 profile_coulomb_smoothing(const std::vector<Regressor>& A0, const std::vector<RowMask>& kept,
                                const std::vector<int>& at_sample, const std::vector<Vec6>& tau,
                                const CalibVec& s, const CalibVec& x0, double prior_weight,
-                               const Vec6& vs_prior, const std::vector<CoulombSign>& shapes,
+                               const Vec6& vs_prior, bool fit_sign,
                                std::array<CoulombSign, 6>* sign, const ColumnsFn& columns,
                                CoulombSmoothingProfile* profile) {
   std::vector<double> grid;
@@ -139,7 +140,8 @@ Vec6 profile_coulomb_smoothing(const std::vector<Regressor>& A0, const std::vect
   grid.erase(std::unique(grid.begin(), grid.end()), grid.end());
   std::vector<double> cand;
   std::vector<CoulombSign> cand_sign;
-  for (CoulombSign sh : shapes) {
+  for (CoulombSign sh : {CoulombSign::kTanh, CoulombSign::kErf}) {
+    if (!fit_sign && std::find(sign->begin(), sign->end(), sh) == sign->end()) continue;
     for (double v : grid) {
       cand.push_back(v);
       cand_sign.push_back(sh);
@@ -217,6 +219,7 @@ Vec6 profile_coulomb_smoothing(const std::vector<Regressor>& A0, const std::vect
       curve[j].assign(nc, 0.0);
       int best = ch[j];
       for (int c = 0; c < nc; ++c) {
+        if (!fit_sign && cand_sign[c] != (*sign)[j]) continue;
         t[j] = c;
         curve[j][c] = cost(t);
         if (curve[j][c] < curve[j][best]) best = c;
@@ -420,10 +423,8 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
   // v_s per joint: the prior's, or chosen by profile least squares (FitOptions).
   Vec6 vs = prior.coulomb_smoothing_rad_s;
   if (opt.fit_coulomb_smoothing) {
-    std::vector<CoulombSign> shapes{sign[0]};
-    if (opt.fit_coulomb_sign) shapes = {CoulombSign::kTanh, CoulombSign::kErf};
     vs = profile_coulomb_smoothing(A0, kept_rows, at_sample, tau, s, x0, opt.prior_weight, vs,
-                                   shapes, &sign, coulomb_columns,
+                                   opt.fit_coulomb_sign, &sign, coulomb_columns,
                                    &res.coulomb_smoothing_profile);
   }
   res.coulomb_smoothing_rad_s = vs;

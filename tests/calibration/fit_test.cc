@@ -257,6 +257,27 @@ TEST(CalibFit, ProfileFindsEachJointsSmoothSign) {
   EXPECT_EQ(r.coulomb_smoothing_profile.sign.size(), r.coulomb_smoothing_profile.v_s_rad_s.size());
 }
 
+// A prior whose joints have different smooth signs: the profile (v_s only) keeps each joint's
+// own sign and finds its v_s (it once gave every joint the first joint's sign).
+TEST(CalibFit, ProfileKeepsEachJointsSignOfAMixedPrior) {
+  constexpr CoulombSign t = CoulombSign::kTanh, e = CoulombSign::kErf;
+  const LawDevice d = law_device(22, {10, 11, 9, 15, 16, 13}, {e, t, e, e, t, e});
+  PhantomParams prior = default_phantom_params();
+  prior.coulomb_sign = d.truth.coulomb_sign;
+  FitOptions fo = law_fit_options();
+  fo.model_mismatch_term = false;
+  const FitResult r = fit_calibration(d.log, prior, fo);
+  ASSERT_TRUE(r.converged) << r.report;
+  const CalibVec xt = pack_calib_params(d.truth);
+  for (int j = 0; j < 6; ++j) {
+    EXPECT_EQ(r.coulomb_sign[j], d.truth.coulomb_sign[j]) << "joint " << j + 1;
+    EXPECT_NEAR(r.coulomb_smoothing_rad_s(j), d.truth.coulomb_smoothing_rad_s(j),
+                1e-12 * d.truth.coulomb_smoothing_rad_s(j))
+        << "joint " << j + 1;
+    EXPECT_NEAR(r.params[44 + j].value / xt(44 + j), 1.0, 1e-3) << "joint " << j + 1;
+  }
+}
+
 TEST(CalibFit, TorqueShiftRealignsADelayedTorqueLog) {
   // A log whose torque column runs 1 sample ahead of the state (tau_log[k] = tau[k + 1]): the
   // fit with torque_shift_samples = 1 recovers the parameters as from the aligned log.
