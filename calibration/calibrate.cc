@@ -111,6 +111,7 @@ CalibrateOutcome calibrate_log(const CalibrationLog& log, const std::string& log
   fo.torque_shift_samples = o.torque_shift;
   fo.coulomb_from_filtered_velocity = o.coulomb_velocity == "filtered";
   fo.model_mismatch_term = o.model_mismatch_term;
+  fo.law_mismatch_term = o.law_mismatch_term;
   fo.min_speed_rad_s = o.min_speed;
   fo.fit_coulomb_smoothing = o.coulomb_smoothing == "fit";
   if (o.coulomb_sign == "prior") {
@@ -217,6 +218,7 @@ nlohmann::json calibration_report_json(const CalibrateOutcome& c, const TruthCom
                      {"std", fp.std},
                      {"std_statistical", fp.std_statistical},
                      {"std_model", fp.std_model},
+                     {"std_law", fp.std_law},
                      {"std_white", fp.std_white},
                      {"identifiable", fp.identifiable}};
     if (!fp.identifiable) not_id.push_back(fp.name);
@@ -232,6 +234,7 @@ nlohmann::json calibration_report_json(const CalibrateOutcome& c, const TruthCom
   j["model_mismatch"] = r.model_mismatch;
   j["model_mismatch_reasons"] = r.model_mismatch_reasons;
   j["model_mismatch_term"] = fo.model_mismatch_term;
+  j["law_mismatch_term"] = fo.model_mismatch_term && fo.law_mismatch_term;
   j["residual_diagnostics"] = {
       {"lag1_autocorrelation", vec6_list(r.diagnostics.lag1_autocorrelation)},
       {"rms_slow_quarter_n_m", vec6_list(r.diagnostics.rms_slow)},
@@ -248,7 +251,8 @@ nlohmann::json calibration_report_json(const CalibrateOutcome& c, const TruthCom
     nlohmann::json rss = nlohmann::json::array();
     for (const std::vector<double>& curve : r.coulomb_smoothing_profile.rss) rss.push_back(curve);
     nlohmann::json cand_sign = nlohmann::json::array();
-    for (CoulombSign cs : r.coulomb_smoothing_profile.sign) cand_sign.push_back(coulomb_sign_name(cs));
+    for (CoulombSign cs : r.coulomb_smoothing_profile.sign)
+      cand_sign.push_back(coulomb_sign_name(cs));
     smoothing["profile"] = {{"v_s_rad_s", r.coulomb_smoothing_profile.v_s_rad_s},
                             {"sign", cand_sign},
                             {"rss_n2_m2", rss}};

@@ -28,6 +28,7 @@ struct CalibrateOptions {
   double torque_shift = 0.0;                  // --torque-shift [ticks], |s| <= 100
   std::string coulomb_velocity = "filtered";  // --coulomb-velocity: 'filtered' or 'raw'
   bool model_mismatch_term = true;            // false: --no-model-mismatch
+  bool law_mismatch_term = true;              // false: --no-law-mismatch (FitOptions)
   double min_speed = 0.2;                     // --min-speed [rad/s], 0..10 (FitOptions)
   // --coulomb-smoothing: 'fit' (v_s per joint by profile, FitOptions::fit_coulomb_smoothing) or
   // 'prior' (the prior model's v_s)

@@ -9,6 +9,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <stdexcept>
 
 #include "reference/core/io.h"
 #include "reference/phantom/phantom_model.h"
@@ -125,8 +126,7 @@ using RowMask = Eigen::Matrix<bool, 6, 1>;
 // sign times a log grid 0.001..1 rad/s (21 values) and the prior's v_s; joint j takes only its
 // own sign `(*sign)[j]` unless `fit_sign` (then either). Coordinate descent over the joints until
 // no joint changes (at most 4 passes), from the prior's v_s and `*sign`.
-using ColumnsFn =
-    std::function<std::vector<Vec6>(const Vec6&, const std::array<CoulombSign, 6>&)>;
+using ColumnsFn = std::function<std::vector<Vec6>(const Vec6&, const std::array<CoulombSign, 6>&)>;
 Vec6 profile_coulomb_smoothing(const std::vector<Regressor>& A0, const std::vector<RowMask>& kept,
                                const std::vector<int>& at_sample, const std::vector<Vec6>& tau,
                                const CalibVec& s, const CalibVec& x0, double prior_weight,
@@ -329,8 +329,15 @@ Regressor calib_regressor_by_columns(const PhantomParams& prior, const Vec6& q, 
   return Y;
 }
 
-FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
-                          const FitOptions& opt) {
+namespace {
+
+// fit_calibration, with each joint's smooth sign `*sign_override` instead of the options' (the
+// law term's refit). `*regressors`: Y of each used sample without its Coulomb columns, computed
+// here when empty, else reused (the refits use the log's samples as the fit does: the autodiff
+// regressor is most of a fit's time).
+FitResult fit_impl(const CalibrationLog& log, const PhantomParams& prior, const FitOptions& opt,
+                   const std::array<CoulombSign, 6>* sign_override,
+                   std::vector<Regressor>* regressors) {
   const int n = log.size();
   if (n < 3) throw InputError("calibrate: log too short (fewer than 3 samples)");
   const double dt = (log.t.back() - log.t.front()) / (n - 1);
@@ -347,6 +354,7 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
   // the logged qd's noise flips it, options.coulomb_from_filtered_velocity).
   std::array<CoulombSign, 6> sign = prior.coulomb_sign;
   if (opt.coulomb_sign) sign.fill(*opt.coulomb_sign);
+  if (sign_override != nullptr) sign = *sign_override;
   const auto coulomb_columns = [&](const Vec6& vs, const std::array<CoulombSign, 6>& law) {
     std::vector<Vec6> col(n);
     for (int k = 0; k < n; ++k) {
@@ -407,13 +415,20 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
   std::vector<int> at_sample;
   std::vector<Regressor> A0;
   std::vector<RowMask> kept_rows;
-  for (int k = std::max(1, trim); k + 1 < n - trim; k += stride) {
-    const Vec6 qdd = (qd[k + 1] - qd[k - 1]) / (log.t[k + 1] - log.t[k - 1]);
-    Regressor Y = calib_regressor(prior, q[k], qd[k], qdd);
+  const bool reuse = !regressors->empty();
+  std::size_t used = 0;
+  for (int k = std::max(1, trim); k + 1 < n - trim; k += stride, ++used) {
+    if (!reuse) {
+      const Vec6 qdd = (qd[k + 1] - qd[k - 1]) / (log.t[k + 1] - log.t[k - 1]);
+      regressors->push_back(calib_regressor(prior, q[k], qd[k], qdd));
+      for (int j = 0; j < 6; ++j) regressors->back()(j, kCoulomb + j) = 0.0;
+    } else if (used >= regressors->size()) {
+      throw std::logic_error("fit_calibration: a refit used more samples than the fit");
+    }
+    Regressor Y = (*regressors)[used];
     RowMask keep;
     for (int j = 0; j < 6; ++j) {
       keep(j) = !(std::abs(qd[k](j)) < slow_below(j));
-      Y(j, kCoulomb + j) = 0.0;
       if (!keep(j)) Y.row(j).setZero();  // a dropped row: no residual
     }
     A0.push_back(Y * s.asDiagonal());
@@ -424,7 +439,7 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
   Vec6 vs = prior.coulomb_smoothing_rad_s;
   if (opt.fit_coulomb_smoothing) {
     vs = profile_coulomb_smoothing(A0, kept_rows, at_sample, tau, s, x0, opt.prior_weight, vs,
-                                   opt.fit_coulomb_sign, &sign, coulomb_columns,
+                                   opt.fit_coulomb_sign && !sign_override, &sign, coulomb_columns,
                                    &res.coulomb_smoothing_profile);
   }
   res.coulomb_smoothing_rad_s = vs;
@@ -598,8 +613,8 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
     res.diagnostics.rms_fast(j) = std::sqrt(fast / quarter);
     if (res.diagnostics.rms_slow(j) > 2.0 * res.diagnostics.rms_fast(j)) {
       char buf[96];
-      std::snprintf(buf, sizeof buf, "joint %d: residual %.3g N m at low speed, %.3g at high", j + 1,
-                    res.diagnostics.rms_slow(j), res.diagnostics.rms_fast(j));
+      std::snprintf(buf, sizeof buf, "joint %d: residual %.3g N m at low speed, %.3g at high",
+                    j + 1, res.diagnostics.rms_slow(j), res.diagnostics.rms_fast(j));
       res.model_mismatch_reasons.emplace_back(buf);
     }
   }
@@ -611,12 +626,13 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
     reduced.model_mismatch_term = false;
     // v_s is chosen again on the reduced rows: how much the choice moves the parameters is part
     // of what the rows near reversal say about the law.
-    const FitResult alt = fit_calibration(log, prior, reduced);
+    const FitResult alt = fit_impl(log, prior, reduced, &res.coulomb_sign, regressors);
     for (int i = 0; i < kCalibParams; ++i) {
       FitParameter& fp = res.params[i];
       const double d = alt.params[i].value - fp.value;
-      const double var_d = std::max(0.0, alt.params[i].std_statistical * alt.params[i].std_statistical -
-                                             fp.std_statistical * fp.std_statistical);
+      const double var_d =
+          std::max(0.0, alt.params[i].std_statistical * alt.params[i].std_statistical -
+                            fp.std_statistical * fp.std_statistical);
       fp.std_model = std::sqrt(std::max(0.0, d * d - var_d));
       fp.std = std::hypot(fp.std_statistical, fp.std_model);
       const double z = var_d > 0.0 ? std::abs(d) / std::sqrt(var_d) : 0.0;
@@ -629,18 +645,51 @@ FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
       }
     }
   }
+  // The law term (FitOptions::law_mismatch_term): the same rows, each joint's other smooth sign.
+  if (opt.model_mismatch_term && opt.law_mismatch_term) {
+    FitOptions other = opt;
+    other.model_mismatch_term = false;
+    std::array<CoulombSign, 6> flipped = res.coulomb_sign;
+    for (CoulombSign& c : flipped) {
+      c = c == CoulombSign::kTanh ? CoulombSign::kErf : CoulombSign::kTanh;
+    }
+    const FitResult alt = fit_impl(log, prior, other, &flipped, regressors);
+    for (int i = 0; i < kCalibParams; ++i) {
+      FitParameter& fp = res.params[i];
+      const double d = alt.params[i].value - fp.value;
+      fp.std_law = std::abs(d);
+      fp.std =
+          std::sqrt(fp.std_statistical * fp.std_statistical + fp.std_model * fp.std_model + d * d);
+      if (fp.identifiable && fp.std_statistical <= opt.max_rel_std * s(i) &&
+          std::abs(d) > 3.0 * fp.std_statistical) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "%s: moves %.3g (%.1f std) with the other smooth sign",
+                      fp.name.c_str(), d, std::abs(d) / fp.std_statistical);
+        res.model_mismatch_reasons.emplace_back(buf);
+      }
+    }
+  }
   res.model_mismatch = !res.model_mismatch_reasons.empty();
 
-  // Practically identifiable: the data pin it to better than max_rel_std of its prior, all
-  // uncertainty included.
+  // Practically identifiable: the data pin it to better than max_rel_std of its prior (the
+  // statistical std: what the data say; the model terms say how far the law may move it, which
+  // the reported std carries and the bar checks against).
   for (int i = 0; i < kCalibParams; ++i) {
     FitParameter& fp = res.params[i];
-    if (fp.identifiable && !(fp.std <= opt.max_rel_std * s(i))) {
+    if (fp.identifiable && !(fp.std_statistical <= opt.max_rel_std * s(i))) {
       fp.identifiable = false;
       --res.identifiable;
     }
   }
   return res;
+}
+
+}  // namespace
+
+FitResult fit_calibration(const CalibrationLog& log, const PhantomParams& prior,
+                          const FitOptions& options) {
+  std::vector<Regressor> regressors;
+  return fit_impl(log, prior, options, nullptr, &regressors);
 }
 
 }  // namespace dentsim

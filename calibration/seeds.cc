@@ -107,6 +107,7 @@ SeedRun run_seed(const PhantomParams& base, std::uint64_t seed, const SeedRunOpt
   co.max_samples = o.max_samples;
   co.max_iterations = o.max_iterations;
   co.model_mismatch_term = o.model_mismatch_term;
+  co.law_mismatch_term = o.law_mismatch_term;
   co.min_speed = o.min_speed;
   co.coulomb_smoothing = o.coulomb_smoothing;
   co.coulomb_sign = o.coulomb_sign;
@@ -140,6 +141,7 @@ SeedRun run_seed(const PhantomParams& base, std::uint64_t seed, const SeedRunOpt
     sp.std = fp.std;
     sp.std_statistical = fp.std_statistical;
     sp.std_model = fp.std_model;
+    sp.std_law = fp.std_law;
     sp.rel_error = truth.params[i].rel_error;
     sp.error_over_std = truth.params[i].error_over_std;
     r.params.push_back(sp);
@@ -197,6 +199,7 @@ nlohmann::json seed_result_to_json(const SeedResult& r) {
                      {"std", p.std},
                      {"std_statistical", p.std_statistical},
                      {"std_model", p.std_model},
+                     {"std_law", p.std_law},
                      {"rel_error", p.rel_error}};
     // JSON has no infinity: null stands for it.
     e["error_over_std"] = std::isfinite(p.error_over_std) ? nlohmann::json(p.error_over_std)
@@ -242,6 +245,7 @@ SeedResult seed_result_from_json(const nlohmann::json& j) {
     p.std = e.at("std").get<double>();
     p.std_statistical = e.at("std_statistical").get<double>();
     p.std_model = e.at("std_model").get<double>();
+    p.std_law = e.value("std_law", 0.0);
     p.rel_error = e.at("rel_error").get<double>();
     const nlohmann::json& eos = e.at("error_over_std");
     p.error_over_std = eos.is_null() ? std::numeric_limits<double>::infinity() : eos.get<double>();

@@ -67,9 +67,10 @@ struct SeedRunOptions {
   int max_samples = 3000;           // calibrate --max-samples
   int max_iterations = 100;         // calibrate --max-iterations
   bool model_mismatch_term = true;  // calibrate without --no-model-mismatch
-  double min_speed = 0.2;                  // calibrate --min-speed [rad/s]
-  std::string coulomb_smoothing = "fit";   // calibrate --coulomb-smoothing
-  std::string coulomb_sign = "prior";      // calibrate --coulomb-sign
+  bool law_mismatch_term = true;    // calibrate without --no-law-mismatch
+  double min_speed = 0.2;           // calibrate --min-speed [rad/s]
+  std::string coulomb_smoothing = "fit";  // calibrate --coulomb-smoothing
+  std::string coulomb_sign = "prior";     // calibrate --coulomb-sign
 };
 
 // One fitted parameter against the truth (fields as in `dentsim calibrate --truth`'s JSON; the
@@ -78,6 +79,7 @@ struct SeedParameter {
   std::string name;
   bool identifiable = false;
   double truth = 0.0, value = 0.0, std = 0.0, std_statistical = 0.0, std_model = 0.0;
+  double std_law = 0.0;
   double rel_error = 0.0;       // |value - truth| / |truth|
   double error_over_std = 0.0;  // |value - truth| / std (infinity when std = 0)
   bool operator==(const SeedParameter&) const = default;

@@ -175,6 +175,7 @@ struct CalibrateFlags {
   std::string log, json, out, prior, truth, plots;
   CalibrateOptions fit;
   bool no_model_mismatch = false;
+  bool no_law_mismatch = false;
 };
 
 void write_plots(const FitResult& r, const std::string& dir) {
@@ -249,6 +250,10 @@ void setup_calibrate(CLI::App& app) {
                 "report the statistical std only (the default refits without each joint's slowest\n"
                 "quarter of samples and adds the change beyond noise to each parameter's std,\n"
                 "flagging a model mismatch: docs/calibration.md)");
+  sub->add_flag(
+      "--no-law-mismatch", opt->no_law_mismatch,
+      "no law term in the std (the default refits with each joint's other smooth sign,\n"
+      "tanh <-> erf, and adds how far each parameter moves to its std: docs/calibration.md)");
   sub->add_option("--max-iterations", opt->fit.max_iterations,
                   "Ceres iteration limit (default 100); a fit that hits it did not converge");
   sub->add_option("--min-speed", opt->fit.min_speed,
@@ -265,6 +270,7 @@ void setup_calibrate(CLI::App& app) {
                   "joint, by the profile) or 'prior' (the prior model's; default)");
   sub->callback([opt] {
     opt->fit.model_mismatch_term = !opt->no_model_mismatch;
+    opt->fit.law_mismatch_term = !opt->no_law_mismatch;
     check_calibrate_options(opt->fit);
     check_output_paths({{"--json", opt->json}, {"-o", opt->out}},
                        {{"LOG", opt->log}, {"--prior", opt->prior}, {"--truth", opt->truth}});

@@ -39,6 +39,7 @@ struct SeedsOptions {
   int count = 20;
   std::string device, json, out;
   bool no_model_mismatch = false;
+  bool no_law_mismatch = false;
   SeedRunOptions run;
 };
 
@@ -129,6 +130,8 @@ void setup_calibrate_seeds(CLI::App& app) {
       ->check(CLI::Range(0, 100000));
   sub->add_flag("--no-model-mismatch", opt->no_model_mismatch,
                 "report the statistical std only (calibrate --no-model-mismatch)");
+  sub->add_flag("--no-law-mismatch", opt->no_law_mismatch,
+                "no law term in the std (calibrate --no-law-mismatch)");
   sub->add_option("--lowpass", opt->run.lowpass_hz,
                   "calibrate --lowpass [Hz] (default 10; 0 = off)")
       ->check(finite_range(0.0, 1e6));
@@ -167,6 +170,7 @@ void setup_calibrate_seeds(CLI::App& app) {
     const PhantomParams base =
         opt->device.empty() ? default_phantom_params() : load_phantom_params(opt->device);
     opt->run.model_mismatch_term = !opt->no_model_mismatch;
+    opt->run.law_mismatch_term = !opt->no_law_mismatch;
     // The low-pass bounds of `calibrate` (calibration/calibrate.cc), checked before any work: below
     // the Nyquist frequency of the device's tick, and a transient (one cut-off period at each
     // end) shorter than a quarter of the log.
@@ -224,15 +228,17 @@ void setup_calibrate_seeds(CLI::App& app) {
     j["perturbation"] = {{"factor_min", kSeedFactorMin},
                          {"factor_max", kSeedFactorMax},
                          {"generator", "std::mt19937_64(seed), top 53 bits"}};
-    j["options"] = {{"duration_s", opt->run.duration_s},
-                    {"design_iterations", opt->run.design_iterations},
-                    {"model_mismatch_term", opt->run.model_mismatch_term},
-                    {"min_speed_rad_s", opt->run.min_speed},
-                    {"coulomb_smoothing", opt->run.coulomb_smoothing},
-                    {"coulomb_sign", opt->run.coulomb_sign},
-                    {"lowpass_hz", opt->run.lowpass_hz},
-                    {"max_samples", opt->run.max_samples},
-                    {"max_iterations", opt->run.max_iterations}};
+    j["options"] = {
+        {"duration_s", opt->run.duration_s},
+        {"design_iterations", opt->run.design_iterations},
+        {"model_mismatch_term", opt->run.model_mismatch_term},
+        {"law_mismatch_term", opt->run.model_mismatch_term && opt->run.law_mismatch_term},
+        {"min_speed_rad_s", opt->run.min_speed},
+        {"coulomb_smoothing", opt->run.coulomb_smoothing},
+        {"coulomb_sign", opt->run.coulomb_sign},
+        {"lowpass_hz", opt->run.lowpass_hz},
+        {"max_samples", opt->run.max_samples},
+        {"max_iterations", opt->run.max_iterations}};
     j["seeds"] = seeds;
     j["summary"] = seed_summary_to_json(s);
     write_json(opt->json, j);

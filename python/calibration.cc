@@ -53,7 +53,7 @@ py::dict calibrate(const py::handle& log_arg, const py::object& prior_arg, doubl
                    const py::object& velocity_lag, double torque_shift,
                    const std::string& coulomb_velocity, bool model_mismatch_term,
                    double min_speed, const std::string& coulomb_smoothing,
-                   const std::string& coulomb_sign) {
+                   const std::string& coulomb_sign, bool law_mismatch_term) {
   const std::string path = path_arg(log_arg, "calibrate: log");
   const CalibrateOptionNames names = argument_names();
   CalibrateOptions o;
@@ -67,6 +67,7 @@ py::dict calibrate(const py::handle& log_arg, const py::object& prior_arg, doubl
   o.min_speed = min_speed;
   o.coulomb_smoothing = coulomb_smoothing;
   o.coulomb_sign = coulomb_sign;
+  o.law_mismatch_term = law_mismatch_term;
   // 'auto' or a number of ticks, as the command's text (17 significant digits read back exactly).
   if (py::isinstance<py::str>(velocity_lag)) {
     o.velocity_lag = velocity_lag.cast<std::string>();
@@ -119,12 +120,14 @@ void bind_calibration(py::module_& m) {
         py::arg("torque_shift") = 0.0, py::arg("coulomb_velocity") = "filtered",
         py::arg("model_mismatch_term") = true, py::arg("min_speed") = 0.2,
         py::arg("coulomb_smoothing") = "fit", py::arg("coulomb_sign") = "prior",
+        py::arg("law_mismatch_term") = true,
         R"(Fit the device's inertial and friction parameters to a calibration log (Ceres), as
 `dentsim calibrate LOG --json FILE -o MODEL` with the same options and defaults:
 prior (model file; None: the shipped default), lowpass_hz, lowpass_order, max_samples,
 max_iterations, velocity_lag ('auto' or ticks), torque_shift, coulomb_velocity ('filtered' or
 'raw'), model_mismatch_term (False: --no-model-mismatch), min_speed [rad/s] (--min-speed),
-coulomb_smoothing ('fit' or 'prior'), coulomb_sign ('erf', 'tanh' or 'prior').
+coulomb_smoothing ('fit' or 'prior'), coulomb_sign ('erf', 'tanh', 'fit' or 'prior'),
+law_mismatch_term (False: --no-law-mismatch).
 
 Returns the CLI's JSON report as a dict (converged, residual_rms_n_m, condition_number,
 parameters [name, prior, value, std, ..., identifiable], ...) plus "fitted_model" (the fitted

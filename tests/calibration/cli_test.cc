@@ -7,7 +7,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -67,10 +66,9 @@ TEST(CalibrateCli, ExciteThenCalibrateOnTheSimulatedPhantom) {
   ASSERT_TRUE(j.contains("max_rel_error"));
   // Identifiable in practice on this quantised, sampled-data run: arm Coulomb friction, the
   // base-yaw damping, gimbal masses (through gravity), gimbal Coulomb friction. Their worst
-  // error (measured 0.148: the gimbal-yaw mass, 3.5 sigma, also pulled by the friction mismatch
-  // below) stays below 20 % except the gimbal joints' Coulomb friction: on those tiny inertias
-  // MuJoCo's frictionloss (a soft constraint) is far from the model's tanh law (fitted -51 %
-  // and -26 % on q4, q5 at ~14 reported sigma: a model mismatch, not noise; docs/calibration.md).
+  // error without the gimbal joints' Coulomb friction stays below 20 % (measured 0.9 %; with it
+  // 7.0 %: on those tiny inertias MuJoCo's frictionloss, a soft constraint, is neither smooth
+  // sign of the model; the bar below checks them against their reported std).
   EXPECT_GE(j.at("identifiable_count").get<int>(), 4);
   double max_rel = 0.0;
   for (const auto& e : j.at("parameters")) {
@@ -85,21 +83,21 @@ TEST(CalibrateCli, ExciteThenCalibrateOnTheSimulatedPhantom) {
   EXPECT_LT(max_rel, 0.2);
   EXPECT_GT(j.at("condition_number").get<double>(), 1.0);
   // The plant's friction is MuJoCo's frictionloss, not the model's tanh law: the fit says so
-  // (residual diagnostics, the refit without the slow rows), and its reported std carries the
-  // model-mismatch term: every identifiable parameter but the gimbal joints' Coulomb friction is
-  // within 5 % of the truth or 3 reported std (docs/calibration.md "Uncertainty under model
-  // mismatch").
+  // (residual diagnostics, the refit without the slow rows, the refit with the other smooth
+  // sign), and its reported std carries both model-mismatch terms: every identifiable parameter,
+  // the gimbal joints' Coulomb friction included, is within 5 % of the truth or 3 reported std
+  // (issue #17's bar; docs/calibration.md "Uncertainty under model mismatch").
   EXPECT_TRUE(j.at("model_mismatch").get<bool>());
   EXPECT_FALSE(j.at("model_mismatch_reasons").empty());
   ASSERT_TRUE(j.contains("residual_diagnostics"));
+  EXPECT_TRUE(j.at("law_mismatch_term").get<bool>());
   for (const auto& e : j.at("parameters")) {
-    const double total = std::hypot(e.at("std_statistical").get<double>(),
-                                    e.at("std_model").get<double>());
+    const double stat = e.at("std_statistical").get<double>(),
+                 slow = e.at("std_model").get<double>(), law = e.at("std_law").get<double>();
+    const double total = std::sqrt(stat * stat + slow * slow + law * law);
     EXPECT_NEAR(e.at("std").get<double>(), total, 1e-12 * total + 1e-300) << e.at("name");
     const std::string name = e.at("name");
-    if (!e.contains("rel_error") || (name.rfind("coulomb_n_m.", 0) == 0 && name.back() >= '4')) {
-      continue;
-    }
+    if (!e.contains("rel_error")) continue;
     EXPECT_TRUE(e.at("rel_error").get<double>() < 0.05 ||
                 e.at("error_over_std").get<double>() < 3.0)
         << name << ": " << e;

@@ -186,11 +186,13 @@ TEST(CalibrationSeeds, SummaryCountsWhatIsOutsideBothBarsAndRoundTripsThroughJso
 //
 // Issue #17's bar on the default simulated plant (MuJoCo's frictionloss, quantised encoders, the
 // driver's velocity estimate) and seeded held-out perturbations: every identifiable parameter
-// within 5 % or within 3 reported std, and the fitted M(q) within 2 %. It does NOT hold today
-// (DISABLED_Issue17FullBar below says where it fails); the tests before it assert what holds,
-// each under its own name. Short form: seeds 1..3, 8 s of excitation as drawn (no design
-// iterations), 1500 samples, the model-mismatch term on: about 6.5 s of CPU per seed in Release.
-// The long form is `dentsim calibrate-seeds --count 20` (docs/calibration.md has its table).
+// within 5 % or within 3 reported std, and the fitted M(q) within 2 %. Short form: seeds 1..3,
+// the excitation designed as `dentsim excite` designs it (40 iterations) but 8 s long, 1500
+// samples, both model-mismatch terms on: about 10 s of CPU per seed in Release. The long form is
+// `dentsim calibrate-seeds --count 20` (docs/calibration.md has its table: 0 of 230 outside).
+// Measured here: 33 parameters checked, none outside; M(q) 0.27-0.33 %. The excitation as drawn
+// (no design iterations) is a weaker experiment: on it seed 2's coulomb_n_m.6 is 7.9 % off at
+// 3.96 reported std (docs/calibration.md).
 
 constexpr std::uint64_t kFirstSeed = 1;
 constexpr int kSeeds = 3;
@@ -198,7 +200,6 @@ constexpr int kSeeds = 3;
 SeedRunOptions short_options() {
   SeedRunOptions o;
   o.duration_s = 8.0;
-  o.design_iterations = 0;
   o.max_samples = 1500;
   return o;
 }
@@ -219,8 +220,9 @@ const std::vector<SeedResult>& short_results() {
           100 * s.prior.gimbal_mass_matrix, 100 * s.fitted.gravity);
       for (const SeedParameter& p : s.params) {
         if (!p.identifiable) continue;
-        std::printf("  %-26s %+8.3f %% %7.2f std%s\n", p.name.c_str(),
-                    100 * (p.value / p.truth - 1.0), p.error_over_std,
+        std::printf("  %-26s %+8.3f %% %7.2f std (statistical %.3g, slow rows %.3g, law %.3g)%s\n",
+                    p.name.c_str(), 100 * (p.value / p.truth - 1.0), p.error_over_std,
+                    p.std_statistical, p.std_model, p.std_law,
                     within_bar(p) ? "" : "  outside the bar");
       }
     }
@@ -229,47 +231,50 @@ const std::vector<SeedResult>& short_results() {
   return results;
 }
 
-// What holds today, in one test (ctest runs each test in its own process: the fits run once).
-TEST(CalibrationSeedsProperty, NonGimbalCoulombWithin5PercentOr3StdAndMassMatrixWithin2Percent) {
+// Issue #17's bar and the law term's share of the std, in one test (ctest runs each test in its
+// own process: the fits run once).
+TEST(CalibrationSeedsProperty, EveryIdentifiableWithin5PercentOr3StdAndMassMatrixWithin2Percent) {
   for (const SeedResult& r : short_results()) {
     EXPECT_TRUE(r.converged) << "seed " << r.seed;
-    // Issue #17's parameter bar, except coulomb_n_m.4..6: the gimbal joints' Coulomb friction
-    // still misses it on some seeds (DISABLED_Issue17FullBar).
-    int others = 0;
-    for (const SeedParameter& p : r.params) {
-      if (!p.identifiable || is_gimbal_coulomb(p.name)) continue;
-      ++others;
-      EXPECT_TRUE(within_bar(p)) << "seed " << r.seed << ": " << p.name << " " << 100 * p.rel_error
-                                 << " % off at " << p.error_over_std << " reported std";
-    }
-    // Not met by checking nothing: at least 4 such parameters per seed (measured 7-9).
-    EXPECT_GE(others, 4) << "seed " << r.seed;
-    // M(q): issue #17's 2 % (measured on seeds 1..3: 0.12, 0.20, 0.22 %; 1.9-2.4 % before the
-    // rows near stiction were dropped), and well below the prior's error (4.2-6.7 %).
-    EXPECT_LE(r.fitted.mass_matrix, kMassMatrixBar) << "seed " << r.seed;
-    EXPECT_LT(r.fitted.mass_matrix, 0.1 * r.prior.mass_matrix) << "seed " << r.seed;
-    // The gimbal's block, which the whole matrix cannot see: not degenerate (the fit used to put
-    // the gimbal inertias at their lower bound, 1e-3 of the prior). Measured 17.7, 10.1, 3.8 %
-    // (prior 4.2, 15.7, 9.3 %): 8 s of excitation pins it loosely; bound 30 %.
-    EXPECT_LE(r.fitted.gimbal_mass_matrix, 0.3) << "seed " << r.seed;
-    // MuJoCo's frictionloss is not the model's tanh law: the fit says so on every seed.
-    EXPECT_TRUE(r.model_mismatch) << "seed " << r.seed;
-  }
-}
-
-// Issue #17's full bar. Disabled because it fails today on the short form (measured): seed 2:
-// coulomb_n_m.5 +5.5 % at 5.3 std, coulomb_n_m.6 -7.9 % at 4.2 std (M(q) is within 2 % on every
-// seed now). With the rows near stiction dropped and v_s fitted per joint the gimbal Coulomb
-// friction is mostly within the bar, but on some seeds the profile settles on a v_s that trades
-// f_c against the viscous term (docs/calibration.md, "Calibration over seeded held-out
-// devices"). Enable it when that is fixed (issue #17).
-TEST(CalibrationSeedsProperty, DISABLED_Issue17FullBar) {
-  for (const SeedResult& r : short_results()) {
     for (const SeedParameter& p : r.outside()) {
       ADD_FAILURE() << "seed " << r.seed << ": " << p.name << " " << 100 * p.rel_error
                     << " % off at " << p.error_over_std << " reported std";
     }
+    // Not met by checking nothing: the arm's damping and Coulomb friction and the gimbal's
+    // Coulomb friction at least (measured 11 identifiable per seed).
+    int gimbal_coulomb = 0;
+    for (const SeedParameter& p : r.params)
+      gimbal_coulomb += p.identifiable && is_gimbal_coulomb(p.name);
+    EXPECT_GE(r.checked(), 8) << "seed " << r.seed;
+    EXPECT_GE(gimbal_coulomb, 1) << "seed " << r.seed;
+    // M(q): issue #17's 2 % (measured on seeds 1..3: 0.27-0.33 %), and well below the prior's
+    // error (4.2-6.7 %).
     EXPECT_LE(r.fitted.mass_matrix, kMassMatrixBar) << "seed " << r.seed;
+    EXPECT_LT(r.fitted.mass_matrix, 0.1 * r.prior.mass_matrix) << "seed " << r.seed;
+    // The gimbal's block, which the whole matrix cannot see: not degenerate (the fit used to put
+    // the gimbal inertias at their lower bound, 1e-3 of the prior). Worst measured 8.3 %; 8 s
+    // of excitation pins it loosely: bound 30 %.
+    EXPECT_LE(r.fitted.gimbal_mass_matrix, 0.3) << "seed " << r.seed;
+    // MuJoCo's frictionloss is not the model's tanh law: the fit says so on every seed.
+    EXPECT_TRUE(r.model_mismatch) << "seed " << r.seed;
+    // The reported std is the three terms in quadrature; the law term is large where the smooth
+    // sign matters (some gimbal Coulomb friction: measured 3.1-5.8 statistical std per seed) and
+    // small where it does not (the arm's Coulomb friction: measured below 1).
+    double gimbal_max = 0.0;
+    for (const SeedParameter& p : r.params) {
+      EXPECT_NEAR(
+          p.std * p.std,
+          p.std_statistical * p.std_statistical + p.std_model * p.std_model + p.std_law * p.std_law,
+          1e-9 * p.std * p.std + 1e-300)
+          << p.name;
+      if (!p.identifiable || p.name.rfind("coulomb_n_m.", 0) != 0) continue;
+      if (is_gimbal_coulomb(p.name)) {
+        gimbal_max = std::max(gimbal_max, p.std_law / p.std_statistical);
+      } else {
+        EXPECT_LT(p.std_law, 2.0 * p.std_statistical) << "seed " << r.seed << ": " << p.name;
+      }
+    }
+    EXPECT_GT(gimbal_max, 1.5) << "seed " << r.seed;
   }
 }
 

@@ -59,6 +59,18 @@ def test_fit_equals_the_commands_report(excite_log, cli, tmp_path):
     assert dentsim.PhantomModel(path).dof == 6
 
 
+def test_without_the_law_term_equals_the_commands_flag(excite_log, cli, tmp_path):
+    cli("calibrate", excite_log, "--json", tmp_path / "fit.json", "-o", tmp_path / "model.json",
+        "--max-samples", FIT["max_samples"], "--no-law-mismatch")
+    expected = json.loads((tmp_path / "fit.json").read_text())
+    r = dentsim.calibrate(excite_log, law_mismatch_term=False, **FIT)
+    assert r["parameters"] == expected["parameters"] and not r["law_mismatch_term"]
+    # The law term off: the reported std is the statistical and the slow-row terms alone.
+    for p in r["parameters"]:
+        assert p["std_law"] == 0.0
+        assert p["std"] == pytest.approx(np.hypot(p["std_statistical"], p["std_model"]), rel=1e-12)
+
+
 def test_bad_logs_and_options_raise_the_commands_message(cli, tmp_path, excite_log):
     bad = tmp_path / "bad.csv"
     bad.write_text("t_s,q1_rad\n0,0\n")
