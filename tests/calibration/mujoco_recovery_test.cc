@@ -12,10 +12,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <random>
 #include <string>
 #include <utility>
 
+#include "calibration/calibrate.h"  // truth_model_error
 #include "calibration/excitation.h"
 #include "calibration/fit.h"
 #include "device/phantom_device.h"
@@ -71,29 +71,15 @@ std::pair<double, std::string> worst_identifiable(const FitResult& r, const Phan
 }
 
 // The base parameters the observer uses: the largest relative error of M(q) and of g(q) over 100
-// random poses in the joint box.
-std::pair<double, double> model_errors(const PhantomParams& truth, const PhantomParams& fitted) {
-  const PhantomModelD mt(truth), mf(fitted);
-  std::mt19937_64 rng(1);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  double m_err = 0.0, g_err = 0.0;
-  for (int k = 0; k < 100; ++k) {
-    Vec6 q;
-    for (int j = 0; j < 6; ++j)
-      q(j) = truth.q_min_rad(j) + u(rng) * (truth.q_max_rad(j) - truth.q_min_rad(j));
-    m_err = std::max(m_err, (mf.M(q) - mt.M(q)).norm() / mt.M(q).norm());
-    g_err = std::max(g_err, (mf.g(q) - mt.g(q)).norm() / mt.g(q).norm());
-  }
-  return {m_err, g_err};
-}
-
+// random poses in the joint box (truth_model_error, as `calibrate --truth` reports it over 200).
 TEST(CalibrationMujocoRecovery, TanhFrictionExactSensingRecoversWithinTwoPercent) {
   const PhantomParams truth = truth_model();
   const CalibrationLog log = exact_log(truth, SimulatedDeviceConfig::FrictionLaw::kTanh);
   const FitResult r = fit_calibration(log, default_phantom_params(), exact_fit_options());
   ASSERT_TRUE(r.converged) << r.report;
   const auto [max_rel, worst] = worst_identifiable(r, truth);
-  const auto [m_err, g_err] = model_errors(truth, r.fitted);
+  const ModelError e = truth_model_error(truth, r.fitted, 100);
+  const double m_err = e.mass_matrix, g_err = e.gravity;
   std::printf(
       "%d identifiable, residual %.3g N m, max rel. error %.4f (%s), M(q) %.2e, g(q) %.2e\n",
       r.identifiable, r.residual_rms, max_rel, worst.c_str(), m_err, g_err);
@@ -116,10 +102,10 @@ TEST(CalibrationMujocoRecovery, FrictionlossExactSensingRecoversOnceStictionRows
   const FitResult r = fit_calibration(log, default_phantom_params(), fo);
   ASSERT_TRUE(r.converged) << r.report;
   const auto [max_rel, worst] = worst_identifiable(r, truth);
-  const double m_err = model_errors(truth, r.fitted).first;
+  const double m_err = truth_model_error(truth, r.fitted, 100).mass_matrix;
   fo.min_speed_rad_s = 0.0;
   const FitResult kept = fit_calibration(log, default_phantom_params(), fo);
-  const double m_err_kept = model_errors(truth, kept.fitted).first;
+  const double m_err_kept = truth_model_error(truth, kept.fitted, 100).mass_matrix;
   std::printf(
       "rows near stiction dropped: %d identifiable, max rel. error %.4f (%s), M(q) %.2e, v_s "
       "%.3g..%.3g rad/s; kept: M(q) %.2e\n",
