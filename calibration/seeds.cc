@@ -154,6 +154,8 @@ SeedRun run_seed(const PhantomParams& base, std::uint64_t seed, const SeedRunOpt
 SeedSummary summarize(const std::vector<SeedResult>& results) {
   SeedSummary s;
   std::vector<double> m;
+  double sum_z2 = 0.0;
+  int finite = 0;
   for (const SeedResult& r : results) {
     ++s.fits;
     s.converged += r.converged;
@@ -166,7 +168,19 @@ SeedSummary summarize(const std::vector<SeedResult>& results) {
     s.mass_matrix_within_bar += r.fitted.mass_matrix <= kMassMatrixBar;
     s.gimbal_mass_matrix_max = std::max(s.gimbal_mass_matrix_max, r.fitted.gimbal_mass_matrix);
     s.model_mismatch_flagged += r.model_mismatch;
+    for (const SeedParameter& p : r.params) {
+      if (!p.identifiable) continue;
+      const double z = p.error_over_std;
+      if (std::isfinite(z)) {
+        sum_z2 += z * z;
+        ++finite;
+      }
+      s.beyond_1_std += !(z <= 1.0);
+      s.beyond_2_std += !(z <= 2.0);
+      s.beyond_3_std += !(z <= 3.0);
+    }
   }
+  s.error_over_std_rms = finite > 0 ? std::sqrt(sum_z2 / finite) : 0.0;
   if (!m.empty()) {
     std::sort(m.begin(), m.end());
     const std::size_t n = m.size();
@@ -265,6 +279,10 @@ nlohmann::json seed_summary_to_json(const SeedSummary& s) {
           {"mass_matrix_within_bar", s.mass_matrix_within_bar},
           {"gimbal_mass_matrix_error_max", s.gimbal_mass_matrix_max},
           {"model_mismatch_flagged", s.model_mismatch_flagged},
+          {"error_over_std_rms", s.error_over_std_rms},
+          {"beyond_1_std", s.beyond_1_std},
+          {"beyond_2_std", s.beyond_2_std},
+          {"beyond_3_std", s.beyond_3_std},
           {"bar",
            {{"parameter_rel_error", kParameterRelBar},
             {"parameter_error_over_std", kParameterStdBar},

@@ -127,6 +127,12 @@ struct SeedSummary {
   int mass_matrix_within_bar = 0;                          // fits with M(q) within 2 %
   double gimbal_mass_matrix_max = 0.0;                     // worst fitted gimbal-block error
   int model_mismatch_flagged = 0;
+  // Whether the reported std is the right size: |value - truth| / std over the checked parameters
+  // (RMS over the finite ones; an error with std = 0 counts as beyond every bound). A std that
+  // fits the errors gives RMS near 1 and about 32 / 5 / 0.3 % beyond 1 / 2 / 3 std for Gaussian
+  // errors; RMS well below 1 is a std wider than the errors need.
+  double error_over_std_rms = 0.0;
+  int beyond_1_std = 0, beyond_2_std = 0, beyond_3_std = 0;
   bool operator==(const SeedSummary&) const = default;
 };
 // The median is the mean of the two middle values for an even count.

@@ -81,7 +81,7 @@ std::string outside_text(const SeedResult& r) {
 }
 
 void print_tables(const std::vector<SeedResult>& results, const SeedSummary& s,
-                  bool model_mismatch_term) {
+                  bool model_mismatch_term, bool law_term) {
   std::printf(
       "| seed | converged | identifiable | outside 5 %% and 3 std | fitted M(q) error | fitted "
       "gimbal-block error | prior M(q) error | model_mismatch |\n|---|---|---|---|---|---|---|---|\n");
@@ -97,12 +97,19 @@ void print_tables(const std::vector<SeedResult>& results, const SeedSummary& s,
       "which gimbal Coulomb | fitted M(q) error median / max | M(q) within 2 %% | gimbal-block "
       "error max | model_mismatch flagged |\n|---|---|---|---|---|---|---|---|---|\n");
   std::printf("| %s | %d | %d | %d | %d | %s / %s | %d | %s | %d |\n",
-              model_mismatch_term ? "total, with the model-mismatch term"
-                                  : "statistical (Newey-West), without the model-mismatch term",
+              !model_mismatch_term ? "statistical (Newey-West), without the model-mismatch term"
+              : law_term           ? "total, with the model-mismatch and law terms"
+                                   : "total, with the model-mismatch term (no law term)",
               s.fits, s.checked, s.outside, s.outside_gimbal_coulomb,
               percent(s.mass_matrix_median).c_str(), percent(s.mass_matrix_max).c_str(),
               s.mass_matrix_within_bar, percent(s.gimbal_mass_matrix_max).c_str(),
               s.model_mismatch_flagged);
+  const double n = std::max(1, s.checked);
+  std::printf(
+      "\nerror / reported std over the %d checks: RMS %.2f; beyond 1 std %d (%.0f %%), beyond 2 "
+      "std %d (%.0f %%), beyond 3 std %d (%.1f %%)\n",
+      s.checked, s.error_over_std_rms, s.beyond_1_std, 100.0 * s.beyond_1_std / n, s.beyond_2_std,
+      100.0 * s.beyond_2_std / n, s.beyond_3_std, 100.0 * s.beyond_3_std / n);
 }
 
 void setup_calibrate_seeds(CLI::App& app) {
@@ -242,7 +249,7 @@ void setup_calibrate_seeds(CLI::App& app) {
     j["seeds"] = seeds;
     j["summary"] = seed_summary_to_json(s);
     write_json(opt->json, j);
-    print_tables(results, s, opt->run.model_mismatch_term);
+    print_tables(results, s, opt->run.model_mismatch_term, opt->run.law_mismatch_term);
     if (s.converged < s.fits) {
       std::string which;
       for (const SeedResult& r : results)

@@ -171,6 +171,12 @@ TEST(CalibrationSeeds, SummaryCountsWhatIsOutsideBothBarsAndRoundTripsThroughJso
   EXPECT_EQ(s.mass_matrix_within_bar, 2);  // 0.010 and 0.020 (the bar is inclusive)
   EXPECT_EQ(s.model_mismatch_flagged, 1);
   EXPECT_DOUBLE_EQ(summarize({a, b, c}).mass_matrix_median, 0.020);
+  // error / std over the 5 checks (10, 3, 3.01, inf, 4): RMS over the finite four, the infinite
+  // one beyond every bound, 3 itself not beyond 3.
+  EXPECT_DOUBLE_EQ(s.error_over_std_rms, std::sqrt((100.0 + 9.0 + 3.01 * 3.01 + 16.0) / 4.0));
+  EXPECT_EQ(s.beyond_1_std, 5);
+  EXPECT_EQ(s.beyond_2_std, 5);
+  EXPECT_EQ(s.beyond_3_std, 4);
 
   // Through JSON text (as the MPI gather carries it): bit-identical, infinity as null.
   const nlohmann::json j = nlohmann::json::parse(seed_result_to_json(a).dump());
@@ -180,6 +186,8 @@ TEST(CalibrationSeeds, SummaryCountsWhatIsOutsideBothBarsAndRoundTripsThroughJso
   const nlohmann::json js = seed_summary_to_json(s);
   EXPECT_EQ(js.at("outside_bar"), 3);
   EXPECT_EQ(js.at("mass_matrix_within_bar"), 2);
+  EXPECT_EQ(js.at("beyond_3_std"), 4);
+  EXPECT_EQ(js.at("error_over_std_rms").get<double>(), s.error_over_std_rms);
 }
 
 // ---- issue #17's property test over seeds, short form (CI) ----------------------------------
