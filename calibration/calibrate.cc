@@ -239,6 +239,28 @@ nlohmann::json calibration_report_json(const CalibrateOutcome& c, const TruthCom
       {"lag1_autocorrelation", vec6_list(r.diagnostics.lag1_autocorrelation)},
       {"rms_slow_quarter_n_m", vec6_list(r.diagnostics.rms_slow)},
       {"rms_fast_quarter_n_m", vec6_list(r.diagnostics.rms_fast)}};
+  {
+    const ResidualDiagnostics& dg = r.diagnostics;
+    nlohmann::json& jd = j["residual_diagnostics"];
+    nlohmann::json rho = nlohmann::json::array(), white = nlohmann::json::array(),
+                   length = nlohmann::json::array(), bins = nlohmann::json::array();
+    for (int q = 0; q < 6; ++q) {
+      rho.push_back(dg.autocorrelation[q]);
+      white.push_back(dg.white[q]);
+      length.push_back(dg.correlation_length[q]);
+      const ResidualDiagnostics::VelocityBins& vb = dg.residual_vs_velocity[q];
+      bins.push_back(
+          {{"qd_rad_s", vb.qd}, {"mean_n_m", vb.mean}, {"rms_n_m", vb.rms}, {"rows", vb.rows}});
+    }
+    jd["autocorrelation_lags"] = dg.autocorrelation_lags;
+    jd["autocorrelation"] = rho;
+    jd["ljung_box_q"] = vec6_list(dg.ljung_box_q);
+    jd["ljung_box_threshold_99"] = dg.ljung_box_threshold;
+    jd["white"] = white;
+    jd["correlation_length_samples"] = length;
+    jd["newey_west_lags"] = r.hac_lags;
+    jd["residual_vs_velocity"] = bins;
+  }
   j["not_identifiable_left_at_prior"] = not_id;
   // The friction law's shape: rows dropped near stiction, v_s per joint and its profile.
   j["min_speed_rad_s"] = fo.min_speed_rad_s;

@@ -619,6 +619,73 @@ FitResult fit_impl(const CalibrationLog& log, const PhantomParams& prior, const 
     }
   }
 
+  // Whiteness and the residual against the signed velocity (ResidualDiagnostics).
+  {
+    ResidualDiagnostics& dg = res.diagnostics;
+    const int K = std::max(1, std::min(std::max(10, 2 * res.hac_lags), m / 4));
+    dg.autocorrelation_lags = K;
+    // chi^2_K 99 % point, Wilson-Hilferty: K (1 - 2 / (9K) + z sqrt(2 / (9K)))^3, z = 2.3263.
+    const double a = 2.0 / (9.0 * K);
+    dg.ljung_box_threshold = K * std::pow(1.0 - a + 2.3263478740408408 * std::sqrt(a), 3);
+    std::vector<double> e(m);
+    for (int j = 0; j < 6; ++j) {
+      int nj = 0;
+      double c0 = 0.0;
+      for (int k = 0; k < m; ++k) {
+        e[k] = kept_rows[k](j) ? res.tau_predicted[k](j) - res.tau_measured[k](j) : 0.0;
+        nj += kept_rows[k](j);
+        c0 += e[k] * e[k];
+      }
+      std::vector<double>& rho = dg.autocorrelation[j];
+      rho.assign(K, 0.0);
+      dg.correlation_length[j] = K + 1;
+      double lb_sum = 0.0;
+      for (int l = 1; l <= K; ++l) {
+        double c = 0.0;
+        int pairs = 0;
+        for (int k = 0; k + l < m; ++k) {
+          if (!kept_rows[k](j) || !kept_rows[k + l](j)) continue;
+          c += e[k] * e[k + l];
+          ++pairs;
+        }
+        rho[l - 1] = pairs > 0 && c0 > 0.0 ? (c / pairs) / (c0 / nj) : 0.0;
+        if (nj > l) lb_sum += rho[l - 1] * rho[l - 1] / (nj - l);
+        if (dg.correlation_length[j] == K + 1 && nj > 0 &&
+            std::abs(rho[l - 1]) < 2.0 / std::sqrt(static_cast<double>(nj))) {
+          dg.correlation_length[j] = l;
+        }
+      }
+      dg.ljung_box_q(j) = static_cast<double>(nj) * (nj + 2.0) * lb_sum;
+      dg.white[j] = dg.ljung_box_q(j) <= dg.ljung_box_threshold;
+      // Residual against the signed velocity: 5 bins of equal count on each side of 0.
+      std::vector<std::pair<double, double>> vr;
+      for (int k = 0; k < m; ++k) {
+        if (kept_rows[k](j)) vr.emplace_back(used_qd[k](j), e[k]);
+      }
+      std::sort(vr.begin(), vr.end());
+      const std::size_t zero = static_cast<std::size_t>(
+          std::lower_bound(vr.begin(), vr.end(), std::make_pair(0.0, -HUGE_VAL)) - vr.begin());
+      ResidualDiagnostics::VelocityBins& vb = dg.residual_vs_velocity[j];
+      for (const auto& [first, last] : {std::pair{std::size_t{0}, zero}, {zero, vr.size()}}) {
+        const std::size_t n_side = last - first, nb = std::min<std::size_t>(5, n_side);
+        for (std::size_t bin = 0; bin < nb; ++bin) {
+          const std::size_t lo = first + n_side * bin / nb, hi = first + n_side * (bin + 1) / nb;
+          double sq = 0.0, se = 0.0, se2 = 0.0;
+          for (std::size_t i = lo; i < hi; ++i) {
+            sq += vr[i].first;
+            se += vr[i].second;
+            se2 += vr[i].second * vr[i].second;
+          }
+          const double cnt = static_cast<double>(hi - lo);
+          vb.qd.push_back(sq / cnt);
+          vb.mean.push_back(se / cnt);
+          vb.rms.push_back(std::sqrt(se2 / cnt));
+          vb.rows.push_back(static_cast<int>(hi - lo));
+        }
+      }
+    }
+  }
+
   // The model-mismatch term (FitOptions::model_mismatch_term).
   if (opt.model_mismatch_term) {
     FitOptions reduced = opt;

@@ -176,6 +176,30 @@ struct ResidualDiagnostics {
   // RMS residual over the used samples in the slowest and the fastest quarter of |qd_j|: a
   // friction law that does not fit shows where the joint reverses (slow), not where it moves.
   Vec6 rms_slow = Vec6::Zero(), rms_fast = Vec6::Zero();
+  // Whiteness, per joint over its kept rows: the residual's autocorrelation rho_l at lags
+  // l = 1..K (K = autocorrelation_lags = 2 x the Newey-West lags, at least 10, at most a quarter
+  // of the samples; pairs of kept rows only), the Ljung-Box statistic
+  // Q = n (n + 2) sum_l rho_l^2 / (n - l) and the 99 % point of chi^2 with K degrees of freedom
+  // (Wilson-Hilferty); Q above it: not white. After the zero-phase low-pass a residual is
+  // correlated over the filter's time by construction, which the Newey-West std allows for over
+  // FitResult::hac_lags samples: correlation_length, the first lag whose |rho| is inside the
+  // white-noise band 2 / sqrt(n) (K + 1 if none), beyond hac_lags says that window is short.
+  int autocorrelation_lags = 0;
+  std::array<std::vector<double>, 6> autocorrelation;
+  Vec6 ljung_box_q = Vec6::Zero();
+  double ljung_box_threshold = 0.0;
+  std::array<bool, 6> white{};
+  std::array<int, 6> correlation_length{};
+  // The residual against the signed velocity: joint j's kept rows by low-passed qd_j in (up to)
+  // 5 bins of equal count on each side of 0, in order of qd: the bin's mean qd, the mean and RMS
+  // residual, the rows. A friction law of the wrong shape shows as a pattern near qd = 0; a
+  // direction-dependent Coulomb friction (f+ one way, f- the other: the symmetric law's
+  // (f+ + f-) / 2 plus a constant (f+ - f-) / 2) as a mean offset of one sign on both sides.
+  struct VelocityBins {
+    std::vector<double> qd, mean, rms;
+    std::vector<int> rows;
+  };
+  std::array<VelocityBins, 6> residual_vs_velocity;
 };
 
 struct FitResult {

@@ -210,6 +210,44 @@ void write_plots(const FitResult& r, const std::string& dir) {
   s.points = true;
   hist.series.push_back(s);
   plot::write_png({hist}, dir + "/residual_histogram.png");
+  // The residual against the signed velocity (mean and RMS per bin of equal count), per joint.
+  const ResidualDiagnostics& dg = r.diagnostics;
+  std::vector<plot::Figure> vel;
+  for (int j = 0; j < 6; ++j) {
+    const ResidualDiagnostics::VelocityBins& vb = dg.residual_vs_velocity[j];
+    plot::Figure f{"joint " + std::to_string(j + 1) + ": residual vs velocity",
+                   "low-passed qd [rad/s]",
+                   "predicted - measured [N m]",
+                   {}};
+    plot::Series mean{"mean", vb.qd, vb.mean}, rms{"RMS", vb.qd, vb.rms};
+    mean.points = true;
+    rms.dashed = true;
+    f.series.push_back(mean);
+    f.series.push_back(rms);
+    vel.push_back(f);
+  }
+  plot::write_png(vel, dir + "/residual_vs_velocity.png", 2);
+  // Autocorrelation per joint with the white-noise band (2 / sqrt(rows)) and the Newey-West window.
+  plot::Figure ac{"residual autocorrelation (kept rows)", "lag [samples used]", "rho", {}};
+  std::vector<double> lags;
+  for (int l = 1; l <= dg.autocorrelation_lags; ++l) lags.push_back(l);
+  for (int j = 0; j < 6; ++j) {
+    ac.series.push_back({"joint " + std::to_string(j + 1), lags, dg.autocorrelation[j]});
+  }
+  const double band = 2.0 / std::sqrt(std::max(1, r.rows_used.maxCoeff()));
+  const double last = dg.autocorrelation_lags;
+  plot::Series hi{"white-noise band", {1.0, last}, {band, band}},
+      lo{"", {1.0, last}, {-band, -band}};
+  hi.dashed = lo.dashed = true;
+  ac.series.push_back(hi);
+  lo.color = static_cast<int>(ac.series.size()) - 1;
+  ac.series.push_back(lo);
+  plot::Series nw{"Newey-West lags",
+                  {static_cast<double>(r.hac_lags), static_cast<double>(r.hac_lags)},
+                  {-1.0, 1.0}};
+  nw.dashed = true;
+  ac.series.push_back(nw);
+  plot::write_png({ac}, dir + "/residual_autocorrelation.png");
 }
 
 void setup_calibrate(CLI::App& app) {
@@ -225,7 +263,9 @@ void setup_calibrate(CLI::App& app) {
   sub->add_option("--prior", opt->prior, "prior device model (default: built-in Premium 1.5A)");
   sub->add_option("--truth", opt->truth,
                   "true device model (simulated data): adds true values and max_rel_error");
-  sub->add_option("--plots", opt->plots, "directory for PNG plots (torque fit, residuals)");
+  sub->add_option("--plots", opt->plots,
+                  "directory for PNG plots (torque fit, residual histogram, residual vs\n"
+                  "velocity, residual autocorrelation)");
   sub->add_option("--lowpass", opt->fit.lowpass_hz,
                   "zero-phase low-pass of qd and tau before differentiating [Hz], 0 = off, else\n"
                   "between 4 / (log duration) and 0.45 / (time step) (default 10)");
@@ -256,10 +296,11 @@ void setup_calibrate(CLI::App& app) {
       "tanh <-> erf, and adds how far each parameter moves to its std: docs/calibration.md)");
   sub->add_option("--max-iterations", opt->fit.max_iterations,
                   "Ceres iteration limit (default 100); a fit that hits it did not converge");
-  sub->add_option("--min-speed", opt->fit.min_speed,
-                  "drop each joint's torque rows where its low-passed speed is below this [rad/s]:\n"
-                  "near stiction Coulomb friction is any torque within +-f_c, which no law of the\n"
-                  "velocity predicts; 0 = keep every row (default 0.2)");
+  sub->add_option(
+      "--min-speed", opt->fit.min_speed,
+      "drop each joint's torque rows where its low-passed speed is below this [rad/s]:\n"
+      "near stiction Coulomb friction is any torque within +-f_c, which no law of the\n"
+      "velocity predicts; 0 = keep every row (default 0.2)");
   sub->add_option("--coulomb-smoothing", opt->fit.coulomb_smoothing,
                   "v_s of each joint's f_c tanh(qd / v_s): 'fit' (chosen per joint by profile\n"
                   "least squares over 0.001..1 rad/s and written to the fitted model, default) or\n"

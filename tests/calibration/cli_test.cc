@@ -90,6 +90,20 @@ TEST(CalibrateCli, ExciteThenCalibrateOnTheSimulatedPhantom) {
   EXPECT_TRUE(j.at("model_mismatch").get<bool>());
   EXPECT_FALSE(j.at("model_mismatch_reasons").empty());
   ASSERT_TRUE(j.contains("residual_diagnostics"));
+  // The residual diagnostics of the report (ResidualDiagnostics): per joint, whiteness (after the
+  // 10 Hz low-pass no joint's residual is white) and the residual against the signed velocity
+  // (its bins hold every row used).
+  const nlohmann::json& dg = j.at("residual_diagnostics");
+  const int lags = dg.at("autocorrelation_lags").get<int>();
+  EXPECT_EQ(lags, std::max(10, 2 * dg.at("newey_west_lags").get<int>()));
+  for (int q = 0; q < 6; ++q) {
+    EXPECT_EQ(dg.at("autocorrelation")[q].size(), static_cast<std::size_t>(lags));
+    EXPECT_FALSE(dg.at("white")[q].get<bool>()) << "joint " << q + 1;
+    EXPECT_GT(dg.at("ljung_box_q")[q].get<double>(), dg.at("ljung_box_threshold_99").get<double>());
+    int rows = 0;
+    for (const auto& n : dg.at("residual_vs_velocity")[q].at("rows")) rows += n.get<int>();
+    EXPECT_EQ(rows, j.at("rows_used")[q].get<int>()) << "joint " << q + 1;
+  }
   EXPECT_TRUE(j.at("law_mismatch_term").get<bool>());
   for (const auto& e : j.at("parameters")) {
     const double stat = e.at("std_statistical").get<double>(),
@@ -141,6 +155,8 @@ TEST(CalibrateCli, ExciteThenCalibrateOnTheSimulatedPhantom) {
   EXPECT_LT(gf, 0.5 * g0);
   EXPECT_TRUE(fs::file_size(d / "plots" / "torque_fit.png") > 1000);
   EXPECT_TRUE(fs::file_size(d / "plots" / "residual_histogram.png") > 1000);
+  EXPECT_TRUE(fs::file_size(d / "plots" / "residual_vs_velocity.png") > 1000);
+  EXPECT_TRUE(fs::file_size(d / "plots" / "residual_autocorrelation.png") > 1000);
 }
 
 TEST(CalibrateCli, ObserverReportWithNamedModelFiles) {
