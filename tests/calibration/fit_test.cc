@@ -114,15 +114,20 @@ TEST(CalibRegressor, DriverVelocityLag) {
   EXPECT_NEAR(t - qd / c, driver_velocity_lag_ticks(true, 200.0, T) * T, 1e-12);
 }
 
+// The noise-free 11 s log (1 kHz) of `truth` under the excitation seeded with `seed` from the
+// home pose.
+CalibrationLog synthesized(const PhantomParams& truth, std::uint64_t seed) {
+  ExcitationParams ep;
+  ep.seed = seed;
+  const Excitation exc(truth, phantom_home_q(default_phantom_params()), ep);
+  return synthesize_log(truth, exc, 11.0, 1e-3);
+}
+
 TEST(CalibFit, RecoversIdentifiableParametersNoiseFree) {
   const PhantomParams prior = default_phantom_params();
-  const Vec6 q0 = phantom_home_q(prior);
   for (std::uint64_t seed : {11u, 12u, 13u}) {
     const PhantomParams truth = perturbed(prior, seed);
-    ExcitationParams ep;
-    ep.seed = seed;
-    const Excitation exc(truth, q0, ep);
-    const CalibrationLog log = synthesize_log(truth, exc, 11.0, 1e-3);
+    const CalibrationLog log = synthesized(truth, seed);
     FitOptions fo;
     fo.max_samples = 700;
     const FitResult r = fit_calibration(log, prior, fo);
@@ -181,10 +186,7 @@ LawDevice law_device(std::uint64_t seed, const std::array<int, 6>& grid_index,
     d.truth.coulomb_smoothing_rad_s(j) = 1e-3 * std::pow(10.0, 3.0 * grid_index[j] / 20.0);
   }
   d.truth.coulomb_sign = sign;
-  ExcitationParams ep;
-  ep.seed = seed;
-  const Excitation exc(d.truth, phantom_home_q(default_phantom_params()), ep);
-  d.log = synthesize_log(d.truth, exc, 11.0, 1e-3);
+  d.log = synthesized(d.truth, seed);
   return d;
 }
 // Fit options of the profile tests: the rows near reversal are where v_s shows, so all are kept.
@@ -193,6 +195,19 @@ FitOptions law_fit_options() {
   fo.max_samples = 1000;
   fo.min_speed_rad_s = 0.0;
   return fo;
+}
+
+// The device of the mixed-sign tests (erf, tanh, erf, erf, tanh, erf) and a prior with its signs.
+struct MixedSign {
+  LawDevice device;
+  PhantomParams prior;
+};
+MixedSign mixed_sign() {
+  constexpr CoulombSign t = CoulombSign::kTanh, e = CoulombSign::kErf;
+  MixedSign m{law_device(22, {10, 11, 9, 15, 16, 13}, {e, t, e, e, t, e}),
+              default_phantom_params()};
+  m.prior.coulomb_sign = m.device.truth.coulomb_sign;
+  return m;
 }
 
 // FitOptions::fit_coulomb_smoothing: on a noise-free log of a device whose joints have their own
@@ -236,8 +251,7 @@ TEST(CalibFit, ProfileFindsEachJointsCoulombSmoothing) {
 // log of a device that has both.
 TEST(CalibFit, ProfileFindsEachJointsSmoothSign) {
   const PhantomParams prior = default_phantom_params();
-  constexpr CoulombSign t = CoulombSign::kTanh, e = CoulombSign::kErf;
-  const LawDevice d = law_device(22, {10, 11, 9, 15, 16, 13}, {e, t, e, e, t, e});
+  const LawDevice d = mixed_sign().device;
   const PhantomParams& truth = d.truth;
   const CalibrationLog& log = d.log;
   FitOptions fo = law_fit_options();
@@ -260,10 +274,7 @@ TEST(CalibFit, ProfileFindsEachJointsSmoothSign) {
 // A prior whose joints have different smooth signs: the profile (v_s only) keeps each joint's
 // own sign and finds its v_s (it once gave every joint the first joint's sign).
 TEST(CalibFit, ProfileKeepsEachJointsSignOfAMixedPrior) {
-  constexpr CoulombSign t = CoulombSign::kTanh, e = CoulombSign::kErf;
-  const LawDevice d = law_device(22, {10, 11, 9, 15, 16, 13}, {e, t, e, e, t, e});
-  PhantomParams prior = default_phantom_params();
-  prior.coulomb_sign = d.truth.coulomb_sign;
+  const auto [d, prior] = mixed_sign();
   FitOptions fo = law_fit_options();
   fo.model_mismatch_term = false;
   const FitResult r = fit_calibration(d.log, prior, fo);
@@ -284,9 +295,7 @@ TEST(CalibFit, ProfileKeepsEachJointsSignOfAMixedPrior) {
 // quadrature.
 TEST(CalibFit, LawTermIsTheMoveUnderTheOtherSmoothSign) {
   constexpr CoulombSign t = CoulombSign::kTanh, e = CoulombSign::kErf;
-  const LawDevice d = law_device(22, {10, 11, 9, 15, 16, 13}, {e, t, e, e, t, e});
-  PhantomParams prior = default_phantom_params();
-  prior.coulomb_sign = d.truth.coulomb_sign;
+  const auto [d, prior] = mixed_sign();
   FitOptions fo = law_fit_options();
   const FitResult r = fit_calibration(d.log, prior, fo);
   ASSERT_TRUE(r.converged) << r.report;
@@ -354,10 +363,7 @@ TEST(CalibFit, TorqueShiftRealignsADelayedTorqueLog) {
   // fit with torque_shift_samples = 1 recovers the parameters as from the aligned log.
   const PhantomParams prior = default_phantom_params();
   const PhantomParams truth = perturbed(prior, 31);
-  ExcitationParams ep;
-  ep.seed = 31;
-  const Excitation exc(truth, phantom_home_q(prior), ep);
-  CalibrationLog log = synthesize_log(truth, exc, 11.0, 1e-3);
+  CalibrationLog log = synthesized(truth, 31);
   for (int k = 0; k + 1 < log.size(); ++k) log.tau[k] = log.tau[k + 1];
   FitOptions fo;
   fo.max_samples = 500;
@@ -384,15 +390,11 @@ TEST(CalibFit, NoisyTorqueErrorsWithinThreeReportedSigma) {
   // Gaussian torque noise (sigma 0.2 % of each joint's torque limit), exact q and qd: every
   // identifiable parameter's error must lie within 3 of its reported standard deviations.
   const PhantomParams prior = default_phantom_params();
-  const Vec6 q0 = phantom_home_q(prior);
   int checked = 0, outside = 0;
   double sum_z2 = 0.0;
   for (std::uint64_t seed : {21u, 22u}) {
     const PhantomParams truth = perturbed(prior, seed);
-    ExcitationParams ep;
-    ep.seed = seed;
-    const Excitation exc(truth, q0, ep);
-    CalibrationLog log = synthesize_log(truth, exc, 11.0, 1e-3);
+    CalibrationLog log = synthesized(truth, seed);
     std::mt19937_64 rng(seed);
     std::normal_distribution<double> nd(0.0, 1.0);
     for (auto& tau : log.tau) {
@@ -438,10 +440,7 @@ TEST(CalibFit, NoisyTorqueErrorsWithinThreeReportedSigma) {
 TEST(CalibFit, ResidualDiagnosticsTellWhiteFromFilteredAndShowDirectionDependentFriction) {
   const PhantomParams prior = default_phantom_params();
   const PhantomParams truth = perturbed(prior, 21);
-  ExcitationParams ep;
-  ep.seed = 21;
-  const Excitation exc(truth, phantom_home_q(prior), ep);
-  const CalibrationLog exact = synthesize_log(truth, exc, 11.0, 1e-3);
+  const CalibrationLog exact = synthesized(truth, 21);
   CalibrationLog log = exact;
   std::mt19937_64 rng(21);
   std::normal_distribution<double> nd(0.0, 1.0);
@@ -548,10 +547,7 @@ struct Coverage {
 void noisy_fit(std::uint64_t seed, Coverage* cov) {
   const PhantomParams prior = default_phantom_params();
   const PhantomParams truth = perturbed(prior, seed);
-  ExcitationParams ep;
-  ep.seed = seed;
-  const Excitation exc(truth, phantom_home_q(prior), ep);
-  const CalibrationLog log = sensed(synthesize_log(truth, exc, 11.0, 1e-3), prior, seed);
+  const CalibrationLog log = sensed(synthesized(truth, seed), prior, seed);
   FitOptions fo;
   fo.max_samples = 1000;
   fo.lowpass_hz = 10.0;
