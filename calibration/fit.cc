@@ -587,39 +587,9 @@ FitResult fit_impl(const CalibrationLog& log, const PhantomParams& prior, const 
     fp.std = fp.std_statistical;
   }
 
-  // Residual diagnostics: lag-1 autocorrelation, and the residual at low vs high joint speed.
-  for (int j = 0; j < 6; ++j) {
-    double c0 = 0.0, c1 = 0.0;
-    // Over the rows kept (a dropped row has no residual).
-    std::vector<std::pair<double, double>> speed_res;
-    for (int k = 0; k < m; ++k) {
-      if (!kept_rows[k](j)) continue;
-      const double r = res.tau_predicted[k](j) - res.tau_measured[k](j);
-      c0 += r * r;
-      if (k > 0 && kept_rows[k - 1](j))
-        c1 += r * (res.tau_predicted[k - 1](j) - res.tau_measured[k - 1](j));
-      speed_res.emplace_back(std::abs(used_qd[k](j)), r);
-    }
-    res.diagnostics.lag1_autocorrelation(j) = c0 > 0.0 ? c1 / c0 : 0.0;
-    std::sort(speed_res.begin(), speed_res.end());
-    const int mj = static_cast<int>(speed_res.size());
-    const int quarter = std::max(1, mj / 4);
-    double slow = 0.0, fast = 0.0;
-    for (int k = 0; k < quarter && k < mj; ++k) {
-      slow += speed_res[k].second * speed_res[k].second;
-      fast += speed_res[mj - 1 - k].second * speed_res[mj - 1 - k].second;
-    }
-    res.diagnostics.rms_slow(j) = std::sqrt(slow / quarter);
-    res.diagnostics.rms_fast(j) = std::sqrt(fast / quarter);
-    if (res.diagnostics.rms_slow(j) > 2.0 * res.diagnostics.rms_fast(j)) {
-      char buf[96];
-      std::snprintf(buf, sizeof buf, "joint %d: residual %.3g N m at low speed, %.3g at high",
-                    j + 1, res.diagnostics.rms_slow(j), res.diagnostics.rms_fast(j));
-      res.model_mismatch_reasons.emplace_back(buf);
-    }
-  }
-
-  // Whiteness and the residual against the signed velocity (ResidualDiagnostics).
+  // Residual diagnostics (ResidualDiagnostics), per joint over its kept rows: whiteness (the
+  // autocorrelation, its lag-1 value, Ljung-Box, the correlation length), the residual at low vs
+  // high speed, and the residual against the signed velocity.
   {
     ResidualDiagnostics& dg = res.diagnostics;
     const int K = std::max(1, std::min(std::max(10, 2 * res.hac_lags), m / 4));
@@ -631,10 +601,14 @@ FitResult fit_impl(const CalibrationLog& log, const PhantomParams& prior, const 
     for (int j = 0; j < 6; ++j) {
       int nj = 0;
       double c0 = 0.0;
+      // (signed low-passed qd, residual) of the kept rows.
+      std::vector<std::pair<double, double>> vr;
       for (int k = 0; k < m; ++k) {
         e[k] = kept_rows[k](j) ? res.tau_predicted[k](j) - res.tau_measured[k](j) : 0.0;
-        nj += kept_rows[k](j);
+        if (!kept_rows[k](j)) continue;
+        ++nj;
         c0 += e[k] * e[k];
+        vr.emplace_back(used_qd[k](j), e[k]);
       }
       std::vector<double>& rho = dg.autocorrelation[j];
       rho.assign(K, 0.0);
@@ -655,13 +629,30 @@ FitResult fit_impl(const CalibrationLog& log, const PhantomParams& prior, const 
           dg.correlation_length[j] = l;
         }
       }
+      dg.lag1_autocorrelation(j) = rho[0];
       dg.ljung_box_q(j) = static_cast<double>(nj) * (nj + 2.0) * lb_sum;
       dg.white[j] = dg.ljung_box_q(j) <= dg.ljung_box_threshold;
-      // Residual against the signed velocity: 5 bins of equal count on each side of 0.
-      std::vector<std::pair<double, double>> vr;
-      for (int k = 0; k < m; ++k) {
-        if (kept_rows[k](j)) vr.emplace_back(used_qd[k](j), e[k]);
+      if (vr.empty()) continue;
+      // The slowest and the fastest quarter of |qd_j|.
+      std::vector<std::pair<double, double>> by_speed = vr;
+      for (auto& [v, r] : by_speed) v = std::abs(v);
+      std::sort(by_speed.begin(), by_speed.end());
+      const int mj = static_cast<int>(by_speed.size());
+      const int quarter = std::max(1, mj / 4);
+      double slow = 0.0, fast = 0.0;
+      for (int k = 0; k < quarter && k < mj; ++k) {
+        slow += by_speed[k].second * by_speed[k].second;
+        fast += by_speed[mj - 1 - k].second * by_speed[mj - 1 - k].second;
       }
+      dg.rms_slow(j) = std::sqrt(slow / quarter);
+      dg.rms_fast(j) = std::sqrt(fast / quarter);
+      if (dg.rms_slow(j) > 2.0 * dg.rms_fast(j)) {
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "joint %d: residual %.3g N m at low speed, %.3g at high",
+                      j + 1, dg.rms_slow(j), dg.rms_fast(j));
+        res.model_mismatch_reasons.emplace_back(buf);
+      }
+      // Against the signed velocity: 5 bins of equal count on each side of 0.
       std::sort(vr.begin(), vr.end());
       const std::size_t zero = static_cast<std::size_t>(
           std::lower_bound(vr.begin(), vr.end(), std::make_pair(0.0, -HUGE_VAL)) - vr.begin());

@@ -172,7 +172,7 @@ struct FitParameter {
 
 // What the residuals say about the model, per joint.
 struct ResidualDiagnostics {
-  Vec6 lag1_autocorrelation = Vec6::Zero();  // of the residual over the used samples
+  Vec6 lag1_autocorrelation = Vec6::Zero();  // of the residual: autocorrelation[j][0]
   // RMS residual over the used samples in the slowest and the fastest quarter of |qd_j|: a
   // friction law that does not fit shows where the joint reverses (slow), not where it moves.
   Vec6 rms_slow = Vec6::Zero(), rms_fast = Vec6::Zero();
