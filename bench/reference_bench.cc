@@ -8,7 +8,7 @@
 #include "reference/tick.h"
 #include "reference/tools.h"
 #include "reference/tooth/collision.h"
-#include "reference/tooth/procedural_molar.h"
+#include "tooth_io/procedural_molar.h"
 
 namespace dentsim {
 namespace {

@@ -16,8 +16,8 @@
 #include <string>
 
 #include "bench/stage_times.h"
-#include "device/scene.h"
-#include "device/simulator.h"
+#include "sim/scene.h"
+#include "sim/simulator.h"
 #include "fast/registry.h"
 
 namespace dentsim {

@@ -12,7 +12,7 @@
 
 #include "bench/tooth_bench.h"
 #include "fast/tooth/tooth_contacts.h"
-#include "reference/tooth/procedural_molar.h"
+#include "tooth_io/procedural_molar.h"
 #include "reference/tooth/tooth_contacts.h"
 
 namespace dentsim {

@@ -21,7 +21,7 @@
 
 #include "bench/tooth_bench.h"
 #include "fast/tooth/collision.h"
-#include "reference/tooth/procedural_molar.h"
+#include "tooth_io/procedural_molar.h"
 
 namespace dentsim {
 namespace {

@@ -6,7 +6,7 @@
 
 #include <cmath>
 
-#include "reference/tooth/procedural_molar.h"
+#include "tooth_io/procedural_molar.h"
 #include "view/surface_mesh.h"
 
 namespace dentsim::view {

@@ -19,6 +19,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "device/backend.h"
 #include "calibration/calibrate.h"
 #include "calibration/excitation.h"
 #include "calibration/fit.h"
@@ -107,7 +108,7 @@ void setup_excite(CLI::App& app) {
       throw InputError("--duration: expected 1 <= S <= 3600 s, got " +
                        std::to_string(opt->duration));
     }
-    if (opt->device == "hdapi") {
+    if (find_device_backend(opt->device) == DeviceBackend::kHdapi) {
       check_output_paths({{"-o", opt->out}}, {{"--model", opt->model}});
       const PhantomParams p =
           opt->model.empty() ? default_phantom_params() : load_phantom_params(opt->model);

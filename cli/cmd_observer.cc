@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "fast/registry.h"
 #include "cli/registry.h"
 #include "reference/core/io.h"
 #include "reference/phantom/phantom_model.h"
@@ -75,8 +76,9 @@ void setup_observer(CLI::App& app) {
     c.gain_L = opt->gain;
     c.device_friction = !opt->no_friction;
     c.ideal_sensing = opt->ideal_sensing;
-    if (opt->pipeline != "reference" && opt->pipeline != "fast") {
-      throw InputError("--pipeline '" + opt->pipeline + "': expected reference or fast");
+    if (find_implementation(opt->pipeline) == nullptr) {
+      throw InputError("--pipeline '" + opt->pipeline + "': expected one of " +
+                       stage_table_names());
     }
     c.pipeline = opt->pipeline;
     // Named observer models: parse and load them all before running anything.

@@ -9,8 +9,8 @@
 #include "cli/png_writer.h"
 #include "cli/progress.h"
 #include "cli/registry.h"
-#include "device/scene.h"
-#include "device/simulator.h"
+#include "sim/scene.h"
+#include "sim/simulator.h"
 #include "reference/core/io.h"
 #include "view/view.h"
 

@@ -1,14 +1,15 @@
 // `dentsim replay FILE --pipeline reference --json OUT`: re-runs a pipeline open-loop on a
-// recorded session (device/session_record.h) and reports how far its torques are from the
-// recorded commands (device/session_replay.h): `ticks`, `max_torque_diff_n_m`,
+// recorded session (sim/session_record.h) and reports how far its torques are from the
+// recorded commands (sim/session_replay.h): `ticks`, `max_torque_diff_n_m`,
 // `max_force_diff_n`. A session recorded by `dentsim run --record` replays in its scene (the
 // scene's pipeline configuration and a fresh copy of its tooth); others in free space on the
 // default Phantom model (free_space_pipeline_config()). `--pipeline fast|reference`.
 #include <cstdio>
 #include <memory>
 
+#include "fast/registry.h"
 #include "cli/registry.h"
-#include "device/session_replay.h"
+#include "sim/session_replay.h"
 #include "reference/core/io.h"
 
 namespace dentsim::cli {
@@ -38,7 +39,7 @@ void setup_replay(CLI::App& app) {
       "recorded commands (differential testing on data recorded from a device)");
   sub->add_option("FILE", o->file, "recorded session (dentsim run ... --record FILE)")->required();
   sub->add_option("--pipeline", o->pipeline, "pipeline to re-run")
-      ->check(CLI::IsMember({"reference", "fast"}))
+      ->check(CLI::IsMember(implementation_names()))
       ->capture_default_str();
   sub->add_option("--json", o->json, "write the comparison as JSON to this file");
   sub->callback([o] { replay(*o); });

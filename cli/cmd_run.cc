@@ -9,19 +9,20 @@
 #include <span>
 #include <sstream>
 
+#include "device/backend.h"
 #include "cli/plot.h"
 #include "cli/png_writer.h"
 #include "cli/progress.h"
 #include "cli/registry.h"
 #include "cli/run_view.h"
 #include "device/fault_injection.h"
-#include "device/run_report.h"
-#include "device/scene.h"
-#include "device/simulator.h"
+#include "sim/run_report.h"
+#include "sim/scene.h"
+#include "sim/simulator.h"
 #include "fast/registry.h"
 #include "reference/core/io.h"
 #include "reference/tooth/materials.h"
-#include "reference/tooth/render_png.h"
+#include "tooth_io/render_png.h"
 
 namespace dentsim::cli {
 namespace {
@@ -45,7 +46,7 @@ struct RunCliOptions {
   bool no_skip = false;  // --no-skip
 };
 
-// timeseries.csv: the columns of run_series_columns() (device/run_report.h, shared with the
+// timeseries.csv: the columns of run_series_columns() (sim/run_report.h, shared with the
 // Python module), 9 significant digits.
 std::string csv_of(const RunResult& r) {
   const std::span<const RunSeriesColumn> cols = run_series_columns();
@@ -294,7 +295,7 @@ void setup_run(CLI::App& app) {
          "The device: simulated-phantom (the embedded default) or hdapi (a Phantom through "
          "OpenHaptics, or the project's emulator; docs/hardware.md); default: the "
          "scene's device.type")
-      ->check(CLI::IsMember({"simulated-phantom", "hdapi"}));
+      ->check(CLI::IsMember(device_backend_names()));
   sub->add_option("--hd-library", o->hd_library,
                   "With --device hdapi: the HDAPI library to load (default: DENTSIM_HD_LIBRARY, "
                   "then libHD.so, libHD.so.3.0, ...)");

@@ -1,6 +1,6 @@
 // `dentsim voxelize MESH|VOLUME|--procedural --resolution N [--size-mm S | --scale K] --json FILE
 //  [--png FILE] [--material-thresholds enamel=LO:HI,dentin=LO:HI]`: builds the voxel tooth
-// (reference/tooth/voxelize.h, procedural_molar.h, volume.h) and reports it (issues #4, #21).
+// (tooth_io/voxelize.h, procedural_molar.h, volume.h) and reports it (issues #4, #21).
 // JSON keys (a contract): voxels_by_material and volume_mm3_by_material (material name -> count,
 // mm^3), volume_mm3 (solid), mesh_volume_mm3 (mesh input only), thresholds (volume input only),
 // resolution, voxel_size_mm, octree_bytes, timing_ms (total wall time of the job); plus the echo
@@ -17,13 +17,13 @@
 #include "cli/registry.h"
 #include "reference/core/io.h"
 #include "reference/tooth/materials.h"
-#include "reference/tooth/mesh.h"
+#include "tooth_io/mesh.h"
 #include "reference/tooth/octree.h"
-#include "reference/tooth/procedural_molar.h"
-#include "reference/tooth/render_png.h"
-#include "reference/tooth/volume.h"
-#include "reference/tooth/volume_write.h"
-#include "reference/tooth/voxelize.h"
+#include "tooth_io/procedural_molar.h"
+#include "tooth_io/render_png.h"
+#include "tooth_io/volume.h"
+#include "tooth_io/volume_write.h"
+#include "tooth_io/voxelize.h"
 
 namespace dentsim::cli {
 namespace {
@@ -198,7 +198,7 @@ void run(const Options& o) {
     t_png = ms_since(t0);
   }
   if (!o.write_volume.empty()) {
-    // A synthetic scan of this tooth (reference/tooth/volume_write.h), seed 1.
+    // A synthetic scan of this tooth (tooth_io/volume_write.h), seed 1.
     const ScanVolume scan = render_scan(grid, Vec3::Constant(o.scan_spacing_mm * 1e-3), o.scan_noise, 1);
     write_volume(scan, o.write_volume);
     j["written_volume"] = {{"path", o.write_volume},

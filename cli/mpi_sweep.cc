@@ -29,6 +29,7 @@
 
 #include "cli/registry.h"
 #include "reference/core/io.h"
+#include "validation/thread_pool.h"
 
 #ifdef DENTSIM_HAVE_MPI
 // The C API only: Open MPI's and MPICH's mpi.h otherwise pull in the deprecated C++ bindings,
@@ -119,51 +120,26 @@ std::optional<Failure> failure_from(const nlohmann::json& j) {
   throw std::runtime_error(f.message);
 }
 
-// Runs job(owned[k]) for every k on `threads` threads (in order on one). Returns the dumped
-// results in the order of `owned` (those after a failure left empty) and the failure with the
-// lowest index, if any.
+// Runs job(owned[k]) for every k on `threads` threads (validation/thread_pool.h). Returns the
+// dumped results in the order of `owned` (those after a failure left empty) and the failure with
+// the lowest index, if any.
 std::vector<std::string> run_owned(const std::vector<int>& owned,
                                    const std::function<nlohmann::json(int)>& job,
                                    const std::function<void(int, int)>& on_done, int threads,
                                    std::optional<Failure>* failure) {
-  const int m = static_cast<int>(owned.size());
   std::vector<std::string> out(owned.size());
-  std::atomic<int> next{0};
-  std::mutex mu;
-  int done = 0;
-  auto record = [&](int k, bool input, const std::string& msg) {
-    std::lock_guard<std::mutex> lock(mu);
-    if (!*failure || owned[k] < (*failure)->index) *failure = Failure{owned[k], input, msg};
-    next.store(m);  // no new job starts after a failure
-  };
-  auto worker = [&] {
-    for (;;) {
-      const int k = next.fetch_add(1);
-      if (k >= m) return;
-      try {
-        out[k] = job(owned[k]).dump();
-      } catch (const InputError& e) {
-        record(k, true, e.what());
-        return;
-      } catch (const std::exception& e) {
-        record(k, false, e.what());
-        return;
-      } catch (...) {
-        record(k, false, "job " + std::to_string(owned[k]) + " failed (unknown exception)");
-        return;
-      }
-      std::lock_guard<std::mutex> lock(mu);
-      ++done;
-      if (on_done) on_done(done, m);
-    }
-  };
-  const int nt = std::clamp(threads, 1, std::max(1, m));
-  if (nt == 1) {
-    worker();
-  } else {
-    std::vector<std::thread> pool;
-    for (int i = 0; i < nt; ++i) pool.emplace_back(worker);
-    for (std::thread& t : pool) t.join();
+  int failed = -1;
+  try {
+    run_jobs_on_threads(
+        static_cast<int>(owned.size()), threads,
+        [&](int k) { out[static_cast<std::size_t>(k)] = job(owned[k]).dump(); }, on_done, &failed);
+  } catch (const InputError& e) {
+    *failure = Failure{owned[failed], true, e.what()};
+  } catch (const std::exception& e) {
+    *failure = Failure{owned[failed], false, e.what()};
+  } catch (...) {
+    *failure = Failure{owned[failed], false,
+                       "job " + std::to_string(owned[failed]) + " failed (unknown exception)"};
   }
   return out;
 }

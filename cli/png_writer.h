@@ -1,10 +1,10 @@
 // PNG output for the CLI (the dentsim binary links libpng; reference/ stays free of it): encodes an
-// RGB picture (reference/tooth/render_png.h) as an 8-bit RGB PNG and writes it atomically.
+// RGB picture (tooth_io/render_png.h) as an 8-bit RGB PNG and writes it atomically.
 #pragma once
 
 #include <string>
 
-#include "reference/tooth/render_png.h"
+#include "tooth_io/render_png.h"
 
 namespace dentsim::cli {
 

@@ -8,7 +8,7 @@
 
 #include "cli/png_writer.h"
 #include "reference/core/io.h"
-#include "reference/tooth/render_png.h"
+#include "tooth_io/render_png.h"
 #include "view/pictures.h"
 #include "view/view.h"
 

@@ -4,8 +4,8 @@
 
 #include <string>
 
-#include "device/scene.h"
-#include "device/simulator.h"
+#include "sim/scene.h"
+#include "sim/simulator.h"
 
 namespace dentsim::cli {
 

@@ -19,8 +19,8 @@ set(DENTSIM_INSTALL_DATADIR ${CMAKE_INSTALL_DATADIR}/dentsim)
 
 # ---- the libraries and their exported targets ---------------------------------------------------
 # The exported names drop the prefix: dentsim_fast -> dentsim::fast.
-set(dentsim_exported_libs dentsim_reference dentsim_fast dentsim_plant dentsim_device
-    dentsim_validation dentsim_calibration dentsim_view)
+set(dentsim_exported_libs dentsim_reference dentsim_tooth_io dentsim_fast dentsim_plant
+    dentsim_device dentsim_sim dentsim_validation dentsim_calibration dentsim_view)
 foreach(lib ${dentsim_exported_libs})
   string(REGEX REPLACE "^dentsim_" "" short ${lib})
   set_target_properties(${lib} PROPERTIES EXPORT_NAME ${short})
@@ -31,7 +31,7 @@ endforeach()
 
 # dentsim_volume_libs (top-level CMakeLists.txt) names nifticlib and teem by the absolute paths
 # find_library found on this machine, and their include directories (used only by
-# reference/tooth/volume_io.cc, no public header). The installed package must not carry this
+# tooth_io/volume_io.cc, no public header). The installed package must not carry this
 # machine's paths: in the export these become dentsim::nifti2 and dentsim::teem, which
 # dentsimConfig.cmake finds again on the consumer's machine. gdcmMSFF is GDCM's own exported target.
 set(volume_include_dirs "$<BUILD_INTERFACE:${NIFTI_INCLUDE_DIR};${TEEM_INCLUDE_DIR}>")
@@ -56,7 +56,7 @@ install(TARGETS dentsim_volume_libs dentsim_hd_emulator dentsim EXPORT dentsimTa
 
 # Every header of the libraries, folder layout kept (one install(FILES) per folder rather than
 # install(DIRECTORY), which would also create the folders that hold only sources).
-foreach(dir reference fast plant device validation calibration view)
+foreach(dir reference tooth_io fast plant device sim validation calibration view)
   file(GLOB_RECURSE headers RELATIVE ${PROJECT_SOURCE_DIR} CONFIGURE_DEPENDS
        ${PROJECT_SOURCE_DIR}/${dir}/*.h)
   foreach(h ${headers})
@@ -89,7 +89,7 @@ install(FILES ${CMAKE_BINARY_DIR}/cmake/dentsimConfig.cmake
         DESTINATION ${DENTSIM_INSTALL_CMAKEDIR})
 
 # ---- data: the default device model and the built-in scenes ------------------------------------
-# They are compiled into the binary (reference/phantom/phantom_params.cc, device/scene.cc); the
+# They are compiled into the binary (reference/phantom/phantom_params.cc, sim/scene.cc); the
 # files are what the built dentsim prints (`dentsim device show`, `dentsim run NAME --show`), so
 # they cannot drift from it. <build>/share/dentsim mirrors the installed folder.
 set(dentsim_data_dir ${CMAKE_BINARY_DIR}/share/dentsim)

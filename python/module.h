@@ -5,13 +5,13 @@
 // the same inputs):
 //   model.cc        PhantomModel: M(q), C, bias, gravity, Jacobian, kinematics (reference/phantom)
 //   pipeline.cc     Pipeline: the tick of a registered implementation (fast/registry.h), tick by
-//                   tick, in free space or in a scene's environment (device/simulator.h's rig)
-//   run.cc          run(scene): device/simulator.h's run_scene, report.json's document
-//                   (device/run_report.h) and the time series as arrays; the built-in scenes
+//                   tick, in free space or in a scene's environment (sim/simulator.h's rig)
+//   run.cc          run(scene): sim/simulator.h's run_scene, report.json's document
+//                   (sim/run_report.h) and the time series as arrays; the built-in scenes
 //   calibration.cc  calibration logs (calibration/log.h) and `dentsim calibrate`'s fit and report
 //                   (calibration/calibrate.h)
-//   session.cc      recorded sessions (device/session_record.h) and their replay
-//                   (device/session_replay.h)
+//   session.cc      recorded sessions (sim/session_record.h) and their replay
+//                   (sim/session_replay.h)
 // Errors: InputError (reference/core/io.h: a bad file, value or name; the message names what and
 // where) becomes dentsim.InputError, a subclass of ValueError; std::invalid_argument ValueError;
 // other std::runtime_error RuntimeError.

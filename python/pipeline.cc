@@ -5,9 +5,9 @@
 //
 // Environment and configuration:
 // - scene=None: free space (no contacts) with the configuration `dentsim replay` uses for a
-//   session without a scene (free_space_pipeline_config, device/session_replay.h: PMI + virtual
+//   session without a scene (free_space_pipeline_config, sim/session_replay.h: PMI + virtual
 //   coupling, the model file's torque limits), on the default or the given device model;
-// - scene=NAME|PATH: the scene's rig (device/simulator.h build_scene_rig), the one `dentsim run`
+// - scene=NAME|PATH: the scene's rig (sim/simulator.h build_scene_rig), the one `dentsim run`
 //   and `dentsim replay` use: the scene's method, gains, tool and device model, and a fresh copy
 //   of its tooth (contacts and drilling). Its simulated device and scripted hand are built but not
 //   stepped: the samples come from Python.
@@ -16,9 +16,9 @@
 #include <optional>
 
 #include "device/phantom_device.h"
-#include "device/scene.h"
-#include "device/session_replay.h"
-#include "device/simulator.h"
+#include "sim/scene.h"
+#include "sim/session_replay.h"
+#include "sim/simulator.h"
 #include "fast/phantom/phantom_model.h"
 #include "fast/registry.h"
 #include "python/module.h"
@@ -51,20 +51,15 @@ class PyPipeline {
         rig_ = build_scene_rig(s, o);
       }
       pipeline_ = rig_->pipeline.get();
-      env_ = rig_->contacts.get();
+      env_ = rig_->contacts;
       tick_ = rig_->tick;
       home_q_ = rig_->q_home;
     } else {
       params_ = model.is_none() ? default_phantom_params()
                                 : load_phantom_params(path_arg(model, "Pipeline: model"));
-      own_reference_ = std::make_unique<PhantomModel>(params_);
-      const SixDofDeviceModel* belief = own_reference_.get();
-      if (impl == "fast") {
-        own_fast_ = std::make_unique<fast::PhantomModel>(params_);
-        belief = own_fast_.get();
-      }
+      own_model_ = make_phantom_model(impl, params_);
       own_pipeline_ =
-          make_pipeline(impl, *belief, free_space_pipeline_config(params_.torque_limit_n_m));
+          make_pipeline(impl, *own_model_, free_space_pipeline_config(params_.torque_limit_n_m));
       pipeline_ = own_pipeline_.get();
       env_ = &free_;
       home_q_ = phantom_home_q(params_);
@@ -147,8 +142,7 @@ class PyPipeline {
   std::string scene_name_;
   // Free space: owned here.
   PhantomParams params_;
-  std::unique_ptr<PhantomModel> own_reference_;
-  std::unique_ptr<fast::PhantomModel> own_fast_;
+  std::unique_ptr<SixDofDeviceModel> own_model_;  // the implementation's (fast/registry.h)
   std::unique_ptr<Pipeline> own_pipeline_;
   NoContacts free_;
 

@@ -1,15 +1,15 @@
 // dentsim.run(scene): `dentsim run` without the files. The scene runs through the same library
-// call (device/simulator.h run_scene) with the same options as the CLI's, and the report is the
-// same document (device/run_report.h run_report_json, the function cmd_run.cc writes
+// call (sim/simulator.h run_scene) with the same options as the CLI's, and the report is the
+// same document (sim/run_report.h run_report_json, the function cmd_run.cc writes
 // report.json with), converted to Python objects; the time series are the columns of
 // timeseries.csv as NumPy arrays. The scenes: the built-in names, their text, a loaded scene.
 #include <cmath>
 #include <optional>
 
 #include "device/fault_injection.h"
-#include "device/run_report.h"
-#include "device/scene.h"
-#include "device/simulator.h"
+#include "sim/run_report.h"
+#include "sim/scene.h"
+#include "sim/simulator.h"
 #include "fast/registry.h"
 #include "python/module.h"
 #include "reference/core/io.h"

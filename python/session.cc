@@ -1,9 +1,9 @@
 // Recorded sessions from Python (docs/hardware.md "Recorded sessions"): read a session written by
-// `dentsim run --record FILE` (device/session_record.h) as arrays, and replay it through a
-// pipeline with `dentsim replay`'s library function (device/session_replay.h
+// `dentsim run --record FILE` (sim/session_record.h) as arrays, and replay it through a
+// pipeline with `dentsim replay`'s library function (sim/session_replay.h
 // replay_recorded_session), returning the numbers of `dentsim replay FILE --json OUT` (same keys).
-#include "device/session_record.h"
-#include "device/session_replay.h"
+#include "sim/session_record.h"
+#include "sim/session_replay.h"
 #include "python/module.h"
 
 namespace dentsim::python {

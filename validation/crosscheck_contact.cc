@@ -11,11 +11,11 @@
 
 #include "reference/core/contact_provider.h"
 #include "reference/core/io.h"
-#include "reference/tooth/mesh.h"
-#include "reference/tooth/procedural_molar.h"
+#include "tooth_io/mesh.h"
+#include "tooth_io/procedural_molar.h"
 #include "reference/tooth/sdf.h"
 #include "reference/tooth/tooth_contacts.h"
-#include "reference/tooth/voxelize.h"
+#include "tooth_io/voxelize.h"
 
 namespace dentsim {
 namespace {

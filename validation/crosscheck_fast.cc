@@ -7,8 +7,8 @@
 #include <memory>
 #include <numbers>
 
-#include "device/scene.h"
-#include "device/simulator.h"
+#include "sim/scene.h"
+#include "sim/simulator.h"
 #include "fast/registry.h"
 
 namespace dentsim {
@@ -202,7 +202,7 @@ void check_stages(const FastCrosscheckOptions& o, FastCrosscheckResult* out) {
       D->qd = s.qd;
       D->t = s.t;
       D->T = T;
-      D->env = ref->contacts.get();
+      D->env = ref->contacts;
       if (o.adversarial && k > 0) {
         // One perturbation per tick, in turn, on a copy of the tick's starting state; every stage
         // but drill (it would cut the teeth the main comparison drills).
@@ -215,7 +215,7 @@ void check_stages(const FastCrosscheckOptions& o, FastCrosscheckResult* out) {
         bool ok_adv = true;
         for (int i = 0; i < kStageCount - 1 && ok_adv; ++i) {
           *C = *P;
-          C->env = other->contacts.get();
+          C->env = other->contacts;
           const TickStatus so = table->stage[i](mo, *C);
           const TickStatus sr = ref_table.stage[i](mr, *P);
           if (so != sr) adv[pi][i].mismatches++;
@@ -229,7 +229,7 @@ void check_stages(const FastCrosscheckOptions& o, FastCrosscheckResult* out) {
       bool ok = true;
       for (int i = 0; i < kStageCount && ok; ++i) {
         *C = *D;
-        C->env = other->contacts.get();
+        C->env = other->contacts;
         const TickStatus so = table->stage[i](m_other, *C);
         const TickStatus sr = ref_table.stage[i](m_ref, *D);
         if (so != sr) diffs[i].mismatches++;

@@ -10,7 +10,7 @@
 #include "device/phantom_device.h"
 #include "reference/core/io.h"
 #include "reference/observer.h"
-#include "fast/phantom/phantom_model.h"
+#include "fast/registry.h"
 #include "reference/phantom/phantom_model.h"
 
 namespace dentsim {
@@ -338,10 +338,11 @@ ObserverReport run_observer_models(const PhantomParams& params, const ObserverRe
 
 std::unique_ptr<DeviceModel> observer_device_model(const PhantomParams& params,
                                                    const std::string& pipeline) {
-  if (pipeline == "reference") return std::make_unique<PhantomModel>(params);
-  if (pipeline == "fast") return std::make_unique<fast::PhantomModel>(params);
-  throw InputError("observer report: unknown pipeline '" + pipeline +
-                   "' (expected reference or fast)");
+  if (find_implementation(pipeline) == nullptr) {
+    throw InputError("observer report: unknown pipeline '" + pipeline + "' (expected one of: " +
+                     stage_table_names() + ")");
+  }
+  return make_phantom_model(pipeline, params);
 }
 
 ObserverReport run_observer_report(const PhantomParams& params,

@@ -22,8 +22,8 @@
 #include <string>
 #include <vector>
 
-#include "device/scene.h"
-#include "device/simulator.h"
+#include "sim/scene.h"
+#include "sim/simulator.h"
 
 namespace dentsim {
 

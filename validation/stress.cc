@@ -1,5 +1,7 @@
+#include "fast/registry.h"
 #include "validation/stress.h"
 
+#include <span>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -7,8 +9,8 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
-#include "device/scene.h"
-#include "device/simulator.h"
+#include "sim/scene.h"
+#include "sim/simulator.h"
 #include "reference/core/io.h"
 #include "reference/tooth/sdf.h"
 
@@ -40,12 +42,12 @@ struct Draw {
 Draw draw(std::mt19937_64& rng, long run, long ticks_per_run) {
   static const char* const kScenes[] = {"probe", "drill"};
   static const char* const kMethods[] = {"explicit", "pmi", "pmi-pd"};
-  static const char* const kPipelines[] = {"reference", "fast"};
   static const double kRates[] = {500.0, 1000.0, 2000.0};
   static const int kResolutions[] = {64, 128};
   Draw d;
   d.scene = kScenes[run % 2];
-  d.pipeline = pick(rng, kPipelines);
+  const std::span<const Implementation* const> impls = implementations();  // fast/registry.h
+  d.pipeline = impls[std::uniform_int_distribution<std::size_t>(0, impls.size() - 1)(rng)]->name();
   const std::string method = kMethods[(run / 2) % 3];
   const double hz = pick(rng, kRates);
   const double duration = static_cast<double>(ticks_per_run) / hz;

@@ -6,8 +6,8 @@
 #include <limits>
 #include <stdexcept>
 
-#include "device/scene.h"
-#include "device/simulator.h"
+#include "sim/scene.h"
+#include "sim/simulator.h"
 #include "fast/registry.h"
 #include "reference/core/io.h"
 
@@ -57,7 +57,8 @@ std::vector<BenchSettings> variant_settings(const TimeVsErrorConfig& c) {
     s.resolution = res;
     add(s);
   }
-  if (c.base.pipeline == "fast" && !c.base.float_device_terms) {
+  const Implementation* impl = find_implementation(c.base.pipeline);
+  if (impl != nullptr && impl->phantom_model_float != nullptr && !c.base.float_device_terms) {
     BenchSettings s = c.base;
     s.float_device_terms = true;
     add(s);
@@ -76,7 +77,7 @@ void check_settings(const BenchSettings& s, const std::string& what) {
   if (s.resolution < 32 || s.resolution > 512 || (s.resolution & (s.resolution - 1)) != 0) {
     throw InputError(what + ": resolution must be a power of two from 32 to 512");
   }
-  if (s.float_device_terms && s.pipeline != "fast") {
+  if (s.float_device_terms && find_implementation(s.pipeline)->phantom_model_float == nullptr) {
     throw InputError(what + ": float device terms exist in the fast pipeline only");
   }
 }

@@ -12,7 +12,6 @@
 #include "device/closed_loop.h"
 #include "device/phantom_device.h"
 #include "device/simulated_phantom.h"
-#include "fast/phantom/phantom_model.h"
 #include "fast/registry.h"
 #include "plant/mujoco_plant.h"
 #include "plant/phantom_mjcf.h"
@@ -24,6 +23,7 @@
 #include "reference/tools.h"
 #include "reference/tooth/collision.h"
 #include "reference/tooth/tooth_contacts.h"
+#include "validation/thread_pool.h"
 
 namespace dentsim {
 
@@ -141,10 +141,7 @@ PhantomParams phantom_belief(const ZwidthScenario& sc) {
 class PhantomRig : public Rig {
  public:
   explicit PhantomRig(const ZwidthScenario& sc)
-      : truth_(phantom_truth(sc)), model_(phantom_belief(sc)) {
-    if (sc.pipeline == "fast") {
-      fast_model_ = std::make_unique<fast::PhantomModel>(phantom_belief(sc));
-    }
+      : truth_(phantom_truth(sc)), model_(make_phantom_model(sc.pipeline, phantom_belief(sc))) {
     SimulatedDeviceConfig cfg;
     cfg.gravity = false;
     if (sc.jitter_half_width > 0.0) {
@@ -157,15 +154,15 @@ class PhantomRig : public Rig {
   }
   Device& device() override { return *dev_; }
   const SixDofDeviceModel& model() const override {
-    return fast_model_ ? static_cast<const SixDofDeviceModel&>(*fast_model_) : model_;
+    return *model_;
   }
   void set_hand(const ScriptedHand* hand) override { dev_->set_hand(hand); }
   Pose true_tip() const override { return dev_->tip_pose(); }
 
  private:
   PhantomParams truth_;
-  PhantomModel model_;
-  std::unique_ptr<fast::PhantomModel> fast_model_;  // the fast pipeline's evaluation of model_
+  // The pipeline implementation's evaluation of the believed model (fast/registry.h).
+  std::unique_ptr<SixDofDeviceModel> model_;
   std::unique_ptr<SimulatedPhantom> dev_;
 };
 
@@ -491,40 +488,6 @@ ZwidthPoint run_zwidth_point(Method method, ZwidthOperator op, const ZwidthGains
     pt.z_width_n_per_m = std::min(pt.z_width_n_per_m, r.z_width_n_per_m);
   }
   return pt;
-}
-
-void run_jobs_on_threads(int n, int threads, const std::function<void(int)>& job,
-                         const std::function<void(int, int)>& progress) {
-  std::atomic<int> next{0};
-  std::mutex mu;
-  int done = 0;
-  int failed = -1;
-  std::exception_ptr error;
-  auto worker = [&] {
-    for (;;) {
-      const int i = next.fetch_add(1);
-      if (i >= n) return;
-      try {
-        job(i);
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(mu);
-        if (failed < 0 || i < failed) {
-          failed = i;
-          error = std::current_exception();
-        }
-        next.store(n);
-        return;
-      }
-      std::lock_guard<std::mutex> lock(mu);
-      ++done;
-      if (progress) progress(done, n);
-    }
-  };
-  const int nt = std::clamp(threads, 1, std::max(1, n));
-  std::vector<std::thread> pool;
-  for (int t = 0; t < nt; ++t) pool.emplace_back(worker);
-  for (std::thread& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
 }
 
 std::vector<ZwidthSweep> run_zwidth_sweep(const std::vector<Method>& methods,

@@ -225,12 +225,6 @@ struct ZwidthSweep {
   double z_width_n_per_m() const { return best < 0 ? 0.0 : points[best].z_width_n_per_m; }
 };
 
-// Runs job(0), ..., job(n - 1) on `threads` std::threads (at most n); `progress(done, n)` is
-// called (serialised) after every job that returned. A job that throws stops new jobs from
-// starting; the exception of the lowest failing index is rethrown once all threads are done.
-void run_jobs_on_threads(int n, int threads, const std::function<void(int)>& job,
-                         const std::function<void(int, int)>& progress = {});
-
 // Sweeps every (method, operator) over the grid, in parallel over grid points on `threads`
 // std::threads (each job builds its own device, pipeline and tooth). `progress(done, total)` is
 // called (serialised) after every point. Results in the order methods x operators.

@@ -10,6 +10,7 @@
 #include <type_traits>
 
 #include "reference/core/io.h"
+#include "validation/thread_pool.h"
 
 namespace dentsim {
 

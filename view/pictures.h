@@ -1,11 +1,11 @@
 // The tooth pictures of `dentsim run` (tooth_before.png, tooth_after.png; issue #19): the lit
 // surface of view/surface_mesh.h drawn by the view's renderer, two panels side by side as the
-// voxel pictures of reference/tooth/render_png.h: left the whole tooth, right the cut-away (the
+// voxel pictures of tooth_io/render_png.h: left the whole tooth, right the cut-away (the
 // +x +y quarter removed, so enamel, dentin and pulp show as layers). Throws InputError when this
 // build or machine has no headless GL (view/view.h); the CLI then falls back to render_voxels.
 #pragma once
 
-#include "reference/tooth/render_png.h"
+#include "tooth_io/render_png.h"
 #include "view/view.h"
 
 namespace dentsim::view {

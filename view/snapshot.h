@@ -1,6 +1,6 @@
 // Publication of the servo loop's state to the render thread without locks (issue #19).
 //
-// The servo thread (TickObserver::on_tick, device/tick_observer.h) writes; one render thread
+// The servo thread (TickObserver::on_tick, sim/tick_observer.h) writes; one render thread
 // reads. Neither ever waits for the other, and on_tick neither allocates nor throws:
 //  - Tick state (poses, forces, timing, removed volume, faults): a triple buffer. Three slots;
 //    the writer fills its private back slot, then atomically exchanges it with the shared middle
@@ -26,7 +26,7 @@
 #include <string>
 #include <vector>
 
-#include "device/tick_observer.h"
+#include "sim/tick_observer.h"
 #include "reference/tooth/voxel_grid.h"
 
 namespace dentsim::view {

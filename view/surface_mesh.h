@@ -16,7 +16,7 @@
 //
 // Material per quad: the material of a if it is solid, else the most frequent material among the
 // solid voxels of a's 3x3x3 neighbourhood (ties: the lower id). The cut-away (a quarter removed,
-// as in reference/tooth/render_png.h) makes voxels with i >= cut_i and j >= cut_j empty for the
+// as in tooth_io/render_png.h) makes voxels with i >= cut_i and j >= cut_j empty for the
 // field only, so the cut faces are real surface, coloured by the layers they cross.
 //
 // Blocks: the grid is split into blocks of B^3 voxels; a quad belongs to the block of its inside

@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "reference/tooth/render_png.h"
+#include "tooth_io/render_png.h"
 #include "reference/tooth/voxel_grid.h"
 #include "view/camera.h"
 #include "view/snapshot.h"

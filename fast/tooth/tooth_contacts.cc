@@ -1,5 +1,7 @@
 #include "fast/tooth/tooth_contacts.h"
 
+#include "fast/tooth/sdf.h"
+
 namespace dentsim::fast {
 
 bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out) {
@@ -16,6 +18,25 @@ int ToothContactProvider::drill(std::span<const Contact> contacts, double T) {
       drill_tick(contacts, voxels_, tip_, drill_params_, T, &tooth_, &drill_state_, &removed_);
   record_drill(contacts, material, removed_before, pulp_before);
   return removed;
+}
+
+BrickPipelineTooth::BrickPipelineTooth(const VoxelTooth& tooth, const PipelineToothSetup& setup)
+    : brick_(tooth),
+      setup_(setup),
+      provider_(brick_, setup.tip, setup.k_tooth, setup.b_tooth, setup.drilling) {
+  brick_.set_free_space_early_out(setup.skip_unneeded);
+}
+
+void BrickPipelineTooth::tip_contacts(const Pose& pose, std::vector<Contact>* out) {
+  out->clear();
+  collide_tool_tip(brick_, pose, setup_.tip, setup_.k_tooth, setup_.b_tooth, out);
+}
+
+std::unique_ptr<PipelineTooth> make_fast_tooth(VoxelTooth& tooth, const PipelineToothSetup& setup) {
+  if (setup.contact_model == ContactModel::kFaces) {
+    return std::make_unique<BrickPipelineTooth>(tooth, setup);
+  }
+  return make_reference_tooth(tooth, setup, &fast::signed_distance);
 }
 
 }  // namespace dentsim::fast

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -30,6 +31,26 @@ class ToothContactProvider : public ToothProviderBase {
 
  private:
   BrickTooth& tooth_;
+};
+
+// The fast pipeline's tooth (fast/registry.h): for the face model the brick tooth, built from
+// the reference tooth's grid and drilled by fast::ToothContactProvider; for the surface proxy the
+// reference provider on the reference tooth with the fast signed distance (fast/tooth/sdf.h).
+std::unique_ptr<PipelineTooth> make_fast_tooth(VoxelTooth& tooth, const PipelineToothSetup& setup);
+
+// The face model's fast tooth, for tests that reach its brick tooth (its free-space early out).
+class BrickPipelineTooth final : public PipelineTooth {
+ public:
+  BrickPipelineTooth(const VoxelTooth& tooth, const PipelineToothSetup& setup);
+  ToothProviderBase& provider() override { return provider_; }
+  const VoxelGrid& grid() const override { return brick_.grid(); }
+  void tip_contacts(const Pose& pose, std::vector<Contact>* out) override;
+  BrickTooth& brick() { return brick_; }
+
+ private:
+  BrickTooth brick_;
+  PipelineToothSetup setup_;
+  ToothContactProvider provider_;
 };
 
 }  // namespace dentsim::fast

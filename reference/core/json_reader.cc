@@ -131,7 +131,7 @@ JsonReader::Json JsonReader::parse(const std::string& text) const {
 
 void JsonReader::fail(const std::string& field, const std::string& what) const {
   // `what` may quote the file's text (an unknown method name, ...): control bytes never reach the
-  // terminal (written \xNN; found by the scene fuzz target, tests/device/scene_test.cc).
+  // terminal (written \xNN; found by the scene fuzz target, tests/sim/scene_test.cc).
   std::string safe;
   safe.reserve(what.size());
   for (const char c : what) {

@@ -4,7 +4,7 @@
 // - kSurfaceProxy ("sdf", beyond the thesis, the scenes' default): the surface proxy on the exact
 //   signed distance of reference/tooth/sdf.h, one contact between the tool's sphere and the proxy.
 // The constructor defaults to kFaces (validation/zwidth.cc renders its wall with it); scenes
-// default to "sdf" (device/scene.h).
+// default to "sdf" (sim/scene.h).
 // It keeps the voxels of the last query so that drilling (reference/tooth/drilling.h) can run on
 // the same set after the solve: for kFaces the voxel of every contact; for kSurfaceProxy the solid
 // voxels within rho + h of the proxy centre g that face the push (docs/derivations/sdf_contact.md
@@ -14,6 +14,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -123,5 +124,36 @@ class ToothContactProvider : public ToothProviderBase {
   std::vector<Contact> drill_contacts_;  // kSurfaceProxy: the drilled voxels' force shares
   std::vector<std::size_t> drill_voxels_;
 };
+
+// The tooth as one implementation of the tick holds it (fast/registry.h, Implementation::tooth):
+// the contact provider its collide and drill stages use, the grid that provider drills, and the
+// tool tip's face-model contact set at a pose on that grid (measurements outside the tick, e.g.
+// the device tip's own penetration; the same code as the face model's collide stage).
+class PipelineTooth {
+ public:
+  virtual ~PipelineTooth() = default;
+  virtual ToothProviderBase& provider() = 0;
+  virtual const VoxelGrid& grid() const = 0;
+  // Clears `out` and fills it (allocation-free within its reserved capacity).
+  virtual void tip_contacts(const Pose& pose, std::vector<Contact>* out) = 0;
+};
+
+// What an implementation's tooth is built from: the scene's tool tip, tooth stiffness and
+// damping, drilling (null: the tool does not drill) and contact model; skip_unneeded as
+// PipelineModel::skip_unneeded (an implementation may skip work the answer does not need).
+struct PipelineToothSetup {
+  ToolTip tip;
+  double k_tooth = 0.0;
+  double b_tooth = 0.0;
+  const DrillParams* drilling = nullptr;
+  ContactModel contact_model = ContactModel::kSurfaceProxy;
+  bool skip_unneeded = true;
+};
+
+// The reference's tooth: ToothContactProvider over `tooth` (which must outlive it) with the
+// signed-distance query `sd` for the surface proxy. Throws what ToothContactProvider throws.
+std::unique_ptr<PipelineTooth> make_reference_tooth(VoxelTooth& tooth,
+                                                    const PipelineToothSetup& setup,
+                                                    SignedDistanceFn sd = &signed_distance);
 
 }  // namespace dentsim

@@ -11,7 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "device/session_record.h"
+#include "sim/session_record.h"
 #include "tests/support/cli.h"
 
 namespace dentsim {

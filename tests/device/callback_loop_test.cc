@@ -12,8 +12,8 @@
 #include <thread>
 
 #include "device/hdapi/hdapi_device.h"
-#include "device/scene.h"
-#include "device/simulator.h"
+#include "sim/scene.h"
+#include "sim/simulator.h"
 
 #include "tests/support/thread_alloc_counter.h"
 

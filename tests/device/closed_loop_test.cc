@@ -1,6 +1,6 @@
 // The loop owner (device/closed_loop.h): the callback form of a tick equals the read/write/advance
 // form tick for tick, and the safety chain's ramp-in and watchdog act through the loop as on a
-// real device (the scene rig's hdapi settings: device/simulator.cc).
+// real device (the scene rig's hdapi settings: sim/simulator.cc).
 #include "device/closed_loop.h"
 
 #include <gtest/gtest.h>
@@ -8,9 +8,9 @@
 
 #include <memory>
 
-#include "device/scene.h"
+#include "sim/scene.h"
 #include "device/simulated_phantom.h"
-#include "device/simulator.h"
+#include "sim/simulator.h"
 
 namespace dentsim {
 namespace {

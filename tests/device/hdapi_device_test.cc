@@ -20,7 +20,7 @@
 
 #include "device/phantom_device.h"
 #include "device/safety_chain.h"
-#include "device/scene_device.h"
+#include "sim/scene_device.h"
 #include "device/simulated_phantom.h"
 #include "reference/phantom/phantom_model.h"
 

@@ -8,8 +8,8 @@
 #include <cstdio>
 #include <string>
 
-#include "device/scene.h"
-#include "device/simulator.h"
+#include "sim/scene.h"
+#include "sim/simulator.h"
 #include "fast/registry.h"
 #include "tests/support/alloc_counter.h"
 

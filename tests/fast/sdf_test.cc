@@ -12,8 +12,8 @@
 #include <cstdio>
 #include <random>
 
-#include "device/scene.h"
-#include "device/simulator.h"
+#include "sim/scene.h"
+#include "sim/simulator.h"
 
 namespace dentsim {
 namespace {

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "fast/tooth/tooth_contacts.h"
 #include "validation/skip_variants.h"
 
 namespace dentsim {
@@ -65,7 +66,8 @@ TEST(FastSkips, SkippingChangesNoTorque) {
 TEST(FastSkips, FreeSpaceEarlyOutFindsTheSameSets) {
   const SkipVariant& v = skip_variants().front();  // face model
   auto rig = build_skip_variant_rig(v, true);
-  ASSERT_NE(rig->brick, nullptr);
+  auto* brick_tooth = dynamic_cast<fast::BrickPipelineTooth*>(rig->pipeline_tooth.get());
+  ASSERT_NE(brick_tooth, nullptr);
   std::vector<Contact> with, without;
   with.reserve(kContactCapacity);
   without.reserve(kContactCapacity);
@@ -74,9 +76,9 @@ TEST(FastSkips, FreeSpaceEarlyOutFindsTheSameSets) {
     for (int k = -6; k <= 12; ++k) {
       Pose p = rig->home;
       p.x = rig->anchor + Vec3(0.75e-3 * i, 0.3e-3 * i, 0.5e-3 * k);
-      rig->brick->set_free_space_early_out(true);
+      brick_tooth->brick().set_free_space_early_out(true);
       ASSERT_TRUE(rig->contacts->contacts(p, with));
-      rig->brick->set_free_space_early_out(false);
+      brick_tooth->brick().set_free_space_early_out(false);
       ASSERT_TRUE(rig->contacts->contacts(p, without));
       ASSERT_EQ(with.size(), without.size()) << i << " " << k;
       for (std::size_t m = 0; m < with.size(); ++m) {

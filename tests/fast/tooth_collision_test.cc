@@ -17,9 +17,9 @@
 #include "fast/tooth/collision.h"
 #include "reference/core/io.h"
 #include "reference/tooth/materials.h"
-#include "reference/tooth/mesh.h"
-#include "reference/tooth/procedural_molar.h"
-#include "reference/tooth/voxelize.h"
+#include "tooth_io/mesh.h"
+#include "tooth_io/procedural_molar.h"
+#include "tooth_io/voxelize.h"
 #include "tests/fast/tooth_diff.h"
 #include "tests/support/stress.h"
 

@@ -9,7 +9,7 @@
 #include <random>
 
 #include "reference/core/io.h"
-#include "reference/tooth/procedural_molar.h"
+#include "tooth_io/procedural_molar.h"
 #include "reference/tooth/tooth_contacts.h"
 #include "tests/fast/tooth_diff.h"
 #include "tests/support/alloc_counter.h"

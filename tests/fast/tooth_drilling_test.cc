@@ -14,7 +14,7 @@
 #include <string>
 
 #include "reference/tooth/drilling.h"
-#include "reference/tooth/procedural_molar.h"
+#include "tooth_io/procedural_molar.h"
 #include "tests/fast/tooth_diff.h"
 #include "tests/support/stress.h"
 

@@ -1,6 +1,6 @@
 // libFuzzer target: the Wavefront OBJ reader with welding and manifold validation
-// (reference/tooth/mesh.h).
-#include "reference/tooth/mesh.h"
+// (tooth_io/mesh.h).
+#include "tooth_io/mesh.h"
 #include "tests/fuzz/fuzz_input.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

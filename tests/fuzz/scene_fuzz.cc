@@ -1,6 +1,6 @@
-// libFuzzer target: the scene file reader of `dentsim run` (device/scene.h) and its JSON reader
+// libFuzzer target: the scene file reader of `dentsim run` (sim/scene.h) and its JSON reader
 // (reference/core/json_reader.h).
-#include "device/scene.h"
+#include "sim/scene.h"
 #include "tests/fuzz/fuzz_input.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -1,10 +1,10 @@
-// libFuzzer target: the recorded-session reader of `dentsim replay` (device/session_record.h) and
+// libFuzzer target: the recorded-session reader of `dentsim replay` (sim/session_record.h) and
 // what replay makes of a session's context: the JSON, and the scene in it through the scene
-// reader (device/scene.h) — the replay rebuilds that scene.
+// reader (sim/scene.h) — the replay rebuilds that scene.
 #include <nlohmann/json.hpp>
 
-#include "device/scene.h"
-#include "device/session_record.h"
+#include "sim/scene.h"
+#include "sim/session_record.h"
 #include "tests/fuzz/fuzz_input.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

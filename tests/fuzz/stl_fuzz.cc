@@ -1,6 +1,6 @@
 // libFuzzer target: the STL reader (binary and ASCII; parse_stl dispatches on the bytes) with
-// welding and manifold validation (reference/tooth/mesh.h).
-#include "reference/tooth/mesh.h"
+// welding and manifold validation (tooth_io/mesh.h).
+#include "tooth_io/mesh.h"
 #include "tests/fuzz/fuzz_input.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

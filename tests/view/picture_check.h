@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "reference/tooth/materials.h"
-#include "reference/tooth/render_png.h"
+#include "tooth_io/render_png.h"
 #include "view/camera.h"
 
 namespace dentsim::view::testing {

@@ -8,7 +8,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "reference/tooth/procedural_molar.h"
+#include "tooth_io/procedural_molar.h"
 #include "tests/view/picture_check.h"
 #include "view/view.h"
 

@@ -1,5 +1,5 @@
 // Tests of view/snapshot.h (the lock-free publication of the servo loop's state) and of the
-// TickObserver hook of run_scene (device/tick_observer.h): the reader never sees a torn snapshot,
+// TickObserver hook of run_scene (sim/tick_observer.h): the reader never sees a torn snapshot,
 // its copy of the tooth converges to the writer's, and a stalled renderer does not change a single
 // tick of the run.
 #include "view/snapshot.h"
@@ -11,8 +11,8 @@
 #include <set>
 #include <thread>
 
-#include "device/simulator.h"
-#include "reference/tooth/procedural_molar.h"
+#include "sim/simulator.h"
+#include "tooth_io/procedural_molar.h"
 
 namespace dentsim::view {
 namespace {

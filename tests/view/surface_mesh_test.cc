@@ -13,7 +13,7 @@
 #include <set>
 #include <tuple>
 
-#include "reference/tooth/procedural_molar.h"
+#include "tooth_io/procedural_molar.h"
 
 namespace dentsim::view {
 namespace {

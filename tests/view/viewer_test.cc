@@ -16,7 +16,7 @@
 #include <string>
 #include <thread>
 
-#include "device/simulator.h"
+#include "sim/simulator.h"
 #include "tests/support/cli.h"
 #include "tests/view/picture_check.h"
 #include "view/view.h"

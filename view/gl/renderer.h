@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "reference/tooth/render_png.h"
+#include "tooth_io/render_png.h"
 #include "view/camera.h"
 #include "view/snapshot.h"
 #include "view/surface_mesh.h"

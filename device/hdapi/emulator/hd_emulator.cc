@@ -44,7 +44,7 @@
 //   DENTSIM_HD_EMU_CATCH_UP=0         skipped ticks do not advance the physics (one physics period
 //                                     per callback tick, for comparisons by tick index)
 //   DENTSIM_HD_EMU_SCENE=NAME|FILE    the device and the scripted hand of that scene
-//                                     (device/scene_device.h: the plant `dentsim run` simulates),
+//                                     (sim/scene_device.h: the plant `dentsim run` simulates),
 //                                     the hand's clock starting at hdInitDevice; a scene that does
 //                                     not load fails hdInitDevice (HD_DEVICE_FAULT, reason on
 //                                     stderr)
@@ -66,7 +66,7 @@
 
 #include "device/hdapi/hdapi_abi.h"
 #include "device/phantom_device.h"
-#include "device/scene_device.h"
+#include "sim/scene_device.h"
 #include "reference/phantom/phantom_model.h"
 #include "reference/phantom/phantom_params.h"
 

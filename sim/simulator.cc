@@ -1,0 +1,576 @@
+#include "sim/simulator.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <numbers>
+#include <thread>
+
+#include "device/backend.h"
+#include "device/callback_loop.h"
+#include "device/closed_loop.h"
+#include "device/hdapi/hdapi_device.h"
+#include "device/phantom_device.h"
+#include "device/servo_pacer.h"
+#include "sim/session_record.h"
+#include "device/simulated_phantom.h"
+#include "fast/registry.h"
+#include "reference/core/io.h"
+#include "reference/core/so3.h"
+#include "reference/grasp_mass_model.h"
+#include "reference/phantom/phantom_model.h"
+#include "reference/phantom/phantom_params.h"
+#include "reference/tick.h"
+#include "reference/tools.h"
+#include "reference/tooth/collision.h"
+#include "reference/tooth/drilling.h"
+#include "tooth_io/mesh.h"
+#include "tooth_io/procedural_molar.h"
+#include "reference/tooth/tooth_contacts.h"
+#include "tooth_io/voxelize.h"
+
+namespace dentsim {
+namespace {
+
+VoxelGrid build_tooth(const SceneTooth& t) { return build_tooth_grid(tooth_source(t)); }
+
+// The top of the occlusal surface near the crown's axis: the highest solid voxel top among the
+// columns within 1.5 mm (at least one voxel) of the solid's centroid in x, y.
+Vec3 occlusal_anchor(const VoxelGrid& g) {
+  Vec3 c = Vec3::Zero();
+  long n = 0;
+  for (int k = 0; k < g.n; ++k) {
+    for (int j = 0; j < g.n; ++j) {
+      for (int i = 0; i < g.n; ++i) {
+        if (g.solid(i, j, k)) {
+          c += g.center(i, j, k);
+          ++n;
+        }
+      }
+    }
+  }
+  if (n == 0) throw InputError("the tooth has no solid voxel");
+  c /= static_cast<double>(n);
+  const double radius = std::max(1.5e-3, g.voxel_size);
+  double top = -1e300;
+  for (int k = 0; k < g.n; ++k) {
+    for (int j = 0; j < g.n; ++j) {
+      for (int i = 0; i < g.n; ++i) {
+        if (!g.solid(i, j, k)) continue;
+        const Vec3 p = g.center(i, j, k);
+        if (std::hypot(p.x() - c.x(), p.y() - c.y()) <= radius) {
+          top = std::max(top, p.z() + 0.5 * g.voxel_size);
+        }
+      }
+    }
+  }
+  return Vec3(c.x(), c.y(), top);
+}
+
+// Device penetrations below this (the Phantom's tip resolution, ~0.03 mm, PHANTOM.md) are
+// encoder noise and do not enter the stiffness fit.
+constexpr double kMinDepthForStiffness = 3e-5;
+// The loop owner's velocity guard [rad/s] (phantom_safety_limits' value, device/safety_chain.h).
+constexpr double kSceneMaxJointSpeed = 20.0;
+
+StageStats stats_of(std::vector<double>& v) {
+  StageStats s;
+  if (v.empty()) return s;
+  std::sort(v.begin(), v.end());
+  s.median_us = v[v.size() / 2];
+  s.p99_us = v[std::min(v.size() - 1, static_cast<std::size_t>(0.99 * v.size()))];
+  s.max_us = v.back();
+  double sum = 0.0;
+  for (double x : v) sum += x;
+  s.mean_us = sum / static_cast<double>(v.size());
+  return s;
+}
+
+}  // namespace
+
+const VoxelGrid& SceneRig::tooth_grid() const { return pipeline_tooth->grid(); }
+
+void SceneRig::tip_contacts(const Pose& pose, std::vector<Contact>* out) {
+  pipeline_tooth->tip_contacts(pose, out);
+}
+
+// The safety chain's ramp-in and watchdog on a real device (hdapi); none in simulation.
+constexpr double kHardwareRampS = 0.5;
+constexpr double kHardwareWatchdogPeriods = 20.0;
+// The safety chain's sustained-saturation guard in every scene run.
+constexpr double kMaxSaturationS = 2.0;
+
+double SceneRig::tip_depth(const Pose& pose) {
+  tip_contacts(pose, &measure_contacts);
+  double d = 0.0;
+  for (const Contact& c : measure_contacts) d = std::max(d, c.depth);
+  return d;
+}
+
+std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOptions& options) {
+  auto rig = std::make_unique<SceneRig>();
+  SceneRig& g = *rig;
+  g.tick = 1.0 / scene.tick_hz;
+
+  // Device: the model file drives both the simulated plant and the pipeline's model.
+  g.params = scene.device.model_file.empty() ? default_phantom_params()
+                                             : load_phantom_params(scene.device.model_file);
+  g.model = std::make_unique<PhantomModel>(g.params);
+  g.q_home = phantom_home_q(g.params);
+  g.home = g.model->forward_kinematics(g.q_home);
+
+  SimulatedDeviceConfig dcfg = phantom_device_config(g.params);
+  dcfg.quantize = scene.device.quantize;
+  dcfg.saturate = scene.device.saturate;
+  dcfg.jitter.period = g.tick;
+  if (scene.device.jitter_us > 0.0) {
+    dcfg.jitter.kind = TickJitterKind::kUniform;
+    dcfg.jitter.half_width = 1e-6 * scene.device.jitter_us;
+  }
+  g.device = std::make_unique<SimulatedPhantom>(phantom_plant(g.params), dcfg, g.q_home);
+  const std::string backend_name = options.device.empty() ? scene.device.type : options.device;
+  const std::optional<DeviceBackend> found = find_device_backend(backend_name);
+  if (!found) {
+    throw InputError("device '" + backend_name + "': expected " + device_backend_list());
+  }
+  const DeviceBackend backend = *found;
+
+  // Tooth, placed so its occlusal anchor sits at home + anchor_offset.
+  VoxelGrid grid = build_tooth(scene.tooth);
+  g.anchor = g.home.x + scene.tooth.anchor_offset;
+  grid.origin += g.anchor - occlusal_anchor(grid);
+  g.tooth_before = grid;
+  g.tooth = std::make_unique<VoxelTooth>(std::move(grid));
+  g.tip.radius = scene.tool.bur_radius;
+  g.measure_contacts.reserve(4096);
+  g.k_tooth = scene.tooth.k_tooth;
+  g.b_tooth = scene.tooth.b_tooth;
+  DrillParams drill;
+  drill.bur_speed_rad_s = scene.tool.bur_speed_rpm * 2.0 * std::numbers::pi / 60.0;
+  drill.cutting_coefficient = scene.tool.cutting_coefficient;
+  const DrillParams* drilling = scene.tool.drills() ? &drill : nullptr;
+  const ContactModel contact_model = parse_contact_model(scene.tooth.contact_model);
+  // The implementation of the tick (fast/registry.h): its tooth and, below, its device model.
+  const Implementation& impl = implementation(options.pipeline);
+  PipelineToothSetup tooth_setup;
+  tooth_setup.tip = g.tip;
+  tooth_setup.k_tooth = g.k_tooth;
+  tooth_setup.b_tooth = g.b_tooth;
+  tooth_setup.drilling = drilling;
+  tooth_setup.contact_model = contact_model;
+  tooth_setup.skip_unneeded = options.skip_unneeded;
+  g.pipeline_tooth = impl.tooth(*g.tooth, tooth_setup);
+  g.contacts = &g.pipeline_tooth->provider();
+
+  // Hand.
+  std::vector<HandKeyframe> keys;
+  for (const SceneHandKey& k : scene.script) {
+    HandKeyframe hk;
+    hk.t = k.t;
+    hk.x_ref = g.anchor + k.offset;
+    hk.wrench_ff = stack(k.force, Vec3::Zero());
+    keys.push_back(hk);
+  }
+  g.hand = std::make_unique<ScriptedHand>(scene.hand, keys, g.home.R);
+  g.device->set_hand(g.hand.get());
+
+  // The pipeline's device model: the model file's, plus the gripping hand's nominal mass at the
+  // tip when the scene asks for it (reference/grasp_mass_model.h): always (a fixed mass), or
+  // tick by tick as the grip detector decides (method.grip_detector; then the pipeline's model
+  // is the device alone and the detector adds the mass).
+  // Each implementation evaluates the same model file through its own device model.
+  g.pipeline_model = make_phantom_model(impl.name(), g.params, options.float_device_terms);
+  const SixDofDeviceModel* base = g.pipeline_model.get();
+  if (scene.method.grasp_mass_scale > 0.0) {
+    g.grasp =
+        std::make_unique<GraspMassModel>(*base, scene.method.grasp_mass_scale * scene.hand.mass,
+                                         scene.method.grasp_mass_scale * scene.hand.inertia);
+  }
+  const bool detect = g.grasp && scene.method.grip_detector;
+  const SixDofDeviceModel& belief =
+      g.grasp && !detect ? static_cast<const SixDofDeviceModel&>(*g.grasp) : *base;
+
+  // Pipeline.
+  PipelineConfig pc;
+  pc.method = scene.method.method;
+  pc.proxy = scene.method.proxy;
+  pc.coupling = scene.method.coupling;
+  pc.friction = scene.method.friction;
+  // The tool's desired inertia sits on this device's locked inertia M_L = M1 + M2 at home
+  // (thesis §3.1.2: M_d at least the device's own inertia, or the feed-forward makes the tool
+  // feel lighter than the device by injecting energy); with the detector, on the gripped model.
+  {
+    const SixDofDeviceModel& heaviest =
+        g.grasp ? static_cast<const SixDofDeviceModel&>(*g.grasp) : *base;
+    const Mat6 J1 = heaviest.twist_to_joint(g.q_home);
+    const Mat6 M1 = J1.transpose() * heaviest.mass_matrix(g.q_home) * J1;
+    pc.tool = tool_preset(scene.tool.preset, M1 + scene.method.proxy.M());
+  }
+  pc.observer_gain = VecX::Constant(6, scene.method.observer_gain);
+  // The observer's input matched to the driver's velocity estimate (reference/observer.h): without
+  // it the decomposition's feed-forward closes a loop through the velocity filter's lag.
+  pc.observer_input = matched_observer_input(g.device->capabilities());
+  pc.torque_limit = g.params.torque_limit_n_m;
+  if (detect) pc.grasp_model = g.grasp.get();
+  pc.skip_unneeded = options.skip_unneeded;
+  if (options.configure_pipeline) options.configure_pipeline(pc);
+  g.pipeline = make_pipeline(options.pipeline, belief, pc);
+  SafetyLimits limits;
+  limits.tau_max = g.params.torque_limit_n_m;
+  limits.qd_max = VecX::Constant(g.device->dof(), kSceneMaxJointSpeed);
+  limits.ramp_time_s = 0.0;
+  if (backend == DeviceBackend::kHdapi) {
+    // A real device: force engages over the first kHardwareRampS, and a tick whose own work took
+    // longer than kHardwareWatchdogPeriods periods of CPU time (not slow but broken: the
+    // Release drill tick's worst is ~0.7 ms; under the sanitizers its first contact took over
+    // 5 ms; the device's own watchdog would trip later) means zero torque.
+    limits.ramp_time_s = kHardwareRampS;
+    limits.watchdog_s = kHardwareWatchdogPeriods * g.tick;
+  }
+  limits.nominal_period = g.tick;
+  limits.monotonic_time = true;
+  limits.max_joint_step = g.device->limits().max_joint_step;
+  // A hand pushing harder than the device can render holds the motors at their peak: a safe stop
+  // after kMaxSaturationS (both backends; a built-in scene never saturates that long).
+  limits.max_saturation_s = kMaxSaturationS;
+  g.safety = std::make_unique<SafetyChain>(limits);
+  // The device the loop drives, started last: a device with its own clock (HDAPI's scheduler;
+  // the emulator's scripted hand starts at hdInitDevice) runs from here on.
+  Device* loop_device = g.device.get();
+  if (backend == DeviceBackend::kHdapi) {
+    // The project's emulator simulates the plant and the hand of the scene named by
+    // DENTSIM_HD_EMU_SCENE (device/hdapi/emulator): hand it this scene, as parsed, unless the
+    // caller chose one; a real device's library ignores the variable.
+    if (std::getenv("DENTSIM_HD_EMU_SCENE") == nullptr) {
+      const std::string path = (std::filesystem::temp_directory_path() /
+                                ("dentsim_hd_scene_" + std::to_string(::getpid()) + ".json"))
+                                   .string();
+      write_file_atomic(path, scene.text);
+      ::setenv("DENTSIM_HD_EMU_SCENE", path.c_str(), 0);
+    }
+    HdapiConfig hc;
+    hc.library = options.hd_library;
+    hc.rate_hz = static_cast<int>(std::lround(scene.tick_hz));
+    g.backend = std::make_unique<HdapiDevice>(hc);
+    loop_device = g.backend.get();
+  }
+  if (options.fault.kind != InjectedFault::kNone) {
+    g.faulty = std::make_unique<FaultInjectingDevice>(*loop_device, options.fault);
+    loop_device = g.faulty.get();
+  }
+  g.loop_device = loop_device;
+  g.loop = std::make_unique<ClosedLoop>(*loop_device, *g.pipeline, *g.contacts);
+  g.loop->set_safety_chain(g.safety.get());
+  return rig;
+}
+
+RunResult run_scene(const Scene& scene, const RunOptions& options) {
+  RunResult res;
+  res.scene = scene.name;
+  const double duration =
+      options.duration_override > 0.0 ? options.duration_override : scene.duration;
+  const std::string backend = options.device.empty() ? scene.device.type : options.device;
+  if (options.hd_loop != "callback" && options.hd_loop != "caller") {
+    throw InputError("--hd-loop '" + options.hd_loop + "': expected callback or caller");
+  }
+  if (find_device_backend(backend) == DeviceBackend::kHdapi && options.hd_loop == "callback") {
+    const char* why = options.fault.kind != InjectedFault::kNone ? "--inject-fault wraps"
+                      : options.observer != nullptr              ? "the view runs on"
+                      : options.realtime                         ? "--realtime paces"
+                                                                 : nullptr;
+    if (why != nullptr) {
+      throw InputError(std::string("with --device hdapi the tick runs in the vendor's callback (") +
+                       "--hd-loop callback), but " + why +
+                       " the caller's loop: add --hd-loop caller");
+    }
+  }
+  SceneRigOptions rig_options;
+  rig_options.pipeline = options.pipeline;
+  rig_options.fault = options.fault;
+  rig_options.float_device_terms = options.float_device_terms;
+  rig_options.skip_unneeded = options.skip_unneeded;
+  rig_options.device = options.device;
+  rig_options.hd_library = options.hd_library;
+  const std::unique_ptr<SceneRig> rig = build_scene_rig(scene, rig_options);
+  const double T = rig->tick;
+  res.device_model =
+      scene.device.model_file.empty() ? "default Phantom Premium 1.5A" : scene.device.model_file;
+  res.pipeline = rig->pipeline->name();
+  res.skip_unneeded = options.skip_unneeded;
+  res.tooth_before = rig->tooth_before;
+  SimulatedPhantom& device = *rig->device;  // the simulator's ground truth (unless a backend)
+  Device& driven = *rig->loop_device;       // what the loop drives
+  const bool truth = rig->backend == nullptr;
+  // With HDAPI the tick runs inside the vendor's scheduler callback (RunOptions::hd_loop).
+  const bool callback = !truth && options.hd_loop == "callback";
+  if (!truth) res.hd_loop = options.hd_loop;
+  res.device =
+      device_backend_name(truth ? DeviceBackend::kSimulatedPhantom : DeviceBackend::kHdapi);
+  res.has_ground_truth = truth;
+  ClosedLoop& loop = *rig->loop;
+  const Pipeline& pipeline = *rig->pipeline;
+  const ToothProviderBase& contacts = *rig->contacts;
+
+  const long n_ticks = static_cast<long>(std::ceil(duration / T));
+  std::vector<double> stage_us[kStageCount + 2];
+  for (auto& v : stage_us) v.reserve(n_ticks);
+  res.series.reserve(n_ticks / std::max(1, options.log_every) + 1);
+
+  double sum_f2 = 0.0, sum_fd = 0.0, sum_dd = 0.0, sum_obs2 = 0.0;
+  double hand_work = 0.0;
+  VecX q_true_prev = device.true_q();
+  const auto wall_start = std::chrono::steady_clock::now();
+  long next_progress = 0;
+  // The recorder (RunOptions::record_path): its writer thread drains a preallocated ring; the
+  // loop copies the tick's input sample into rec_sample (no allocation: same sizes) and pushes.
+  std::unique_ptr<SessionWriter> recorder;
+  DeviceSample rec_sample = loop.sample();
+  VecX rec_tau = VecX::Zero(rec_sample.q.size());
+  DeviceSample step_in = loop.sample();  // the direct loop's copy of a tick's input sample
+  TickRecord record;
+  if (!options.record_path.empty()) {
+    SessionHeader h;
+    h.dof = device.dof();
+    h.tick_rate_hz = scene.tick_hz;
+    const nlohmann::json context = {{"scene", nlohmann::json::parse(scene.text)},
+                                    {"scene_origin", scene.origin},
+                                    {"pipeline", res.pipeline},
+                                    {"duration_s", duration}};
+    h.context = context.dump();
+    const std::size_t capacity = static_cast<std::size_t>(std::min<long>(n_ticks + 2, 1L << 18));
+    recorder = std::make_unique<SessionWriter>(options.record_path, h, capacity);
+  }
+  loop.start();
+  if (loop.faulted()) {
+    res.faults.push_back(std::string(loop.fault_name()) +
+                         " at t = " + std::to_string(loop.fault_time()) + " s");
+  }
+  // --realtime: absolute deadlines, overruns counted and skipped (device/servo_pacer.h).
+  std::unique_ptr<ServoPacer> pacer;
+  bool fifo = false, locked = false;
+  if (options.realtime) {
+    pacer = std::make_unique<ServoPacer>(T);
+    std::string warning;
+    if (options.realtime_priority) {
+      request_realtime(&fifo, &locked, &warning);
+      if (!warning.empty()) std::fprintf(stderr, "dentsim run: warning: %s\n", warning.c_str());
+    }
+    pacer->set_privileges(fifo, locked, warning);
+    pacer->start();
+  }
+  // A device with its own clock (hdapi) runs until its clock has covered the duration (its ticks
+  // need not be the nominal ones); the simulated device for the nominal number of ticks.
+  const double t_begin = loop.sample().t;
+  const long max_ticks = truth ? n_ticks : 4 * n_ticks + 16;
+  double t_end = t_begin;  // the device clock at the end of the last tick consumed
+
+  // The measurements of one tick, whichever thread ran it (the direct loop below, or the vendor's
+  // scheduler callback: device/callback_loop.h). False ends the run.
+  auto consume = [&](const TickRecord& rec, double device_us) -> bool {
+    const long k = rec.k;
+    const double t = rec.t;
+    if (recorder) {
+      rec_sample.q = rec.q.head(rec_sample.q.size());
+      rec_sample.qd = rec.qd.head(rec_sample.qd.size());
+      rec_sample.t = rec.t;
+      rec_tau = rec.tau_pipeline.head(rec_tau.size());
+      recorder->push(static_cast<std::uint64_t>(k), rec_sample, rec_tau,
+                     static_cast<std::uint32_t>(rec.contacts));
+    }
+    res.virtual_energy_generated_j = rec.energy_virtual_j;
+    if (rec.faulted) {
+      // The loop latched a fault and commanded zero torque: end the run here; the report and the
+      // time series up to the fault are kept.
+      res.faults.push_back(std::string(rec.fault_name) + " at t = " + std::to_string(rec.fault_t) +
+                           " s");
+      return false;
+    }
+    res.hand_work_min_j = std::min(res.hand_work_min_j, hand_work);
+    long tick_ns = 0;
+    for (int s = 0; s < kStageCount; ++s) {
+      stage_us[s].push_back(1e-3 * rec.stage_ns[s]);
+      tick_ns += rec.stage_ns[s];
+    }
+    stage_us[kStageCount].push_back(1e-3 * tick_ns);
+    stage_us[kStageCount + 1].push_back(device_us);
+
+    // Measurements.
+    const double f_contact = rec.f_contact.norm();
+    const double f_device = rec.f_device.norm();
+    const double d_dev = rec.device_depth;
+    if (rec.contacts > 0) {
+      ++res.contact_ticks;
+      sum_f2 += f_contact * f_contact;
+      res.max_contact_force_n = std::max(res.max_contact_force_n, f_contact);
+      res.max_penetration_m = std::max(res.max_penetration_m, rec.max_depth);
+    }
+    if (d_dev > kMinDepthForStiffness) {
+      sum_fd += f_device * d_dev;
+      sum_dd += d_dev * d_dev;
+    }
+    const Vec3 f_hand = truth ? Vec3(device.hand_wrench().head<3>()) : Vec3::Zero();
+    sum_obs2 += (rec.f_observer - f_hand).squaredNorm();
+    ++res.ticks;
+    if (k % std::max(1, options.log_every) == 0) {
+      RunSample smp;
+      smp.t = t;
+      smp.contact_force_n = f_contact;
+      smp.device_force_n = f_device;
+      smp.device_force = rec.f_device;
+      smp.penetration_m = rec.max_depth;
+      smp.device_penetration_m = d_dev;
+      smp.proxy_x = rec.proxy.x;
+      smp.device_x = rec.device.x;
+      smp.proxy_rotvec = log_so3(rec.proxy.R);
+      smp.device_rotvec = log_so3(rec.device.R);
+      smp.hand_force_n = f_hand;
+      smp.observer_force_n = rec.f_observer;
+      smp.contacts = rec.contacts;
+      smp.energy_virtual_j = rec.energy_virtual_j;
+      smp.hand_work_j = hand_work;
+      for (const SceneHandKey& key : scene.script) {
+        if (key.t <= t) smp.phase = key.phase;
+      }
+      res.series.push_back(std::move(smp));
+    }
+    if (options.observer != nullptr) {
+      TickSnapshotView view;
+      view.tick = k;
+      view.t = t;
+      view.device = rec.device;
+      view.proxy = rec.proxy;
+      view.tool_radius_m = rig->tip.radius;
+      view.contact_force_n = rec.f_contact;
+      view.device_force_n = rec.f_device;
+      view.contacts = rec.contacts;
+      view.max_depth_m = rec.max_depth;
+      view.tick_us = 1e-3 * tick_ns;
+      for (int m = 1; m < kMaterialCount && contacts.drills(); ++m) {
+        view.removed_volume_mm3[m] = contacts.drill_state().removed_volume_m3(m) * 1e9;
+      }
+      view.faults = driven.faults();
+      view.tooth = &rig->tooth_grid();
+      view.touched_voxels = contacts.last_removed();
+      options.observer->on_tick(view);
+    }
+    if (driven.faults() != kFaultNone) {
+      res.faults.push_back(fault_string(driven.faults()) + " at t = " + std::to_string(t) + " s");
+      return false;
+    }
+    if (options.progress && k >= next_progress) {
+      options.progress(static_cast<double>(k) / n_ticks);
+      next_progress = k + std::max(1L, n_ticks / 100);
+    }
+    return true;
+  };
+
+  if (callback) {
+    // The tick inside the vendor's scheduler callback (device/callback_loop.h); this thread
+    // consumes the records until the device's clock has covered the duration.
+    HdapiDevice& hd = static_cast<HdapiDevice&>(*rig->backend);
+    auto depth = [](void* ctx, const Pose& pose) {
+      return static_cast<SceneRig*>(ctx)->tip_depth(pose);
+    };
+    CallbackServo servo(hd, loop, pipeline, depth, rig.get(),
+                        static_cast<std::size_t>(std::min<long>(max_ticks + 16, 1L << 16)));
+    servo.start();
+    TickRecord rec;
+    bool running = true;
+    while (running) {
+      if (servo.pop(rec)) {
+        if (rec.t - t_begin >= duration - 0.5 * T) {
+          t_end = rec.t;
+          break;
+        }
+        running = consume(rec, 0.0);
+        t_end = rec.t;
+        if (rec.k + 1 >= max_ticks) break;
+        continue;
+      }
+      if (hd.servo_done() || !hd.wait_ticks(1)) {
+        // The scheduler stopped calling us (the backend latched scheduler_stopped and disabled
+        // force output): what is left in the ring is still measured.
+        while (running && servo.pop(rec)) running = consume(rec, 0.0);
+        if (running) {
+          res.faults.push_back(fault_string(driven.faults() | kFaultSchedulerStopped) +
+                               " at t = " + std::to_string(t_end) + " s");
+        }
+        break;
+      }
+    }
+    servo.request_stop();
+    hd.wait_ticks(2);  // the callback has returned DONE with zero torque (or the scheduler is gone)
+    res.callback_dropped_ticks = servo.dropped();
+  } else {
+    for (long k = 0; !loop.faulted() && k < max_ticks; ++k) {
+      if (!truth && loop.sample().t - t_begin >= duration - 0.5 * T) break;
+      if (pacer) pacer->wait_next();
+      const auto t0 = std::chrono::steady_clock::now();
+      if (truth) q_true_prev = device.true_q();
+      const DeviceSample& in = loop.sample();
+      step_in.q = in.q;  // the tick's input (same sizes: no allocation)
+      step_in.qd = in.qd;
+      step_in.t = in.t;
+      const TickResult& r = loop.step();
+      if (pacer) pacer->tick_done();
+      const double step_us = 1e-3 * std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                        std::chrono::steady_clock::now() - t0)
+                                        .count();
+      // Hand port: the hand's joint torques (averaged over the tick) times the true joint motion.
+      if (truth) hand_work += device.hand_joint_torque().dot(device.true_q() - q_true_prev);
+      // The servo tick is what a real loop computes: the pipeline's stages and drilling. The
+      // simulated device's physics (MuJoCo substeps, hand) runs inside loop.step too and is
+      // reported apart, as "device_simulation". The device tip's own penetration (rendered
+      // stiffness) is measured outside the tick.
+      long tick_ns = 0;
+      for (int s = 0; s < kStageCount; ++s) tick_ns += r.stage_ns[s];
+      const double d_dev = loop.faulted() ? 0.0 : rig->tip_depth(r.device);
+      fill_tick_record(k, step_in, r, loop, pipeline, d_dev, record);
+      t_end = loop.sample().t;
+      if (!consume(record, step_us - 1e-3 * tick_ns)) break;
+    }
+  }
+  if (options.progress) options.progress(1.0);
+  if (pacer) {
+    release_realtime(fifo, locked);
+    res.realtime = pacer->stats();
+  }
+  if (recorder) {
+    recorder->stop();  // drains every pushed tick, the faulting one included
+    res.recorded_ticks = static_cast<long>(recorder->written());
+    res.record_dropped_ticks = static_cast<long>(recorder->dropped());
+  }
+
+  res.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  res.simulated_s = truth ? res.ticks * T : t_end - t_begin;
+  res.rms_contact_force_n = res.contact_ticks > 0 ? std::sqrt(sum_f2 / res.contact_ticks) : 0.0;
+  res.rendered_stiffness_n_per_m = sum_dd > 0.0 ? sum_fd / sum_dd : 0.0;
+  if (!callback) res.virtual_energy_generated_j = loop.energy_virtual_j();
+  res.hand_work_j = hand_work;
+  res.observer_rms_error_n = res.ticks > 0 ? std::sqrt(sum_obs2 / res.ticks) : 0.0;
+  for (int m = 1; m < kMaterialCount; ++m) {
+    res.removed_volume_mm3[m] =
+        contacts.drills() ? contacts.drill_state().removed_volume_m3(m) * 1e9 : 0.0;
+    res.removed_volume_total_mm3 += res.removed_volume_mm3[m];
+  }
+  res.tick_s = T;
+  if (contacts.pulp_exposed_tick() > 0) res.pulp_exposed_at_s = contacts.pulp_exposed_tick() * T;
+  res.drill_log = contacts.drill_log();
+  for (int s = 0; s < kStageCount; ++s) {
+    res.timing.emplace_back(tick_stage_name(s), stats_of(stage_us[s]));
+  }
+  res.timing.emplace_back("tick", stats_of(stage_us[kStageCount]));
+  res.timing.emplace_back("device_simulation", stats_of(stage_us[kStageCount + 1]));
+  res.tooth_after = rig->tooth_grid();
+  const bool faulted = callback ? !res.faults.empty() : loop.faulted();
+  res.torque_after_fault_n_m = faulted ? driven.applied_torque().norm() : 0.0;
+  return res;
+}
+
+}  // namespace dentsim

@@ -1,0 +1,314 @@
+// The default procedural molar (tooth_io/procedural_molar.h): deterministic, the anatomical
+// dimensions it states, five cusps above a central groove, two roots below a trunk, a pulp
+// enclosed in dentin with a canal in each root, enamel only on the crown and 2.5 mm thick over the
+// tallest cusp. Also the picture of the voxel tooth (tooth_io/render_png.h), drawn from it.
+#include "tooth_io/procedural_molar.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <set>
+#include <tuple>
+
+#include "reference/tooth/materials.h"
+#include "reference/tooth/neighbors.h"
+#include "tooth_io/render_png.h"
+
+namespace dentsim {
+namespace {
+
+const VoxelGrid& molar128() {
+  static const VoxelGrid g = voxelize_procedural_molar(MolarParams{}, 128);
+  return g;
+}
+
+int index_of(const VoxelGrid& g, int axis, double world) {
+  return static_cast<int>(std::floor((world - g.origin[axis]) / g.voxel_size));
+}
+
+// Height [m] of the top face of the highest solid voxel in the column through (x, y).
+double top_height(const VoxelGrid& g, double x, double y) {
+  const int i = index_of(g, 0, x), j = index_of(g, 1, y);
+  for (int k = g.n - 1; k >= 0; --k) {
+    if (g.solid(i, j, k)) return g.origin.z() + (k + 1) * g.voxel_size;
+  }
+  return -1;
+}
+
+// 4-connected components of solid voxels in the slice k; `with_pulp` counts those holding pulp.
+int slice_components(const VoxelGrid& g, int k, int* with_pulp) {
+  std::vector<int> label(static_cast<std::size_t>(g.n) * g.n, -1);
+  int count = 0;
+  *with_pulp = 0;
+  for (int j = 0; j < g.n; ++j) {
+    for (int i = 0; i < g.n; ++i) {
+      if (!g.solid(i, j, k) || label[i + g.n * j] >= 0) continue;
+      bool pulp = false;
+      std::vector<std::pair<int, int>> stack = {{i, j}};
+      label[i + g.n * j] = count;
+      while (!stack.empty()) {
+        const auto [a, b] = stack.back();
+        stack.pop_back();
+        pulp |= g.at(a, b, k) == kPulp;
+        for (const auto& [da, db] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+          const int x = a + da, y = b + db;
+          if (g.solid(x, y, k) && label[x + g.n * y] < 0) {
+            label[x + g.n * y] = count;
+            stack.push_back({x, y});
+          }
+        }
+      }
+      *with_pulp += pulp;
+      ++count;
+    }
+  }
+  return count;
+}
+
+TEST(ProceduralMolar, DeterministicAndScaleExact) {
+  const VoxelGrid a = voxelize_procedural_molar(MolarParams{}, 64);
+  const VoxelGrid b = voxelize_procedural_molar(MolarParams{}, 64);
+  EXPECT_EQ(a.voxels, b.voxels);
+  MolarParams twice;
+  twice.scale = 2;  // a power of two scales every coordinate exactly
+  const VoxelGrid c = voxelize_procedural_molar(twice, 64);
+  EXPECT_EQ(c.voxels, a.voxels);
+  EXPECT_DOUBLE_EQ(c.voxel_size, 2 * a.voxel_size);
+}
+
+TEST(ProceduralMolar, DimensionsOfALowerFirstMolar) {
+  const VoxelGrid& g = molar128();
+  const double h = g.voxel_size;
+  Vec3 lo = Vec3::Constant(1e9), hi = Vec3::Constant(-1e9);
+  for (int k = 0; k < g.n; ++k) {
+    for (int j = 0; j < g.n; ++j) {
+      for (int i = 0; i < g.n; ++i) {
+        if (!g.solid(i, j, k)) continue;
+        lo = lo.cwiseMin(g.origin + h * Vec3(i, j, k));
+        hi = hi.cwiseMax(g.origin + h * Vec3(i + 1, j + 1, k + 1));
+      }
+    }
+  }
+  const Vec3 ext = hi - lo;
+  std::printf("h = %.4f mm; extents %.3f x %.3f x %.3f mm (crown %.3f mm above the CEJ)\n", h * 1e3,
+              ext.x() * 1e3, ext.y() * 1e3, ext.z() * 1e3, hi.z() * 1e3);
+  EXPECT_NEAR(ext.x(), 11.0e-3, 2 * h);  // mesiodistal
+  EXPECT_NEAR(ext.y(), 10.5e-3, 2 * h);  // buccolingual
+  EXPECT_NEAR(hi.z(), 7.5e-3, h);        // crown height above the CEJ
+  EXPECT_NEAR(-lo.z(), 14.0e-3, h);      // mesial root length
+  EXPECT_NEAR(ext.z(), 21.5e-3, 2 * h);
+  // Width at the CEJ (z = 0): the cervix, 9.0 x 9.0 mm.
+  const int k0 = index_of(g, 2, 0.5 * h);
+  int i_lo = g.n, i_hi = -1;
+  for (int i = 0; i < g.n; ++i) {
+    if (g.solid(i, index_of(g, 1, 0.0), k0)) {
+      i_lo = std::min(i_lo, i);
+      i_hi = std::max(i_hi, i);
+    }
+  }
+  EXPECT_NEAR((i_hi - i_lo + 1) * h, 9.0e-3, 2 * h);
+}
+
+TEST(ProceduralMolar, FiveCuspsAboveTheGrooves) {
+  const VoxelGrid& g = molar128();
+  const double h = g.voxel_size;
+  // Cusp tips (mm): MB, DB, D, ML, DL and their heights.
+  const double cusps[5][3] = {
+      {-2.6, -2.0, 7.0}, {0.8, -2.2, 6.8}, {3.3, -1.1, 6.4}, {-2.4, 2.0, 7.5}, {1.8, 2.1, 7.3}};
+  for (const auto& c : cusps) {
+    EXPECT_NEAR(top_height(g, c[0] * 1e-3, c[1] * 1e-3), c[2] * 1e-3, 1.5 * h)
+        << c[0] << "," << c[1];
+  }
+  // The central groove (y = 0) between the mesial cusps and the buccal groove between MB and DB.
+  const double central = top_height(g, -2.5e-3, 0.0);
+  const double buccal = top_height(g, -0.9e-3, -2.1e-3);
+  std::printf("central groove %.2f mm, buccal groove %.2f mm, ML cusp %.2f mm\n", central * 1e3,
+              buccal * 1e3, top_height(g, -2.4e-3, 2.0e-3) * 1e3);
+  EXPECT_LT(central, 7.0e-3 - 1.0e-3);
+  EXPECT_LT(buccal, 6.8e-3 - 0.1e-3);
+}
+
+TEST(ProceduralMolar, TwoRootsBelowTheTrunkEachWithACanal) {
+  const VoxelGrid& g = molar128();
+  int pulp = 0;
+  EXPECT_EQ(slice_components(g, index_of(g, 2, -1.5e-3), &pulp), 1);   // trunk
+  EXPECT_EQ(pulp, 1);                                                  // pulp chamber
+  EXPECT_EQ(slice_components(g, index_of(g, 2, -8.0e-3), &pulp), 2);   // mesial + distal roots
+  EXPECT_EQ(pulp, 2);                                                  // a canal in each
+  EXPECT_EQ(slice_components(g, index_of(g, 2, -13.5e-3), &pulp), 1);  // the distal one is shorter
+}
+
+TEST(ProceduralMolar, PulpEnclosedInDentinEnamelOnTheCrown) {
+  const VoxelGrid& g = molar128();
+  const double h = g.voxel_size;
+  const auto counts = count_materials(g);
+  std::printf("enamel %.1f mm^3, dentin %.1f mm^3, pulp %.1f mm^3\n",
+              counts[kEnamel] * g.voxel_volume() * 1e9, counts[kDentin] * g.voxel_volume() * 1e9,
+              counts[kPulp] * g.voxel_volume() * 1e9);
+  ASSERT_GT(counts[kPulp], 0);
+  ASSERT_GT(counts[kEnamel], 0);
+  long exposed_pulp = 0, enamel_below_cej = 0;
+  double pulp_top = -1;
+  for (int k = 0; k < g.n; ++k) {
+    for (int j = 0; j < g.n; ++j) {
+      for (int i = 0; i < g.n; ++i) {
+        const std::uint8_t m = g.at(i, j, k);
+        const double z = g.center(i, j, k).z();
+        if (m == kEnamel && z < 0) ++enamel_below_cej;
+        if (m != kPulp) continue;
+        pulp_top = std::max(pulp_top, z);
+        for (const auto& [di, dj, dk] :
+             {std::tuple{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}}) {
+          const std::uint8_t q = g.at(i + di, j + dj, k + dk);
+          if (q == kEmpty || q == kEnamel) ++exposed_pulp;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(exposed_pulp, 0);
+  EXPECT_EQ(enamel_below_cej, 0);
+  EXPECT_LT(pulp_top, 3.5e-3);  // horns stay in the cervical half of the crown
+  // Enamel thickness at the mesiolingual cusp tip: the distance from the tip to the nearest
+  // dentin (the dentino-enamel junction): 2.5 mm, anatomical (MolarParams::enamel_cusp_m).
+  const Vec3 tip(-2.4e-3, 2.0e-3, top_height(g, -2.4e-3, 2.0e-3));
+  double to_dentin = 1;
+  for (int k = 0; k < g.n; ++k) {
+    for (int j = 0; j < g.n; ++j) {
+      for (int i = 0; i < g.n; ++i) {
+        if (g.at(i, j, k) == kDentin)
+          to_dentin = std::min(to_dentin, (g.center(i, j, k) - tip).norm());
+      }
+    }
+  }
+  std::printf("enamel at the ML cusp tip: %.3f mm to the nearest dentin\n", to_dentin * 1e3);
+  EXPECT_NEAR(to_dentin, 2.5e-3, 1.5 * h);
+  // Laterally at mid-crown (z = 3.75 mm) from the buccal surface: t_top / 2 with
+  // t_top = t_cusp H / (H - t_cusp) = 2.2 * 7.5 / 5.3 mm, i.e. 1.557 mm.
+  const int kk = index_of(g, 2, 3.75e-3), ii = index_of(g, 0, -0.5e-3);
+  int jj = 0;
+  while (jj < g.n && !g.solid(ii, jj, kk)) ++jj;
+  int lateral = 0;
+  for (; jj < g.n && g.at(ii, jj, kk) == kEnamel; ++jj) ++lateral;
+  std::printf("buccal enamel at mid-crown: %.3f mm\n", lateral * h * 1e3);
+  EXPECT_NEAR(lateral * h, 0.5 * 2.2e-3 * 7.5 / 5.3, 1.5 * h);
+}
+
+TEST(ProceduralMolar, VolumeConvergesWithResolution) {
+  const auto v = [](int n) {
+    const VoxelGrid g = voxelize_procedural_molar(MolarParams{}, n);
+    const auto c = count_materials(g);
+    return (c[kEnamel] + c[kDentin] + c[kPulp]) * g.voxel_volume();
+  };
+  const double v64 = v(64), v128 = molar128().voxel_volume() * (count_materials(molar128())[1] +
+                                                                count_materials(molar128())[2] +
+                                                                count_materials(molar128())[3]);
+  std::printf("volume: %.2f mm^3 at 64^3, %.2f mm^3 at 128^3\n", v64 * 1e9, v128 * 1e9);
+  EXPECT_NEAR(v64 / v128, 1.0, 0.02);
+  EXPECT_GT(v128, 800e-9);  // a lower first molar is roughly 1 cm^3
+  EXPECT_LT(v128, 1600e-9);
+}
+
+// ---- the picture
+// ----------------------------------------------------------------------------------
+
+TEST(RenderVoxels, CutAwayShowsTheThreeLayersExteriorShowsNoPulp) {
+  const VoxelGrid g = voxelize_procedural_molar(MolarParams{}, 64);
+  RenderOptions opt;
+  opt.panel_size = 160;
+  const RgbImage img = render_voxels(g, opt);
+  ASSERT_EQ(img.width, 320);
+  ASSERT_EQ(img.height, 160);
+  long count[2][kMaterialCount] = {};
+  for (int y = 0; y < img.height; ++y) {
+    for (int x = 0; x < img.width; ++x) {
+      const std::size_t p = static_cast<std::size_t>(y) * img.width + x;
+      const std::uint8_t m = img.material[p];
+      ++count[x >= 160][m];
+      for (int c = 0; c < 3; ++c) {
+        const int v = img.rgb[3 * p + c];
+        if (m == kEmpty) {
+          ASSERT_EQ(v, kBackgroundRgb[c]);
+        } else {  // material colour x shade in [ambient, 1]
+          const int base = material_properties(m).rgb[c];
+          ASSERT_LE(v, base);
+          ASSERT_GE(v, static_cast<int>(0.35 * base) - 1);
+        }
+      }
+    }
+  }
+  std::printf(
+      "exterior: enamel %ld dentin %ld pulp %ld; cut-away: enamel %ld dentin %ld pulp %ld\n",
+      count[0][kEnamel], count[0][kDentin], count[0][kPulp], count[1][kEnamel], count[1][kDentin],
+      count[1][kPulp]);
+  EXPECT_EQ(count[0][kPulp], 0);
+  EXPECT_GT(count[0][kEnamel], 1000);  // the crown
+  EXPECT_GT(count[0][kDentin], 1000);  // the roots
+  EXPECT_GT(count[1][kPulp], 100);
+  EXPECT_GT(count[1][kEnamel], 1000);
+  EXPECT_GT(count[1][kDentin], count[0][kDentin]);  // the cut faces add dentin
+  // The tooth fills a good part of each panel, with background around it.
+  EXPECT_GT(count[0][kEmpty], 160 * 160 / 4);
+  EXPECT_LT(count[0][kEmpty], 160 * 160 * 3 / 4);
+}
+
+TEST(RenderVoxels, ACubeShowsThreeShadedFaces) {
+  VoxelGrid g(16, Vec3::Zero(), 1e-3);
+  for (int k = 6; k < 10; ++k) {
+    for (int j = 6; j < 10; ++j) {
+      for (int i = 6; i < 10; ++i) g.set(i, j, k, kDentin);
+    }
+  }
+  RenderOptions opt;
+  opt.panel_size = 64;
+  const RgbImage img = render_voxels(g, opt);
+  std::set<int> shades;
+  for (int y = 0; y < 64; ++y) {
+    for (int x = 0; x < 64; ++x) {
+      const std::size_t p = static_cast<std::size_t>(y) * img.width + x;
+      if (img.material[p] == kDentin) shades.insert(img.rgb[3 * p]);
+    }
+  }
+  EXPECT_EQ(shades.size(), 3u);  // top and two side faces, each flat-shaded differently
+  EXPECT_EQ(img.material[static_cast<std::size_t>(32) * img.width + 32], kDentin);
+  EXPECT_EQ(img.material[0], kEmpty);
+}
+
+}  // namespace
+}  // namespace dentsim
+
+namespace dentsim {
+namespace {
+
+TEST(ProceduralMolar, CariesLesionInTheGrooveOpensIntoItAndReachesDentin) {
+  MolarParams params;
+  const VoxelGrid& g = molar128();
+  const NeighborCodes codes = encode_neighbors(g);
+  long caries = 0, exposed = 0, dentin_below = 0;
+  for (int k = 0; k < g.n; ++k) {
+    for (int j = 0; j < g.n; ++j) {
+      for (int i = 0; i < g.n; ++i) {
+        if (g.at(i, j, k) != kCaries) continue;
+        ++caries;
+        EXPECT_TRUE(molar_caries(params, g.center(i, j, k)));
+        if (codes.code[g.index(i, j, k)] != 0) ++exposed;
+        if (g.at(i, j, k - 1) == kDentin) ++dentin_below;  // the lesion's floor is dentin
+      }
+    }
+  }
+  std::printf("caries: %ld voxels (%.2f mm^3), %ld exposed, %ld over dentin\n", caries,
+              caries * g.voxel_volume() * 1e9, exposed, dentin_below);
+  // The ellipsoid holds 4/3 pi 1.0 x 0.8 x 1.2 mm^3 = 4.02 mm^3, part of it above the groove
+  // floor's sides (empty): between a quarter and all of it is solid.
+  EXPECT_GT(caries * g.voxel_volume(), 1.0e-9);
+  EXPECT_LT(caries * g.voxel_volume(), 4.03e-9);
+  EXPECT_GT(exposed, 0);
+  EXPECT_GT(dentin_below, 0);
+  // Off: no caries voxel at all.
+  params.caries_lesion = false;
+  const auto counts = count_materials(voxelize_procedural_molar(params, 64));
+  EXPECT_EQ(counts[kCaries], 0);
+}
+
+}  // namespace
+}  // namespace dentsim

@@ -1,0 +1,223 @@
+#include "tooth_io/procedural_molar.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace dentsim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kMm = 1e-3;
+constexpr double kSuperellipse = 2.5;  // cross-section exponent: a rounded rectangle
+
+// Cusps of a lower first molar: position (x, y) [mm] and tip height above the CEJ as a fraction of
+// the crown height (the mesiolingual cusp is the tallest, 1.0). Mesial -x, buccal -y. Positions
+// are for the default 11.0 x 10.5 mm crown and scale with it.
+struct Cusp {
+  double x, y, height;
+};
+constexpr std::array<Cusp, 5> kCusps = {{
+    {-2.6, -2.0, 7.0 / 7.5},  // mesiobuccal
+    {0.8, -2.2, 6.8 / 7.5},   // distobuccal
+    {3.3, -1.1, 6.4 / 7.5},   // distal
+    {-2.4, 2.0, 1.0},         // mesiolingual
+    {1.8, 2.1, 7.3 / 7.5},    // distolingual
+}};
+constexpr double kCuspCurvature = 0.15;  // paraboloid drop [mm / mm^2] away from a tip
+constexpr double kGrooveDepth = 1.0;     // central groove depth [mm]
+constexpr double kGrooveWidth = 0.4;     // its Gaussian width [mm]
+constexpr double kContourHeight = 2.5;   // height of contour above the CEJ [mm]
+constexpr double kOcclusalTable = 0.88;  // occlusal half width / maximal half width
+
+// Lengths in millimetres of the unscaled model.
+struct Mm {
+  double md, bl, cmd, cbl, crown, mesial, distal, trunk;
+};
+Mm mm_of(const MolarParams& p) {
+  return {p.crown_mesiodistal_m / kMm,   p.crown_buccolingual_m / kMm, p.cervix_mesiodistal_m / kMm,
+          p.cervix_buccolingual_m / kMm, p.crown_height_m / kMm,       p.mesial_root_length_m / kMm,
+          p.distal_root_length_m / kMm,  p.root_trunk_m / kMm};
+}
+
+bool in_superellipse(double x, double y, double a, double b) {
+  if (a <= 0 || b <= 0) return false;
+  return std::pow(std::abs(x) / a, kSuperellipse) + std::pow(std::abs(y) / b, kSuperellipse) <= 1;
+}
+
+// Crown and trunk half widths (x, y) at height z [mm].
+std::array<double, 2> body_half_widths(const Mm& m, double z) {
+  const double max_x = m.md / 2, max_y = m.bl / 2, cerv_x = m.cmd / 2, cerv_y = m.cbl / 2;
+  if (z < 0) {  // root trunk: narrows slightly towards the furcation
+    const double u = std::min(1.0, -z / m.trunk);
+    return {cerv_x * (1 - 0.07 * u), cerv_y * (1 - 0.07 * u)};
+  }
+  const double zc = kContourHeight * m.crown / 7.5;
+  if (z <= zc) {
+    const double w = std::sin(0.5 * kPi * z / zc);
+    return {cerv_x + (max_x - cerv_x) * w, cerv_y + (max_y - cerv_y) * w};
+  }
+  const double u = std::min(1.0, (z - zc) / (m.crown - zc));
+  const double f = 1 - (1 - kOcclusalTable) * u * u;
+  return {max_x * f, max_y * f};
+}
+
+// Occlusal surface height at (x, y) [mm]: upper envelope of the cusps minus the central groove.
+double occlusal_height(const Mm& m, double x, double y) {
+  const double sx = m.md / 11.0, sy = m.bl / 10.5;
+  double top = -1e9;
+  for (const Cusp& c : kCusps) {
+    const double dx = x - c.x * sx, dy = y - c.y * sy;
+    top = std::max(top, c.height * m.crown - kCuspCurvature * (dx * dx + dy * dy));
+  }
+  return top - kGrooveDepth * std::exp(-(y * y) / (kGrooveWidth * kGrooveWidth));
+}
+
+// Root centreline x [mm] and scaled half widths at depth u = -z / L in [0, 1].
+struct RootShape {
+  double x0, bend, wx, wy, length;
+};
+std::array<RootShape, 2> roots(const Mm& m) {
+  const double sx = m.md / 11.0, sy = m.bl / 10.5;
+  return {{{-2.4 * sx, 0.8 * sx, 2.0 * sx, 4.2 * sy, m.mesial},   // mesial: curves distally
+           {2.6 * sx, 0.4 * sx, 1.9 * sx, 3.8 * sy, m.distal}}};  // distal: straighter
+}
+
+double root_taper(double u) { return (1 - 0.6 * u) * std::sqrt(std::max(0.0, 1 - std::pow(u, 6))); }
+
+bool in_root(const RootShape& r, double x, double y, double z) {
+  if (z > 0 || -z >= r.length) return false;
+  const double u = -z / r.length;
+  const double s = root_taper(u);
+  const double dx = x - (r.x0 + r.bend * u * u);
+  return s > 0 && (dx * dx) / (r.wx * r.wx * s * s) + (y * y) / (r.wy * r.wy * s * s) <= 1;
+}
+
+}  // namespace
+
+bool molar_solid(const MolarParams& params, const Vec3& p) {
+  const Mm m = mm_of(params);
+  const double x = p.x() / (kMm * params.scale), y = p.y() / (kMm * params.scale),
+               z = p.z() / (kMm * params.scale);
+  if (z >= -m.trunk && z <= m.crown) {
+    const auto [a, b] = body_half_widths(m, z);
+    if (in_superellipse(x, y, a, b) && z <= occlusal_height(m, x, y)) return true;
+  }
+  for (const RootShape& r : roots(m)) {
+    if (in_root(r, x, y, z)) return true;
+  }
+  return false;
+}
+
+bool molar_pulp(const MolarParams& params, const Vec3& p) {
+  const Mm m = mm_of(params);
+  const double x = p.x() / (kMm * params.scale), y = p.y() / (kMm * params.scale),
+               z = p.z() / (kMm * params.scale);
+  const double sx = m.md / 11.0, sy = m.bl / 10.5, sz = m.crown / 7.5;
+  // Chamber: floor 1.5 mm below the CEJ, roof 2.0 mm above it, horns under the four main cusps.
+  const double floor = -1.5 * sz, roof = 2.0 * sz;
+  if (z >= floor && z <= roof + 1.2 * sz && in_superellipse(x, y, 2.6 * sx, 2.2 * sy)) {
+    double top = roof;
+    for (int c : {0, 1, 3, 4}) {
+      const double dx = x - 0.6 * kCusps[c].x * sx, dy = y - 0.6 * kCusps[c].y * sy;
+      top = std::max(top, roof + 1.2 * sz - 0.8 * (dx * dx + dy * dy));
+    }
+    if (z <= top) return true;
+  }
+  // One canal per root along its centreline, ending short of the apex.
+  for (const RootShape& r : roots(m)) {
+    if (z > 0 || -z >= 0.95 * r.length) continue;
+    const double u = -z / r.length;
+    const double rad = 0.5 * sx * (1 - 0.7 * u);
+    const double dx = x - (r.x0 + r.bend * u * u);
+    if (dx * dx + y * y <= rad * rad) return true;
+  }
+  return false;
+}
+
+Aabb molar_bounds(const MolarParams& params) {
+  const Mm m = mm_of(params);
+  double x_min = -m.md / 2, x_max = m.md / 2;
+  for (const RootShape& r : roots(m)) {  // root outlines at the sampled depths
+    for (int i = 0; i <= 1000; ++i) {
+      const double u = i / 1000.0;
+      const double c = r.x0 + r.bend * u * u, w = r.wx * root_taper(u);
+      x_min = std::min(x_min, c - w);
+      x_max = std::max(x_max, c + w);
+    }
+  }
+  Aabb b;
+  const double k = kMm * params.scale;
+  b.min = Vec3(x_min, -m.bl / 2, -std::max(m.mesial, m.distal)) * k;
+  b.max = Vec3(x_max, m.bl / 2, m.crown) * k;
+  return b;
+}
+
+bool molar_caries(const MolarParams& params, const Vec3& p) {
+  if (!params.caries_lesion) return false;
+  const Mm m = mm_of(params);
+  const double k = kMm * params.scale;
+  const double cx = params.caries_x_m / kMm;  // unscaled model millimetres
+  const Vec3 radii = params.caries_radii_m / kMm;
+  const Vec3 centre(cx, 0.0, occlusal_height(m, cx, 0.0) - radii.z());
+  const Vec3 q = p / k - centre;
+  const double s = (q.x() * q.x()) / (radii.x() * radii.x()) +
+                   (q.y() * q.y()) / (radii.y() * radii.y()) +
+                   (q.z() * q.z()) / (radii.z() * radii.z());
+  return s <= 1.0;
+}
+
+CrownFrame molar_crown_frame(const MolarParams& params) {
+  CrownFrame c;
+  c.axis = Vec3::UnitZ();
+  c.cej = 0.0;
+  c.crown_height = params.crown_height_m * params.scale;
+  return c;
+}
+
+VoxelGrid voxelize_procedural_molar(const MolarParams& params, int resolution,
+                                    VoxelizeReport* report) {
+  VoxelGrid grid = make_grid(molar_bounds(params), resolution);
+  std::vector<std::uint8_t> pulp(grid.voxels.size(), 0);
+  VoxelizeReport r;
+  // Only the voxels whose centres may lie within the model's bounds are sampled.
+  const Aabb b = molar_bounds(params);
+  std::array<int, 3> lo{}, hi{};
+  for (int d = 0; d < 3; ++d) {
+    lo[d] = std::max(
+        0, static_cast<int>(std::floor((b.min[d] - grid.origin[d]) / grid.voxel_size)) - 1);
+    hi[d] = std::min(
+        grid.n - 1, static_cast<int>(std::ceil((b.max[d] - grid.origin[d]) / grid.voxel_size)) + 1);
+  }
+  for (int k = lo[2]; k <= hi[2]; ++k) {
+    for (int j = lo[1]; j <= hi[1]; ++j) {
+      for (int i = lo[0]; i <= hi[0]; ++i) {
+        const Vec3 c = grid.center(i, j, k);
+        if (!molar_solid(params, c)) continue;
+        const std::size_t x = grid.index(i, j, k);
+        grid.voxels[x] = 1;
+        pulp[x] = molar_pulp(params, c) ? 1 : 0;
+        ++r.solid.interior_voxels;
+      }
+    }
+  }
+  r.crown = molar_crown_frame(params);
+  assign_materials(grid, pulp, r.crown, params.enamel_cusp_m * params.scale);
+  if (params.caries_lesion) {
+    for (int k = lo[2]; k <= hi[2]; ++k) {
+      for (int j = lo[1]; j <= hi[1]; ++j) {
+        for (int i = lo[0]; i <= hi[0]; ++i) {
+          const std::size_t x = grid.index(i, j, k);
+          if (grid.voxels[x] == kEnamel || grid.voxels[x] == kDentin) {
+            if (molar_caries(params, grid.center(i, j, k))) grid.voxels[x] = kCaries;
+          }
+        }
+      }
+    }
+  }
+  r.pulp_voxels = count_materials(grid)[kPulp];
+  if (report != nullptr) *report = r;
+  return grid;
+}
+
+}  // namespace dentsim
