@@ -1,0 +1,108 @@
+#!/usr/bin/env python3
+"""Pins the reports of the built-in scenes, bit for bit (issue #31: a renovation changes no result).
+
+  report_pins.py write DENTSIM PINS   runs every pinned case twice and writes PINS: every numeric
+                                      leaf of report.json that both runs agree on (timings, which
+                                      a busy machine changes, drop out and are listed), and a
+                                      SHA-256 per column of timeseries.csv
+  report_pins.py check DENTSIM PINS   runs every case once and fails on any pinned value or column
+                                      that is not identical (new keys and columns are allowed)
+
+A change that is meant to change results regenerates the pins with `write` in the same commit and
+says why in its message."""
+import hashlib
+import json
+import pathlib
+import subprocess
+import sys
+import tempfile
+
+CASES = [
+    ("probe", ["probe"]),
+    ("probe-groove", ["probe-groove"]),
+    ("drill", ["drill"]),
+    ("drill-reference", ["drill", "--pipeline", "reference"]),
+]
+
+
+def flatten(node, prefix, out):
+    if isinstance(node, dict):
+        for k, v in node.items():
+            flatten(v, f"{prefix}.{k}" if prefix else k, out)
+    elif isinstance(node, list):
+        for i, v in enumerate(node):
+            flatten(v, f"{prefix}[{i}]", out)
+    elif isinstance(node, bool) or node is None or isinstance(node, str):
+        out[prefix] = node
+    elif isinstance(node, (int, float)):
+        out[prefix] = repr(float(node)) if isinstance(node, float) else node
+    return out
+
+
+def columns(csv_path):
+    lines = csv_path.read_text().splitlines()
+    if not lines:
+        return {}
+    names = lines[0].split(",")
+    cols = {n: hashlib.sha256() for n in names}
+    for line in lines[1:]:
+        for n, v in zip(names, line.split(",")):
+            cols[n].update(v.encode() + b"\n")
+    return {n: h.hexdigest() for n, h in cols.items()}
+
+
+def run(dentsim, args):
+    with tempfile.TemporaryDirectory() as d:
+        out = pathlib.Path(d) / "out"
+        r = subprocess.run([dentsim, "run", *args, "--out", str(out)], capture_output=True, text=True)
+        if r.returncode != 0:
+            raise SystemExit(f"report_pins: dentsim run {' '.join(args)} exited {r.returncode}:\n"
+                             f"{r.stderr}")
+        report = json.loads((out / "report.json").read_text())
+        return flatten(report, "", {}), columns(out / "timeseries.csv")
+
+
+def write(dentsim, pins):
+    doc = {"_what": "scripts/report_pins.py write: report.json leaves and timeseries.csv column "
+                    "hashes of the built-in scenes (tests/sim: ReportPins)", "cases": {}}
+    for name, args in CASES:
+        print(f"report_pins: {name} (twice)", file=sys.stderr, flush=True)
+        (a, ca), (b, cb) = run(dentsim, args), run(dentsim, args)
+        keep = {k: v for k, v in a.items() if b.get(k) == v}
+        dropped = sorted(k for k in a if k not in keep)
+        doc["cases"][name] = {"args": args, "report": keep, "report_unpinned": dropped,
+                              "timeseries_sha256": {k: v for k, v in ca.items() if cb.get(k) == v}}
+    pathlib.Path(pins).write_text(json.dumps(doc, indent=1, sort_keys=True) + "\n")
+    print(f"report_pins: wrote {pins}", file=sys.stderr)
+
+
+def check(dentsim, pins):
+    doc = json.loads(pathlib.Path(pins).read_text())
+    bad = 0
+    checked = 0
+    for name, case in doc["cases"].items():
+        report, cols = run(dentsim, case["args"])
+        for k, v in case["report"].items():
+            checked += 1
+            if report.get(k, "<missing>") != v:
+                bad += 1
+                if bad <= 40:
+                    print(f"report_pins: {name}: report.json {k}: {report.get(k, '<missing>')} "
+                          f"(pinned {v})")
+        for k, v in case["timeseries_sha256"].items():
+            checked += 1
+            if cols.get(k) != v:
+                bad += 1
+                if bad <= 40:
+                    print(f"report_pins: {name}: timeseries.csv column {k} differs")
+    print(f"report_pins: {checked} pinned values in {len(doc['cases'])} runs, {bad} differ")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 4 or sys.argv[1] not in ("write", "check"):
+        raise SystemExit(__doc__)
+    if sys.argv[1] == "write":
+        write(sys.argv[2], sys.argv[3])
+        sys.exit(0)
+    sys.exit(check(sys.argv[2], sys.argv[3]))
