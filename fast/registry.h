@@ -1,5 +1,5 @@
-// The registry of the tick's implementations (DESIGN.md "The tick as Model/Data stages"; STYLE.md
-// "One registry"): every StageTable implementing the stage list of reference/core/pipeline.h.
+// The registry of the tick's implementations (docs/design.md "One registry", "The tick as
+// Model/Data stages"): every StageTable implementing the stage list of reference/core/pipeline.h.
 // The differential tests, the benchmarks, the allocation-counting test and `--pipeline NAME` all
 // iterate this one list, so no implementation of a stage can exist without being checked.
 #pragma once
