@@ -6,7 +6,7 @@
 #   <prefix>/include/dentsim/{reference,fast,...}/*.h      the headers, in the repository's layout
 #   <prefix>/lib/cmake/dentsim/                            find_package(dentsim CONFIG)
 #   <prefix>/share/dentsim/devices/*.json, scenes/*.json   the default device model, the scenes
-#   <prefix>/share/doc/dentsim/                            README.md, docs/
+#   <prefix>/share/doc/dentsim/                            README.md, docs/, copyright (LICENSE)
 #
 # Headers include each other as "reference/core/types.h", "fast/tick.h": the include directory is
 # <prefix>/include/dentsim, so a consumer writes the same #include lines as the repository and the
@@ -105,6 +105,9 @@ add_custom_target(dentsim_data ALL DEPENDS ${CMAKE_BINARY_DIR}/cmake/dentsim_dat
 install(DIRECTORY ${dentsim_data_dir}/ DESTINATION ${DENTSIM_INSTALL_DATADIR})
 
 install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
+# The licence as Debian policy wants it: /usr/share/doc/<package>/copyright.
+install(FILES ${PROJECT_SOURCE_DIR}/LICENSE DESTINATION ${CMAKE_INSTALL_DOCDIR}
+        RENAME copyright)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs)
 
 # ---- the install test (label `package`) ---------------------------------------------------------
@@ -130,6 +133,7 @@ set(CPACK_GENERATOR DEB)
 set(CPACK_PACKAGE_NAME dentsim)
 set(CPACK_PACKAGE_VERSION ${PROJECT_VERSION})
 set(CPACK_PACKAGE_VENDOR "dentsim")
+set(CPACK_RESOURCE_FILE_LICENSE ${PROJECT_SOURCE_DIR}/LICENSE)
 # The maintainers as the repository's history names them.
 set(CPACK_PACKAGE_CONTACT
     "Seed 389a29a1 maintainers <maintainers@users.noreply.h-seed-389a29a1.example>")

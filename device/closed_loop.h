@@ -1,6 +1,6 @@
-// The loop owner: the closed loop of one servo tick against any Device (DESIGN.md "One servo
-// tick", "The tick as Model/Data stages"), used by the simulator, the Z-width rig, the wall loop
-// and the observer report:
+// The loop owner: the closed loop of one servo tick against any Device (docs/design.md
+// "One servo tick", "The tick as Model/Data stages"), used by the simulator, the Z-width rig,
+// the wall loop and the observer report:
 //
 //   device.read(sample) -> pipeline.tick(sample, T_k, contacts) -> device.write(tau) ->
 //   device.advance()

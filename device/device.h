@@ -1,7 +1,7 @@
 // The haptic-device interface of dentsim (issue #3): what every backend (the MuJoCo-simulated
 // Phantom, the OpenHaptics backend, log replay) implements and what the servo loop talks to.
 //
-// One servo tick, as on hardware (DESIGN.md "One servo tick"):
+// One servo tick, as on hardware (docs/design.md "One servo tick"):
 //     device.read(sample);        // q [rad], qd [rad/s] (estimated), t [s] at the start of tick k
 //     ... pipeline computes tau ...
 //     device.write(tau);          // joint torques [N m], held (zero-order hold) over tick k
@@ -10,7 +10,7 @@
 // Units: SI. q and tau are in the device's joint coordinates (for the Phantom: q1 base yaw, q2
 // upper-arm elevation, q3 absolute forearm angle, q4..q6 gimbal), index 1 = device.
 //
-// Command chain (STYLE.md "Real-time loop"): every command passes finite check -> fault threshold
+// Command chain (docs/design.md "The real-time loop"): finite check -> fault threshold
 // -> saturation to the device limits. A fault (non-finite torque, torque beyond the fault
 // threshold, non-monotonic time, encoder jump) latches a named flag and brings the device to a
 // safe stop: zero torque until clear_faults(). Nothing in read/write/advance allocates once the

@@ -1,5 +1,5 @@
 // The safety chain (issue #15): one definition for every backend, run on every servo tick between
-// the pipeline's torque and the device (STYLE.md "Real-time loop"; libfranka, CHAI3D):
+// the pipeline's torque and the device (docs/design.md "The real-time loop"; libfranka, CHAI3D):
 //
 //   1. finite check        any tau_cmd,i NaN/inf                      -> non_finite_torque
 //      fault threshold     |tau_cmd,i| > tau_fault_i                  -> torque_beyond_limit

@@ -2,7 +2,7 @@
 // tool tip and following a position profile, a force profile, or both.
 //
 // Wrench the hand applies to the tool at its tip, F = [f (world {O}); tau (tip body frame {B})]
-// (DESIGN.md conventions, dual to V = [v (world); w (body)]):
+// (docs/conventions.md "Frames", dual to V = [v (world); w (body)]):
 //     f   = f_ff(t) + K_h (x_ref(t) - x) + B_h (v_ref(t) - v)                      [N]
 //     tau = tau_ff(t) + k_hw log(R^T R_ref) - b_hw w                                [N m]
 // with x, R the tip pose, v (world) and w (body) its twist. log(R^T R_ref) is the body-frame

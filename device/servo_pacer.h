@@ -1,7 +1,7 @@
 // Pacing a servo loop whose device has no clock of its own (the simulated Phantom with
 // `dentsim run --realtime`; issue #15): absolute deadlines on the grid t_0 + k T, overruns counted
 // and the missed deadlines skipped rather than replayed, and period and execution-time statistics
-// in constant memory (STYLE.md "Real-time loop"; libfranka, ros2_control).
+// in constant memory (docs/design.md "The real-time loop"; libfranka, ros2_control).
 //
 //   wait_next():  target = d + T (d: the last deadline the loop started on).
 //                 now <= target: sleep until target (absolute: no drift), start on it, d = target.

@@ -1,5 +1,5 @@
-// The simulated haptic device: a MuJoCo plant run as sampled-data hardware (DESIGN.md "Device
-// model", issue #3). Each effect is configurable and tested (tests/device/):
+// The simulated haptic device: a MuJoCo plant run as sampled-data hardware (docs/design.md
+// "The simulated device", issue #3). Each effect is configurable and tested (tests/device/):
 //
 // - Sub-stepping: tick k of length T_k [s] is integrated in N_k = ceil(T_k / max_substep) MuJoCo
 //   steps of h_k = T_k / N_k (RK4 by default).

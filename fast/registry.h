@@ -1,7 +1,8 @@
-// The registry of the tick's implementations (docs/pipeline.md "One registry"): one entry per
-// implementation of the stage list of reference/core/pipeline.h, with what a caller plugs into
-// it: the stage table, the device model that evaluates a Phantom model file's terms, and the
-// tooth its collide and drill stages query (per contact model). A caller looks its
+// The registry of the tick's implementations (docs/design.md "One registry"; docs/pipeline.md
+// "One registry of implementations"): one entry per implementation of the stage list of
+// reference/core/pipeline.h, with what a caller plugs into it: the stage table, the device model
+// that evaluates a Phantom model file's terms, and the tooth its collide and drill stages query
+// (per contact model). A caller looks its
 // implementation up once by name; nothing else compares implementation names. The differential
 // tests, the benchmarks, the allocation-counting test and `--pipeline NAME` all iterate this one
 // list, so no implementation of a stage can exist without being checked; adding one is one entry

@@ -4,11 +4,11 @@
 // docs/derivations/decomposition_and_observer.md.
 //
 // Units and frames: SI. Twists V = [v (world {O}); w (body)], wrenches F = [f (world); tau (body)]
-// (DESIGN.md). Index 1 = device (master), in maximal coordinates: V1 = [v1; w1] with w1 in the
-// device tip frame {B1}; index 2 = proxy: V2 = [v2; w2] with w2 in the proxy frame {B2}.
+// (docs/conventions.md). Index 1 = device (master), in maximal coordinates: V1 = [v1; w1], w1 in
+// the device tip frame {B1}; index 2 = proxy: V2 = [v2; w2] with w2 in the proxy frame {B2}.
 //
-// Frame reading of E (DESIGN.md "Passive decomposition"): the proxy twist seen in the device's
-// coordinates is E^T V2 = [v2; R1^T R2 w2], so
+// Frame reading of E (docs/derivations/decomposition_and_observer.md "1. The frame reading of E"):
+// the proxy twist seen in the device's coordinates is E^T V2 = [v2; R1^T R2 w2], so
 //     E = diag(I, R2^T R1),   E^T E = I                                         (3.3)-(3.4)
 // — the transpose of the block printed in the thesis. With this reading
 //     v_E = V1 - E^T V2 = [v1 - v2; w1 - R1^T R2 w2]

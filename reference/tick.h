@@ -1,5 +1,5 @@
-// One servo tick of the reference pipeline (DESIGN.md "One servo tick"; thesis Fig. 4.1, §4.1.1),
-// written as the Model/Data stages of reference/core/pipeline.h:
+// One servo tick of the reference pipeline (docs/design.md "One servo tick"; thesis Fig. 4.1,
+// §4.1.1), written as the Model/Data stages of reference/core/pipeline.h:
 //
 //   device_terms  device sample (q, qd, t) -> x1, R1, J_t, M, C^T qd, g, tau_f in one pass of
 //                 the device model; J1 = J_t^-1 (one LU), V1 = J_t qd                   (2.2)

@@ -1,5 +1,5 @@
 // Mesh -> voxel tooth (thesis §2.5.2, Fig. 2.9: voxelised surface model -> 3D seed filling ->
-// materials; DESIGN.md "Voxel tooth"; issue #4).
+// materials; docs/design.md "Voxel tooth"; issue #4).
 //
 // Pipeline, each stage a free function so tests can check it alone:
 //  1. surface_voxels: every voxel whose closed box meets a triangle, by the exact separating-axis

@@ -1,6 +1,6 @@
 // Cross-check of the full octree's sphere query against brute force over the flat voxel array
-// (DESIGN.md "Voxel tooth": "Cross-check every query against brute force"; STYLE.md: the oracle is
-// not the code under test). The comparison is exact: the sorted set of flat voxel indices the
+// (docs/design.md "Voxel tooth"; docs/conventions.md "Tests": the oracle is not the code under
+// test). The comparison is exact: the sorted set of flat voxel indices the
 // octree returns must equal the set the brute force finds by testing every voxel of the array with
 // the same definition (sphere_intersects_voxel: distance from the centre to the closed voxel box
 // < rho). Between queries, random voxels are removed through FullOctree::remove_voxel, so the

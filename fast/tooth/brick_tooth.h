@@ -1,7 +1,7 @@
 // The fast voxel tooth: the same grid and neighbour codes as the reference tooth
 // (reference/tooth/collision.h VoxelTooth: FullOctree + NeighborCodes), plus a hierarchy over the
-// SURFACE voxels only (code != 0), so that a query never visits an interior voxel (DESIGN.md
-// "Voxel tooth", "Fast path rules"; docs/tooth_octree.md "Fast tooth").
+// SURFACE voxels only (code != 0), so that a query never visits an interior voxel (docs/design.md
+// "Voxel tooth", "The reference and fast twins"; docs/tooth_octree.md "Fast tooth").
 //
 // Frames and units: as reference/tooth/voxel_grid.h (world frame, metres, flat index
 // i + N (j + N k)).

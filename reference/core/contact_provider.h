@@ -1,4 +1,4 @@
-// The collision stage as the servo tick sees it (DESIGN.md "The tick as Model/Data stages"):
+// The collision stage as the servo tick sees it (docs/design.md "The tick as Model/Data stages"):
 // an environment that reports the contact set of the tool at the proxy pose, and that the tool
 // may cut (drilling). Implementations: the voxel tooth (reference/tooth/tooth_contacts.h), the
 // half-space wall (reference/half_space_wall.h), free space (NoContacts).

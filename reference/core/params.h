@@ -71,7 +71,7 @@ struct ToolDynamics {
   Mat6 D_d = Mat6::Zero();
 };
 
-// The rendering method (DESIGN.md "One servo tick").
+// The rendering method (docs/design.md "One servo tick").
 enum class Method {
   kExplicitVc,   // standard virtual coupling, explicit Euler proxy (the thesis's baseline)
   kPmiVc,        // PMI proxy + PMI virtual coupling (§2)

@@ -1,4 +1,4 @@
-// The servo tick as Model/Data stages (DESIGN.md "The tick as Model/Data stages"; MuJoCo's
+// The servo tick as Model/Data stages (docs/design.md "The tick as Model/Data stages"; MuJoCo's
 // mjModel/mjData, Pinocchio's model/data). Shared by reference/ and fast/: both implement the
 // same stage list over the same PipelineModel and PipelineData, and one registry of stage
 // tables (StageTable) drives the tick, the differential tests, the benchmarks and the

@@ -1,5 +1,5 @@
 // Collision of the tool-tip sphere with the voxel tooth -> contact set (thesis §2.5.2 "Collision
-// Detection", §2.3 (2.15)-(2.16); DESIGN.md "Voxel tooth").
+// Detection", §2.3 (2.15)-(2.16); docs/design.md "Voxel tooth").
 //
 // Frames and units: world frame {O}, metres. The tip is a sphere of radius rho [m] centred at
 // c = x_2 + R_2 o, o the tip offset in the proxy body frame (zero: the tip is the proxy origin).

@@ -1,5 +1,5 @@
-// Drilling of the voxel tooth (thesis §2.5.2 "Drilling"; DESIGN.md "Voxel tooth", last stage of
-// "One servo tick").
+// Drilling of the voxel tooth (thesis §2.5.2 "Drilling"; docs/design.md "Voxel tooth", last stage
+// of "One servo tick").
 //
 // Model (docs/tooth_octree.md "Drilling"): the bur is the tip sphere of radius rho spinning at
 // omega [rad/s]; its cutting surface moves at u = omega rho [m/s] against the tooth. Contact i of

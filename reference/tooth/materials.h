@@ -1,6 +1,6 @@
-// Tooth materials (thesis §2.5; DESIGN.md "Voxel tooth"). Ids are stored per voxel (VoxelGrid).
-// The property table (stiffness scale, drilling threshold, colour) lives in materials.cc with
-// its sources.
+// Tooth materials (thesis §2.5; docs/design.md "Voxel tooth"). Ids are stored per voxel
+// (VoxelGrid). The property table (stiffness scale, drilling threshold, colour) lives in
+// materials.cc with its sources.
 #pragma once
 
 #include <cstdint>

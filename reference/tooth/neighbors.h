@@ -1,5 +1,5 @@
-// Neighbour encoding of the voxel tooth (thesis §2.5.2 "Neighbor Encoding"; DESIGN.md "Voxel
-// tooth"): 6 bits per voxel, bit f set iff the voxel is solid and its neighbour across face f is
+// Neighbour encoding of the voxel tooth (thesis §2.5.2 "Neighbor Encoding"; docs/design.md
+// "Voxel tooth"): 6 bits per voxel, bit f set iff the voxel is solid and its neighbour across f is
 // empty or outside the grid, i.e. face f is exposed. Surface voxels are those with a nonzero code.
 // Contact is built from exposed faces only (reference/tooth/collision.h), so the face shared by
 // two face-adjacent solid voxels, and the edge between their exposed faces, give no force.

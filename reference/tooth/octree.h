@@ -1,5 +1,5 @@
-// Full (pointerless) octree over the voxel tooth (thesis §2.5.2, ref [10]; DESIGN.md "Voxel
-// tooth").
+// Full (pointerless) octree over the voxel tooth (thesis §2.5.2, ref [10]; docs/design.md
+// "Voxel tooth").
 //
 // Levels: level 0 is the root (the whole N^3 grid), level L = log2(N) are the leaves (the voxels of
 // the VoxelGrid, which the octree owns). A node at level l has integer position (x, y, z) in

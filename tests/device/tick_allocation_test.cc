@@ -1,5 +1,5 @@
-// The servo tick allocates nothing (DESIGN.md "The tick as Model/Data stages"; issue "The tick as
-// an engine"): every implementation in the registry (fast/registry.h), every method, with and
+// The servo tick allocates nothing (docs/design.md "The tick as Model/Data stages"; issue "The tick
+// as an engine"): every implementation in the registry (fast/registry.h), every method, with and
 // without the grip detector, over 10^4 ticks of the drill scene in contact and drilling, counted
 // with a global operator new hook around the loop owner's step (read -> tick -> write ->
 // advance on the simulated Phantom).

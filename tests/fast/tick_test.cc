@@ -38,7 +38,7 @@ TEST(FastTick, EveryStageAndTheClosedLoopAgreeWithTheReference) {
     EXPECT_LE(s.max_rel, 1e-9) << s.stage;
     EXPECT_EQ(s.count_mismatches, 0) << s.stage;
     EXPECT_EQ(s.samples, o.stage_ticks);
-    // A check that barely met contact would prove little (STYLE.md "MISTRUSTED").
+    // A check that barely met contact would prove little (docs/conventions.md "Tests").
     EXPECT_GT(s.contact_samples, s.samples / 10) << s.stage;
   }
   // Adversarial states (validation/crosscheck_fast.h): tick lengths 1e-5 to 1e-2 s, the proxy's

@@ -67,7 +67,8 @@ foreach(f bin/dentsim include/dentsim/reference/tick.h include/dentsim/fast/regi
           ${LIBDIR}/cmake/dentsim/dentsimConfig.cmake
           ${LIBDIR}/cmake/dentsim/dentsimConfigVersion.cmake
           ${LIBDIR}/cmake/dentsim/dentsimTargets.cmake ${LIBDIR}/libdentsim_hd_emulator.so
-          share/doc/dentsim/README.md share/dentsim/scenes/probe.json)
+          share/doc/dentsim/README.md share/doc/dentsim/copyright
+          share/dentsim/scenes/probe.json)
   if(NOT EXISTS ${prefix}/${f})
     message(FATAL_ERROR "install test: ${prefix}/${f} was not installed")
   endif()
