@@ -63,8 +63,12 @@ void run(const Options& o) {
                                   {"count_mismatches", s.count_mismatches}};
     nlohmann::json& row = stages[s.stage];
     if (row.is_null()) {
-      row = {{"implementation", s.implementation}, {"max_rel", 0.0},       {"worst_config", ""},
-             {"samples", 0},                       {"contact_samples", 0}, {"count_mismatches", 0},
+      row = {{"implementation", s.implementation},
+             {"max_rel", 0.0},
+             {"worst_config", ""},
+             {"samples", 0},
+             {"contact_samples", 0},
+             {"count_mismatches", 0},
              {"configs", 0}};
     }
     if (s.max_rel >= row["max_rel"].get<double>()) {
@@ -180,8 +184,7 @@ void setup_crosscheck_fast(CLI::App& app) {
                   "the grip detector, every contact model, on every --stage-scenes scene) or "
                   "cover (each combination once, the scenes in turn)")
       ->capture_default_str();
-  sub->add_option("--stage-scenes", opt->stage_scenes,
-                  "Built-in scenes checked stage by stage")
+  sub->add_option("--stage-scenes", opt->stage_scenes, "Built-in scenes checked stage by stage")
       ->delimiter(',')
       ->capture_default_str();
   sub->add_option("--duration", opt->check.scene_duration_s, "Closed-loop run per scene [s]")

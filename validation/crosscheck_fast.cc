@@ -260,8 +260,7 @@ void check_config(const StageConfig& cfg, const CheckedImplementation& impl,
       P->env = ref_adv->contacts.get();
       perturb(pt, k, P.get());
       const PipelineModel& mr = pt.saturate ? m_ref_sat : pt.frictionless ? m_ref_nof : m_ref;
-      const PipelineModel& mo =
-          pt.saturate ? m_other_sat : pt.frictionless ? m_other_nof : m_other;
+      const PipelineModel& mo = pt.saturate ? m_other_sat : pt.frictionless ? m_other_nof : m_other;
       bool ok_adv = true;
       for (int i = 0; i < kStageCount - 1 && ok_adv; ++i) {
         *C = *P;
@@ -349,9 +348,9 @@ void check_config(const StageConfig& cfg, const CheckedImplementation& impl,
       c.saturated_samples = adv_saturated[pi];
       if (!(c.max_rel <= o.max_rel_bound) || c.count_mismatches != 0) {
         out->ok = false;
-        out->failures.push_back(c.implementation + " " + config + " " + c.perturbation +
-                                " stage " + c.stage + ": max_rel " + sci(c.max_rel) +
-                                ", count mismatches " + std::to_string(c.count_mismatches));
+        out->failures.push_back(c.implementation + " " + config + " " + c.perturbation + " stage " +
+                                c.stage + ": max_rel " + sci(c.max_rel) + ", count mismatches " +
+                                std::to_string(c.count_mismatches));
       }
       out->adversarial.push_back(c);
     }
@@ -362,7 +361,8 @@ void check_scene(const std::string& name, const CheckedImplementation& impl,
                  const FastCrosscheckOptions& o, FastCrosscheckResult* out) {
   const StageTable& table = *impl.table;
   if (find_stage_table(impl.environment) != &table) {
-    // The closed loop runs a registered pipeline (build_scene_rig): a test's wrapper table has none.
+    // The closed loop runs a registered pipeline (build_scene_rig): a test's wrapper table has
+    // none.
     out->ok = false;
     out->failures.push_back(name + ": the closed loop runs registered implementations only (" +
                             table.implementation + ")");

@@ -102,8 +102,7 @@ std::vector<CheckedImplementation> registered_implementations();
 struct FastCrosscheckOptions {
   long stage_ticks = 2000;  // ticks of each configuration checked stage by stage
   // Configurations checked stage by stage (default: the whole matrix on the three scenes).
-  std::vector<StageConfig> stage_configs =
-      stage_config_matrix({"drill", "probe", "probe-groove"});
+  std::vector<StageConfig> stage_configs = stage_config_matrix({"drill", "probe", "probe-groove"});
   double scene_duration_s = 5.0;  // closed-loop run per scene
   // Built-in scenes; "NAME:faces" runs one with the face contact model.
   std::vector<std::string> scenes = {"drill", "probe", "drill:faces"};

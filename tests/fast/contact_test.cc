@@ -73,7 +73,8 @@ Scales scales(const std::vector<Contact>& set, const Pose& proxy, double T, Sche
     const double delta = penetration_depth(c, proxy);
     if (!(delta > 0.0)) continue;
     const double an = std::max(1.0, (c.r.cross(proxy.R.transpose() * c.n)).cwiseAbs().maxCoeff());
-    const double g = w(c) * ((scheme == Scheme::kMidpoint ? 0.5 * T : 0.0) * c.stiffness + c.damping);
+    const double g =
+        w(c) * ((scheme == Scheme::kMidpoint ? 0.5 * T : 0.0) * c.stiffness + c.damping);
     s.f0 += w(c) * c.stiffness * delta * an;
     s.G += g * an * an;
   }
@@ -197,10 +198,10 @@ TEST(FastContact, HalfSpacePushesOutAlongTheNormalWithKDelta) {
     // delta is recomputed from the pose: round-off of the positions' size (|x_o| ~ 0.1 m), not of
     // delta's.
     const double tol = 8 * kEps * K * (delta + c.x_o.cwiseAbs().maxCoeff() + r.norm());
-    EXPECT_NEAR(f.dot(n), K * delta, tol);                  // magnitude K delta
-    EXPECT_LE((f - f.dot(n) * n).norm(), tol);              // along n: no tangential part
-    EXPECT_EQ(Fe.f0, Fm.f0);                                // the spring at t_k in both schemes
-    const Vec3 tau = r.cross(p.R.transpose() * f);          // the torque of f at x_c (body)
+    EXPECT_NEAR(f.dot(n), K * delta, tol);          // magnitude K delta
+    EXPECT_LE((f - f.dot(n) * n).norm(), tol);      // along n: no tangential part
+    EXPECT_EQ(Fe.f0, Fm.f0);                        // the spring at t_k in both schemes
+    const Vec3 tau = r.cross(p.R.transpose() * f);  // the torque of f at x_c (body)
     EXPECT_LE((Fm.f0.tail<3>() - tau).norm(), tol * 0.05);
     Vec6 a;
     a << n, r.cross(p.R.transpose() * n);

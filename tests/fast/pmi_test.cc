@@ -46,7 +46,8 @@ PmiSystem random_system(Rng& rng, double T, double decades) {
   AffineWrench F;
   Mat6 L;
   for (int i = 0; i < 36; ++i) L(i) = uni(rng, -1.0, 1.0);
-  const Vec6 scale = Vec6::NullaryExpr([&](Eigen::Index) { return std::pow(10.0, uni(rng, 0.0, decades)); });
+  const Vec6 scale =
+      Vec6::NullaryExpr([&](Eigen::Index) { return std::pow(10.0, uni(rng, 0.0, decades)); });
   F.G = -(scale.asDiagonal() * L * L.transpose() * scale.asDiagonal()) * T;
   Mat6 N;
   for (int i = 0; i < 36; ++i) N(i) = uni(rng, -1.0, 1.0) * 1e-3;
@@ -89,8 +90,9 @@ TEST(FastPmi, AdversarialSystemsAgreeWithTheReference) {
   Rng rng(5);
   Vec6 V;
   // Not finite: both refuse.
-  for (double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(),
-                     -std::numeric_limits<double>::infinity()}) {
+  for (double bad :
+       {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(),
+        -std::numeric_limits<double>::infinity()}) {
     PmiSystem s = random_system(rng, 1e-3, 2.0);
     s.A(2, 3) = bad;
     EXPECT_FALSE(fast::pmi_try_solve(s, &V));

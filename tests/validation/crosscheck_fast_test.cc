@@ -132,13 +132,13 @@ TEST(CrosscheckFast, APlantedErrorInAnyStageIsReported) {
     }
     for (const StageCrosscheck& s : r.stages) {
       if (s.stage == name || s.stage == "chain") continue;
-      EXPECT_FALSE(reported(s, o.max_rel_bound)) << "planted in " << name << ", " << s.stage
-                                                 << " reports " << s.max_rel;
+      EXPECT_FALSE(reported(s, o.max_rel_bound))
+          << "planted in " << name << ", " << s.stage << " reports " << s.max_rel;
     }
-    std::printf("planted in %-13s own row max_rel %.3e (%ld count mismatches), chain row %.3e (%ld)\n",
-                name.c_str(), own != nullptr ? own->max_rel : -1.0,
-                own != nullptr ? own->count_mismatches : -1L, chain->max_rel,
-                chain->count_mismatches);
+    std::printf(
+        "planted in %-13s own row max_rel %.3e (%ld count mismatches), chain row %.3e (%ld)\n",
+        name.c_str(), own != nullptr ? own->max_rel : -1.0,
+        own != nullptr ? own->count_mismatches : -1L, chain->max_rel, chain->count_mismatches);
   }
 }
 
