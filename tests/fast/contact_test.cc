@@ -22,6 +22,8 @@
 #include "reference/contact.h"
 #include "reference/core/contact_provider.h"
 #include "reference/core/so3.h"
+#include "tests/support/contacts.h"
+#include "tests/support/random.h"
 
 namespace dentsim {
 namespace {
@@ -30,14 +32,8 @@ using Rng = std::mt19937_64;
 constexpr double kEps = 2.220446049250313e-16;
 constexpr double kC = 16.0;  // the round-off constant of the bound (header)
 
-double uni(Rng& rng, double a, double b) {
-  return std::uniform_real_distribution<double>(a, b)(rng);
-}
-
-Vec3 random_unit(Rng& rng) {
-  std::normal_distribution<double> g(0.0, 1.0);
-  return Vec3(g(rng), g(rng), g(rng)).normalized();
-}
+double uni(Rng& rng, double a, double b) { return testing::uniform(rng, a, b); }
+using testing::random_unit;
 
 Pose random_pose(Rng& rng, double angle) {
   Pose p;
@@ -50,15 +46,7 @@ Pose random_pose(Rng& rng, double angle) {
 // x_o along n (depth > 0 penetrates; recomputed from the pose by both implementations).
 Contact member(const Pose& proxy, const Vec3& r, const Vec3& n, double depth, double k, double b,
                double weight) {
-  Contact c;
-  c.r = r;
-  c.n = n;
-  c.x_o = proxy.x + proxy.R * r + depth * n;
-  c.depth = depth;
-  c.stiffness = k;
-  c.damping = b;
-  c.weight = weight;
-  return c;
+  return testing::make_contact(proxy, n, r, depth, k, b, weight);
 }
 
 // The sums' scales: per entry, sum over penetrating members of |w k delta a| (f0) and of

@@ -19,6 +19,7 @@
 #include <random>
 
 #include "reference/pmi.h"
+#include "tests/support/random.h"
 
 namespace dentsim {
 namespace {
@@ -26,9 +27,7 @@ namespace {
 using Rng = std::mt19937_64;
 constexpr double kEps = 2.220446049250313e-16;
 
-double uni(Rng& rng, double a, double b) {
-  return std::uniform_real_distribution<double>(a, b)(rng);
-}
+double uni(Rng& rng, double a, double b) { return testing::uniform(rng, a, b); }
 
 // A system of the tick's kind: the proxy's inertia (4.2), a coupling / contact term G = -S (S
 // symmetric positive semidefinite, rank <= 6, stiffness spanning `decades` orders), a
