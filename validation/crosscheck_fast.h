@@ -22,9 +22,10 @@
 //                 f_hat, the grip detector's band powers and state) and command's (tau, T1,
 //                 tau_gravity), and every stage's status. It starts after device_terms (which has
 //                 its own row) because the observer's estimate is a difference of nearly equal
-//                 momenta, f_hat = L (p - p_hat): the device terms' round-off (7e-16 of M) becomes
-//                 up to 4e-10 of f_hat and of the grip detector's band powers — the observer's
-//                 conditioning, not an error of either implementation, and above the bound.
+//                 momenta, f_hat = L (p - p_hat): the device terms' round-off of M becomes a
+//                 relative difference of f_hat (and of the grip detector's band powers) orders of
+//                 magnitude larger when f_hat is small — the observer's conditioning, not an
+//                 error of either implementation, and above the bound.
 // Stages an implementation runs with the reference's own code (CheckedImplementation::
 // shared_stages; fast: observe and command, fast/tick.cc) have no row of their own: on the same
 // input a row would compare a function with itself and could not fail. Their outputs are compared
