@@ -3,13 +3,15 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <iterator>
 #include <memory>
 #include <numbers>
 
-#include "sim/scene.h"
-#include "sim/simulator.h"
+#include "device/scene.h"
+#include "device/simulator.h"
 #include "fast/registry.h"
+#include "fast/tick.h"
 
 namespace dentsim {
 namespace {
@@ -130,15 +132,17 @@ struct Perturbation {
   double angle;          // >= 0: the proxy's rotation off the device's orientation [rad]
   bool saturate;         // the model with torque limits at 1 %
   double proxy_depth_m;  // > 0: the proxy moved this far down (-z)
+  bool frictionless;     // the model without friction (the PMI solve of the contact system)
 };
 constexpr Perturbation kPerturbations[] = {
-    {"tick_1e-5", 1e-5, -1.0, false, 0.0},
-    {"tick_1e-4", 1e-4, -1.0, false, 0.0},
-    {"tick_1e-2", 1e-2, -1.0, false, 0.0},
-    {"rotation_near_0", 0.0, 1e-9, false, 0.0},
-    {"rotation_near_pi", 0.0, std::numbers::pi - 1e-9, false, 0.0},
-    {"saturation", 0.0, -1.0, true, 0.0},
-    {"proxy_offset", 0.0, -1.0, false, 3e-4},
+    {"tick_1e-5", 1e-5, -1.0, false, 0.0, false},
+    {"tick_1e-4", 1e-4, -1.0, false, 0.0, false},
+    {"tick_1e-2", 1e-2, -1.0, false, 0.0, false},
+    {"rotation_near_0", 0.0, 1e-9, false, 0.0, false},
+    {"rotation_near_pi", 0.0, std::numbers::pi - 1e-9, false, 0.0, false},
+    {"saturation", 0.0, -1.0, true, 0.0, false},
+    {"proxy_offset", 0.0, -1.0, false, 3e-4, false},
+    {"frictionless", 0.0, -1.0, false, 0.0, true},
 };
 constexpr int kPerturbationCount = static_cast<int>(std::size(kPerturbations));
 
@@ -157,141 +161,213 @@ const StagedPipeline& staged(const SceneRig& rig) {
   return dynamic_cast<const StagedPipeline&>(*rig.pipeline);
 }
 
-// Stage by stage on the drill scene: `ref` runs in closed loop, the other implementation's stages
-// run on copies of its data.
-void check_stages(const FastCrosscheckOptions& o, FastCrosscheckResult* out) {
-  Scene scene = load_scene("drill");
-  scene.method.grasp_mass_scale = 1.0;  // exercise the hand's terms and the grip detector too
-  scene.method.grip_detector = true;
-  // The face contact model: the one with a fast twin (fast/tooth/), so `collide` and `drill`
-  // compare the brick tooth with the reference octree.
-  scene.tooth.contact_model = "faces";
+// A built-in scene as a configuration asks for it.
+Scene config_scene(const StageConfig& c) {
+  Scene scene = load_scene(c.scene);
+  scene.method.method = c.method;
+  scene.method.grasp_mass_scale = 1.0;  // the hand's terms in every configuration
+  scene.method.grip_detector = c.grip_detector;
+  scene.tooth.contact_model = c.contact_model;
+  return scene;
+}
+
+std::unique_ptr<SceneRig> rig_of(const Scene& scene, const std::string& pipeline) {
   SceneRigOptions ro;
-  ro.pipeline = "reference";
-  const std::unique_ptr<SceneRig> ref = build_scene_rig(scene, ro);
+  ro.pipeline = pipeline;
+  return build_scene_rig(scene, ro);
+}
+
+std::string sci(double x) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3e", x);
+  return b;
+}
+
+void add_row(const FastCrosscheckOptions& o, StageCrosscheck c, FastCrosscheckResult* out) {
+  if (!(c.max_rel <= o.max_rel_bound) || c.count_mismatches != 0) {
+    out->ok = false;
+    out->failures.push_back(c.implementation + " " + c.config + " " + c.stage + ": max_rel " +
+                            sci(c.max_rel) + ", count mismatches " +
+                            std::to_string(c.count_mismatches));
+  }
+  out->stages.push_back(std::move(c));
+}
+
+// Stage by stage on one configuration: `ref` runs in closed loop, the other implementation's
+// stages run on copies of its data (its own environment `other`), and its stages from observe on
+// run chained on a copy of the reference's device terms, on a third environment (`chain`) that
+// sees the same queries.
+void check_config(const StageConfig& cfg, const CheckedImplementation& impl,
+                  const FastCrosscheckOptions& o, FastCrosscheckResult* out) {
+  const Scene scene = config_scene(cfg);
+  const std::string config = cfg.name();
+  const std::unique_ptr<SceneRig> ref = rig_of(scene, "reference");
+  const std::unique_ptr<SceneRig> other = rig_of(scene, impl.environment);
+  const std::unique_ptr<SceneRig> chain = rig_of(scene, impl.environment);
+  // The adversarial states query their own pair of environments (header).
+  std::unique_ptr<SceneRig> ref_adv, other_adv;
+  if (o.adversarial) {
+    ref_adv = rig_of(scene, "reference");
+    other_adv = rig_of(scene, impl.environment);
+  }
   const StageTable& ref_table = reference_stage_table();
-  for (const StageTable* table : stage_tables()) {
-    if (table == &ref_table) continue;
-    ro.pipeline = table->implementation;
-    const std::unique_ptr<SceneRig> other = build_scene_rig(scene, ro);
-    const PipelineModel& m_ref = staged(*ref).model();
-    const PipelineModel& m_other = staged(*other).model();
-    Diff diffs[kStageCount];
-    long samples = 0, contact_samples = 0;
-    // Adversarial: the models with torque limits at 1 %, the diffs per perturbation and stage.
-    PipelineModel m_ref_sat = m_ref, m_other_sat = m_other;
-    m_ref_sat.torque_limit *= 0.01;
-    m_other_sat.torque_limit *= 0.01;
-    Diff adv[kPerturbationCount][kStageCount - 1];
-    long adv_samples[kPerturbationCount] = {}, adv_contact[kPerturbationCount] = {};
-    long adv_saturated[kPerturbationCount] = {};
-    auto P = std::make_unique<PipelineData>();
-    Device& dev = *ref->device;
-    DeviceSample s = dev.make_sample();
+  const StageTable& table = *impl.table;
+  bool shared[kStageCount] = {};
+  for (int i : impl.shared_stages) {
+    if (i >= 0 && i < kStageCount) shared[i] = true;
+  }
+  const PipelineModel& m_ref = staged(*ref).model();
+  const PipelineModel& m_other = staged(*other).model();
+  const PipelineModel& m_chain = staged(*chain).model();
+  Diff diffs[kStageCount];
+  Diff chain_diff;  // the implementation's chained stages against the reference's
+  long samples = 0, contact_samples = 0;
+  // Adversarial: the models with torque limits at 1 %, the diffs per perturbation and stage.
+  PipelineModel m_ref_sat = m_ref, m_other_sat = m_other;
+  m_ref_sat.torque_limit *= 0.01;
+  m_other_sat.torque_limit *= 0.01;
+  PipelineModel m_ref_nof = m_ref, m_other_nof = m_other;
+  m_ref_nof.friction.enabled = false;
+  m_other_nof.friction.enabled = false;
+  Diff adv[kPerturbationCount][kStageCount - 1];
+  long adv_samples[kPerturbationCount] = {}, adv_contact[kPerturbationCount] = {};
+  long adv_saturated[kPerturbationCount] = {};
+  auto P = std::make_unique<PipelineData>();
+  Device& dev = *ref->device;
+  DeviceSample s = dev.make_sample();
+  dev.read(s);
+  auto D = std::make_unique<PipelineData>();
+  auto C = std::make_unique<PipelineData>();
+  auto E = std::make_unique<PipelineData>();
+  if (pipeline_reset(ref_table, m_ref, *D, s) != TickStatus::kOk) {
+    out->failures.push_back(config + ": the reference could not start");
+    out->ok = false;
+    return;
+  }
+  double T = dev.capabilities().nominal_period;
+  for (long k = 0; k < o.stage_ticks; ++k) {
+    D->q = s.q;
+    D->qd = s.qd;
+    D->t = s.t;
+    D->T = T;
+    D->env = ref->contacts;
+    if (o.adversarial && k > 0) {
+      // One perturbation per tick, in turn, on a copy of the tick's starting state; every stage
+      // but drill (it would cut the teeth).
+      const int pi = static_cast<int>(k % kPerturbationCount);
+      const Perturbation& pt = kPerturbations[pi];
+      *P = *D;
+      P->env = ref_adv->contacts;
+      perturb(pt, k, P.get());
+      const PipelineModel& mr = pt.saturate ? m_ref_sat : pt.frictionless ? m_ref_nof : m_ref;
+      const PipelineModel& mo = pt.saturate ? m_other_sat : pt.frictionless ? m_other_nof : m_other;
+      bool ok_adv = true;
+      for (int i = 0; i < kStageCount - 1 && ok_adv; ++i) {
+        *C = *P;
+        C->env = other_adv->contacts;
+        const TickStatus so = table.stage[i](mo, *C);
+        const TickStatus sr = ref_table.stage[i](mr, *P);
+        if (so != sr) adv[pi][i].mismatches++;
+        ok_adv = sr == TickStatus::kOk && so == TickStatus::kOk;
+        if (!shared[i]) compare_stage(i, *P, *C, &adv[pi][i]);
+      }
+      ++adv_samples[pi];
+      if (!P->r.contacts.empty()) ++adv_contact[pi];
+      if (ok_adv && P->r.saturated) ++adv_saturated[pi];
+    }
+    bool ok = true;
+    for (int i = 0; i < kStageCount && ok; ++i) {
+      *C = *D;
+      C->env = other->contacts;
+      const TickStatus so = table.stage[i](m_other, *C);
+      const TickStatus sr = ref_table.stage[i](m_ref, *D);
+      if (so != sr) diffs[i].mismatches++;
+      ok = sr == TickStatus::kOk;
+      if (!shared[i]) compare_stage(i, *D, *C, &diffs[i]);
+      if (i == kStageDeviceTerms) {
+        *E = *D;  // the chain starts on the reference's device terms (header)
+        E->env = chain->contacts;
+      }
+    }
+    // The implementation's stages from observe on, chained (the reference's ran to its end when
+    // ok).
+    if (ok) {
+      for (int i = kStageDeviceTerms + 1; i < kStageCount; ++i) {
+        if (table.stage[i](m_chain, *E) != TickStatus::kOk) {
+          ++chain_diff.mismatches;
+          break;
+        }
+      }
+      for (int i = kStageDeviceTerms + 1; i < kStageCount; ++i) {
+        compare_stage(i, *D, *E, &chain_diff);
+      }
+    }
+    ++samples;
+    if (!D->r.contacts.empty()) ++contact_samples;
+    for (const Contact& c : D->r.contacts) {
+      const auto m = static_cast<std::size_t>(c.material);
+      if (c.material >= 0 && m < out->contact_members_per_material.size()) {
+        ++out->contact_members_per_material[m];
+      }
+    }
+    if (!ok) break;
+    dev.write(D->r.tau);
+    dev.advance();
+    const double t_prev = s.t;
     dev.read(s);
-    auto D = std::make_unique<PipelineData>();
-    auto C = std::make_unique<PipelineData>();
-    if (pipeline_reset(ref_table, m_ref, *D, s) != TickStatus::kOk) {
-      out->failures.push_back("stage crosscheck: the reference could not start");
-      out->ok = false;
-      return;
-    }
-    double T = dev.capabilities().nominal_period;
-    for (long k = 0; k < o.stage_ticks; ++k) {
-      D->q = s.q;
-      D->qd = s.qd;
-      D->t = s.t;
-      D->T = T;
-      D->env = ref->contacts;
-      if (o.adversarial && k > 0) {
-        // One perturbation per tick, in turn, on a copy of the tick's starting state; every stage
-        // but drill (it would cut the teeth the main comparison drills).
-        const int pi = static_cast<int>(k % kPerturbationCount);
-        const Perturbation& pt = kPerturbations[pi];
-        *P = *D;
-        perturb(pt, k, P.get());
-        const PipelineModel& mr = pt.saturate ? m_ref_sat : m_ref;
-        const PipelineModel& mo = pt.saturate ? m_other_sat : m_other;
-        bool ok_adv = true;
-        for (int i = 0; i < kStageCount - 1 && ok_adv; ++i) {
-          *C = *P;
-          C->env = other->contacts;
-          const TickStatus so = table->stage[i](mo, *C);
-          const TickStatus sr = ref_table.stage[i](mr, *P);
-          if (so != sr) adv[pi][i].mismatches++;
-          ok_adv = sr == TickStatus::kOk && so == TickStatus::kOk;
-          compare_stage(i, *P, *C, &adv[pi][i]);
-        }
-        ++adv_samples[pi];
-        if (!P->r.contacts.empty()) ++adv_contact[pi];
-        if (ok_adv && P->r.saturated) ++adv_saturated[pi];
-      }
-      bool ok = true;
-      for (int i = 0; i < kStageCount && ok; ++i) {
-        *C = *D;
-        C->env = other->contacts;
-        const TickStatus so = table->stage[i](m_other, *C);
-        const TickStatus sr = ref_table.stage[i](m_ref, *D);
-        if (so != sr) diffs[i].mismatches++;
-        ok = sr == TickStatus::kOk;
-        compare_stage(i, *D, *C, &diffs[i]);
-      }
-      ++samples;
-      if (!D->r.contacts.empty()) ++contact_samples;
-      for (const Contact& c : D->r.contacts) {
-        const auto m = static_cast<std::size_t>(c.material);
-        if (c.material >= 0 && m < out->contact_members_per_material.size()) {
-          ++out->contact_members_per_material[m];
-        }
-      }
-      if (!ok) break;
-      dev.write(D->r.tau);
-      dev.advance();
-      const double t_prev = s.t;
-      dev.read(s);
-      if (s.t > t_prev) T = s.t - t_prev;
-    }
-    for (int i = 0; i < kStageCount; ++i) {
-      StageCrosscheck c;
-      c.implementation = table->implementation;
+    if (s.t > t_prev) T = s.t - t_prev;
+  }
+  StageCrosscheck row;
+  row.implementation = table.implementation;
+  row.config = config;
+  row.samples = samples;
+  row.contact_samples = contact_samples;
+  for (int i = 0; i < kStageCount; ++i) {
+    if (shared[i]) continue;
+    row.stage = tick_stage_name(i);
+    row.max_rel = diffs[i].max_rel;
+    row.count_mismatches = diffs[i].mismatches;
+    add_row(o, row, out);
+  }
+  row.stage = "chain";
+  row.max_rel = chain_diff.max_rel;
+  row.count_mismatches = chain_diff.mismatches;
+  add_row(o, row, out);
+  for (int pi = 0; pi < kPerturbationCount && o.adversarial; ++pi) {
+    for (int i = 0; i < kStageCount - 1; ++i) {
+      if (shared[i]) continue;
+      AdversarialCrosscheck c;
+      c.implementation = table.implementation;
+      c.config = config;
+      c.perturbation = kPerturbations[pi].name;
       c.stage = tick_stage_name(i);
-      c.max_rel = diffs[i].max_rel;
-      c.samples = samples;
-      c.contact_samples = contact_samples;
-      c.count_mismatches = diffs[i].mismatches;
+      c.max_rel = adv[pi][i].max_rel;
+      c.samples = adv_samples[pi];
+      c.contact_samples = adv_contact[pi];
+      c.count_mismatches = adv[pi][i].mismatches;
+      c.saturated_samples = adv_saturated[pi];
       if (!(c.max_rel <= o.max_rel_bound) || c.count_mismatches != 0) {
         out->ok = false;
-        out->failures.push_back(c.implementation + " stage " + c.stage + ": max_rel " +
-                                std::to_string(c.max_rel) + ", count mismatches " +
+        out->failures.push_back(c.implementation + " " + config + " " + c.perturbation + " stage " +
+                                c.stage + ": max_rel " + sci(c.max_rel) + ", count mismatches " +
                                 std::to_string(c.count_mismatches));
       }
-      out->stages.push_back(c);
-    }
-    for (int pi = 0; pi < kPerturbationCount && o.adversarial; ++pi) {
-      for (int i = 0; i < kStageCount - 1; ++i) {
-        AdversarialCrosscheck c;
-        c.implementation = table->implementation;
-        c.perturbation = kPerturbations[pi].name;
-        c.stage = tick_stage_name(i);
-        c.max_rel = adv[pi][i].max_rel;
-        c.samples = adv_samples[pi];
-        c.contact_samples = adv_contact[pi];
-        c.count_mismatches = adv[pi][i].mismatches;
-        c.saturated_samples = adv_saturated[pi];
-        if (!(c.max_rel <= o.max_rel_bound) || c.count_mismatches != 0) {
-          out->ok = false;
-          out->failures.push_back(c.implementation + " " + c.perturbation + " stage " + c.stage +
-                                  ": max_rel " + std::to_string(c.max_rel) + ", count mismatches " +
-                                  std::to_string(c.count_mismatches));
-        }
-        out->adversarial.push_back(c);
-      }
+      out->adversarial.push_back(c);
     }
   }
 }
 
-void check_scene(const std::string& name, const StageTable& table, const FastCrosscheckOptions& o,
-                 FastCrosscheckResult* out) {
+void check_scene(const std::string& name, const CheckedImplementation& impl,
+                 const FastCrosscheckOptions& o, FastCrosscheckResult* out) {
+  const StageTable& table = *impl.table;
+  if (find_stage_table(impl.environment) != &table) {
+    // The closed loop runs a registered pipeline (build_scene_rig): a test's wrapper table has
+    // none.
+    out->ok = false;
+    out->failures.push_back(name + ": the closed loop runs registered implementations only (" +
+                            table.implementation + ")");
+    return;
+  }
   // "NAME:faces": the built-in scene with the face contact model (the one with a fast twin).
   const std::size_t colon = name.find(':');
   Scene scene = load_scene(name.substr(0, colon));
@@ -354,12 +430,74 @@ void check_scene(const std::string& name, const StageTable& table, const FastCro
 
 }  // namespace
 
+std::string StageConfig::name() const {
+  return scene + "/" + contact_model + "/" + method_name(method) + (grip_detector ? "+grip" : "");
+}
+
+namespace {
+// The (method, grip detector, contact model) combinations, in a fixed order.
+std::vector<StageConfig> combinations() {
+  std::vector<StageConfig> v;
+  for (Method m : {Method::kExplicitVc, Method::kPmiVc, Method::kPmiPd}) {
+    for (bool grip : {false, true}) {
+      for (const char* model : {"sdf", "faces"}) {
+        StageConfig c;
+        c.method = m;
+        c.grip_detector = grip;
+        c.contact_model = model;
+        v.push_back(c);
+      }
+    }
+  }
+  return v;
+}
+}  // namespace
+
+std::vector<StageConfig> stage_config_matrix(const std::vector<std::string>& scenes) {
+  std::vector<StageConfig> v;
+  for (const std::string& s : scenes) {
+    for (StageConfig c : combinations()) {
+      c.scene = s;
+      v.push_back(c);
+    }
+  }
+  return v;
+}
+
+std::vector<StageConfig> stage_config_cover(const std::vector<std::string>& scenes) {
+  std::vector<StageConfig> v = combinations();
+  if (scenes.empty()) return {};
+  for (std::size_t i = 0; i < v.size(); ++i) v[i].scene = scenes[i % scenes.size()];
+  return v;
+}
+
+std::vector<CheckedImplementation> registered_implementations() {
+  std::vector<CheckedImplementation> v;
+  for (const StageTable* t : stage_tables()) {
+    if (t == &reference_stage_table()) continue;
+    CheckedImplementation c;
+    c.table = t;
+    c.environment = t->implementation;
+    // fast/tick.cc: observe and command are the reference's stages (the skips' extra work is
+    // discarded, and the crosscheck runs with skips on).
+    if (t == &fast::fast_stage_table()) c.shared_stages = {kStageObserve, kStageCommand};
+    v.push_back(std::move(c));
+  }
+  return v;
+}
+
 FastCrosscheckResult crosscheck_fast(const FastCrosscheckOptions& options) {
   FastCrosscheckResult res;
-  check_stages(options, &res);
-  for (const StageTable* table : stage_tables()) {
-    if (table == &reference_stage_table()) continue;
-    for (const std::string& name : options.scenes) check_scene(name, *table, options, &res);
+  const std::vector<CheckedImplementation> impls =
+      options.implementations.empty() ? registered_implementations() : options.implementations;
+  for (const CheckedImplementation& impl : impls) {
+    for (int i : impl.shared_stages) {
+      res.shared.push_back({impl.table->implementation, tick_stage_name(i),
+                            "runs the reference's own code: on the same input a row would compare "
+                            "a function with itself; its outputs are compared in the chain row"});
+    }
+    for (const StageConfig& c : options.stage_configs) check_config(c, impl, options, &res);
+    for (const std::string& name : options.scenes) check_scene(name, impl, options, &res);
   }
   return res;
 }

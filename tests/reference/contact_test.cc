@@ -20,6 +20,7 @@
 
 #include "reference/core/io.h"
 #include "reference/core/so3.h"
+#include "tests/support/contacts.h"
 
 namespace dentsim {
 namespace {
@@ -50,19 +51,7 @@ Pose advance(const Pose& p, const Vec6& V, double h) {
   return Pose{p.x + h * lin(V), p.R * exp_so3(h * ang(V))};
 }
 
-// A contact at body offset r whose surface point sits `depth` beyond x_c along n.
-Contact make_contact(const Pose& p, const Vec3& n, const Vec3& r, double depth, double K,
-                     double B = 0.0, double weight = 1.0) {
-  Contact c;
-  c.n = n;
-  c.r = r;
-  c.x_o = p.x + p.R * r + depth * n;
-  c.depth = depth;
-  c.stiffness = K;
-  c.damping = B;
-  c.weight = weight;
-  return c;
-}
+using testing::make_contact;
 
 double rel_err(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
   return (a - b).norm() / std::max({a.norm(), b.norm(), 1e-300});
