@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "cli/registry.h"
-#include "device/scene.h"
+#include "sim/scene.h"
 #include "reference/core/io.h"
 #include "reference/tooth/materials.h"
 #include "validation/crosscheck_fast.h"

@@ -8,8 +8,8 @@
 #include <memory>
 #include <numbers>
 
-#include "device/scene.h"
-#include "device/simulator.h"
+#include "sim/scene.h"
+#include "sim/simulator.h"
 #include "fast/registry.h"
 #include "fast/tick.h"
 
