@@ -1,8 +1,9 @@
 // `dentsim run SCENE --out DIR`: the main job — the dental simulator on the embedded default
 // (simulated Phantom, voxel tooth, scripted hand). Writes DIR/report.json, DIR/timeseries.csv,
-// DIR/force_penetration.png, DIR/observer.png, DIR/tooth_before.png, DIR/tooth_after.png and,
-// when the tool drills, DIR/drill_depth.png.
+// DIR/force_penetration.png, DIR/observer.png, DIR/quiet.png (what the hand feels: issue #29),
+// DIR/tooth_before.png, DIR/tooth_after.png and, when the tool drills, DIR/drill_depth.png.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -169,6 +170,97 @@ void write_plots(const RunResult& r, const std::string& dir) {
   plot::write_png({ob}, dir + "/observer.png", 1, 900, 420);
 }
 
+// DIR/quiet.png: what the hand feels. Top: the force on the device and its 0.1 s centred moving
+// average (the steady force), each steady press/slide phase shaded by a line at its mean with its
+// ripple and contact losses in the legend, every contact loss marked. Bottom: the force ripple
+// over the window (RMS of the force minus its moving average, over that average) of the force on
+// the device and of the contact force, against the bound.
+void write_quiet_plot(const RunResult& r, const QuietReport& q, const std::string& dir) {
+  const QuietSeries& s = r.quiet_series;
+  const int h = quiet_half_window(q.bounds, s.tick_s);
+  const std::size_t n = s.t.size();
+  plot::Figure felt{"What the hand feels: force on the device (contact losses marked)",
+                    "time [s]",
+                    "force [N]",
+                    {},
+                    false,
+                    false};
+  felt.series.push_back({"force on device", s.t, s.device_force_n, false, 1, false});
+  plot::Figure ripple{"Force ripple over 0.1 s (RMS of force - moving average, / average)",
+                      "time [s]",
+                      "ripple [%]",
+                      {},
+                      false,
+                      false};
+  const std::size_t w = 2 * static_cast<std::size_t>(h) + 1;
+  if (n >= w) {
+    const std::vector<double> avg = centred_moving_average(s.device_force_n, h);
+    std::vector<double> ta(s.t.begin() + h, s.t.begin() + h + avg.size());
+    felt.series.push_back({"0.1 s average", ta, avg, false, 0, true});
+    // Rolling ripple over the steady press/slide phases (the stretches the verdict measures).
+    auto steady = [&q](double t) {
+      for (const QuietPhase& p : q.phases) {
+        if (t >= p.steady_from_s && t < p.t_end_s) return true;
+      }
+      return false;
+    };
+    for (int which = 0; which < 2; ++which) {
+      const std::vector<double>& f = which == 0 ? s.device_force_n : s.contact_force_n;
+      const std::vector<double> a = centred_moving_average(f, h);
+      plot::Series rs{which == 0 ? "force on device" : "contact force",
+                      {},
+                      {},
+                      true,
+                      which == 0 ? 1 : 0,
+                      false};
+      for (std::size_t j = h; j + h < a.size(); j += 5) {
+        if (!steady(s.t[j + h]) || !(a[j] > 0.0)) continue;
+        double sum = 0.0;
+        for (std::size_t i = j - h; i <= j + h; ++i) {
+          const double res = f[i + h] - a[i];
+          sum += res * res;
+        }
+        rs.x.push_back(s.t[j + h]);
+        rs.y.push_back(100.0 * std::sqrt(sum / static_cast<double>(w)) / a[j]);
+      }
+      ripple.series.push_back(std::move(rs));
+    }
+  }
+  plot::Series losses{"contact loss", {}, {}, true, 3, false};
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    if (s.contacts[i] > 0 && s.contacts[i + 1] <= 0) {
+      losses.x.push_back(s.t[i + 1]);
+      losses.y.push_back(0.0);
+    }
+  }
+  felt.series.push_back(std::move(losses));
+  int color = 4;
+  for (const QuietPhase& p : q.phases) {
+    char label[200];
+    std::snprintf(label, sizeof label, "%s: ripple %.0f/%.0f %%, %d losses%s", p.phase.c_str(),
+                  100.0 * p.ripple_device_force.value_or(0.0),
+                  100.0 * p.ripple_contact_force.value_or(0.0), p.contact_losses,
+                  p.quiet ? ", quiet" : "");
+    felt.series.push_back({label,
+                           {p.steady_from_s, p.t_end_s},
+                           {p.mean_device_force_n, p.mean_device_force_n},
+                           false,
+                           color++,
+                           false});
+  }
+  if (!s.t.empty()) {
+    ripple.series.push_back(
+        {"bound " + std::to_string(static_cast<int>(std::lround(100.0 * q.bounds.ripple_max))) +
+             " %",
+         {s.t.front(), s.t.back()},
+         {100.0 * q.bounds.ripple_max, 100.0 * q.bounds.ripple_max},
+         false,
+         2,
+         true});
+  }
+  plot::write_png({felt, ripple}, dir + "/quiet.png", 1, 900, 360);
+}
+
 void run(const RunCliOptions& o) {
   if (o.list) {
     for (const std::string& n : builtin_scene_names()) {
@@ -231,6 +323,8 @@ void run(const RunCliOptions& o) {
   write_json(o.out + "/report.json", report);
   write_file_atomic(o.out + "/timeseries.csv", csv_of(r));
   write_plots(r, o.out);
+  const QuietReport quiet = run_quiet_report(scene, r);
+  write_quiet_plot(r, quiet, o.out);
   write_tooth_pictures(r, o.out);
 
   std::printf("scene %s: %ld ticks (%ld in contact), %.2f s simulated in %.2f s\n",
@@ -252,9 +346,26 @@ void run(const RunCliOptions& o) {
                   s.max_us);
     }
   }
+  for (const QuietPhase& p : quiet.phases) {
+    std::printf(
+        "  quiet %s (%s, %.2f-%.2f s): ripple %.1f %% contact, %.1f %% device; in contact %.1f %% "
+        "of ticks, %d losses; oscillation %.1f quanta; static stiffness %.0f N/m; motors %.3g J: "
+        "%s\n",
+        p.phase.c_str(), p.kind.c_str(), p.steady_from_s, p.t_end_s,
+        100.0 * p.ripple_contact_force.value_or(0.0), 100.0 * p.ripple_device_force.value_or(0.0),
+        100.0 * p.contact_fraction, p.contact_losses, p.oscillation_amplitude_quanta,
+        p.static_stiffness_n_per_m.value_or(0.0), p.motor_energy_j,
+        p.quiet ? "quiet" : "NOT quiet");
+  }
+  std::printf(
+      "  free space: force felt %.3f N RMS moving (%ld ticks), %.3f N RMS still (%ld ticks), "
+      "%ld pulses > %.2f N while still\n",
+      quiet.free_space.moving_force_rms_n, quiet.free_space.moving_ticks,
+      quiet.free_space.still_force_rms_n, quiet.free_space.still_ticks,
+      quiet.free_space.still_pulses, quiet.bounds.pulse_threshold_n);
   std::printf("  faults: %s\n", r.faults.empty() ? "none" : r.faults.front().c_str());
   std::printf(
-      "  outputs in %s/: report.json timeseries.csv force_penetration.png observer.png "
+      "  outputs in %s/: report.json timeseries.csv force_penetration.png observer.png quiet.png "
       "tooth_before.png tooth_after.png%s\n",
       o.out.c_str(), r.drill_log.empty() ? "" : " drill_depth.png");
   if (!r.faults.empty())

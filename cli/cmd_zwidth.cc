@@ -199,6 +199,15 @@ void write_plots(const std::string& dir, const ZwidthExperimentResult& r) {
   plot::write_png(b, dir + "/summary.png");
 }
 
+// "(K_vc, b_vc, K_tooth)" of point i of a sweep, "-" for none (i < 0).
+std::string point_gains(const ZwidthSweep& s, int i) {
+  if (i < 0) return "-";
+  const ZwidthGains& g = s.points[i].gains;
+  char gains[64];
+  std::snprintf(gains, sizeof gains, "(%g, %g, %g)", g.k_vc, g.b_vc, g.k_tooth);
+  return gains;
+}
+
 // The table on stdout: each method's headline Z-width beside the thesis's, per operator, the
 // bounds, the ratios and the sensitivity.
 void print_summary(const ZwidthExperimentResult& r) {
@@ -214,19 +223,47 @@ void print_summary(const ZwidthExperimentResult& r) {
   std::printf(" %12s %12s\n", "CS bound", "PMI bound");
   for (const ZwidthMethodResult& mr : r.methods) {
     const ZwidthSweep& s = mr.headline_sweep();
-    char gains[64] = "-";
-    if (s.best >= 0) {
-      const ZwidthGains& g = s.points[s.best].gains;
-      std::snprintf(gains, sizeof gains, "(%g, %g, %g)", g.k_vc, g.b_vc, g.k_tooth);
-    }
     std::printf("%-8s %10.0f %9.1f %14s", method_name(mr.method), mr.thesis_z_width_n_per_m,
-                mr.z_width_n_per_m(), gains);
+                mr.z_width_n_per_m(), point_gains(s, s.best).c_str());
     for (const ZwidthSweep& sw : mr.sweeps) std::printf(" %9.1f", sw.z_width_n_per_m());
     std::printf(" %12.1f %12.1f\n", mr.colgate_schenkel_max_stiffness_n_per_m,
                 mr.pmi_coupling_bound_n_per_m);
   }
   std::printf("ratio pmi/explicit %.2f (thesis 1.8), pmi-pd/explicit %.2f (thesis 9.5)\n",
               r.ratio_pmi_over_explicit, r.ratio_pmipd_over_explicit);
+  // The quiet Z-width (issue #29): over points that are stable, passive and quiet (force ripple
+  // <= 5 % of the contact force and of the force fed back, contact on every tick, no loss).
+  std::printf(
+      "\nquiet Z-width (stable, passive and quiet: ripple <= %.0f %%, contact on every "
+      "tick, no contact loss):\n",
+      100.0 * sc.quiet.ripple_max);
+  std::printf("%-8s %24s", "method", "quiet Z-width (gains)");
+  for (ZwidthOperator op : ops) std::printf(" %9s", operator_name(op));
+  std::printf("\n");
+  for (const ZwidthMethodResult& mr : r.methods) {
+    const ZwidthSweep& s = mr.headline_sweep();
+    std::printf("%-8s %9.1f %14s", method_name(mr.method), mr.quiet_z_width_n_per_m(),
+                point_gains(s, s.best_quiet).c_str());
+    for (const ZwidthSweep& sw : mr.sweeps) std::printf(" %9.1f", sw.quiet_z_width_n_per_m());
+    std::printf("\n");
+  }
+  std::printf("quiet ratios: pmi/explicit %.2f, pmi-pd/explicit %.2f",
+              r.quiet_ratio_pmi_over_explicit, r.quiet_ratio_pmipd_over_explicit);
+  const ZwidthMethodResult* ex = nullptr;
+  const ZwidthMethodResult* pd = nullptr;
+  for (const ZwidthMethodResult& mr : r.methods) {
+    if (mr.method == Method::kExplicitVc) ex = &mr;
+    if (mr.method == Method::kPmiPd) pd = &mr;
+  }
+  if (ex != nullptr && pd != nullptr) {
+    std::printf("; pmi-pd/explicit per operator:");
+    for (std::size_t k = 0; k < ops.size(); ++k) {
+      const double z = ex->sweeps[k].quiet_z_width_n_per_m();
+      std::printf(" %s %.2f", operator_name(ops[k]),
+                  z > 0.0 ? pd->sweeps[k].quiet_z_width_n_per_m() / z : std::nan(""));
+    }
+  }
+  std::printf("\n");
   if (!r.experiment.sensitivity) return;
   std::printf("\nsensitivity at each method's best point (force operator unless noted):\n");
   for (const ZwidthMethodResult& mr : r.methods) {

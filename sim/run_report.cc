@@ -75,6 +75,66 @@ nlohmann::json run_report_json(const Scene& scene, const RunResult& r) {
     j["record_dropped_ticks"] = r.record_dropped_ticks;
   }
   if (!r.faults.empty()) j["torque_after_fault_n_m"] = r.torque_after_fault_n_m;
+  j["quiet"] = quiet_report_json(run_quiet_report(scene, r));
+  return j;
+}
+
+QuietReport run_quiet_report(const Scene& scene, const RunResult& r, const QuietBounds& bounds) {
+  std::vector<QuietScriptKey> keys;
+  keys.reserve(scene.script.size());
+  for (const SceneHandKey& k : scene.script) keys.push_back({k.t, k.offset, k.force, k.phase});
+  return quiet_report(r.quiet_series, keys, bounds, r.tip_quantum_m);
+}
+
+nlohmann::json quiet_report_json(const QuietReport& q) {
+  auto opt = [](const std::optional<double>& v) {
+    return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+  };
+  const QuietBounds& b = q.bounds;
+  nlohmann::json j;
+  j["bounds"] = {{"ripple_max", b.ripple_max},
+                 {"contact_fraction_min", b.contact_fraction_min},
+                 {"contact_losses_max", b.contact_losses_max},
+                 {"ripple_window_s", b.window_s},
+                 {"settle_s", b.settle_s},
+                 {"min_steady_s", b.min_steady_s},
+                 {"pulse_threshold_n", b.pulse_threshold_n},
+                 {"still_settle_s", b.still_settle_s}};
+  j["tip_quantum_m"] = q.tip_quantum_m;
+  nlohmann::json phases = nlohmann::json::array();
+  for (const QuietPhase& p : q.phases) {
+    phases.push_back({{"phase", p.phase},
+                      {"kind", p.kind},
+                      {"t_begin_s", p.t_begin_s},
+                      {"t_end_s", p.t_end_s},
+                      {"steady_from_s", p.steady_from_s},
+                      {"ticks", p.ticks},
+                      {"ripple_contact_force", opt(p.ripple_contact_force)},
+                      {"ripple_device_force", opt(p.ripple_device_force)},
+                      {"contact_fraction", p.contact_fraction},
+                      {"contact_losses", p.contact_losses},
+                      {"oscillation_amplitude_m", p.oscillation_amplitude_m},
+                      {"oscillation_amplitude_quanta", p.oscillation_amplitude_quanta},
+                      {"mean_contact_force_n", p.mean_contact_force_n},
+                      {"mean_device_force_n", p.mean_device_force_n},
+                      {"mean_device_penetration_m", p.mean_penetration_m},
+                      {"static_stiffness_n_per_m", opt(p.static_stiffness_n_per_m)},
+                      {"motor_energy_j", p.motor_energy_j},
+                      {"quiet", p.quiet}});
+  }
+  j["phases"] = phases;
+  const QuietFreeSpace& f = q.free_space;
+  j["free_space"] = {
+      {"moving_ticks", f.moving_ticks},
+      {"moving_force_rms_n", f.moving_force_rms_n},
+      {"still_ticks", f.still_ticks},
+      {"still_force_rms_n", f.still_force_rms_n},
+      {"still_pulses", f.still_pulses},
+      {"still_pulse_rate_per_s", f.still_pulse_rate_per_s},
+      {"still_motor_energy_j", f.still_motor_energy_j},
+      {"still_motor_power_w", f.still_s > 0.0 ? nlohmann::json(f.still_motor_energy_j / f.still_s)
+                                              : nlohmann::json(nullptr)}};
+  j["quiet"] = q.quiet ? nlohmann::json(*q.quiet) : nlohmann::json(nullptr);
   return j;
 }
 

@@ -25,6 +25,14 @@ namespace dentsim {
 // The report.json document of a run of `scene`.
 nlohmann::json run_report_json(const Scene& scene, const RunResult& r);
 
+// The quiet measures of a run (sim/quiet_measures.h): its steady press and slide phases and
+// its free space, cut by the scene's script; and their JSON, the report's `quiet` block:
+// {"bounds", "tip_quantum_m", "phases": [{"phase", "kind", ..., "quiet"}], "free_space",
+// "quiet"} (docs/scenes.md).
+QuietReport run_quiet_report(const Scene& scene, const RunResult& r,
+                             const QuietBounds& bounds = {});
+nlohmann::json quiet_report_json(const QuietReport& q);
+
 // One column of the time series: its name (units in the suffix) and, for a numeric column, its
 // value in a sample; `value` is null for the one text column, "phase" (RunSample::phase).
 struct RunSeriesColumn {

@@ -79,6 +79,20 @@ constexpr double kMinDepthForStiffness = 3e-5;
 // The loop owner's velocity guard [rad/s] (phantom_safety_limits' value, device/safety_chain.h).
 constexpr double kSceneMaxJointSpeed = 20.0;
 
+// RunResult::tip_quantum_m: max over the world axes a of sum_i |J_t(a, i)| 2 pi / counts_i at home.
+double tip_encoder_quantum(const SceneRig& rig) {
+  const Mat6 Jt = rig.model->model().tool_jacobian(Vec6(rig.q_home));
+  double quantum = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    double sum = 0.0;
+    for (int i = 0; i < 6; ++i) {
+      sum += std::abs(Jt(a, i)) * 2.0 * std::numbers::pi / rig.params.encoder_counts_per_rev(i);
+    }
+    quantum = std::max(quantum, sum);
+  }
+  return quantum;
+}
+
 StageStats stats_of(std::vector<double>& v) {
   StageStats s;
   if (v.empty()) return s;
@@ -321,6 +335,9 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   std::vector<double> stage_us[kStageCount + 2];
   for (auto& v : stage_us) v.reserve(n_ticks);
   res.series.reserve(n_ticks / std::max(1, options.log_every) + 1);
+  res.quiet_series.tick_s = T;
+  res.quiet_series.reserve(static_cast<std::size_t>(std::max(0L, n_ticks)) + 1);
+  res.tip_quantum_m = tip_encoder_quantum(*rig);
 
   double sum_f2 = 0.0, sum_fd = 0.0, sum_dd = 0.0, sum_obs2 = 0.0;
   double hand_work = 0.0;
@@ -415,6 +432,18 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       sum_dd += d_dev * d_dev;
     }
     const Vec3 f_hand = truth ? Vec3(device.hand_wrench().head<3>()) : Vec3::Zero();
+    {
+      QuietSeries& qs = res.quiet_series;
+      qs.t.push_back(t);
+      qs.contacts.push_back(rec.contacts);
+      qs.contact_force_n.push_back(f_contact);
+      qs.device_force_n.push_back(f_device);
+      qs.device_penetration_m.push_back(d_dev);
+      qs.tip_x_m.push_back(rec.device.x.x());
+      qs.tip_y_m.push_back(rec.device.x.y());
+      qs.tip_z_m.push_back(rec.device.x.z());
+      qs.energy_j.push_back(rec.energy_virtual_j);
+    }
     sum_obs2 += (rec.f_observer - f_hand).squaredNorm();
     ++res.ticks;
     if (k % std::max(1, options.log_every) == 0) {

@@ -37,6 +37,7 @@
 
 #include "device/closed_loop.h"
 #include "device/fault_injection.h"
+#include "sim/quiet_measures.h"
 #include "sim/scene.h"
 #include "device/scripted_hand.h"
 #include "device/servo_pacer.h"
@@ -142,6 +143,11 @@ struct RunResult {
   std::optional<ServoTimingStats> realtime;  // --realtime: period and execution-time statistics
   long recorded_ticks = 0;                   // ticks written to RunOptions::record_path
   long record_dropped_ticks = 0;             // ticks the recorder's ring had no room for
+  // Every tick's signals for the quiet measures (sim/quiet_measures.h; the report's `quiet`
+  // block), whatever RunOptions::log_every, and the device tip's encoder quantum: the largest,
+  // over the world axes a, of sum_i |J_t(a, i)| 2 pi / counts_i at home (one count on every joint).
+  QuietSeries quiet_series;
+  double tip_quantum_m = 0.0;
 };
 
 // Everything a scene runs on, built once: the simulated Phantom (behind a fault injector when

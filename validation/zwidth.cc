@@ -7,6 +7,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <numbers>
 #include <thread>
 
 #include "device/closed_loop.h"
@@ -213,6 +214,34 @@ TipProperties tip_properties(const ZwidthScenario& sc) {
   return tp;
 }
 
+// The quiet measures of a run's contact (every sample of qs is after first contact + settle).
+QuietPhase zwidth_quiet_measures(const QuietSeries& qs, const QuietBounds& b, double quantum) {
+  QuietPhase q;
+  q.phase = "hold";
+  q.kind = "press";
+  q.touched = !qs.t.empty();
+  q.ticks = static_cast<long>(qs.t.size());
+  if (q.touched) {
+    q.t_begin_s = qs.t.front();
+    q.steady_from_s = qs.t.front();
+    q.t_end_s = qs.t.back() + qs.tick_s;
+    const int h = quiet_half_window(b, qs.tick_s);
+    q.ripple_contact_force = force_ripple(qs.contact_force_n, h);
+    q.ripple_device_force = force_ripple(qs.device_force_n, h);
+    q.contact_fraction = contact_fraction(qs.contacts);
+    q.contact_losses = contact_losses(qs.contacts);
+    q.oscillation_amplitude_m = std::numbers::sqrt2 * residual_rms(qs.tip_z_m, h);
+    q.oscillation_amplitude_quanta = quantum > 0.0 ? q.oscillation_amplitude_m / quantum : 0.0;
+    q.mean_contact_force_n = mean(qs.contact_force_n);
+    q.mean_device_force_n = mean(qs.device_force_n);
+    q.mean_penetration_m = mean(qs.device_penetration_m);
+    q.static_stiffness_n_per_m = static_stiffness(qs.device_force_n, qs.device_penetration_m);
+    q.motor_energy_j = rise(qs.energy_j);
+  }
+  q.quiet = phase_is_quiet(q, b);
+  return q;
+}
+
 // Least-squares slope of y against x (0 for fewer than two points).
 double ls_slope(const std::vector<double>& x, const std::vector<double>& y) {
   const std::size_t n = x.size();
@@ -343,6 +372,9 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
   long n_grip_ticks = 0, n_grip_agree = 0, n_on = 0, n_off = 0;
   const double cap = 2.0 + sc.hold_s + (tip0.x.z() - z_s) / std::max(speed, 1e-3);
   std::vector<double> ts, ps;  // penetration after first contact + settle
+  // The quiet measures' signals, from first contact + quiet.settle_s (sim/quiet_measures.h).
+  QuietSeries qs;
+  qs.tick_s = sc.tick;
   double sum_f = 0, sum_p = 0;
   long n_tail = 0;
   DeviceSample prev = loop.sample();
@@ -379,6 +411,15 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
       if (t >= t_first + sc.settle_s) {
         ts.push_back(t);
         ps.push_back(p);
+      }
+      if (t >= t_first + sc.quiet.settle_s) {
+        qs.t.push_back(t);
+        qs.contacts.push_back(static_cast<int>(r.contacts.size()));
+        qs.contact_force_n.push_back(r.F_contact.head<3>().norm());
+        qs.device_force_n.push_back(force);
+        qs.device_penetration_m.push_back(std::max(0.0, p));
+        qs.tip_z_m.push_back(p);
+        qs.energy_j.push_back(E);
       }
       if (t >= t_first + sc.hold_s - 1.0) {
         sum_f += force;
@@ -467,6 +508,8 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
                run.growth_rate_per_s <= run.growth_limit_per_s &&
                run.last_amplitude_m <= run.amplitude_bound_m;
   run.passive = run.finite && run.faults == kFaultNone && run.energy_max_j <= run.energy_tol_j;
+  run.quiet_measures = zwidth_quiet_measures(qs, sc.quiet, tp.quantum);
+  run.quiet = run.finite && run.faults == kFaultNone && run.contact && run.quiet_measures.quiet;
   return run;
 }
 
@@ -481,10 +524,12 @@ ZwidthPoint run_zwidth_point(Method method, ZwidthOperator op, const ZwidthGains
   }
   pt.stable = !pt.runs.empty();
   pt.passive = !pt.runs.empty();
+  pt.quiet = !pt.runs.empty();
   pt.z_width_n_per_m = pt.runs.empty() ? 0.0 : pt.runs.front().z_width_n_per_m;
   for (const ZwidthRun& r : pt.runs) {
     pt.stable = pt.stable && r.stable;
     pt.passive = pt.passive && r.passive;
+    pt.quiet = pt.quiet && r.quiet;
     pt.z_width_n_per_m = std::min(pt.z_width_n_per_m, r.z_width_n_per_m);
   }
   return pt;
@@ -520,6 +565,10 @@ std::vector<ZwidthSweep> run_zwidth_sweep(const std::vector<Method>& methods,
       if (p.stable && p.passive &&
           (sw.best < 0 || p.z_width_n_per_m > sw.points[sw.best].z_width_n_per_m)) {
         sw.best = static_cast<int>(i);
+      }
+      if (p.stable && p.passive && p.quiet &&
+          (sw.best_quiet < 0 || p.z_width_n_per_m > sw.points[sw.best_quiet].z_width_n_per_m)) {
+        sw.best_quiet = static_cast<int>(i);
       }
     }
   }

@@ -35,7 +35,12 @@
 //   virtual side put into the device; E_v <= 0 = passive, the virtual side starts empty) and
 //   E_tol = sum_i Delta_i (2 max_k |tau_i,k| + sum_k |tau_i,k - tau_i,k-1|), the largest error
 //   encoder quantisation (|q_meas - q_true| < Delta_i) can put into sum_k tau_k^T (q_k+1 - q_k)
-//   (summation by parts), plus 1e-9 J round-off.
+//   (summation by parts), plus 1e-9 J round-off;
+// - quiet <=> the quiet measures of sim/quiet_measures.h (issue #29) over the contact from
+//   first contact + quiet.settle_s to the end of the run meet quiet's bounds: force ripple <= 5 %
+//   both of the contact force on the proxy and of the force fed back (what the hand feels),
+//   contact on every tick, no contact loss. The oscillation amplitude is that of p, in Delta_n.
+//   A point's quiet Z-width counts only points that are stable, passive and quiet.
 //
 // Bounds beside the measurements (per unit of translational device damping b_d [N s/m] at the
 // tip): Colgate-Schenkel passivity of a sampled spring-damper, b_d > K T / 2 + B, i.e.
@@ -49,6 +54,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/quiet_measures.h"
 #include "device/scripted_hand.h"
 #include "reference/core/params.h"
 #include "reference/grip_detector.h"
@@ -147,6 +153,7 @@ struct ZwidthScenario {
   double settle_s = 0.2;
   double window_s = 0.25;
   double amplitude_bound_quanta = 10.0;
+  QuietBounds quiet;  // the quiet verdict's bounds and windows (sim/quiet_measures.h)
 };
 
 struct ZwidthTrace {
@@ -191,6 +198,10 @@ struct ZwidthRun {
   double grip_statistic_max_off = 0.0;
   bool stable = false;
   bool passive = false;
+  // The quiet measures of the contact (sim/quiet_measures.h; phase "hold", kind "press";
+  // static stiffness there over the same stretch) and their verdict.
+  QuietPhase quiet_measures;
+  bool quiet = false;
 };
 
 struct ZwidthPoint {
@@ -198,6 +209,7 @@ struct ZwidthPoint {
   std::vector<ZwidthRun> runs;   // one per tap speed for tap, else one
   bool stable = false;           // every run stable
   bool passive = false;          // every run passive
+  bool quiet = false;            // every run quiet
   double z_width_n_per_m = 0.0;  // smallest over the runs
 };
 
@@ -223,6 +235,11 @@ struct ZwidthSweep {
   std::vector<ZwidthPoint> points;  // in grid order
   int best = -1;                    // stable, passive point with the largest Z-width (-1: none)
   double z_width_n_per_m() const { return best < 0 ? 0.0 : points[best].z_width_n_per_m; }
+  // The stable, passive and quiet point with the largest Z-width (-1: none), and its Z-width.
+  int best_quiet = -1;
+  double quiet_z_width_n_per_m() const {
+    return best_quiet < 0 ? 0.0 : points[best_quiet].z_width_n_per_m;
+  }
 };
 
 // Sweeps every (method, operator) over the grid, in parallel over grid points on `threads`

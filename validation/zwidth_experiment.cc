@@ -6,6 +6,7 @@
 #include <exception>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <type_traits>
 
@@ -106,6 +107,14 @@ double headline_of(const ZwidthExperimentResult& r, Method m) {
   return std::nan("");
 }
 
+// The same over the quiet Z-widths.
+double quiet_headline_of(const ZwidthExperimentResult& r, Method m) {
+  for (const ZwidthMethodResult& mr : r.methods) {
+    if (mr.method == m) return mr.quiet_z_width_n_per_m();
+  }
+  return std::nan("");
+}
+
 nlohmann::json gains_json(const ZwidthGains& g) {
   return {{"k_vc_n_per_m", g.k_vc}, {"b_vc_n_s_per_m", g.b_vc}, {"k_tooth_n_per_m", g.k_tooth}};
 }
@@ -145,12 +154,32 @@ void run_fields(Run& r, F&& f) {
   f("grip_statistic_max_off", r.grip_statistic_max_off);
   f("stable", r.stable);
   f("passive", r.passive);
+  // The quiet measures of the contact (issue #29; sim/quiet_measures.h) and the verdict.
+  f("quiet_ticks", r.quiet_measures.ticks);
+  f("ripple_contact_force", r.quiet_measures.ripple_contact_force);
+  f("ripple_device_force", r.quiet_measures.ripple_device_force);
+  f("contact_fraction", r.quiet_measures.contact_fraction);
+  f("contact_losses", r.quiet_measures.contact_losses);
+  f("oscillation_amplitude_quanta", r.quiet_measures.oscillation_amplitude_quanta);
+  f("quiet_static_stiffness_n_per_m", r.quiet_measures.static_stiffness_n_per_m);
+  f("quiet_motor_energy_j", r.quiet_measures.motor_energy_j);
+  f("quiet", r.quiet);
 }
+
+template <class T>
+struct is_optional : std::false_type {};
+template <class T>
+struct is_optional<std::optional<T>> : std::true_type {};
 
 nlohmann::json run_json(const ZwidthRun& r) {
   nlohmann::json j;
   run_fields(r, [&j](const char* key, const auto& v) {
-    if (std::string(key) != "contact") j[key] = v;
+    if (std::string(key) == "contact") return;
+    if constexpr (is_optional<std::decay_t<decltype(v)>>::value) {
+      j[key] = v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+    } else {
+      j[key] = v;
+    }
   });
   return j;
 }
@@ -198,6 +227,7 @@ nlohmann::json sweep_json(const ZwidthSweep& s) {
     nlohmann::json pj = gains_json(p.gains);
     pj["stable"] = p.stable;
     pj["passive"] = p.passive;
+    pj["quiet"] = p.quiet;
     pj["z_width_n_per_m"] = p.z_width_n_per_m;
     nlohmann::json runs = nlohmann::json::array();
     for (const ZwidthRun& r : p.runs) runs.push_back(run_json(r));
@@ -214,6 +244,10 @@ nlohmann::json sweep_json(const ZwidthSweep& s) {
     if (ok) strict = std::max(strict, p.z_width_n_per_m);
   }
   j["z_width_strict_growth_n_per_m"] = strict;
+  // Over stable, passive and quiet points (issue #29).
+  j["quiet_z_width_n_per_m"] = s.quiet_z_width_n_per_m();
+  j["quiet_gains"] =
+      s.best_quiet >= 0 ? gains_json(s.points[s.best_quiet].gains) : nlohmann::json(nullptr);
   return j;
 }
 
@@ -230,13 +264,13 @@ std::vector<nlohmann::json> run_jobs_here(int n, const std::function<nlohmann::j
   return out;
 }
 
-// The best point of a sweep: stable, passive, the largest Z-width, the first in grid order on a
-// tie (as run_zwidth_sweep picks it).
-int best_point(const ZwidthSweep& sw) {
+// The best point of a sweep: stable, passive (and with `quiet`, quiet), the largest Z-width, the
+// first in grid order on a tie (as run_zwidth_sweep picks it).
+int best_point(const ZwidthSweep& sw, bool quiet = false) {
   int best = -1;
   for (std::size_t i = 0; i < sw.points.size(); ++i) {
     const ZwidthPoint& p = sw.points[i];
-    if (p.stable && p.passive &&
+    if (p.stable && p.passive && (p.quiet || !quiet) &&
         (best < 0 || p.z_width_n_per_m > sw.points[best].z_width_n_per_m)) {
       best = static_cast<int>(i);
     }
@@ -253,6 +287,8 @@ nlohmann::json zwidth_point_to_wire(const ZwidthPoint& p) {
     run_fields(r, [&rj](const char* key, const auto& v) {
       if constexpr (std::is_same_v<std::decay_t<decltype(v)>, double>) {
         rj[key] = wire(v);
+      } else if constexpr (is_optional<std::decay_t<decltype(v)>>::value) {
+        rj[key] = v ? wire(*v) : nlohmann::json(nullptr);
       } else {
         rj[key] = v;
       }
@@ -263,6 +299,7 @@ nlohmann::json zwidth_point_to_wire(const ZwidthPoint& p) {
           {"runs", runs},
           {"stable", p.stable},
           {"passive", p.passive},
+          {"quiet", p.quiet},
           {"z_width_n_per_m", wire(p.z_width_n_per_m)}};
 }
 
@@ -276,6 +313,12 @@ ZwidthPoint zwidth_point_from_wire(const nlohmann::json& j) {
       using T = std::decay_t<decltype(v)>;
       if constexpr (std::is_same_v<T, double>) {
         v = double_from_wire(rj.at(key));
+      } else if constexpr (is_optional<T>::value) {
+        if (rj.at(key).is_null()) {
+          v.reset();
+        } else {
+          v = double_from_wire(rj.at(key));
+        }
       } else {
         v = rj.at(key).get<T>();
       }
@@ -284,6 +327,8 @@ ZwidthPoint zwidth_point_from_wire(const nlohmann::json& j) {
   }
   p.stable = j.at("stable").get<bool>();
   p.passive = j.at("passive").get<bool>();
+  p.quiet = j.at("quiet").get<bool>();
+  for (ZwidthRun& r : p.runs) r.quiet_measures.quiet = r.quiet;
   p.z_width_n_per_m = double_from_wire(j.at("z_width_n_per_m"));
   return p;
 }
@@ -368,6 +413,7 @@ ZwidthExperimentResult run_zwidth_experiment(
   for (ZwidthMethodResult& mr : r.methods) {
     for (std::size_t k = 0; k < e.operators.size(); ++k) {
       mr.sweeps[k].best = best_point(mr.sweeps[k]);
+      mr.sweeps[k].best_quiet = best_point(mr.sweeps[k], true);
       if (e.operators[k] == ZwidthOperator::kForce) mr.headline = static_cast<int>(k);
     }
   }
@@ -386,6 +432,11 @@ ZwidthExperimentResult run_zwidth_experiment(
       z_explicit > 0 ? headline_of(r, Method::kPmiVc) / z_explicit : std::nan("");
   r.ratio_pmipd_over_explicit =
       z_explicit > 0 ? headline_of(r, Method::kPmiPd) / z_explicit : std::nan("");
+  const double q_explicit = quiet_headline_of(r, Method::kExplicitVc);
+  r.quiet_ratio_pmi_over_explicit =
+      q_explicit > 0 ? quiet_headline_of(r, Method::kPmiVc) / q_explicit : std::nan("");
+  r.quiet_ratio_pmipd_over_explicit =
+      q_explicit > 0 ? quiet_headline_of(r, Method::kPmiPd) / q_explicit : std::nan("");
 
   // Stage "re-runs" at each method's headline point: the sensitivity variants (hand variants
   // under the grip operator), the figures' traces, and the grip detector's pair of traces at the
@@ -511,6 +562,9 @@ nlohmann::json zwidth_experiment_json(const ZwidthExperimentResult& r) {
     mj["strictest_operator"] = operator_name(s.op);
     mj["gains"] = s.best >= 0 ? gains_json(s.points[s.best].gains) : nlohmann::json(nullptr);
     mj["thesis_z_width_n_per_m"] = mr.thesis_z_width_n_per_m;
+    mj["quiet_z_width_n_per_m"] = s.quiet_z_width_n_per_m();
+    mj["quiet_gains"] =
+        s.best_quiet >= 0 ? gains_json(s.points[s.best_quiet].gains) : nlohmann::json(nullptr);
     mj["colgate_schenkel_max_stiffness_n_per_m"] = mr.colgate_schenkel_max_stiffness_n_per_m;
     mj["pmi_coupling_bound_n_per_m"] = mr.pmi_coupling_bound_n_per_m;
     for (const ZwidthSensitivityResult& v : mr.sensitivity) {
@@ -523,6 +577,13 @@ nlohmann::json zwidth_experiment_json(const ZwidthExperimentResult& r) {
   }
   out["ratio_pmi_over_explicit"] = finite_or_null(r.ratio_pmi_over_explicit);
   out["ratio_pmipd_over_explicit"] = finite_or_null(r.ratio_pmipd_over_explicit);
+  out["quiet_ratio_pmi_over_explicit"] = finite_or_null(r.quiet_ratio_pmi_over_explicit);
+  out["quiet_ratio_pmipd_over_explicit"] = finite_or_null(r.quiet_ratio_pmipd_over_explicit);
+  out["quiet_bounds"] = {{"ripple_max", sc.quiet.ripple_max},
+                         {"contact_fraction_min", sc.quiet.contact_fraction_min},
+                         {"contact_losses_max", sc.quiet.contact_losses_max},
+                         {"ripple_window_s", sc.quiet.window_s},
+                         {"settle_s", sc.quiet.settle_s}};
   return out;
 }
 

@@ -80,6 +80,8 @@ struct ZwidthMethodResult {
 
   const ZwidthSweep& headline_sweep() const { return sweeps[headline]; }
   double z_width_n_per_m() const { return headline_sweep().z_width_n_per_m(); }
+  // Over stable, passive and quiet points of the headline sweep (issue #29).
+  double quiet_z_width_n_per_m() const { return headline_sweep().quiet_z_width_n_per_m(); }
 };
 
 struct ZwidthExperimentResult {
@@ -91,6 +93,9 @@ struct ZwidthExperimentResult {
   // stable, passive point, or the other method was not run.
   double ratio_pmi_over_explicit = 0.0;
   double ratio_pmipd_over_explicit = 0.0;
+  // The same over the quiet Z-widths (ZwidthMethodResult::quiet_z_width_n_per_m; issue #29).
+  double quiet_ratio_pmi_over_explicit = 0.0;
+  double quiet_ratio_pmipd_over_explicit = 0.0;
   // Grip detector at work (traces asked, scenario.grip_detector, release run, PMI + PD has a best
   // release point): that point re-run with the hand's mass fixed in the model and with the
   // detector. has_grip_traces says whether they were run.

@@ -125,7 +125,9 @@ PhantomParams default_phantom_params() {
   p.q_max_rad << 0.9, 0.9, 1.0, 2.4, 1.0, 2.6;
   // OpenHaptics' joint-torque example clamps (PHANTOM.md).
   p.torque_limit_n_m << 0.4, 0.35, 0.2, 0.188, 0.188, 0.048;
-  // 1024 CPR x4 times the capstan ratios (13.3, 11.2, 11.2); gimbal nominal 4096.
+  // 1024 CPR x4 times the capstan ratios (13.3, 11.2, 11.2) (PHANTOM.md, drive train and
+  // sensing); gimbal 4096: assumed, no published resolution of the Premium 1.5/6DoF gimbal
+  // encoders was found (docs/simulated_device.md, issue #29).
   p.encoder_counts_per_rev << 54476.8, 45875.2, 45875.2, 4096, 4096, 4096;
   p.gravity_on = true;
   p.gravity_m_s2 = 9.81;

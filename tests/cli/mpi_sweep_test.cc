@@ -105,6 +105,9 @@ TEST(MpiSweepWire, ZwidthPointsAndTracesRoundTripBitForBit) {
     r.grip_switches = -static_cast<int>(i);
     r.contact = i % 2 == 0;
     r.passive = i % 3 == 0;
+    r.quiet = i % 2 == 1;
+    if (i % 2 == 0) r.quiet_measures.ripple_device_force = odd[i];  // odd i: no ripple (null)
+    r.quiet_measures.contact_losses = static_cast<int>(i);
     p.runs.push_back(r);
   }
   const dentsim::ZwidthPoint q = dentsim::zwidth_point_from_wire(
@@ -125,6 +128,12 @@ TEST(MpiSweepWire, ZwidthPointsAndTracesRoundTripBitForBit) {
     EXPECT_EQ(q.runs[i].grip_switches, p.runs[i].grip_switches) << i;
     EXPECT_EQ(q.runs[i].contact, p.runs[i].contact) << i;
     EXPECT_EQ(q.runs[i].passive, p.runs[i].passive) << i;
+    EXPECT_EQ(q.runs[i].quiet, p.runs[i].quiet) << i;
+    EXPECT_EQ(q.runs[i].quiet_measures.contact_losses, p.runs[i].quiet_measures.contact_losses);
+    ASSERT_EQ(q.runs[i].quiet_measures.ripple_device_force.has_value(), i % 2 == 0) << i;
+    if (i % 2 == 0) {
+      EXPECT_EQ(bits(*q.runs[i].quiet_measures.ripple_device_force), bits(odd[i])) << i;
+    }
   }
   dentsim::ZwidthTrace t;
   t.t = odd;
