@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <ctime>
 #include <limits>
 #include <optional>
 #include <random>
@@ -95,10 +97,28 @@ bool CalibrateOutcome::finite() const {
   return ok;
 }
 
+std::string fitted_model_name(const std::string& prior_name, const std::string& log_path,
+                              const std::string& date) {
+  return prior_name + " (fitted from " + log_path + " on " + date + ")";
+}
+
+std::string utc_date_today() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buf[16];
+  std::strftime(buf, sizeof buf, "%Y-%m-%d", &tm);
+  return buf;
+}
+
 CalibrateOutcome calibrate_log(const CalibrationLog& log, const std::string& log_path,
                                const PhantomParams& prior, const CalibrateOptions& o,
                                const CalibrateOptionNames& names) {
   check_calibrate_options(o, names);
+  if (!log.incomplete.empty() && !o.allow_incomplete) {
+    throw InputError(log_path + ": the log is marked incomplete (" + log.incomplete +
+                     "); a fit of it is refused unless " + names.allow_incomplete + " is given");
+  }
   check_lowpass(o.lowpass_hz, log, log_path, names.lowpass_hz);
   CalibrateOutcome c;
   c.log_path = log_path;
@@ -134,6 +154,8 @@ CalibrateOutcome calibrate_log(const CalibrationLog& log, const std::string& log
     fo.torque_shift_samples += c.velocity_lag_ticks + 0.5;
   }
   c.fit = fit_calibration(log, prior, fo);
+  c.fit.fitted.name = fitted_model_name(prior.name, log_path, utc_date_today());
+  c.log_incomplete = log.incomplete;
   return c;
 }
 
@@ -209,7 +231,8 @@ nlohmann::json calibration_report_json(const CalibrateOutcome& c, const TruthCom
   j["condition_number"] = r.condition_number;
   j["identifiable_count"] = r.identifiable;
   j["std_newey_west_lags"] = r.hac_lags;
-  nlohmann::json params = nlohmann::json::array(), not_id = nlohmann::json::array();
+  nlohmann::json params = nlohmann::json::array(), not_id = nlohmann::json::array(),
+                 moved = nlohmann::json::array();
   for (std::size_t i = 0; i < r.params.size(); ++i) {
     const FitParameter& fp = r.params[i];
     nlohmann::json e{{"name", fp.name},
@@ -221,7 +244,28 @@ nlohmann::json calibration_report_json(const CalibrateOutcome& c, const TruthCom
                      {"std_law", fp.std_law},
                      {"std_white", fp.std_white},
                      {"identifiable", fp.identifiable}};
-    if (!fp.identifiable) not_id.push_back(fp.name);
+    // Not identifiable: left at the prior only if its value is the prior's. A parameter in a
+    // near-null direction that also enters an identifiable combination moves with it (issue #33:
+    // upper_arm.mass_kg was listed as left at the prior at 0.2359 -> 0.2625), and one below the
+    // noise floor keeps the value the data barely pin.
+    if (!fp.identifiable) {
+      if (std::abs(fp.value - fp.prior) <= kLeftAtPriorRelTol * std::abs(fp.prior)) {
+        not_id.push_back(fp.name);
+      } else {
+        char why[200];
+        if (fp.structurally_identifiable) {
+          std::snprintf(why, sizeof why,
+                        "practically: statistical std %.3g above %.3g x the prior (%.3g)",
+                        fp.std_statistical, fo.max_rel_std, fp.prior);
+        } else {
+          std::snprintf(why, sizeof why,
+                        "structurally: in the near-null space, moved with the identifiable "
+                        "combinations it enters");
+        }
+        moved.push_back(
+            {{"name", fp.name}, {"prior", fp.prior}, {"value", fp.value}, {"why", why}});
+      }
+    }
     if (truth && fp.identifiable) {
       const ParameterTruth& pt = truth->params[i];
       e["truth"] = pt.truth;
@@ -262,6 +306,10 @@ nlohmann::json calibration_report_json(const CalibrateOutcome& c, const TruthCom
     jd["residual_vs_velocity"] = bins;
   }
   j["not_identifiable_left_at_prior"] = not_id;
+  j["not_identifiable_moved"] = moved;
+  j["log_incomplete"] =
+      c.log_incomplete.empty() ? nlohmann::json(nullptr) : nlohmann::json(c.log_incomplete);
+  j["fitted_model_name"] = r.fitted.name;
   // The friction law's shape: rows dropped near stiction, v_s per joint and its profile.
   j["min_speed_rad_s"] = fo.min_speed_rad_s;
   j["rows_used"] = std::vector<int>(r.rows_used.data(), r.rows_used.data() + 6);

@@ -34,6 +34,9 @@ struct CalibrateOptions {
   // 'prior' (the prior model's v_s)
   std::string coulomb_smoothing = "fit";
   std::string coulomb_sign = "prior";  // --coulomb-sign: erf, tanh, fit or prior (FitOptions)
+  // --allow-incomplete: fit a log marked incomplete (an excitation stopped by a fault or an
+  // interruption, CalibrationLog::incomplete); refused by default.
+  bool allow_incomplete = false;
 };
 
 // What the error messages call each option: the command's flags by default (a binding passes its
@@ -49,6 +52,7 @@ struct CalibrateOptionNames {
   std::string min_speed = "--min-speed";
   std::string coulomb_smoothing = "--coulomb-smoothing";
   std::string coulomb_sign = "--coulomb-sign";
+  std::string allow_incomplete = "--allow-incomplete";
 };
 
 // The checks that need no log. Throws InputError "<name>: expected ..., got ...".
@@ -61,14 +65,24 @@ struct CalibrateOutcome {
   double velocity_lag_ticks = 0.0;  // resolved ('auto': the driver's lag at the log's time step)
   FitOptions fit_options;           // what fit_calibration ran with
   FitResult fit;
+  std::string log_incomplete;  // the log's CalibrationLog::incomplete (fitted with the flag)
   // The residual RMS and every parameter value are finite (the command writes nothing otherwise).
   bool finite() const;
 };
 
-// Checks the options (check_calibrate_options), then the low-pass against the log `log_path`
+// The fitted model's name (issue #33: a fitted file must not pass for its prior):
+// "<prior name> (fitted from LOG on YYYY-MM-DD)". The model file's `name` is free text, so the
+// format is unchanged and older readers read it.
+std::string fitted_model_name(const std::string& prior_name, const std::string& log_path,
+                              const std::string& date);
+// Today's date, UTC, as YYYY-MM-DD.
+std::string utc_date_today();
+
+// Checks the options (check_calibrate_options), refuses a log marked incomplete unless
+// options.allow_incomplete (InputError naming the log, the reason and the flag), then the low-pass against the log `log_path`
 // (below 0.45 / time step, and at least 4 / duration, so that the filter's transient does not
 // cover the log; InputError naming the option and the log), resolves the velocity lag and runs
-// fit_calibration from `prior`. A fit that did not converge or ended non-finite is returned as it
+// fit_calibration from `prior`; the fitted model is named by fitted_model_name (today). A fit that did not converge or ended non-finite is returned as it
 // is (CalibrateOutcome::finite, FitResult::converged).
 CalibrateOutcome calibrate_log(const CalibrationLog& log, const std::string& log_path,
                                const PhantomParams& prior, const CalibrateOptions& options,
@@ -107,9 +121,12 @@ TruthComparison compare_with_truth(const FitResult& fit, const PhantomParams& pr
 
 // The report `dentsim calibrate --json` writes (docs/calibration.md): log, converged,
 // solver_report, ..., parameters [name, prior, value, std, std_statistical, std_model, std_white,
-// identifiable], model_mismatch..., residual_diagnostics, not_identifiable_left_at_prior; with a
+// identifiable], model_mismatch..., residual_diagnostics, not_identifiable_left_at_prior (the
+// parameters not identifiable whose value is the prior's, within kLeftAtPriorRelTol),
+// not_identifiable_moved (the others: name, prior, value, why), log_incomplete; with a
 // truth comparison also each identifiable parameter's truth, rel_error and error_over_std,
 // max_rel_error and truth_model_error.
+inline constexpr double kLeftAtPriorRelTol = 1e-6;
 nlohmann::json calibration_report_json(const CalibrateOutcome& outcome,
                                        const TruthComparison* truth = nullptr);
 

@@ -19,8 +19,10 @@
 // device applied over that tick (after saturation). Units SI, device joint order (device.h).
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "calibration/log.h"
@@ -114,6 +116,75 @@ struct ExactState {
 CalibrationLog run_excitation(Device& device, const PhantomParams& p, const Excitation& exc,
                               double duration, const TrackingParams& tracking = {},
                               ExactState exact_state = {});
+
+// How an excitation run ended (issue #33): the log up to the stop, and why it stopped early.
+struct ExcitationOutcome {
+  CalibrationLog log;  // t from the excitation's start; log.incomplete = stop_reason when stopped
+  bool complete = false;
+  std::string stop_reason;           // "" when complete
+  std::uint32_t fault = kFaultNone;  // the device's faults at the stop (kFaultNone: a guard or
+                                     // an interruption stopped it, or it completed)
+  bool interrupted = false;          // stopped by the stop request (SIGINT / SIGTERM)
+  double stop_t = 0.0;  // [s] device time of the stop from the excitation's start (< 0: before)
+  // Guarded runs (run_guarded_excitation): what the guards did.
+  double max_command_ratio = 0.0;  // max over ticks and joints of |tau_cmd_j| / tau_max_j
+  double max_speed_rad_s = 0.0;    // max low-passed |qd_j| over the run
+  long ticks = 0, clamped_ticks = 0, late_ticks = 0, guard_ticks = 0;
+  double min_time_scale = 1.0;  // the slowest the velocity/torque guard made the excitation
+  Vec6 gravity_offset = Vec6::Zero();  // the integral action at the end of the settle [N m]
+};
+
+// run_excitation, but a device fault ends the run with the log up to it (ExcitationOutcome)
+// instead of throwing; `stop_request` (optional, e.g. set by a SIGINT handler) ends it alike.
+ExcitationOutcome run_excitation_until_stop(Device& device, const PhantomParams& p,
+                                            const Excitation& exc, double duration,
+                                            const TrackingParams& tracking = {},
+                                            ExactState exact_state = {},
+                                            const std::atomic<bool>* stop_request = nullptr);
+
+// An excitation on a device whose model is not known (a new device: issue #33). `prior` is only
+// the best guess: whatever its mismatch with the device (gravity, masses, friction), the run stays
+// inside the device's limits by construction:
+//   1. hold: the arm is held where it stands (the first reading, which must be inside the prior's
+//      joint ranges) by the prior's gravity and the PD below, all ramped in from zero over
+//      torque_ramp_s, with integral action whose gain is ramped in over the hold: it takes up
+//      what the prior's gravity gets wrong (identified before anything moves);
+//   2. approach: a minimum-jerk move to the excitation's home pose exc.q0() at most
+//      approach_speed_rad_s, then settle_s of hold there (gravity_offset: the integral then);
+//   3. the excitation (logged, `duration` [s] of device time), tracked by
+//      tau = M qdd_r + C(q, qd) qd + g + tau_f(qd_r) + K_p e + K_d de + K_i int e  (prior's model,
+//      K_i = K_p integral_corner, anti-windup: no integration into a clamped command);
+//   4. a clean stop: the excitation faded out over fade_out_s, a hold, the torque ramped down to
+//      zero over stop_ramp_s (not logged).
+// Every command is clamped to torque_fraction x the device's tau_max (never near its fault
+// threshold). Late ticks are ridden through: the reference advances by the measured tick but at
+// most max_reference_step_s per tick (a stalled loop does not make the reference jump ahead).
+// Velocity guard: while a joint's low-passed speed exceeds velocity_guard x the excitation's
+// qd_max, or a command is clamped, the excitation's time scale backs off (down to
+// min_time_scale; the path, inside the joint limits, is unchanged) and recovers afterwards. The
+// run stops, zero torque at once, the log kept and marked incomplete, on: a device fault, a
+// non-finite sample, a joint beyond velocity_stop x qd_max or outside the prior's joint range
+// (by more than range_tolerance_rad), or the stop request (then through the clean stop).
+struct GuardedExcitationParams {
+  double torque_ramp_s = 1.0;
+  double hold_s = 2.0;
+  double approach_speed_rad_s = 0.25;
+  double settle_s = 1.0;
+  double fade_out_s = 1.0, stop_hold_s = 0.25, stop_ramp_s = 0.5;
+  double integral_corner = 0.1;  // K_i = K_p x integral_corner x w_c
+  double torque_fraction = 1.0;
+  double velocity_guard = 1.5, velocity_stop = 3.0;
+  double guard_lowpass_hz = 20.0;  // of |qd| for the guard (encoder quantisation)
+  double min_time_scale = 0.2;
+  double time_scale_down_per_s = 2.0, time_scale_up_per_s = 0.25;
+  double max_reference_step_s = 5e-3;
+  double range_tolerance_rad = 0.05;
+};
+ExcitationOutcome run_guarded_excitation(Device& device, const PhantomParams& prior,
+                                         const Excitation& exc, double duration,
+                                         const GuardedExcitationParams& g = {},
+                                         const TrackingParams& tracking = {},
+                                         const std::atomic<bool>* stop_request = nullptr);
 
 // Noise-free data by inverse dynamics of the model `truth` along the reference trajectory:
 // q, qd exact, tau = M qdd + C qd + g + tau_f, sampled every `dt` [s] (no tracking error, no

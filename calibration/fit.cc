@@ -502,6 +502,8 @@ FitResult fit_impl(const CalibrationLog& log, const PhantomParams& prior, const 
     res.rows_used += kept_rows[k].cast<int>();
     res.tau_measured.push_back(b[k]);
     res.tau_predicted.push_back(pred);
+    res.row_used.push_back({});
+    for (int j = 0; j < 6; ++j) res.row_used.back()[j] = kept_rows[k](j);
   }
   res.samples = m;
   const int rows = std::max(1, res.rows_used.sum());
@@ -544,6 +546,7 @@ FitResult fit_impl(const CalibrationLog& log, const PhantomParams& prior, const 
     fp.prior = p0(i);
     fp.value = p(i);
     fp.identifiable = cn(i) > 0 && Vnull.row(i).norm() < opt.null_component;
+    fp.structurally_identifiable = fp.identifiable;
     res.identifiable += fp.identifiable;
     res.params.push_back(fp);
   }

@@ -168,6 +168,8 @@ struct FitParameter {
   double std_law = 0.0;          // the law term (FitOptions::law_mismatch_term)
   double std_white = 0.0;        // textbook std, residuals assumed independent (for comparison)
   bool identifiable = false;
+  // Not in the near-null space (identifiable may still be false: below the noise floor).
+  bool structurally_identifiable = false;
 };
 
 // What the residuals say about the model, per joint.
@@ -230,6 +232,9 @@ struct FitResult {
   // The samples used: time, measured (filtered) and predicted torque.
   std::vector<double> t;
   std::vector<Vec6> tau_measured, tau_predicted;
+  // Per used sample, the joints whose row the fit used (a dropped slow row has zero measured and
+  // predicted torque above: no residual; plots draw only the rows used).
+  std::vector<std::array<bool, 6>> row_used;
 };
 
 // Fits `log` starting from (and regularised towards) `prior`. Throws InputError if the log is

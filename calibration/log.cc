@@ -33,6 +33,8 @@ std::string fmt(double v) {
   return buf;
 }
 
+constexpr const char* kIncompletePrefix = "incomplete:";
+
 std::string column(const char* prefix, int j, const char* suffix) {
   std::string s(prefix);
   s += std::to_string(j);
@@ -52,6 +54,7 @@ std::vector<std::string> calibration_log_columns() {
 
 std::string calibration_log_to_text(const CalibrationLog& log) {
   std::string s = "# dentsim calibration log v1 (columns: docs/calibration.md)\n";
+  if (!log.incomplete.empty()) s += "# " + std::string(kIncompletePrefix) + log.incomplete + "\n";
   for (const auto& c : log.comments) {
     s += '#';
     s += c;
@@ -94,7 +97,15 @@ CalibrationLog parse_calibration_log(const std::string& text, const std::string&
     const std::string l = trim(line);
     if (l.empty()) continue;
     if (l[0] == '#') {
-      if (index.empty()) log.comments.push_back(l.substr(1));
+      if (index.empty()) {
+        const std::string c = trim(l.substr(1));
+        if (c.rfind(kIncompletePrefix, 0) == 0) {
+          log.incomplete = trim(c.substr(std::string(kIncompletePrefix).size()));
+          if (log.incomplete.empty()) log.incomplete = "no reason given";
+        } else {
+          log.comments.push_back(l.substr(1));
+        }
+      }
       continue;
     }
     const auto cells = split_csv(l);
@@ -168,7 +179,8 @@ CalibrationLog parse_calibration_log(const std::string& text, const std::string&
   if (index.empty()) throw InputError(origin + ": no header line (expected " + cols[0] + ",...)");
   if (log.size() < kMinLogSamples) {
     throw InputError(origin + ": too short: " + std::to_string(log.size()) +
-                     " samples, expected at least " + std::to_string(kMinLogSamples));
+                     " samples, expected at least " + std::to_string(kMinLogSamples) +
+                     (log.incomplete.empty() ? "" : " (marked incomplete: " + log.incomplete + ")"));
   }
   for (int j = 0; j < kLogJoints; ++j) {
     double lo = log.q[0](j), hi = lo;

@@ -38,6 +38,11 @@ struct CalibrationLog {
   std::vector<Vec6> qd;               // [rad/s]
   std::vector<Vec6> tau;              // [N m]
   std::vector<std::string> comments;  // without the leading '#'
+  // Why the log ends early (an excitation stopped by a device fault, a guard or an interruption:
+  // "device fault hd_comm_error at t = 2.300 s"); empty for a complete log. Written as the
+  // comment line "# incomplete: REASON" right after the format line; `dentsim calibrate` refuses
+  // such a log unless --allow-incomplete (calibration/calibrate.h).
+  std::string incomplete;
 
   int size() const { return static_cast<int>(t.size()); }
 };

@@ -11,9 +11,12 @@
 //     max_rel_error. A fit that did not converge writes the JSON (converged: false), no model file,
 //     and exits with status 1.
 #include <algorithm>
+#include <atomic>
+#include <csignal>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -26,6 +29,7 @@
 #include "calibration/log.h"
 #include "cli/plot.h"
 #include "cli/registry.h"
+#include "device/fault_injection.h"
 #include "device/hdapi/hdapi_device.h"
 #include "device/phantom_device.h"
 #include "device/simulated_phantom.h"
@@ -38,12 +42,13 @@ namespace {
 
 struct ExciteOptions {
   std::string device, out;
-  std::string hd_library, model;  // --device hdapi: the library, the feed-forward's model file
+  std::string hd_library, model;  // --device hdapi: the library; --model: the prior (guarded run)
   double duration = 30.0;
   std::uint64_t seed = 1;
   bool no_friction = false, ideal_sensing = false;
   std::string friction_law = "frictionloss";
   int design_iterations = 40;
+  std::string inject_fault;
 };
 
 // The excitation: the seeded series, then designed for identification (design_excitation) unless
@@ -67,6 +72,79 @@ Excitation make_excitation(const PhantomParams& p, const Vec6& q0, const ExciteO
   return std::move(d.excitation);
 }
 
+// SIGINT / SIGTERM while the excitation runs: the run stops cleanly (the excitation faded out,
+// the torque ramped down) and the log up to the signal is written, marked incomplete. The
+// previous handlers come back when the run ends.
+std::atomic<bool> g_excite_stop{false};
+std::atomic<int> g_excite_signal{0};
+extern "C" void excite_on_signal(int sig) {
+  g_excite_signal.store(sig);
+  g_excite_stop.store(true);
+}
+class ExciteSignals {
+ public:
+  ExciteSignals() {
+    g_excite_stop.store(false);
+    g_excite_signal.store(0);
+    struct sigaction sa {};
+    sa.sa_handler = excite_on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old_int_);
+    sigaction(SIGTERM, &sa, &old_term_);
+  }
+  ~ExciteSignals() {
+    sigaction(SIGINT, &old_int_, nullptr);
+    sigaction(SIGTERM, &old_term_, nullptr);
+  }
+  ExciteSignals(const ExciteSignals&) = delete;
+  ExciteSignals& operator=(const ExciteSignals&) = delete;
+
+ private:
+  struct sigaction old_int_ {}, old_term_ {};
+};
+
+// What a guarded run (run_guarded_excitation) did, for the log's comments.
+void add_guard_comments(const ExcitationOutcome& r, std::vector<std::string>* comments) {
+  char buf[400];
+  std::snprintf(buf, sizeof buf,
+                " guarded run (prior model unknown to be right): hold, approach, settle, then "
+                "the excitation; gravity offset at home (integral action) [N m]: %.4g %.4g %.4g "
+                "%.4g %.4g %.4g",
+                r.gravity_offset(0), r.gravity_offset(1), r.gravity_offset(2),
+                r.gravity_offset(3), r.gravity_offset(4), r.gravity_offset(5));
+  comments->push_back(buf);
+  std::snprintf(buf, sizeof buf,
+                " guards: max |tau_cmd| / tau_max %.3f, %ld of %ld ticks clamped, %ld late, "
+                "%ld slowed (min time scale %.3f), max low-passed speed %.3g rad/s",
+                r.max_command_ratio, r.clamped_ticks, r.ticks, r.late_ticks, r.guard_ticks,
+                r.min_time_scale, r.max_speed_rad_s);
+  comments->push_back(buf);
+}
+
+// Writes the log (complete or not) and says so; an incomplete run then exits 3 (a device fault
+// or a guard: not bad input) or 128 + the signal, with one line naming the reason and the time.
+void finish_excite(const ExciteOptions& o, const ExcitationOutcome& r, const std::string& where) {
+  write_calibration_log(o.out, r.log);
+  if (r.complete) {
+    std::printf("excite: %d samples over %.3f s%s -> %s\n", r.log.size(),
+                r.log.size() > 0 ? r.log.t.back() - r.log.t.front() : 0.0, where.c_str(),
+                o.out.c_str());
+    if (r.fault != kFaultNone) {
+      std::printf("excite: warning: device fault %s during the stop, after the log\n",
+                  fault_string(r.fault).c_str());
+    }
+    return;
+  }
+  const std::string msg = "excite: " + r.stop_reason + "; the log up to the stop (" +
+                          std::to_string(r.log.size()) + " samples, marked incomplete) -> " +
+                          o.out + " (`dentsim calibrate --allow-incomplete` fits it)";
+  if (r.interrupted && r.fault == kFaultNone) {
+    const int sig = g_excite_signal.load();
+    throw ExitStatusError(128 + (sig > 0 ? sig : SIGINT), msg);
+  }
+  throw ExitStatusError(3, msg);
+}
+
 void setup_excite(CLI::App& app) {
   auto opt = std::make_shared<ExciteOptions>();
   CLI::App* sub = app.add_subcommand(
@@ -74,18 +152,21 @@ void setup_excite(CLI::App& app) {
       "Run a safe excitation trajectory (Fourier series within the joint, velocity and torque\n"
       "limits, designed for a low regressor condition number) under joint-space PD tracking on the "
       "simulated Phantom and log t, q, qd\n"
-      "(driver estimate) and the applied torque to a CSV calibration log");
+      "(driver estimate) and the applied torque to a CSV calibration log. A device fault, a guard\n"
+      "or SIGINT stops it cleanly: the log up to the stop is written, marked incomplete, and the\n"
+      "exit status is 3 (fault or guard) or 130 (interrupted)");
   sub->add_option("--device", opt->device,
                   "device model file of the simulated Phantom (default: built-in Premium 1.5A),\n"
-                  "or 'hdapi': a Phantom through OpenHaptics (or the project's emulator), driven\n"
-                  "from where it stands with its command chain active; any fault stops the run,\n"
-                  "zero torque, no log written (docs/hardware.md)");
+                  "or 'hdapi': a Phantom through OpenHaptics (or the project's emulator), run as\n"
+                  "a device of unknown model (guarded: hold, gravity taken up by integral action,\n"
+                  "approach, excitation with torque clamp and velocity guard; docs/hardware.md)");
   sub->add_option("--hd-library", opt->hd_library,
                   "with --device hdapi: the HDAPI library (default: DENTSIM_HD_LIBRARY, then\n"
                   "libHD.so, libHD.so.3.0, ...)");
   sub->add_option("--model", opt->model,
-                  "with --device hdapi: the device model file of the feed-forward (default:\n"
-                  "built-in Premium 1.5A)");
+                  "the prior model file the excitation is designed and tracked with (default:\n"
+                  "built-in Premium 1.5A); with a simulated --device, runs the guarded procedure\n"
+                  "of a new device on it (the device's own model is then not used)");
   sub->add_option("-o,--output", opt->out, "calibration log to write (CSV)")->required();
   sub->add_option("--duration", opt->duration, "length of the run [s] (default 30)");
   sub->add_option("--seed", opt->seed, "seed of the Fourier coefficients, 0..2^64-1 (default 1)")
@@ -103,48 +184,56 @@ void setup_excite(CLI::App& app) {
   sub->add_flag("--ideal-sensing", opt->ideal_sensing,
                 "track and log the exact joint angles and velocities (no quantisation, no\n"
                 "velocity estimator): a harness for separating sensing from the plant");
+  sub->add_option("--inject-fault", opt->inject_fault,
+                  "inject a device fault, KIND@T (T [s] on the device clock; kinds as `dentsim run\n"
+                  "--inject-fault`): the run stops there, its log kept and marked incomplete");
   sub->callback([opt] {
     if (!(std::isfinite(opt->duration) && opt->duration >= 1.0 && opt->duration <= 3600.0)) {
       throw InputError("--duration: expected 1 <= S <= 3600 s, got " +
                        std::to_string(opt->duration));
     }
+    const InjectedFault fault = opt->inject_fault.empty()
+                                    ? InjectedFault{}
+                                    : parse_injected_fault(opt->inject_fault, "--inject-fault");
     if (find_device_backend(opt->device) == DeviceBackend::kHdapi) {
       check_output_paths({{"-o", opt->out}}, {{"--model", opt->model}});
       const PhantomParams p =
           opt->model.empty() ? default_phantom_params() : load_phantom_params(opt->model);
+      // The excitation is designed around the prior's home pose before the device is opened
+      // (the design takes a while; a device is never left holding a guessed torque meanwhile).
+      std::vector<std::string> exc_comments;
+      const Excitation exc = make_excitation(p, Vec6(phantom_home_q(p)), *opt, &exc_comments);
       HdapiConfig hc;
       hc.library = opt->hd_library;
       HdapiDevice dev(hc);
-      // A device is wherever its user left it: hold it there with the model's gravity
-      // compensation while the excitation is designed (that takes a while: without the hold the
-      // arm falls, and the excitation's first command would then be a large step), and start
-      // the excitation from the reading.
-      DeviceSample s0 = dev.make_sample();
-      dev.read(s0);
-      const PhantomModel hold_model(p);
-      dev.write(hold_model.gravity(s0.q));
-      std::vector<std::string> exc_comments;
-      const Excitation exc = make_excitation(p, Vec6(s0.q), *opt, &exc_comments);
-      CalibrationLog log = run_excitation(dev, p, exc, opt->duration);
-      log.comments.push_back(" device: hdapi (" + dev.info().library + ", model " +
-                             dev.info().model + ", serial " + dev.info().serial + ")");
-      log.comments.push_back(" feed-forward model: " + p.name);
-      log.comments.insert(log.comments.end(), exc_comments.begin(), exc_comments.end());
-      write_calibration_log(opt->out, log);
-      std::printf("excite: %d samples over %.3f s on the hdapi device -> %s\n", log.size(),
-                  log.t.back() - log.t.front(), opt->out.c_str());
+      FaultInjectingDevice injected(dev, fault);
+      Device& d = fault.kind == InjectedFault::kNone ? static_cast<Device&>(dev) : injected;
+      ExcitationOutcome r;
+      {
+        ExciteSignals signals;
+        r = run_guarded_excitation(d, p, exc, opt->duration, GuardedExcitationParams{},
+                                   TrackingParams{}, &g_excite_stop);
+      }
+      r.log.comments.push_back(" device: hdapi (" + dev.info().library + ", model " +
+                               dev.info().model + ", serial " + dev.info().serial + ")");
+      r.log.comments.push_back(" prior model (design and feed-forward): " + p.name);
+      r.log.comments.insert(r.log.comments.end(), exc_comments.begin(), exc_comments.end());
+      add_guard_comments(r, &r.log.comments);
+      finish_excite(*opt, r, " on the hdapi device");
       return;
     }
-    if (!opt->hd_library.empty() || !opt->model.empty()) {
-      throw InputError("--hd-library and --model go with --device hdapi");
+    if (!opt->hd_library.empty()) throw InputError("--hd-library goes with --device hdapi");
+    if (opt->ideal_sensing && !opt->model.empty()) {
+      throw InputError("--ideal-sensing goes with the simulated device's own model, not --model");
     }
-    check_output_paths({{"-o", opt->out}}, {{"--device", opt->device}});
+    check_output_paths({{"-o", opt->out}}, {{"--device", opt->device}, {"--model", opt->model}});
     const PhantomParams p =
         opt->device.empty() ? default_phantom_params() : load_phantom_params(opt->device);
+    const bool guarded = !opt->model.empty();
+    const PhantomParams prior = guarded ? load_phantom_params(opt->model) : p;
     const VecX home = phantom_home_q(p);
-    const Vec6 q0 = home;
     std::vector<std::string> exc_comments;
-    const Excitation exc = make_excitation(p, q0, *opt, &exc_comments);
+    const Excitation exc = make_excitation(prior, Vec6(phantom_home_q(prior)), *opt, &exc_comments);
     SimulatedDeviceConfig dc = phantom_device_config(p);
     dc.friction_on = !opt->no_friction;
     if (opt->friction_law == "tanh") {
@@ -155,18 +244,31 @@ void setup_excite(CLI::App& app) {
     }
     if (opt->ideal_sensing) dc.quantize = false;
     SimulatedPhantom dev(phantom_plant(p), dc, home);
+    FaultInjectingDevice injected(dev, fault);
+    Device& d = fault.kind == InjectedFault::kNone ? static_cast<Device&>(dev) : injected;
     ExactState exact;
     if (opt->ideal_sensing) exact = {&dev.true_q(), &dev.true_qd()};
-    CalibrationLog log = run_excitation(dev, p, exc, opt->duration, TrackingParams{}, exact);
+    ExcitationOutcome r;
+    {
+      ExciteSignals signals;
+      r = guarded ? run_guarded_excitation(d, prior, exc, opt->duration, GuardedExcitationParams{},
+                                           TrackingParams{}, &g_excite_stop)
+                  : run_excitation_until_stop(d, p, exc, opt->duration, TrackingParams{}, exact,
+                                              &g_excite_stop);
+    }
+    CalibrationLog& log = r.log;
     if (opt->no_friction) log.comments.push_back(" device friction (frictionloss) off");
     if (opt->friction_law == "tanh") log.comments.push_back(" device friction law: tanh");
     if (opt->ideal_sensing) log.comments.push_back(" ideal sensing: exact q and qd logged");
     log.comments.push_back(" device: " + p.name +
                            (opt->device.empty() ? "" : " (" + opt->device + ")"));
+    if (guarded) log.comments.push_back(" prior model (design and feed-forward): " + prior.name);
+    if (fault.kind != InjectedFault::kNone) {
+      log.comments.push_back(" injected fault: " + injected_fault_string(fault));
+    }
     log.comments.insert(log.comments.end(), exc_comments.begin(), exc_comments.end());
-    write_calibration_log(opt->out, log);
-    std::printf("excite: %d samples over %.3f s -> %s\n", log.size(), log.t.back(),
-                opt->out.c_str());
+    if (guarded) add_guard_comments(r, &log.comments);
+    finish_excite(*opt, r, "");
   });
 }
 DENTSIM_REGISTER_COMMAND(setup_excite);
@@ -185,11 +287,14 @@ void write_plots(const FitResult& r, const std::string& dir) {
   std::vector<double> all_res;
   for (int j = 0; j < 6; ++j) {
     plot::Figure f{"joint " + std::to_string(j + 1), "time [s]", "torque [N m]", {}};
-    plot::Series meas{"measured", r.t, {}}, pred{"predicted", r.t, {}};
+    plot::Series meas{"measured (rows used)", r.t, {}}, pred{"predicted", r.t, {}};
+    // Only the rows the fit used: a dropped slow row (--min-speed) is a gap, not zero torque.
+    constexpr double kGap = std::numeric_limits<double>::quiet_NaN();
     for (int k = 0; k < r.samples; ++k) {
-      meas.y.push_back(r.tau_measured[k](j));
-      pred.y.push_back(r.tau_predicted[k](j));
-      all_res.push_back(r.tau_predicted[k](j) - r.tau_measured[k](j));
+      const bool used = r.row_used[k][j];
+      meas.y.push_back(used ? r.tau_measured[k](j) : kGap);
+      pred.y.push_back(used ? r.tau_predicted[k](j) : kGap);
+      if (used) all_res.push_back(r.tau_predicted[k](j) - r.tau_measured[k](j));
     }
     pred.dashed = true;
     f.series.push_back(meas);
@@ -295,6 +400,9 @@ void setup_calibrate(CLI::App& app) {
       "--no-law-mismatch", opt->no_law_mismatch,
       "no law term in the std (the default refits with each joint's other smooth sign,\n"
       "tanh <-> erf, and adds how far each parameter moves to its std: docs/calibration.md)");
+  sub->add_flag("--allow-incomplete", opt->fit.allow_incomplete,
+                "fit a log marked incomplete (an excitation stopped by a device fault, a guard\n"
+                "or an interruption; refused by default: it covers less motion than planned)");
   sub->add_option("--max-iterations", opt->fit.max_iterations,
                   "Ceres iteration limit (default 100); a fit that hits it did not converge");
   sub->add_option(
@@ -336,6 +444,10 @@ void setup_calibrate(CLI::App& app) {
         "  residual RMS %.3g N m%s\n",
         r.samples, r.identifiable, kCalibParams, r.condition_number, r.residual_rms,
         cmp ? (", max_rel_error " + std::to_string(cmp->max_rel_error)).c_str() : "");
+    if (!c.log_incomplete.empty()) {
+      std::printf("  the log is incomplete (%s): fitted as asked (--allow-incomplete)\n",
+                  c.log_incomplete.c_str());
+    }
     for (const std::string& why : r.model_mismatch_reasons) {
       std::printf("  model mismatch: %s\n", why.c_str());
     }

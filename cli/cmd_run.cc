@@ -153,7 +153,13 @@ void write_plots(const RunResult& r, const std::string& dir) {
                       {},
                       false,
                       false};
-  energy.series.push_back({"W_h: work done by the hand", t, wh, false, 2, false});
+  // On a device (has_ground_truth false) the hand's work and force are not known: not drawn as
+  // zero (issue #33).
+  if (r.has_ground_truth) {
+    energy.series.push_back({"W_h: work done by the hand", t, wh, false, 2, false});
+  } else {
+    energy.title = "Passivity observer: motor port E_v (the hand's work is not known on a device)";
+  }
   energy.series.push_back({"E_v: motors, net of gravity", t, e, false, 4, true});
   plot::write_png({force, depth, energy}, dir + "/force_penetration.png", 1, 900, 320);
 
@@ -163,9 +169,12 @@ void write_plots(const RunResult& r, const std::string& dir) {
                   {},
                   false,
                   false};
-  ob.series.push_back({"hand f_z (true)", t, hz, false, 0, false});
+  if (!r.has_ground_truth) {
+    ob.title = "Human force: observer estimate (no true hand force on a device)";
+  }
+  if (r.has_ground_truth) ob.series.push_back({"hand f_z (true)", t, hz, false, 0, false});
   ob.series.push_back({"observer f_z", t, oz, false, 1, true});
-  ob.series.push_back({"hand f_x (true)", t, hx, false, 2, false});
+  if (r.has_ground_truth) ob.series.push_back({"hand f_x (true)", t, hx, false, 2, false});
   ob.series.push_back({"observer f_x", t, ox, false, 3, true});
   plot::write_png({ob}, dir + "/observer.png", 1, 900, 420);
 }

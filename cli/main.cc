@@ -1,5 +1,6 @@
 // dentsim: one binary, subcommands (`dentsim --help` lists them, `dentsim CMD --help` each).
-// Exit status: 0 success, 1 runtime failure, 2 bad input (flags, values, files).
+// Exit status: 0 success, 1 runtime failure, 2 bad input (flags, values, files); a command may
+// exit with its own status through ExitStatusError (cli/registry.h; `excite`: 3 device stopped).
 #include <cstdio>
 #include <exception>
 #include <iostream>
@@ -57,6 +58,9 @@ int main(int argc, char** argv) {
     if (dentsim::cli::launcher_rank() == 0)
       std::fprintf(stderr, "dentsim: error: %s (see dentsim --help)\n", msg.c_str());
     return 2;
+  } catch (const dentsim::cli::ExitStatusError& e) {
+    if (dentsim::cli::launcher_rank() == 0) std::fprintf(stderr, "dentsim: %s\n", e.what());
+    return e.status();
   } catch (const dentsim::InputError& e) {
     if (dentsim::cli::launcher_rank() == 0) std::fprintf(stderr, "dentsim: error: %s\n", e.what());
     return 2;

@@ -15,6 +15,7 @@
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -55,6 +56,19 @@ inline CLI::Validator finite_range(double lo, double hi) {
       },
       desc.str(), "FINITE_RANGE");
 }
+
+// A failure with its own exit status (neither 1, a runtime failure, nor 2, bad input): main
+// prints "dentsim: <what>" on one line and exits with status() (e.g. 3: `excite` stopped by a
+// device fault or a guard, its log kept and marked incomplete; 130/143: interrupted).
+class ExitStatusError : public std::runtime_error {
+ public:
+  ExitStatusError(int status, const std::string& what)
+      : std::runtime_error(what), status_(status) {}
+  int status() const { return status_; }
+
+ private:
+  int status_;
+};
 
 // Writes `j` (pretty-printed) to `path` atomically; throws naming the path on failure.
 void write_json(const std::string& path, const nlohmann::json& j);

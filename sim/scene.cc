@@ -27,6 +27,44 @@ constexpr double kMaxInertia = 10.0;             // [kg m^2]
 constexpr double kMaxOffsetMm = 1000.0;          // [mm]
 constexpr const char* kWhyStiffness = "far beyond any stable haptic gain";
 
+// A file a scene names (device.model_file), like a mesh, is relative to the scene file's folder
+// (`origin`, when it is a file on disk; else, for a built-in scene's text, to the current
+// directory); an absolute path is kept. The file must exist: the error names the scene, the field,
+// the path as written and where it was looked for (issue #33).
+std::string scene_relative_file(const JsonReader& rd, const std::string& origin,
+                                const std::string& field, const std::string& path) {
+  namespace fs = std::filesystem;
+  std::string resolved = path;
+  if (!fs::path(path).is_absolute() && fs::is_regular_file(origin)) {
+    resolved = (fs::path(origin).parent_path() / path).string();
+  }
+  std::error_code ec;
+  if (!fs::is_regular_file(resolved, ec)) {
+    const fs::path abs = fs::absolute(resolved, ec);
+    rd.fail(field, "no such file '" + path + "' (resolved to " +
+                       (ec ? resolved : abs.lexically_normal().string()) + ")");
+  }
+  return resolved;
+}
+
+// The scene's relative file paths made absolute against its folder, for a document parsed under
+// another origin (load_scene_patched): the files then resolve as in the file itself.
+void absolutize_scene_paths(nlohmann::json& doc, const std::string& scene_file) {
+  namespace fs = std::filesystem;
+  if (!fs::is_regular_file(scene_file)) return;
+  const fs::path dir = fs::absolute(fs::path(scene_file)).parent_path();
+  auto fix = [&](const char* object, const char* key) {
+    if (!doc.is_object() || !doc.contains(object) || !doc[object].is_object()) return;
+    nlohmann::json& o = doc[object];
+    if (!o.contains(key) || !o[key].is_string()) return;
+    const std::string v = o[key].get<std::string>();
+    if (!v.empty() && !fs::path(v).is_absolute()) o[key] = (dir / v).string();
+  };
+  fix("device", "model_file");
+  fix("tooth", "mesh");
+  fix("tooth", "volume");
+}
+
 // Built-in scenes. Positions in the hand script are offsets from the tooth's anchor (the top of
 // the occlusal surface near the crown axis) in mm; the tool tip starts at the device's home pose,
 // 6 mm above the anchor. Gains (docs/results/zwidth.md, the headline row "pmi-pd + hand mass +
@@ -138,6 +176,7 @@ Scene load_scene_patched(const std::string& name_or_path, const nlohmann::json& 
   nlohmann::json doc =
       nlohmann::json::parse(builtin ? builtin_scene_text(name_or_path) : read_file(name_or_path));
   doc.merge_patch(patch);
+  if (!builtin) absolutize_scene_paths(doc, name_or_path);
   return parse_scene(doc.dump(), as_written.origin + " " + what);
 }
 
@@ -279,6 +318,9 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
                                s.device.type + "\"");
   }
   s.device.model_file = rd.string(dv, "device", "model_file", "");
+  if (!s.device.model_file.empty()) {
+    s.device.model_file = scene_relative_file(rd, origin, "device.model_file", s.device.model_file);
+  }
   s.device.jitter_us = rd.number(dv, "device", "jitter_us", 0.0);
   rd.non_negative("device.jitter_us", s.device.jitter_us);
   if (s.device.jitter_us * 1e-6 >= 0.5 / s.tick_hz) {

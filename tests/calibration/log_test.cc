@@ -163,5 +163,36 @@ TEST(CalibLog, ShortRowAndGarbageAreNamed) {
   EXPECT_THAT(error_of(""), HasSubstr("no header line"));
 }
 
+
+// A log cut short (issue #33) says so in its header, and reads back with the reason; a complete
+// log has no such line.
+TEST(CalibLog, IncompleteMarkRoundTrips) {
+  CalibrationLog log = sine_log(300);
+  log.comments = {" device: x"};
+  EXPECT_EQ(calibration_log_to_text(log).find("incomplete"), std::string::npos);
+  EXPECT_TRUE(parse_calibration_log(calibration_log_to_text(log), "mem").incomplete.empty());
+  log.incomplete = "device fault hd_comm_error at t = 0.300 s";
+  const std::string text = calibration_log_to_text(log);
+  EXPECT_EQ(text.rfind("# dentsim calibration log v1 (columns: docs/calibration.md)\n"
+                       "# incomplete: device fault hd_comm_error at t = 0.300 s\n",
+                       0),
+            0u)
+      << text;
+  const CalibrationLog back = parse_calibration_log(text, "mem");
+  EXPECT_EQ(back.incomplete, log.incomplete);
+  EXPECT_EQ(back.comments, log.comments);
+  EXPECT_EQ(calibration_log_to_text(back), text);
+  // Too short to fit: the error says it was cut short.
+  log = sine_log(50);
+  log.incomplete = "interrupted at t = 0.050 s";
+  try {
+    parse_calibration_log(calibration_log_to_text(log), "cut.csv");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("too short: 50 samples"));
+    EXPECT_THAT(e.what(), HasSubstr("(marked incomplete: interrupted at t = 0.050 s)"));
+  }
+}
+
 }  // namespace
 }  // namespace dentsim

@@ -23,6 +23,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
@@ -204,34 +205,53 @@ TEST(HdapiRun, DroppedCallbackEndsInSchedulerStoppedWithForceOutputDisabled) {
   expect_named_stop("DENTSIM_HD_EMU_DONE_AT", "scheduler_stopped");
 }
 
-// `dentsim excite --device hdapi`: the calibration excitation through the backend, from where the
-// arm stands, with the device's command chain active; a fault stops it with no log written.
+// `dentsim excite --device hdapi`: the calibration excitation through the backend as a device of
+// unknown model (the guarded run: hold where the arm stands, approach, excitation; issue #33),
+// with the device's command chain active. A device whose gravity the prior gets wrong (the
+// emulator with gravity off) completes too (it faulted at t = 0 before: the prior's gravity held
+// while the excitation was designed flung the arm). A fault stops the run with exit 3, one line
+// naming the fault, and the log up to the stop, marked incomplete (here tick 300: during the hold,
+// whatever the machine's load, so no sample).
 TEST(HdapiRun, ExcitationRunsThroughTheBackendAndStopsOnAFault) {
   const fs::path d = fresh("excite");
-  const std::string log = (d / "excite.csv").string();
-  const auto r = dentsim::testing::run_dentsim("excite --duration 2 -o " + log + kEmulator);
-  ASSERT_EQ(r.status, 0) << r.output;
-  std::ifstream f(log);
-  std::string line;
-  long rows = 0;
-  double q2_min = 1e9, q2_max = -1e9;
-  while (std::getline(f, line)) {
-    if (line.empty() || line[0] == '#' || line[0] == 't') continue;
-    ++rows;
-    const std::size_t a = line.find(','), b = line.find(',', a + 1), c = line.find(',', b + 1);
-    const double q2 = std::stod(line.substr(b + 1, c - b - 1));
-    q2_min = std::min(q2_min, q2);
-    q2_max = std::max(q2_max, q2);
+  for (const bool gravity : {true, false}) {
+    const std::string log = (d / (gravity ? "excite.csv" : "no_gravity.csv")).string();
+    if (!gravity) ::setenv("DENTSIM_HD_EMU_GRAVITY", "0", 1);
+    const auto r = dentsim::testing::run_dentsim("excite --duration 2 --design-iterations 4 -o " +
+                                                 log + kEmulator);
+    ::unsetenv("DENTSIM_HD_EMU_GRAVITY");
+    ASSERT_EQ(r.status, 0) << r.output;
+    std::ifstream f(log);
+    std::string line;
+    long rows = 0;
+    double q2_min = 1e9, q2_max = -1e9;
+    bool incomplete = false;
+    while (std::getline(f, line)) {
+      incomplete = incomplete || line.rfind("# incomplete", 0) == 0;
+      if (line.empty() || line[0] == '#' || line[0] == 't') continue;
+      ++rows;
+      const std::size_t a = line.find(','), b = line.find(',', a + 1), c = line.find(',', b + 1);
+      const double q2 = std::stod(line.substr(b + 1, c - b - 1));
+      q2_min = std::min(q2_min, q2);
+      q2_max = std::max(q2_max, q2);
+    }
+    EXPECT_FALSE(incomplete) << log;
+    EXPECT_GT(rows, 500) << log;              // a sample every one or two scheduler ticks over 2 s
+    EXPECT_GT(q2_max - q2_min, 0.02) << log;  // the arm was excited (rad)
   }
-  EXPECT_GT(rows, 500);              // a sample every one or two scheduler ticks over 2 s
-  EXPECT_GT(q2_max - q2_min, 0.02);  // the arm was excited (rad)
   const std::string bad = (d / "fault.csv").string();
   ::setenv("DENTSIM_HD_EMU_COMM_ERROR_AT", "300", 1);
-  const auto e = dentsim::testing::run_dentsim("excite --duration 2 -o " + bad + kEmulator);
+  const auto e = dentsim::testing::run_dentsim("excite --duration 2 --design-iterations 4 -o " +
+                                               bad + kEmulator);
   ::unsetenv("DENTSIM_HD_EMU_COMM_ERROR_AT");
-  EXPECT_NE(e.status, 0) << e.output;
-  EXPECT_NE(e.output.find("hd_comm_error"), std::string::npos) << e.output;
-  EXPECT_FALSE(fs::exists(bad));
+  EXPECT_EQ(e.status, 3) << e.output;
+  EXPECT_NE(e.output.find("excite: device fault hd_comm_error at "), std::string::npos)
+      << e.output;
+  EXPECT_NE(e.output.find("marked incomplete"), std::string::npos) << e.output;
+  ASSERT_TRUE(fs::exists(bad));
+  std::ifstream f(bad);
+  std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("# incomplete: device fault hd_comm_error"), std::string::npos) << text;
 }
 
 // The device does not initialise (the emulator's init-failure switch: HD_DEVICE_FAULT): the run

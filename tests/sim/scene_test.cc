@@ -5,9 +5,12 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <string>
 
 #include "reference/core/io.h"
+#include "reference/phantom/phantom_params.h"
+#include "tests/support/cli.h"
 
 namespace dentsim {
 namespace {
@@ -155,6 +158,52 @@ TEST(Scene, ControlBytesOfTheFileAreEscapedInMessages) {
   EXPECT_NE(e.find("method.name"), std::string::npos) << e;
   EXPECT_NE(e.find("pmi-p\\x1bd"), std::string::npos) << e;
   for (const char c : e) EXPECT_FALSE(static_cast<unsigned char>(c) < 0x20) << e;
+}
+
+
+// device.model_file resolves like a mesh: relative to the scene file's folder, whatever the
+// current directory (it used to be the current directory's); an absolute path is kept; a missing
+// file is an error naming the scene, the field, the path as written and where it was looked for
+// (issue #33). A patched scene (load_scene_patched, e.g. `run --tick-hz`) resolves alike.
+TEST(Scene, DeviceModelFileIsRelativeToTheSceneFile) {
+  namespace fs = std::filesystem;
+  const fs::path dir = testing::fresh_temp_dir("dentsim_scene_model_file");
+  fs::create_directories(dir / "sub");
+  PhantomParams p = default_phantom_params();
+  p.name = "the scene's own device";
+  write_file_atomic((dir / "sub" / "dev.json").string(), phantom_params_to_text(p));
+  std::string text = builtin_scene_text("probe");
+  const std::string from = "\"type\": \"simulated-phantom\"";
+  text.replace(text.find(from), from.size(), from + ", \"model_file\": \"dev.json\"");
+  const fs::path scene = dir / "sub" / "scene.json";
+  write_file_atomic(scene.string(), text);
+  const fs::path cwd = fs::current_path();
+  fs::current_path(dir);  // the model file is not in the current directory
+  const Scene s = load_scene(scene.string());
+  const Scene patched = load_scene_patched("sub/scene.json", {{"tick_hz", 500}}, "(patched)");
+  fs::current_path(cwd);
+  EXPECT_TRUE(fs::equivalent(s.device.model_file, dir / "sub" / "dev.json")) << s.device.model_file;
+  EXPECT_TRUE(fs::equivalent(patched.device.model_file, dir / "sub" / "dev.json"))
+      << patched.device.model_file;
+  EXPECT_EQ(load_phantom_params(s.device.model_file).name, "the scene's own device");
+  // Absolute: unchanged.
+  std::string abs_text = text;
+  const std::string abs_path = (dir / "sub" / "dev.json").string();
+  abs_text.replace(abs_text.find("\"dev.json\""), 10, "\"" + abs_path + "\"");
+  EXPECT_EQ(parse_scene(abs_text, (dir / "elsewhere.json").string()).device.model_file, abs_path);
+  // Missing: the field and both paths named.
+  std::string missing = text;
+  missing.replace(missing.find("\"dev.json\""), 10, "\"x.json\"");
+  write_file_atomic((dir / "sub" / "missing.json").string(), missing);
+  try {
+    load_scene((dir / "sub" / "missing.json").string());
+    FAIL() << "accepted a missing model file";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              (dir / "sub" / "missing.json").string() +
+                  ": device.model_file: no such file 'x.json' (resolved to " +
+                  (dir / "sub" / "x.json").string() + ")");
+  }
 }
 
 }  // namespace
