@@ -29,6 +29,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -81,7 +82,11 @@ struct RunOptions {
   std::function<void(double)> progress;
   // Called once per tick at the end of the loop body, on the loop's thread (device/tick_observer.h;
   // the live view). Not owned; null: none.
-  TickObserver* observer = nullptr;
+  TickObserver* observer = nullptr;  // Set (by a signal handler, cli/interrupt.h, or the view's
+                                     // window): the loop owner stops at the
+  // next tick boundary and returns what it measured, RunResult::stopped true. Not owned; null:
+  // none.
+  const std::atomic<bool>* stop = nullptr;
 };
 
 // One row of the time series.
@@ -143,7 +148,11 @@ struct RunResult {
   double torque_after_fault_n_m = 0.0;       // |tau| applied over the faulting tick (0 expected)
   std::optional<ServoTimingStats> realtime;  // --realtime: period and execution-time statistics
   long recorded_ticks = 0;                   // ticks written to RunOptions::record_path
-  long record_dropped_ticks = 0;             // ticks the recorder's ring had no room for
+  long record_dropped_ticks =
+      0;  // ticks the recorder's ring had no room for  // RunOptions::stop was set: the run ended
+          // early at a tick boundary (simulated_s says where);
+  // everything above covers the ticks that ran.
+  bool stopped = false;
 };
 
 // Everything a scene runs on, built once: the simulated Phantom (behind a fault injector when
