@@ -8,10 +8,13 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
+#include "cli/interrupt.h"
 #include "cli/mpi_sweep.h"
+#include "cli/outputs.h"
 #include "cli/plot.h"
 #include "cli/progress.h"
 #include "cli/registry.h"
@@ -65,12 +68,8 @@ void run(Options& o) {
     return;
   }
   if (o.out.empty()) throw InputError("--out DIR is required (the plot and the table go there)");
-  check_output_paths({{"--json", o.json}});
-  std::error_code ec;
-  std::filesystem::create_directories(o.out, ec);
-  if (ec || !std::filesystem::is_directory(o.out)) {
-    throw InputError("--out '" + o.out + "': cannot create the directory (" + ec.message() + ")");
-  }
+  check_outputs({{"--json", o.json}}, {{"--out", o.out}});
+  make_output_dir({"--out", o.out});
   o.config.only = o.variants;
   o.config.smooth_s = 1e-3 * o.smooth_ms;
   // The runs go through cli/mpi_sweep.h: under mpirun each rank simulates its share of them and
@@ -79,19 +78,51 @@ void run(Options& o) {
   // starts; the others stay quiet.
   const bool quiet = !writes_outputs();
   ProgressBar bar("bench", !quiet);
-  const TimeVsErrorResult r = run_time_vs_error(
-      o.config,
-      [&bar, quiet](int done, int total, const std::string& name) {
-        if (quiet) return;
-        bar.update(total > 0 ? static_cast<double>(done) / total : 1.0);
-        if (!name.empty())
-          std::fprintf(stderr, "bench: run %d/%d %s\n", done + 1, total, name.c_str());
-      },
-      [](int n, const std::function<nlohmann::json(int)>& job) {
-        SweepOptions so;
-        so.results_on_every_rank = true;
-        return sweep(n, job, {}, so);
-      });
+  // Ctrl-C / SIGTERM: no new run starts, the runs done so far go to --json marked partial, exit
+  // 130 / 143 (cli/interrupt.h).
+  const StopOnSignal stop;
+  std::mutex done_mu;
+  nlohmann::json done_runs = nlohmann::json::array();
+  TimeVsErrorResult r;
+  try {
+    r = run_time_vs_error(
+        o.config,
+        [&bar, quiet](int done, int total, const std::string& name) {
+          if (quiet) return;
+          // One reporter: the run's line goes through the bar (no collision on a terminal).
+          if (!name.empty()) {
+            bar.message("bench: run " + std::to_string(done + 1) + "/" + std::to_string(total) +
+                        " " + name);
+          }
+          bar.update(total > 0 ? static_cast<double>(done) / total : 1.0);
+        },
+        [&](int n, const std::function<nlohmann::json(int)>& job) {
+          SweepOptions so;
+          so.results_on_every_rank = true;
+          const std::function<nlohmann::json(int)> stoppable = [&](int i) {
+            if (stop.requested()) throw std::runtime_error("interrupted");
+            nlohmann::json out = job(i);
+            const std::lock_guard<std::mutex> lock(done_mu);
+            done_runs.push_back({{"index", i}, {"result", out}});
+            return out;
+          };
+          return sweep(n, stoppable, {}, so);
+        });
+  } catch (const std::exception&) {
+    if (!stop.requested()) throw;
+    bar.finish();
+    const std::string why = "stopped by " + stop.signal_name() + " after " +
+                            std::to_string(done_runs.size()) + " runs of this rank";
+    if (!quiet && !o.json.empty()) {
+      write_json(o.json,
+                 {{"partial", true}, {"partial_reason", why}, {"completed_runs", done_runs}});
+    }
+    throw Interrupted("bench " + why +
+                          (o.json.empty() ? std::string("; no --json given, nothing written")
+                                          : "; partial results in " + o.json +
+                                                " (\"partial\": true, \"completed_runs\")"),
+                      stop.exit_status());
+  }
   bar.finish();
   if (quiet) return;  // rank 0 prints and writes
   const std::string table = time_vs_error_table(r);
@@ -111,7 +142,8 @@ void setup_bench(CLI::App& app) {
       "tooth resolution, float device terms, reference vs fast), each run's tick time and its\n"
       "force and removed-volume error against the finest reference run; a Pareto plot");
   sub->add_option("--json", o->json, "Write the numbers to FILE (variants, reference_variant)");
-  sub->add_option("--out", o->out, "Write DIR/pareto.png and DIR/time_vs_error.md");
+  sub->add_option("--out", o->out,
+                  "REQUIRED (but with --list): write DIR/pareto.png and DIR/time_vs_error.md");
   sub->add_option("--scene", o->config.scene, "Built-in scene or scene file")
       ->capture_default_str();
   sub->add_option("--duration", o->config.duration_s,

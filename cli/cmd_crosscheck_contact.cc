@@ -2,13 +2,21 @@
 // probes pressed at 1, 4, 8.5 N into the procedural molar and the real meshes at 128, 256, 512,
 // for the sdf (default) and faces models; pop-throughs, the rendered tip's largest penetration and
 // the sliding ripple on a voxelised sphere. Prints one line per model and resolution, writes
-// --json FILE; exit status 1 if the default model (sdf) popped through anywhere.
+// --json FILE. The verdict (cli/verdict.h) judges the default model (sdf) only: no pop-through in
+// any run, and the rendered sphere's overlap within the skin min(rho/4, h/2) it is built to keep
+// (docs/derivations/sdf_contact.md §2); exit status 1 on FAIL. The faces model is printed for
+// comparison (it pops through by design), and the sliding ripple against the aim of 5 %
+// RMS is reported, not judged: docs/results/contact_sweep.md measures it above the aim for both
+// models (a deliberate choice: the aim needs a sub-voxel surface).
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <stdexcept>
 #include <string>
 
+#include "cli/outputs.h"
 #include "cli/registry.h"
+#include "cli/verdict.h"
 #include "validation/crosscheck_contact.h"
 
 namespace dentsim::cli {
@@ -43,22 +51,38 @@ void setup_crosscheck_contact(CLI::App& app) {
   sub->add_option("--seed", opt->check.seed, "Random seed (std::mt19937_64)")
       ->capture_default_str();
   sub->callback([opt] {
+    check_outputs({{"--json", opt->json}});
     opt->check.tip_radius_m = 1e-3 * opt->tip_radius_mm;
     const ContactCrosscheckResult r = crosscheck_contact(opt->check);
-    long default_pops = 0;
+    constexpr double kRippleAim = 0.05;  // the aim (#16), reported only
     for (const ContactSweepRow& row : r.rows) {
       std::printf(
-          "crosscheck contact: model=%s n=%d h=%.4f mm probes=%ld runs=%ld pop_throughs=%ld "
-          "max_penetration_over_radius=%.4f sliding_ripple_rms=%.4f\n",
+          "crosscheck contact: model=%s n=%d h=%.4f mm probes=%ld runs=%ld pop_throughs=%ld (runs "
+          "whose tip went into the tooth) max_penetration_over_radius=%.4f (x tip radius) "
+          "sliding_ripple_rms=%.4f (RMS force error / push force; aim %.2f: %s)\n",
           row.model.c_str(), row.resolution, 1e3 * row.voxel_size_m, row.probes, row.runs,
-          row.pop_throughs, row.max_penetration_over_radius, row.sliding_ripple_rms);
-      if (row.model == "sdf") default_pops += row.pop_throughs;
+          row.pop_throughs, row.max_penetration_over_radius, row.sliding_ripple_rms, kRippleAim,
+          row.sliding_ripple_rms <= kRippleAim ? "met" : "not met, reported only");
     }
-    if (!opt->json.empty()) write_json(opt->json, crosscheck_contact_json(r));
-    if (default_pops > 0) {
-      throw std::runtime_error("crosscheck contact: the default model (sdf) popped through " +
-                               std::to_string(default_pops) + " times");
+    std::printf("verdict (the default model, sdf):\n");
+    Verdict v("crosscheck contact");
+    long sdf_runs = 0;
+    for (const ContactSweepRow& row : r.rows) {
+      if (row.model != "sdf") continue;
+      sdf_runs += row.runs;
+      const std::string at = "sdf n=" + std::to_string(row.resolution);
+      v.check(at + " pop_throughs [runs]", static_cast<double>(row.pop_throughs), 0.0);
+      // The skin s = min(rho/4, h/2) (docs/derivations/sdf_contact.md §2), over rho.
+      const double skin = std::min(0.25, 0.5 * row.voxel_size_m / opt->check.tip_radius_m);
+      v.check(at + " max_penetration_over_radius", row.max_penetration_over_radius, skin, "x rho");
     }
+    v.require("sdf runs compared", sdf_runs > 0, std::to_string(sdf_runs) + " runs");
+    nlohmann::json j = crosscheck_contact_json(r);
+    j["verdict"] = v.ok() ? "PASS" : "FAIL";
+    j["failed_checks"] = v.failed();
+    j["sliding_ripple_aim"] = kRippleAim;
+    if (!opt->json.empty()) write_json(opt->json, j);
+    v.finish();
   });
 }
 DENTSIM_REGISTER_COMMAND(setup_crosscheck_contact);

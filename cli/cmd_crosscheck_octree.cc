@@ -8,7 +8,9 @@
 #include <stdexcept>
 #include <string>
 
+#include "cli/outputs.h"
 #include "cli/registry.h"
+#include "cli/verdict.h"
 #include "reference/core/io.h"
 #include "reference/tooth/octree.h"
 #include "validation/crosscheck_octree.h"
@@ -38,18 +40,23 @@ void setup_crosscheck_octree(CLI::App& app) {
                   "Remove a random voxel every K queries (0: never)")
       ->capture_default_str();
   sub->callback([opt] {
-    check_output_paths({{"--json", opt->json}});
+    check_outputs({{"--json", opt->json}});
     const OctreeCrosscheckResult r = crosscheck_octree(opt->check);
     std::printf(
         "crosscheck octree: n=%d seed=%llu queries=%ld mismatches=%ld nonempty=%ld "
         "voxels_matched=%ld removals=%ld\n",
         opt->check.n, static_cast<unsigned long long>(opt->check.seed), r.queries, r.mismatches,
         r.nonempty_queries, r.voxels_matched, r.removals);
-    if (!opt->json.empty()) write_json(opt->json, crosscheck_octree_json(opt->check, r));
-    if (r.mismatches > 0) {
-      throw std::runtime_error("crosscheck octree: " + std::to_string(r.mismatches) +
-                               " mismatches; first: " + r.first_mismatch);
-    }
+    Verdict v("crosscheck octree");
+    v.check("mismatches against brute force", static_cast<double>(r.mismatches), 0.0);
+    v.require("queries that found voxels", r.nonempty_queries > 0,
+              std::to_string(r.nonempty_queries) + " of " + std::to_string(r.queries));
+    if (r.mismatches > 0) std::printf("  first mismatch: %s\n", r.first_mismatch.c_str());
+    nlohmann::json j = crosscheck_octree_json(opt->check, r);
+    j["verdict"] = v.ok() ? "PASS" : "FAIL";
+    j["failed_checks"] = v.failed();
+    if (!opt->json.empty()) write_json(opt->json, j);
+    v.finish();
   });
 }
 DENTSIM_REGISTER_COMMAND(setup_crosscheck_octree);

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/outputs.h"
 #include "cli/registry.h"
 #include "reference/core/io.h"
 #include "validation/wall_demo.h"
@@ -29,7 +30,7 @@ void run_demo(const DemoOptions& o) {
   if (!(o.tick_ms > 0.0)) throw InputError("--tick-ms must be positive");
   if (!(o.k_vc > 0.0) || !(o.k_tooth > 0.0))
     throw InputError("--k-vc and --k-tooth must be positive");
-  check_output_paths({{"--json", o.json}});
+  check_outputs({{"--json", o.json}});
   WallDemo demo;
   demo.duration_s = o.duration;
   demo.k_vc = o.k_vc;

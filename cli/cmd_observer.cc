@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/outputs.h"
 #include "fast/registry.h"
 #include "cli/registry.h"
 #include "reference/core/io.h"
@@ -60,7 +61,7 @@ void setup_observer(CLI::App& app) {
   sub->add_flag("--ideal-sensing", opt->ideal_sensing,
                 "exact joint angles and velocities (no quantisation, no estimator)");
   sub->callback([opt] {
-    check_output_paths({{"--json", opt->json}}, {{"--model", opt->model}});
+    check_outputs({{"--json", opt->json}}, {}, {{"--model", opt->model}});
     if (!(std::isfinite(opt->model_error) && opt->model_error > -1.0)) {
       throw InputError("--model-error: expected a finite number > -1, got " +
                        std::to_string(opt->model_error));

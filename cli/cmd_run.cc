@@ -10,6 +10,8 @@
 #include <span>
 #include <sstream>
 
+#include "cli/interrupt.h"
+#include "cli/outputs.h"
 #include "device/backend.h"
 #include "cli/plot.h"
 #include "cli/png_writer.h"
@@ -270,6 +272,9 @@ void write_quiet_plot(const RunResult& r, const QuietReport& q, const std::strin
   plot::write_png({felt, ripple}, dir + "/quiet.png", 1, 900, 360);
 }
 
+void write_run_outputs(const RunCliOptions& o, const Scene& scene, const RunResult& r,
+                       const std::string& partial_reason);
+
 void run(const RunCliOptions& o) {
   if (o.list) {
     for (const std::string& n : builtin_scene_names()) {
@@ -293,19 +298,17 @@ void run(const RunCliOptions& o) {
   const InjectedFault fault = o.inject_fault.empty()
                                   ? InjectedFault{}
                                   : parse_injected_fault(o.inject_fault, "--inject-fault");
-  if (!o.record.empty()) {
-    check_output_paths({{"--record", o.record}}, {{"scene", o.scene}});
-  }
+  check_outputs({{"--record", o.record}}, {{"--out", o.out}, {"--view-shots", o.view.shots_dir}},
+                {{"scene", o.scene}});
   const Scene scene =
       o.tick_hz > 0.0
           ? load_scene_patched(o.scene, {{"tick_hz", o.tick_hz}},
                                "at --tick-hz " + std::to_string(static_cast<long>(o.tick_hz)))
           : load_scene(o.scene);
-  std::error_code ec;
-  std::filesystem::create_directories(o.out, ec);
-  if (ec || !std::filesystem::is_directory(o.out)) {
-    throw InputError("--out '" + o.out + "': cannot create the directory (" + ec.message() + ")");
-  }
+  make_output_dir({"--out", o.out});
+  // Ctrl-C / SIGTERM: the loop stops at a tick boundary and every output of the ticks that ran is
+  // written, report.json "partial": true (cli/interrupt.h). Installed before the first line.
+  const StopOnSignal stop;
 
   std::fprintf(stderr, "dentsim run: scene '%s' (%s), %.2f s at %.0f Hz, method %s, %s pipeline\n",
                scene.name.c_str(), scene.origin.c_str(),
@@ -325,10 +328,37 @@ void run(const RunCliOptions& o) {
   ro.hd_loop = o.hd_loop;
   ro.skip_unneeded = !o.no_skip;
   ro.progress = [&bar](double f) { bar.update(f); };
-  const RunResult r = run_scene_with_view(scene, ro, o.view);
-  bar.finish();
+  ro.stop = &stop.flag();
+  RunViewOptions view = o.view;
+  const double planned_s = o.duration > 0 ? o.duration : scene.duration;
+  std::string partial_reason;
+  view.on_done = [&](const RunResult& r) {
+    bar.finish();
+    if (r.stopped) {
+      char why[160];
+      std::snprintf(why, sizeof why, "stopped by %s at t = %.3f s of %.3f s",
+                    stop.signal_name().c_str(), r.simulated_s, planned_s);
+      partial_reason = why;
+    }
+    write_run_outputs(o, scene, r, partial_reason);
+  };
+  const RunResult r = run_scene_with_view(scene, ro, view);
+  if (r.stopped) {
+    throw Interrupted("run " + partial_reason + "; partial outputs in " + o.out +
+                          "/ (report.json \"partial\": true)",
+                      stop.exit_status());
+  }
+  if (!r.faults.empty())
+    throw std::runtime_error("the device faulted (safe stop): " + r.faults.front());
+}
 
-  const nlohmann::json report = run_report_json(scene, r);
+// Writes every output of the run into o.out and prints the summary; `partial_reason` non-empty:
+// the run was stopped early (report.json "partial": true, "partial_reason").
+void write_run_outputs(const RunCliOptions& o, const Scene& scene, const RunResult& r,
+                       const std::string& partial_reason) {
+  nlohmann::json report = run_report_json(scene, r);
+  report["partial"] = !partial_reason.empty();
+  if (!partial_reason.empty()) report["partial_reason"] = partial_reason;
   write_json(o.out + "/report.json", report);
   write_file_atomic(o.out + "/timeseries.csv", csv_of(r));
   write_plots(r, o.out);
@@ -377,14 +407,14 @@ void run(const RunCliOptions& o) {
       "  outputs in %s/: report.json timeseries.csv force_penetration.png observer.png quiet.png "
       "tooth_before.png tooth_after.png%s\n",
       o.out.c_str(), r.drill_log.empty() ? "" : " drill_depth.png");
-  if (!r.faults.empty())
-    throw std::runtime_error("the device faulted (safe stop): " + r.faults.front());
 }
 
 void setup_run(CLI::App& app) {
   auto o = std::make_shared<RunCliOptions>();
+  std::string names;  // the built-in scenes, from the one list (--help never goes stale)
+  for (const std::string& n : builtin_scene_names()) names += (names.empty() ? "" : ", ") + n;
   CLI::App* sub = app.add_subcommand(
-      "run", "Run the dental simulator on a scene (built-in: probe, drill; or a scene file)");
+      "run", "Run the dental simulator on a scene (built-in: " + names + "; or a scene file)");
   sub->add_option("scene", o->scene, "Built-in scene name or scene file (JSON, docs/scenes.md)");
   sub->add_option("--out", o->out, "Output directory")->capture_default_str();
   sub->add_flag("--realtime", o->realtime,

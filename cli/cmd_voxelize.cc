@@ -5,6 +5,8 @@
 // mm^3), volume_mm3 (solid), mesh_volume_mm3 (mesh input only), thresholds (volume input only),
 // resolution, voxel_size_mm, octree_bytes, timing_ms (total wall time of the job); plus the echo
 // of the scale and the mesh repairs, or of the volume's geometry and segmentation.
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <memory>
@@ -12,6 +14,7 @@
 #include <string>
 #include <utility>
 
+#include "cli/outputs.h"
 #include "cli/png_writer.h"
 #include "cli/progress.h"
 #include "cli/registry.h"
@@ -80,7 +83,17 @@ void run(const Options& o) {
     vto.automatic_thresholds = false;
     vto.thresholds = parse_material_thresholds(o.material_thresholds, "--material-thresholds");
   }
-  check_output_paths({{"--json", o.json}, {"--png", o.png}}, {{"MESH", o.mesh}});
+  {
+    // --write-volume: a NIfTI/NRRD file by its extension, else a DICOM series folder.
+    std::string wv = o.write_volume;
+    std::transform(wv.begin(), wv.end(), wv.begin(),
+                   [](unsigned char c) { return std::tolower(c); });
+    const bool wv_file = wv.ends_with(".nii") || wv.ends_with(".nii.gz") || wv.ends_with(".nrrd") ||
+                         wv.ends_with(".nhdr");
+    check_outputs(
+        {{"--json", o.json}, {"--png", o.png}, {"--write-volume", wv_file ? o.write_volume : ""}},
+        {{"--write-volume", wv_file ? "" : o.write_volume}}, {{"MESH", o.mesh}});
+  }
   // Voxelising at 1024^3 takes about a minute: say so on stderr every few seconds, terminal or not.
   const Heartbeat heartbeat("dentsim voxelize: voxelizing at " + std::to_string(o.resolution) +
                             "^3");
@@ -207,6 +220,9 @@ void run(const Options& o) {
                            {"noise", o.scan_noise}};
   }
   // The full octree of the collision stage over this grid (it takes the grid over).
+  const double grid_mib =
+      static_cast<double>(grid.voxels.size() * sizeof(grid.voxels[0])) / (1024.0 * 1024.0);
+  const double voxel_mm = grid.voxel_size * 1e3;
   const auto t_octree = std::chrono::steady_clock::now();
   const FullOctree octree(std::move(grid));
   j["octree_bytes"] = octree.memory_bytes();
@@ -215,6 +231,24 @@ void run(const Options& o) {
       {"load", t_load}, {"voxelize", t_voxelize}, {"png", t_png}, {"octree", ms_since(t_octree)}};
   j["timing_ms"] = ms_since(t_start);
   write_json(o.json, j);
+  // The summary on stdout (the heartbeat only says the work goes on).
+  std::string materials;
+  for (int m = kEnamel; m < kMaterialCount; ++m) {
+    if (counts[m] == 0) continue;
+    materials += (materials.empty() ? "" : ", ") +
+                 std::string(material_properties(static_cast<std::uint8_t>(m)).name) + " " +
+                 std::to_string(counts[m]);
+  }
+  std::printf(
+      "voxelize: %s at %d^3 (voxel %.4f mm): %ld solid voxels (%s), %.2f mm^3; memory: grid "
+      "%.1f MiB, octree %.1f MiB; %.1f s (load %.1f, voxelize %.1f, octree %.1f); wrote "
+      "%s%s%s%s%s\n",
+      j["source"].get<std::string>().c_str(), o.resolution, voxel_mm, solid, materials.c_str(),
+      j["volume_mm3"].get<double>(), grid_mib,
+      static_cast<double>(octree.memory_bytes()) / (1024.0 * 1024.0), 1e-3 * ms_since(t_start),
+      1e-3 * t_load, 1e-3 * t_voxelize, 1e-3 * j["timing_breakdown_ms"]["octree"].get<double>(),
+      o.json.c_str(), o.png.empty() ? "" : " ", o.png.c_str(), o.write_volume.empty() ? "" : " ",
+      o.write_volume.c_str());
 }
 
 void setup_voxelize(CLI::App& app) {

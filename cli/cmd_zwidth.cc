@@ -11,12 +11,16 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "cli/interrupt.h"
 #include "cli/mpi_sweep.h"
+#include "cli/outputs.h"
 #include "cli/plot.h"
+#include "cli/progress.h"
 #include "cli/registry.h"
 #include "fast/registry.h"
 #include "reference/core/io.h"
@@ -49,17 +53,6 @@ struct ZwidthOptions {
   std::string device_model;     // --device MODEL ("" = the default model)
   std::string pipeline_model;   // --pipeline-model MODEL ("" = the device's)
 };
-
-bool show_progress() { return isatty(2) && std::getenv("CI") == nullptr; }
-
-void progress_bar(const char* what, int done, int total) {
-  if (!show_progress()) return;
-  const int width = 40;
-  const int filled = total > 0 ? width * done / total : width;
-  std::fprintf(stderr, "\r%-12s [%s%s] %d/%d", what, std::string(filled, '#').c_str(),
-               std::string(width - filled, '.').c_str(), done, total);
-  if (done == total) std::fprintf(stderr, "\n");
-}
 
 // Category of a point for the stability map.
 int category(const ZwidthPoint& p) {
@@ -229,8 +222,15 @@ void print_summary(const ZwidthExperimentResult& r) {
     std::printf(" %12.1f %12.1f\n", mr.colgate_schenkel_max_stiffness_n_per_m,
                 mr.pmi_coupling_bound_n_per_m);
   }
-  std::printf("ratio pmi/explicit %.2f (thesis 1.8), pmi-pd/explicit %.2f (thesis 9.5)\n",
-              r.ratio_pmi_over_explicit, r.ratio_pmipd_over_explicit);
+  // A ratio that is not a number says why (zwidth_ratio_reason), never a bare nan.
+  auto ratio = [&r](double x, Method m) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.2f", x);
+    return std::isfinite(x) ? std::string(b) : "n/a (" + zwidth_ratio_reason(r, m) + ")";
+  };
+  std::printf("ratio pmi/explicit %s (thesis 1.8), pmi-pd/explicit %s (thesis 9.5)\n",
+              ratio(r.ratio_pmi_over_explicit, Method::kPmiVc).c_str(),
+              ratio(r.ratio_pmipd_over_explicit, Method::kPmiPd).c_str());
   // The quiet Z-width (issue #29): over points that are stable, passive and quiet (force ripple
   // <= 5 % of the contact force and of the force fed back, contact on every tick, no loss).
   std::printf(
@@ -247,8 +247,15 @@ void print_summary(const ZwidthExperimentResult& r) {
     for (const ZwidthSweep& sw : mr.sweeps) std::printf(" %9.1f", sw.quiet_z_width_n_per_m());
     std::printf("\n");
   }
-  std::printf("quiet ratios: pmi/explicit %.2f, pmi-pd/explicit %.2f",
-              r.quiet_ratio_pmi_over_explicit, r.quiet_ratio_pmipd_over_explicit);
+  // A quiet ratio over a method with no quiet point is not a number: printed as n/a.
+  auto quiet_ratio = [](double x) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.2f", x);
+    return std::isfinite(x) ? std::string(b) : std::string("n/a (no quiet point)");
+  };
+  std::printf("quiet ratios: pmi/explicit %s, pmi-pd/explicit %s",
+              quiet_ratio(r.quiet_ratio_pmi_over_explicit).c_str(),
+              quiet_ratio(r.quiet_ratio_pmipd_over_explicit).c_str());
   const ZwidthMethodResult* ex = nullptr;
   const ZwidthMethodResult* pd = nullptr;
   for (const ZwidthMethodResult& mr : r.methods) {
@@ -259,8 +266,10 @@ void print_summary(const ZwidthExperimentResult& r) {
     std::printf("; pmi-pd/explicit per operator:");
     for (std::size_t k = 0; k < ops.size(); ++k) {
       const double z = ex->sweeps[k].quiet_z_width_n_per_m();
-      std::printf(" %s %.2f", operator_name(ops[k]),
-                  z > 0.0 ? pd->sweeps[k].quiet_z_width_n_per_m() / z : std::nan(""));
+      std::printf(" %s %s", operator_name(ops[k]),
+                  quiet_ratio(z > 0.0 ? pd->sweeps[k].quiet_z_width_n_per_m() / z
+                                      : std::nan(""))
+                      .c_str());
     }
   }
   std::printf("\n");
@@ -283,7 +292,7 @@ void run_zwidth(const ZwidthOptions& o) {
   if (!(o.push_n > 0.0 && o.push_n <= 20.0)) {
     throw InputError("--push: expected a force in (0, 20] N, got " + std::to_string(o.push_n));
   }
-  check_output_paths({{"--json", o.json}});
+  check_outputs({{"--json", o.json}}, {{"--out", o.out}});
   ZwidthExperiment e;
   e.methods.clear();
   for (const std::string& m : o.methods) {
@@ -358,17 +367,35 @@ void run_zwidth(const ZwidthOptions& o) {
   // The jobs go through cli/mpi_sweep.h: under mpirun each rank runs its share of the grid points
   // (and of the re-runs at the best points) on its --threads workers, and every rank gets every
   // result (the re-runs are enumerated from the grid's); alone, this process runs them all as
-  // before. Progress: per operator alone; rank 0's share of each stage under mpirun.
+  // before. Progress (cli/progress.h: a bar on a terminal, lines with the time left in a log):
+  // the grid stage per operator alone; rank 0's share of each stage under mpirun.
   const bool alone = sweep_world().size == 1;
-  const ZwidthJobRunner runner = [&e, alone](const std::string& stage, int n,
-                                             const std::function<nlohmann::json(int)>& job) {
+  // Ctrl-C / SIGTERM: no new job starts (the running ones finish), the jobs done so far go to
+  // --json marked partial, exit 130 / 143 (cli/interrupt.h).
+  const StopOnSignal stop;
+  std::mutex done_mu;
+  nlohmann::json done_jobs = nlohmann::json::array();
+  ProgressBar bar("zwidth", writes_outputs());
+  const ZwidthJobRunner runner = [&](const std::string& stage, int n,
+                                     const std::function<nlohmann::json(int)>& job) {
     SweepOptions so;
     so.threads = e.threads;
     so.results_on_every_rank = true;
+    const std::function<nlohmann::json(int)> stoppable = [&](int i) {
+      if (stop.requested()) throw std::runtime_error("interrupted");
+      nlohmann::json out = job(i);
+      const std::lock_guard<std::mutex> lock(done_mu);
+      done_jobs.push_back({{"stage", stage}, {"index", i}, {"result", out}});
+      return out;
+    };
     return sweep(
-        n, job,
-        [&stage, alone](int done, int owned) {
-          if (!alone) progress_bar(("rank 0 " + stage).c_str(), done, owned);
+        n, stoppable,
+        [&stage, &bar, alone](int done, int owned) {
+          if (!alone) {
+            bar.update(
+                owned > 0 ? static_cast<double>(done) / owned : 1.0,
+                "rank 0 " + stage + " " + std::to_string(done) + "/" + std::to_string(owned));
+          }
         },
         so);
   };
@@ -380,12 +407,54 @@ void run_zwidth(const ZwidthOptions& o) {
     if (!o.pipeline_model.empty())
       sc.phantom_pipeline_params = load_phantom_params(o.pipeline_model);
   }
-  const ZwidthExperimentResult r = run_zwidth_experiment(
-      e,
-      [alone](ZwidthOperator op, int done, int total) {
-        if (alone) progress_bar(operator_name(op), done, total);
-      },
-      runner);
+  // Up front: how much work this is (the bar's lines then give the time left).
+  std::size_t grid_runs = 0;
+  for (ZwidthOperator op : e.operators) {
+    grid_runs += e.methods.size() * (op == ZwidthOperator::kForce ? e.grid : e.other_grid).size();
+  }
+  if (writes_outputs()) {
+    std::fprintf(stderr,
+                 "dentsim zwidth: %zu grid runs (%zu methods x %zu operators), each about %.0f s "
+                 "of simulated contact at T = %g ms, on %d thread(s) x %d rank(s), then the "
+                 "re-runs at each method's best point (%.0f s simulated in the grid alone: "
+                 "minutes of work), progress %s\n",
+                 grid_runs, e.methods.size(), e.operators.size(), sc.hold_s, o.tick_ms, e.threads,
+                 sweep_world().size, static_cast<double>(grid_runs) * sc.hold_s,
+                 bar.lines() ? "every 5 s with the time left" : "on the bar below");
+  }
+  std::vector<int> op_done(e.operators.size(), 0);
+  int all_done = 0;
+  ZwidthExperimentResult r;
+  try {
+    r = run_zwidth_experiment(
+        e,
+        [&](ZwidthOperator op, int done, int total) {
+          if (!alone) return;
+          ++all_done;
+          bar.update(static_cast<double>(all_done) / static_cast<double>(grid_runs),
+                     std::string(operator_name(op)) + " " + std::to_string(done) + "/" +
+                         std::to_string(total));
+        },
+        runner);
+  } catch (const std::exception&) {
+    if (!stop.requested()) throw;
+    bar.finish();
+    // What it has: every job this rank finished, in the wire format of the sweep.
+    const std::string why = "stopped by " + stop.signal_name() + " after " +
+                            std::to_string(done_jobs.size()) + " jobs of this rank";
+    if (writes_outputs() && !o.json.empty()) {
+      write_json(o.json, {{"partial", true},
+                          {"partial_reason", why},
+                          {"grid_runs", grid_runs},
+                          {"completed_jobs", done_jobs}});
+    }
+    throw Interrupted("zwidth " + why +
+                          (o.json.empty() ? std::string("; no --json given, nothing written")
+                                          : "; partial results in " + o.json +
+                                                " (\"partial\": true, \"completed_jobs\")"),
+                      stop.exit_status());
+  }
+  bar.finish();
   if (!writes_outputs()) return;  // rank 0 prints and writes
   print_summary(r);
   if (!o.out.empty()) {

@@ -1,10 +1,13 @@
 // dentsim: one binary, subcommands (`dentsim --help` lists them, `dentsim CMD --help` each).
-// Exit status: 0 success, 1 runtime failure, 2 bad input (flags, values, files); a command may
-// exit with its own status through ExitStatusError (cli/registry.h; `excite`: 3 device stopped).
+// Exit status: 0 success, 1 runtime failure or a check that failed (crosscheck, replay: the
+// verdict FAIL), 2 bad input (flags, values, files), 128 + signal when stopped by SIGINT (130) or
+// SIGTERM (143) after writing the partial outputs (cli/interrupt.h); a command may exit with its
+// own status through ExitStatusError (cli/registry.h; `excite`: 3 device stopped).
 #include <cstdio>
 #include <exception>
 #include <iostream>
 
+#include "cli/interrupt.h"
 #include "cli/mpi_sweep.h"
 #include "cli/registry.h"
 #include "reference/core/io.h"
@@ -64,6 +67,10 @@ int main(int argc, char** argv) {
   } catch (const dentsim::InputError& e) {
     if (dentsim::cli::launcher_rank() == 0) std::fprintf(stderr, "dentsim: error: %s\n", e.what());
     return 2;
+  } catch (const dentsim::cli::Interrupted& e) {
+    if (dentsim::cli::launcher_rank() == 0)
+      std::fprintf(stderr, "dentsim: interrupted: %s\n", e.what());
+    return e.status();
   } catch (const std::exception& e) {
     if (dentsim::cli::launcher_rank() == 0) std::fprintf(stderr, "dentsim: failed: %s\n", e.what());
     return 1;

@@ -1,7 +1,9 @@
 // Progress of long work on stderr.
-// - ProgressBar: on a terminal (and CI unset) a redrawn bar; otherwise (a log, a pipe, CI) one
-//   line "label: 42%" at most every kProgressLineSeconds, so long runs are never silent and
-//   short ones print nothing.
+// The one progress reporter of the CLI (every command uses it; issue #33):
+// - ProgressBar: on a terminal (and CI unset) a redrawn bar; otherwise (a log, a pipe, CI, a
+//   Slurm job's output file) one line "label: 42% detail (30 s elapsed, about 41 s left)" at most
+//   every kProgressLineSeconds, so long runs are never silent and short ones print nothing.
+//   message() prints a line of its own without colliding with the bar.
 // - Heartbeat: for work that reports no fraction (voxelising a 1024^3 grid takes about a minute),
 //   a line "label: 10 s elapsed" every kProgressLineSeconds from a background thread while the
 //   object lives; nothing for work shorter than that.
@@ -30,35 +32,63 @@ class ProgressBar {
         start_(std::chrono::steady_clock::now()),
         last_line_(start_) {}
   ~ProgressBar() { finish(); }
+  ProgressBar(const ProgressBar&) = delete;
+  ProgressBar& operator=(const ProgressBar&) = delete;
 
-  void update(double fraction) {
+  // `fraction` done in [0, 1]; `detail` (e.g. "force 12/30") follows the percentage. The lines
+  // (not a terminal) carry the time elapsed and, once 2 % is done, the time left at the mean
+  // rate so far.
+  void update(double fraction, const std::string& detail = {}) {
     if (!bar_ && !lines_) return;
     const int pct = static_cast<int>(fraction * 100.0 + 0.5);
-    if (pct == last_) return;
+    if (pct == last_ && detail == detail_) return;
+    const auto now = std::chrono::steady_clock::now();
     if (lines_) {
-      const auto now = std::chrono::steady_clock::now();
       if (std::chrono::duration<double>(now - last_line_).count() < kProgressLineSeconds) return;
       last_line_ = now;
       last_ = pct;
-      std::fprintf(stderr, "%s: %d%% (%.0f s elapsed)\n", label_.c_str(), pct,
-                   std::chrono::duration<double>(now - start_).count());
+      detail_ = detail;
+      const double elapsed = std::chrono::duration<double>(now - start_).count();
+      char left[64] = "";
+      if (fraction >= 0.02 && fraction < 1.0) {
+        std::snprintf(left, sizeof left, ", about %.0f s left",
+                      elapsed * (1.0 - fraction) / fraction);
+      }
+      std::fprintf(stderr, "%s: %d%%%s%s (%.0f s elapsed%s)\n", label_.c_str(), pct,
+                   detail.empty() ? "" : " ", detail.c_str(), elapsed, left);
       return;
     }
     last_ = pct;
-    const int width = 40, fill = pct * width / 100;
-    std::fprintf(stderr, "\r%s [%.*s%*s] %3d%%", label_.c_str(), fill,
-                 "========================================", width - fill, "", pct);
-    std::fflush(stderr);
+    detail_ = detail;
+    draw();
+  }
+  // A line of its own (e.g. "run 3/9 ...") that does not collide with the bar: on a terminal the
+  // bar is cleared, the line printed and the bar drawn again below it; otherwise just the line.
+  void message(const std::string& line) {
+    if (bar_ && last_ >= 0) std::fprintf(stderr, "\r\033[K");
+    std::fprintf(stderr, "%s\n", line.c_str());
+    if (bar_ && last_ >= 0) draw();
   }
   void finish() {
     if (bar_ && last_ >= 0) std::fprintf(stderr, "\n");
     bar_ = lines_ = false;
   }
+  // True when progress is shown as lines (stderr is a log, a pipe, or CI is set).
+  bool lines() const { return lines_; }
 
  private:
+  void draw() {
+    const int width = 40, fill = last_ * width / 100;
+    std::fprintf(stderr, "\r%s [%.*s%*s] %3d%%%s%s\033[K", label_.c_str(), fill,
+                 "========================================", width - fill, "", last_,
+                 detail_.empty() ? "" : " ", detail_.c_str());
+    std::fflush(stderr);
+  }
+
   std::string label_;
   bool bar_, lines_;
   int last_ = -1;
+  std::string detail_;
   std::chrono::steady_clock::time_point start_, last_line_;
 };
 

@@ -15,7 +15,11 @@
 namespace dentsim::cli {
 
 RunResult run_scene_with_view(const Scene& scene, RunOptions options, const RunViewOptions& v) {
-  if (!v.view) return run_scene(scene, options);
+  if (!v.view) {
+    RunResult r = run_scene(scene, options);
+    if (v.on_done) v.on_done(r);
+    return r;
+  }
   std::string why;
   if (!view::window_available(&why)) throw InputError("--view: " + why);
   const char* display = std::getenv("DISPLAY");
@@ -37,6 +41,7 @@ RunResult run_scene_with_view(const Scene& scene, RunOptions options, const RunV
   std::thread servo([&] {
     try {
       result = run_scene(scene, options);
+      if (v.on_done) v.on_done(result);  // the outputs, written while the window is open
     } catch (...) {
       run_error = std::current_exception();
     }
@@ -47,6 +52,7 @@ RunResult run_scene_with_view(const Scene& scene, RunOptions options, const RunV
   vo.screenshot_dir = v.shots_dir.empty() ? "." : v.shots_dir;
   vo.capture_first_last = !v.shots_dir.empty();
   vo.close_when_done = v.close || !v.shots_dir.empty();
+  vo.stop = options.stop;
   vo.save_png = [](const std::string& path, const RgbImage& img) { write_png(path, img); };
   std::exception_ptr view_error;
   try {
@@ -54,7 +60,8 @@ RunResult run_scene_with_view(const Scene& scene, RunOptions options, const RunV
   } catch (...) {
     view_error = std::current_exception();
   }
-  if (!done.load()) std::fprintf(stderr, "dentsim run: window closed; finishing the run\n");
+  if (!done.load() && !(options.stop != nullptr && options.stop->load()))
+    std::fprintf(stderr, "dentsim run: window closed; finishing the run\n");
   servo.join();
   if (run_error) std::rethrow_exception(run_error);
   if (view_error) std::rethrow_exception(view_error);

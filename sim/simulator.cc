@@ -492,6 +492,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       res.faults.push_back(fault_string(driven.faults()) + " at t = " + std::to_string(t) + " s");
       return false;
     }
+    if (options.stop != nullptr && options.stop->load(std::memory_order_relaxed)) {
+      res.stopped = true;  // at a tick boundary: this tick is measured, the next one never runs
+      return false;
+    }
     if (options.progress && k >= next_progress) {
       options.progress(static_cast<double>(k) / n_ticks);
       next_progress = k + std::max(1L, n_ticks / 100);

@@ -29,6 +29,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -80,7 +81,11 @@ struct RunOptions {
   std::function<void(double)> progress;
   // Called once per tick at the end of the loop body, on the loop's thread (sim/tick_observer.h;
   // the live view). Not owned; null: none.
-  TickObserver* observer = nullptr;
+  TickObserver* observer = nullptr;  // Set (by a signal handler, cli/interrupt.h, or the view's
+                                     // window): the loop owner stops at the
+  // next tick boundary and returns what it measured, RunResult::stopped true. Not owned; null:
+  // none.
+  const std::atomic<bool>* stop = nullptr;
 };
 
 // One row of the time series.
@@ -148,6 +153,9 @@ struct RunResult {
   // over the world axes a, of sum_i |J_t(a, i)| 2 pi / counts_i at home (one count on every joint).
   QuietSeries quiet_series;
   double tip_quantum_m = 0.0;
+  // RunOptions::stop was set: the run ended early at a tick boundary (simulated_s says where);
+  // everything above covers the ticks that ran.
+  bool stopped = false;
 };
 
 // Everything a scene runs on, built once: the simulated Phantom (behind a fault injector when

@@ -584,7 +584,31 @@ nlohmann::json zwidth_experiment_json(const ZwidthExperimentResult& r) {
                          {"contact_losses_max", sc.quiet.contact_losses_max},
                          {"ripple_window_s", sc.quiet.window_s},
                          {"settle_s", sc.quiet.settle_s}};
+  if (const std::string why = zwidth_ratio_reason(r, Method::kPmiVc); !why.empty()) {
+    out["ratio_pmi_over_explicit_reason"] = why;
+  }
+  if (const std::string why = zwidth_ratio_reason(r, Method::kPmiPd); !why.empty()) {
+    out["ratio_pmipd_over_explicit_reason"] = why;
+  }
   return out;
+}
+
+std::string zwidth_ratio_reason(const ZwidthExperimentResult& r, Method m) {
+  const double ratio = m == Method::kPmiVc   ? r.ratio_pmi_over_explicit
+                       : m == Method::kPmiPd ? r.ratio_pmipd_over_explicit
+                                             : 1.0;
+  if (std::isfinite(ratio)) return "";
+  bool has_m = false, has_explicit = false;
+  for (const ZwidthMethodResult& mr : r.methods) {
+    has_m = has_m || mr.method == m;
+    has_explicit = has_explicit || mr.method == Method::kExplicitVc;
+  }
+  if (!has_explicit) return "explicit was not run (--methods)";
+  if (!has_m) return std::string(method_name(m)) + " was not run (--methods)";
+  if (!(headline_of(r, Method::kExplicitVc) > 0.0)) {
+    return "explicit has no stable and passive grid point (Z-width 0 N/m)";
+  }
+  return std::string(method_name(m)) + "'s Z-width is not finite";
 }
 
 }  // namespace dentsim

@@ -132,6 +132,11 @@ ZwidthPoint zwidth_point_from_wire(const nlohmann::json& j);
 nlohmann::json zwidth_trace_to_wire(const ZwidthTrace& t);
 ZwidthTrace zwidth_trace_from_wire(const nlohmann::json& j);
 
+// Why the ratio of `m`'s headline Z-width over explicit's is not a number ("" when it is): a
+// method not run (--methods), or explicit without a stable and passive grid point (Z-width 0).
+// `dentsim zwidth` prints "n/a (REASON)"; the JSON has null and "<key>_reason".
+std::string zwidth_ratio_reason(const ZwidthExperimentResult& r, Method m);
+
 // The result as `dentsim zwidth --json` writes it (keys: docs/zwidth_protocol.md).
 nlohmann::json zwidth_experiment_json(const ZwidthExperimentResult& r);
 

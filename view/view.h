@@ -57,6 +57,8 @@ struct ViewerOptions {
   // after the run finished) into screenshot_dir, then close the window when the run is done.
   bool capture_first_last = false;
   bool close_when_done = false;
+  // Set (Ctrl-C, SIGTERM; cli/interrupt.h): close the window at the next frame. Null: none.
+  const std::atomic<bool>* stop = nullptr;
   // Writes a PNG (the CLI passes cli/png_writer.h's write_png; the library does not link libpng).
   std::function<void(const std::string&, const RgbImage&)> save_png;
 };

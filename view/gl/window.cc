@@ -201,6 +201,7 @@ void run_viewer(SnapshotChannel& channel, const std::atomic<bool>& run_done,
         next_frame = now;
       }
       if (done && options.close_when_done && (wrote_last || !options.capture_first_last)) break;
+      if (options.stop != nullptr && options.stop->load(std::memory_order_relaxed)) break;
     }
   }
   glfwDestroyWindow(window);

@@ -1,0 +1,45 @@
+// Ctrl-C (SIGINT) and SIGTERM stop long work cleanly instead of losing it (issue #33, "work
+// lost"). A command that can stop early holds a StopOnSignal while it works: the signal handler
+// only sets an atomic flag; the loop owner checks the flag at its own boundaries (a servo tick, a
+// job of a sweep), stops there, writes everything it has (marked partial, with the reason) and
+// throws Interrupted, which main turns into one line and exit status 128 + the signal (130 for
+// Ctrl-C, 143 for SIGTERM). A second signal ends the process at once (the handler is reset after
+// the first). Commands that do not hold a StopOnSignal keep the default behaviour.
+#pragma once
+
+#include <atomic>
+#include <stdexcept>
+#include <string>
+
+namespace dentsim::cli {
+
+class StopOnSignal {
+ public:
+  StopOnSignal();   // installs the SIGINT and SIGTERM handlers (one holder at a time)
+  ~StopOnSignal();  // restores the previous handlers
+  StopOnSignal(const StopOnSignal&) = delete;
+  StopOnSignal& operator=(const StopOnSignal&) = delete;
+
+  // The flag the handler sets; loops check it (relaxed loads suffice: it only ever turns on).
+  const std::atomic<bool>& flag() const;
+  bool requested() const { return flag().load(std::memory_order_relaxed); }
+  // The signal that stopped the work (0: none yet).
+  int signal() const;
+  // "SIGINT (Ctrl-C)", "SIGTERM" or "" when none.
+  std::string signal_name() const;
+  // The exit status for the signal: 128 + signal.
+  int exit_status() const { return 128 + signal(); }
+};
+
+// Thrown once the partial outputs are written; main prints "dentsim: interrupted: WHAT" and exits
+// with `status`.
+class Interrupted : public std::runtime_error {
+ public:
+  Interrupted(const std::string& what, int status) : std::runtime_error(what), status_(status) {}
+  int status() const { return status_; }
+
+ private:
+  int status_;
+};
+
+}  // namespace dentsim::cli

@@ -1,0 +1,132 @@
+// End-to-end tests of issue #33's "work lost" and "results that say what they mean": outputs are
+// checked before the work (exit 2 naming the flag, nothing computed, nothing written); Ctrl-C /
+// SIGTERM stop `dentsim run` and `dentsim zwidth` at a boundary with every output of the work done
+// so far written and marked partial, exit 128 + signal; the checks print PASS/FAIL against their
+// bounds and exit 1 on FAIL (a check that compared nothing fails).
+//
+// The signal is sent once the command has printed its first line on stderr (printed after the
+// handler is installed), so the tests do not depend on timing: whenever the signal lands, the
+// command must stop at its next boundary and write what it has.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "reference/core/io.h"
+#include "tests/support/cli.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using dentsim::testing::fresh_temp_dir;
+using dentsim::testing::read_json_file;
+using dentsim::testing::run_dentsim;
+using dentsim::testing::run_and_signal;
+using dentsim::testing::Signalled;
+using ::testing::HasSubstr;
+
+// --out that is a file, --json that is a directory, a parent that does not exist: exit 2 before
+// any work, the message naming the flag, no other output written.
+TEST(WorkLost, OutputsAreCheckedBeforeTheWork) {
+  const fs::path d = fresh_temp_dir("dentsim_work_lost_outputs");
+  const std::string file = (d / "a_file").string();
+  std::ofstream(file) << "keep\n";
+  const std::string json = (d / "z.json").string();
+  struct Case {
+    std::string args, needle;
+  };
+  const Case cases[] = {
+      {"zwidth --quick --out " + file + " --json " + json,
+       "--out '" + file + "': exists and is not a directory"},
+      {"zwidth --quick --json " + d.string(), "--json '" + d.string() + "': is a directory"},
+      {"bench --out " + file + " --json " + json, "--out '" + file + "'"},
+      {"run probe --out " + file, "--out '" + file + "'"},
+      {"run probe --out " + (d / "o").string() + " --record " + d.string(), "--record"},
+      {"crosscheck fast --json " + (d / "no" / "x.json").string(), "--json"},
+      {"replay " + file + " --json " + file, "is the input FILE"},
+      {"render probe --at 0 --png " + (d / "no" / "x.png").string(), "--png"},
+      {"voxelize --procedural --resolution 32 --json " + json + " --write-volume " + file,
+       "--write-volume '" + file + "': exists and is not a directory"},
+  };
+  for (const Case& c : cases) {
+    const auto r = run_dentsim(c.args);
+    EXPECT_EQ(r.status, 2) << c.args << "\n" << r.output;
+    EXPECT_THAT(r.output, HasSubstr(c.needle)) << c.args;
+    EXPECT_FALSE(fs::exists(json)) << c.args;
+    EXPECT_EQ(dentsim::read_file(file), "keep\n") << c.args;
+  }
+  EXPECT_FALSE(fs::exists(d / "o"));
+}
+
+// Ctrl-C during `dentsim run`: the run stops at a tick boundary, report.json says "partial": true
+// with the reason, the time series and the plots are there, one line says so, exit 130.
+TEST(WorkLost, InterruptedRunWritesItsPartialOutputs) {
+  const fs::path d = fresh_temp_dir("dentsim_work_lost_run");
+  const fs::path out = d / "out";
+  const Signalled r = run_and_signal({"run", "probe", "--duration", "600", "--out", out.string()},
+                                     "dentsim run: scene", SIGINT);
+  EXPECT_EQ(r.status, 130) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("dentsim: interrupted: run stopped by SIGINT (Ctrl-C) at t = "));
+  const nlohmann::json report = read_json_file(out / "report.json");
+  ASSERT_TRUE(report.is_object()) << r.output;
+  EXPECT_EQ(report["partial"], true);
+  EXPECT_THAT(report["partial_reason"].get<std::string>(), HasSubstr("SIGINT"));
+  const long ticks = report["ticks"].get<long>();
+  EXPECT_LT(ticks, 600000);  // stopped early: 600 s at 1 kHz never ran
+  for (const char* f : {"timeseries.csv", "force_penetration.png", "observer.png",
+                        "tooth_before.png", "tooth_after.png"}) {
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  }
+  // One row per tick that ran (plus the header).
+  std::ifstream csv(out / "timeseries.csv");
+  long lines = 0;
+  for (std::string line; std::getline(csv, line);) ++lines;
+  EXPECT_EQ(lines, ticks + 1);
+}
+
+TEST(WorkLost, TerminatedRunExits143WithPartialOutputs) {
+  const fs::path d = fresh_temp_dir("dentsim_work_lost_term");
+  const fs::path out = d / "out";
+  const Signalled r = run_and_signal({"run", "drill", "--duration", "600", "--out", out.string()},
+                                     "dentsim run: scene", SIGTERM);
+  EXPECT_EQ(r.status, 143) << r.output;
+  EXPECT_EQ(read_json_file(out / "report.json")["partial"], true) << r.output;
+}
+
+// Ctrl-C during `dentsim zwidth`: no new job starts, the jobs done go to --json marked partial.
+TEST(WorkLost, InterruptedZwidthWritesPartialJson) {
+  const fs::path d = fresh_temp_dir("dentsim_work_lost_zwidth");
+  const fs::path json = d / "z.json";
+  const Signalled r = run_and_signal({"zwidth", "--quick", "--threads", "1", "--methods",
+                                      "explicit", "--operators", "force", "--json", json.string()},
+                                     "dentsim zwidth:", SIGINT);
+  EXPECT_EQ(r.status, 130) << r.output;
+  const nlohmann::json j = read_json_file(json);
+  ASSERT_TRUE(j.is_object()) << r.output;
+  EXPECT_EQ(j["partial"], true);
+  EXPECT_THAT(j["partial_reason"].get<std::string>(), HasSubstr("SIGINT"));
+  EXPECT_LT(j["completed_jobs"].size(), j["grid_runs"].get<std::size_t>());
+}
+
+// A check that compared nothing fails: `crosscheck octree` with no voxel to find (every query
+// empty) — and a check that compared something passes, printing each bound.
+TEST(Verdicts, ChecksPrintTheirBoundsAndExitOneOnFail) {
+  const fs::path d = fresh_temp_dir("dentsim_verdicts");
+  const auto pass =
+      run_dentsim("crosscheck octree --n 16 --spheres 200 --json " + (d / "o.json").string());
+  EXPECT_EQ(pass.status, 0) << pass.output;
+  EXPECT_THAT(pass.output, HasSubstr("crosscheck octree: PASS"));
+  EXPECT_THAT(pass.output, HasSubstr("<= 0"));
+  EXPECT_EQ(read_json_file(d / "o.json")["verdict"], "PASS");
+
+  const auto device = run_dentsim("crosscheck device --samples 20 --duration 0.001");
+  EXPECT_EQ(device.status, 1) << device.output;  // the trajectory did not move: compared nothing
+  EXPECT_THAT(device.output, HasSubstr("trajectory range (the device moved)"));
+  EXPECT_THAT(device.output, HasSubstr("crosscheck device: FAIL"));
+}
+
+}  // namespace
