@@ -147,7 +147,8 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   // Tooth, placed so its occlusal anchor sits at home + anchor_offset.
   VoxelGrid grid = build_tooth(scene.tooth);
   g.anchor = g.home.x + scene.tooth.anchor_offset;
-  grid.origin += g.anchor - occlusal_anchor(grid);
+  const Vec3 tooth_shift = g.anchor - occlusal_anchor(grid);
+  grid.origin += tooth_shift;
   g.tooth_before = grid;
   g.tooth = std::make_unique<VoxelTooth>(std::move(grid));
   g.tip.radius = scene.tool.bur_radius;
@@ -167,6 +168,15 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
     g.brick->set_free_space_early_out(options.skip_unneeded);
     g.contacts = std::make_unique<fast::ToothContactProvider>(*g.brick, g.tip, g.k_tooth, g.b_tooth,
                                                               drilling);
+  } else if (contact_model == ContactModel::kField) {
+    // The field model (reference/tooth/field_contact.h): the reference provider on both pipelines
+    // until its fast twin exists.
+    g.field = std::make_unique<SampledField>(build_tooth_field(
+        tooth_source(scene.tooth), g.tooth->grid(), tooth_shift,
+        field_band_for_tip(g.tip.radius, g.tooth->grid().voxel_size)));
+    g.contacts = std::make_unique<ToothContactProvider>(*g.tooth, g.tip, g.k_tooth, g.b_tooth,
+                                                        drilling, contact_model,
+                                                        &dentsim::signed_distance, g.field.get());
   } else {
     const SignedDistanceFn sd =
         options.pipeline == "fast" ? &fast::signed_distance : &dentsim::signed_distance;

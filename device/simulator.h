@@ -180,6 +180,7 @@ struct SceneRig {
   VoxelGrid tooth_before;
   std::unique_ptr<VoxelTooth> tooth;        // the reference tooth (drilled by "reference")
   std::unique_ptr<fast::BrickTooth> brick;  // the fast tooth (drilled by "fast")
+  std::unique_ptr<SampledField> field;      // the tooth's field (contact model "field")
   ToolTip tip;
   double k_tooth = 0.0, b_tooth = 0.0;
   std::unique_ptr<ToothProviderBase> contacts;  // the provider of the pipeline's implementation
