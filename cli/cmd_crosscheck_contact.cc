@@ -38,7 +38,7 @@ void setup_crosscheck_contact(CLI::App& app) {
   sub->add_option("--resolutions", opt->check.resolutions, "Voxels per axis (powers of two)")
       ->capture_default_str();
   sub->add_option("--forces", opt->check.forces_n, "Push forces [N]")->capture_default_str();
-  sub->add_option("--models", opt->check.models, "Contact models (sdf, faces)")
+  sub->add_option("--models", opt->check.models, "Contact models (sdf, faces, field)")
       ->capture_default_str();
   sub->add_option("--probes", opt->check.probes,
                   "(point, direction) pairs per resolution over all teeth")

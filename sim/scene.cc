@@ -280,9 +280,14 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   rd.at_most("tooth.anchor_offset_mm", 1e3 * s.tooth.anchor_offset.cwiseAbs().maxCoeff(),
              kMaxOffsetMm, "every component, inside the device's workspace");
   s.tooth.contact_model = rd.string(t, "tooth", "contact_model", "sdf");
-  if (s.tooth.contact_model != "sdf" && s.tooth.contact_model != "faces") {
+  if (s.tooth.contact_model != "sdf" && s.tooth.contact_model != "faces" &&
+      s.tooth.contact_model != "field") {
+    rd.fail("tooth.contact_model", "expected \"sdf\" (the default), \"faces\" or \"field\" (got \"" +
+                                       s.tooth.contact_model + "\")");
+  }
+  if (s.tooth.contact_model == "field" && s.tooth.source == "volume") {
     rd.fail("tooth.contact_model",
-            "expected \"sdf\" (the default) or \"faces\" (got \"" + s.tooth.contact_model + "\")");
+            "\"field\" needs a procedural or mesh tooth (a scan's field is not built yet; use \"sdf\")");
   }
 
   // Tool.
@@ -308,6 +313,11 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   rd.non_negative("tool.cutting_coefficient", s.tool.cutting_coefficient);
   rd.at_most("tool.cutting_coefficient", s.tool.cutting_coefficient, kMaxCuttingCoefficient,
              "tangential over normal force");
+  if (s.tooth.contact_model == "field" && s.tool.drills()) {
+    rd.fail("tooth.contact_model",
+            "\"field\" does not drill yet (the field does not follow the cut): set "
+            "tool.bur_speed_rpm to 0 or use \"sdf\"");
+  }
 
   // Device.
   const auto& dv = rd.object(doc, "", "device");

@@ -33,6 +33,7 @@
 #include "tooth_io/mesh.h"
 #include "tooth_io/procedural_molar.h"
 #include "reference/tooth/tooth_contacts.h"
+#include "tooth_io/tooth_field.h"
 #include "tooth_io/voxelize.h"
 
 namespace dentsim {
@@ -158,7 +159,8 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   // Tooth, placed so its occlusal anchor sits at home + anchor_offset.
   VoxelGrid grid = build_tooth(scene.tooth);
   g.anchor = g.home.x + scene.tooth.anchor_offset;
-  grid.origin += g.anchor - occlusal_anchor(grid);
+  const Vec3 tooth_shift = g.anchor - occlusal_anchor(grid);
+  grid.origin += tooth_shift;
   g.tooth_before = grid;
   g.tooth = std::make_unique<VoxelTooth>(std::move(grid));
   g.tip.radius = scene.tool.bur_radius;
@@ -170,6 +172,13 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   drill.cutting_coefficient = scene.tool.cutting_coefficient;
   const DrillParams* drilling = scene.tool.drills() ? &drill : nullptr;
   const ContactModel contact_model = parse_contact_model(scene.tooth.contact_model);
+  // The tooth's sampled field, built from its source (contact model "field"; tooth_io/
+  // tooth_field.h), which every implementation's tooth reads.
+  if (contact_model == ContactModel::kField) {
+    g.field = std::make_unique<SampledField>(build_tooth_field(
+        tooth_source(scene.tooth), g.tooth->grid(), tooth_shift,
+        field_band_for_tip(g.tip.radius, g.tooth->grid().voxel_size)));
+  }
   // The implementation of the tick (fast/registry.h): its tooth and, below, its device model.
   const Implementation& impl = implementation(options.pipeline);
   PipelineToothSetup tooth_setup;
@@ -179,6 +188,7 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   tooth_setup.drilling = drilling;
   tooth_setup.contact_model = contact_model;
   tooth_setup.skip_unneeded = options.skip_unneeded;
+  tooth_setup.field = g.field.get();
   g.pipeline_tooth = impl.tooth(*g.tooth, tooth_setup);
   g.contacts = &g.pipeline_tooth->provider();
 

@@ -192,6 +192,7 @@ struct SceneRig {
   Device* loop_device = nullptr;                 // what the loop drives (device, backend, faulty)
   VoxelGrid tooth_before;
   std::unique_ptr<VoxelTooth> tooth;        // the reference tooth (drilled by "reference")
+  std::unique_ptr<SampledField> field;  // the tooth's field (contact model "field"), else null
   // The pipeline implementation's tooth over `tooth` (fast/registry.h): what its stages query
   // and drill (for the fast face model its own brick tooth, built from `tooth`).
   std::unique_ptr<PipelineTooth> pipeline_tooth;

@@ -16,19 +16,13 @@
 #include <vector>
 
 #include "reference/core/types.h"
+#include "reference/tooth/triangle_mesh.h"
 
 namespace dentsim {
 
 // Largest |coordinate| a mesh may have, in its own units (and in metres after scaling): volumes
 // are products of three coordinates, so 1e9 keeps every one far inside the range of a double.
 inline constexpr double kMaxMeshCoordinate = 1e9;
-
-struct TriangleMesh {
-  std::vector<Vec3> vertices;                 // mesh units, or [m] after scale_mesh()
-  std::vector<std::array<int, 3>> triangles;  // vertex indices, CCW seen from outside
-  std::vector<int> triangle_group;            // per triangle: index into `groups`
-  std::vector<std::string> groups;            // group names (OBJ `g`/`o`); STL: one group ""
-};
 
 // What loading and validation found; `repairs` lists every change made to the input (said loudly
 // by the CLI). Edge counts are over undirected edges after welding.

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <numbers>
 #include <random>
 #include <utility>
@@ -13,6 +14,7 @@
 #include "reference/core/io.h"
 #include "tooth_io/mesh.h"
 #include "tooth_io/procedural_molar.h"
+#include "reference/tooth/sampled_field.h"
 #include "reference/tooth/sdf.h"
 #include "reference/tooth/tooth_contacts.h"
 #include "tooth_io/voxelize.h"
@@ -31,17 +33,36 @@ struct Probe {
   Vec3 start, d, t;
 };
 
-struct NamedTooth {
-  std::string name;
+// A swept tooth: the voxels, and (when the "field" model is swept) the field of its source.
+struct SweptTooth {
   VoxelTooth tooth;
+  std::unique_ptr<SampledField> field;
 };
 
-VoxelTooth build_mesh_tooth(const std::string& path, double size_mm, int resolution) {
-  LoadedMesh loaded = load_mesh(path);
+SweptTooth build_swept_tooth(const std::string& mesh_path, double size_mm, int resolution,
+                             bool with_field, double rho) {
+  SweptTooth out;
+  if (mesh_path.empty()) {
+    const MolarParams params;
+    out.tooth = VoxelTooth(voxelize_procedural_molar(params, resolution));
+    if (with_field) {
+      const VoxelGrid& grid = out.tooth.grid();
+      out.field = std::make_unique<SampledField>(build_sampled_field(
+          grid, triangulate_implicit(grid, [&](const Vec3& p) { return molar_solid(params, p); }),
+          field_band_for_tip(rho, grid.voxel_size)));
+    }
+    return out;
+  }
+  LoadedMesh loaded = load_mesh(mesh_path);
   scale_mesh(loaded.mesh, scale_for_size(loaded.mesh, 1e-3 * size_mm));
   VoxelizeOptions opt;
   opt.resolution = resolution;
-  return VoxelTooth(voxelize_mesh(loaded.mesh, opt));
+  out.tooth = VoxelTooth(voxelize_mesh(loaded.mesh, opt));
+  if (with_field) {
+    out.field = std::make_unique<SampledField>(build_sampled_field(
+        out.tooth.grid(), loaded.mesh, field_band_for_tip(rho, out.tooth.grid().voxel_size)));
+  }
+  return out;
 }
 
 Vec3 random_unit(std::mt19937_64& rng) {
@@ -96,10 +117,11 @@ struct ProbeOutcome {
   double max_penetration = 0.0;  // [m]
 };
 
-ProbeOutcome run_probe(VoxelTooth& tooth, ContactModel model, const Probe& probe, double force,
-                       const ContactCrosscheckOptions& o) {
+ProbeOutcome run_probe(VoxelTooth& tooth, const SampledField* field, ContactModel model,
+                       const Probe& probe, double force, const ContactCrosscheckOptions& o) {
   const double rho = o.tip_radius_m;
-  ToothContactProvider provider(tooth, ToolTip{rho, Vec3::Zero()}, o.k_tooth, 0.0, nullptr, model);
+  ToothContactProvider provider(tooth, ToolTip{rho, Vec3::Zero()}, o.k_tooth, 0.0, nullptr, model,
+                                &signed_distance, field);
   std::vector<Contact> contacts;
   contacts.reserve(kContactCapacity);
   Pose pose;
@@ -108,12 +130,14 @@ ProbeOutcome run_probe(VoxelTooth& tooth, ContactModel model, const Probe& probe
   for (int tick = 0; tick < o.settle_ticks + o.slide_ticks; ++tick) {
     provider.contacts(pose, contacts);
     const Vec3 f = blended_contact_force(contacts);
-    const Vec3 y = model == ContactModel::kSurfaceProxy && provider.surface_proxy().valid()
+    const Vec3 y = model != ContactModel::kFaces && provider.surface_proxy().valid()
                        ? provider.surface_proxy().g()
                        : pose.x;
     const SignedDistance sd = signed_distance(tooth, y, 2.0 * rho);
-    out.max_penetration = std::max(out.max_penetration, rho - sd.phi);
-    if (sd.phi < 0.0 && -f.dot(probe.d) < 0.5 * force) out.popped = true;
+    // The field model's own solid is {phi_field <= 0}; the rendered centre must be outside both.
+    const double phi_field = model == ContactModel::kField ? field->value(y) : sd.phi;
+    out.max_penetration = std::max(out.max_penetration, rho - phi_field);
+    if ((sd.phi < 0.0 || phi_field < 0.0) && -f.dot(probe.d) < 0.5 * force) out.popped = true;
     Vec3 step = kAlpha * (force * probe.d + f) / o.k_tooth;
     if (step.norm() > kMaxStepM) step *= kMaxStepM / step.norm();
     if (tick >= o.settle_ticks) step += kSlideStepM * probe.t;
@@ -140,10 +164,11 @@ VoxelTooth make_sphere(double h, Vec3* centre) {
   return VoxelTooth(std::move(g));
 }
 
-double sliding_ripple(VoxelTooth& sphere, const Vec3& centre, ContactModel model, double force,
-                      const ContactCrosscheckOptions& o) {
+double sliding_ripple(VoxelTooth& sphere, const SampledField* field, const Vec3& centre,
+                      ContactModel model, double force, const ContactCrosscheckOptions& o) {
   const double rho = o.tip_radius_m;
-  ToothContactProvider provider(sphere, ToolTip{rho, Vec3::Zero()}, o.k_tooth, 0.0, nullptr, model);
+  ToothContactProvider provider(sphere, ToolTip{rho, Vec3::Zero()}, o.k_tooth, 0.0, nullptr, model,
+                                &signed_distance, field);
   std::vector<Contact> contacts;
   contacts.reserve(kContactCapacity);
   const double azimuth = 20.0 * std::numbers::pi / 180.0;
@@ -177,9 +202,11 @@ ContactCrosscheckResult crosscheck_contact(const ContactCrosscheckOptions& o) {
     }
   }
   if (o.probes < 1) throw InputError("--probes: expected at least 1");
-  if (o.models.empty()) throw InputError("--models: expected at least one of sdf, faces");
+  if (o.models.empty()) throw InputError("--models: expected at least one of sdf, faces, field");
   std::vector<ContactModel> models;
   for (const std::string& m : o.models) models.push_back(parse_contact_model(m));
+  const bool with_field =
+      std::find(models.begin(), models.end(), ContactModel::kField) != models.end();
   std::vector<std::string> meshes;
   if (!o.data_dir.empty()) {
     for (const char* file : {"molar-cc0.stl", "chai3d-tooth.obj"}) {
@@ -210,8 +237,9 @@ ContactCrosscheckResult crosscheck_contact(const ContactCrosscheckOptions& o) {
     }
     double h_molar = 0.0;
     for (int t = 0; t < teeth; ++t) {
-      VoxelTooth tooth = t == 0 ? VoxelTooth(voxelize_procedural_molar(MolarParams{}, res))
-                                : build_mesh_tooth(meshes[t - 1], o.mesh_size_mm, res);
+      SweptTooth swept = build_swept_tooth(t == 0 ? std::string() : meshes[t - 1],
+                                           o.mesh_size_mm, res, with_field, o.tip_radius_m);
+      VoxelTooth& tooth = swept.tooth;
       if (t == 0) h_molar = tooth.grid().voxel_size;
       std::mt19937_64 rng(o.seed + 1000003ULL * static_cast<std::uint64_t>(res) +
                           static_cast<std::uint64_t>(t));
@@ -221,7 +249,8 @@ ContactCrosscheckResult crosscheck_contact(const ContactCrosscheckOptions& o) {
         row.probes += static_cast<long>(probes.size());
         for (const Probe& probe : probes) {
           for (std::size_t fi = 0; fi < o.forces_n.size(); ++fi) {
-            const ProbeOutcome out = run_probe(tooth, models[m], probe, o.forces_n[fi], o);
+            const ProbeOutcome out =
+                run_probe(tooth, swept.field.get(), models[m], probe, o.forces_n[fi], o);
             ++row.runs;
             if (out.popped) {
               ++row.pop_throughs;
@@ -237,10 +266,19 @@ ContactCrosscheckResult crosscheck_contact(const ContactCrosscheckOptions& o) {
     }
     Vec3 centre;
     VoxelTooth sphere = make_sphere(h_molar, &centre);
+    std::unique_ptr<SampledField> sphere_field;
+    if (with_field) {  // from the sphere's own implicit function (the voxels' centre test)
+      sphere_field = std::make_unique<SampledField>(build_sampled_field(
+          sphere.grid(),
+          triangulate_implicit(sphere.grid(),
+                               [&](const Vec3& p) { return (p - centre).norm() < kSphereRadiusM; }),
+          field_band_for_tip(o.tip_radius_m, h_molar)));
+    }
     for (std::size_t m = 0; m < models.size(); ++m) {
       rows[m].voxel_size_m = h_molar;
       for (const double f : o.forces_n) {
-        rows[m].ripple_per_force.push_back(sliding_ripple(sphere, centre, models[m], f, o));
+        rows[m].ripple_per_force.push_back(
+            sliding_ripple(sphere, sphere_field.get(), centre, models[m], f, o));
       }
       rows[m].sliding_ripple_rms =
           *std::max_element(rows[m].ripple_per_force.begin(), rows[m].ripple_per_force.end());

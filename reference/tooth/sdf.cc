@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "reference/tooth/materials.h"
+#include "reference/tooth/surface_proxy_core.h"
 
 namespace dentsim {
 namespace sdf_detail {
@@ -201,87 +202,32 @@ Vec3 distance_gradient(const VoxelTooth& tooth, const Vec3& x, const SignedDista
 SurfaceProxy::SurfaceProxy(double rho, double voxel_size, SignedDistanceFn sd)
     : rho_(rho), skin_(std::min(0.25 * rho, 0.5 * voxel_size)), tol_(1e-9 * rho), sd_(sd) {}
 
-double SurfaceProxy::push_out(const VoxelTooth& tooth, Vec3* x) const {
-  // Inside, the shortest way out may be long: search as far as the grid's extent. Outside, all
-  // that matters is whether phi >= rho (then x stays where it is): a search within rho finds the
-  // nearest point exactly when it is nearer than rho and stops early otherwise (in free space the
-  // whole-grid search was most of the tick).
-  const double far = tooth.grid().voxel_size * tooth.grid().n;
-  const VoxelGrid& grid = tooth.grid();
-  for (int it = 0; it < kSurfaceProxyPushOuts; ++it) {
-    int idx[3];
-    const bool inside = sdf_detail::voxel_of(grid, *x, idx) &&
-                        grid.voxels[grid.index(idx[0], idx[1], idx[2])] != kEmpty;
-    const double reach = inside ? far : rho_;
-    const SignedDistance sd = sd_(tooth, *x, reach);
-    if (!sd.found || sd.phi >= rho_) return (sd.found ? sd.phi : reach) - rho_;
-    const Vec3 u = distance_gradient(tooth, *x, sd);
-    *x = sd.nearest + rho_ * u;  // the nearest surface point, then rho out along the normal
+namespace {
+
+// The exact distance to the voxel solid as the proxy's Solid (surface_proxy_core.h): L = 1.
+struct VoxelSolid {
+  const VoxelTooth& voxels;
+  SignedDistanceFn sd;
+  const VoxelTooth& tooth() const { return voxels; }
+  SignedDistance distance(const Vec3& x, double reach) const { return sd(voxels, x, reach); }
+  Vec3 normal(const Vec3& x, const SignedDistance& s) const {
+    return distance_gradient(voxels, x, s);
   }
-  const SignedDistance sd = sd_(tooth, *x, rho_);
-  return sd.phi - rho_;
+  double lipschitz() const { return 1.0; }
+};
+
+}  // namespace
+
+double SurfaceProxy::push_out(const VoxelTooth& tooth, Vec3* x) const {
+  return proxy_detail::push_out(constants(), VoxelSolid{tooth, sd_}, x);
 }
 
 bool SurfaceProxy::sweep(const VoxelTooth& tooth, Vec3* from, const Vec3& to) const {
-  const double h = tooth.grid().voxel_size;
-  const double floor_phi = rho_ - skin_;  // A_skin = {phi >= rho - s}
-  for (int step = 0; step < kSurfaceProxySweepSteps; ++step) {
-    const Vec3 gap = to - *from;
-    const double left = gap.norm();
-    if (left <= tol_) {
-      *from = to;
-      return true;
-    }
-    const double reach = floor_phi + std::min(left, 4.0 * h) + skin_;
-    const SignedDistance sd = sd_(tooth, *from, reach);
-    const double clearance = sd.phi - floor_phi;  // a step this long stays in A_skin (SD1)
-    if (clearance >= left) {
-      // The end itself must be admissible too (it is, by SD1, within A_skin).
-      *from = to;
-      return true;
-    }
-    if (clearance <= 1e-3 * skin_) return false;  // touching: blocked
-    *from += (clearance / left) * gap;
-  }
-  return false;
+  return proxy_detail::sweep(constants(), VoxelSolid{tooth, sd_}, from, to);
 }
 
 const Vec3& SurfaceProxy::update(const VoxelTooth& tooth, const Vec3& c) {
-  if (!valid_) {
-    g_ = c;
-    valid_ = true;
-  }
-  // A proxy inside the tooth (the first call, or a caller that moved the tooth) leaves along
-  // the shortest way (step 1). The push-out alternates between the walls of a concave groove
-  // narrower than 2 rho and may not reach phi >= rho - s within its iterations: then a g that was
-  // admissible stays where it was (found by the full contact sweep: g stuck at phi = 0.73 rho).
-  {
-    const Vec3 before = g_;
-    if (push_out(tooth, &g_) < -skin_ && sd_(tooth, before, rho_).phi >= rho_ - skin_) {
-      g_ = before;
-    }
-  }
-  Vec3 target = c;
-  for (int slide = 0; slide <= kSurfaceProxySlides; ++slide) {
-    Vec3 y = g_;
-    const bool reached = sweep(tooth, &y, target);
-    g_ = y;
-    // Back from the skin to phi >= rho, along the local normal; where the push-out does not
-    // converge, y itself (in A_skin: the sweep started there and stays there) is kept.
-    if (push_out(tooth, &g_) < -skin_) g_ = y;
-    if (reached && (target - c).norm() <= tol_) break;  // the tool itself is admissible
-    // Blocked (or a slide target reached): slide towards c on the tangent plane at g.
-    const SignedDistance sd = sd_(tooth, g_, rho_ + skin_);
-    if (!sd.found) {
-      target = c;
-      continue;
-    }
-    const Vec3 n = distance_gradient(tooth, g_, sd);
-    const double behind = (c - g_).dot(n);
-    const Vec3 next = behind < 0.0 ? Vec3(c - behind * n) : c;
-    if ((next - g_).norm() <= tol_) break;  // g is the constrained nearest point
-    target = next;
-  }
+  proxy_detail::update(constants(), VoxelSolid{tooth, sd_}, &valid_, &g_, c);
   return g_;
 }
 

@@ -88,6 +88,18 @@ SignedDistance signed_distance_ordered(const VoxelTooth& tooth, const Vec3& x, d
 // direction from the centre of `voxel` to x.
 Vec3 distance_gradient(const VoxelTooth& tooth, const Vec3& x, const SignedDistance& sd);
 
+// The sampled field's solid (reference/tooth/field_contact.h), for SurfaceProxy::update below.
+class FieldSolid;
+
+namespace proxy_detail {
+// The surface proxy's constants (its algorithm: reference/tooth/surface_proxy_core.h).
+struct ProxyConstants {
+  double rho;   // tip radius [m]
+  double skin;  // s = min(rho / 4, h / 2) [m]
+  double tol;   // distance below which two points are the same [m]
+};
+}  // namespace proxy_detail
+
 inline constexpr int kSurfaceProxySlides = 4;       // slides per tick (step 3)
 inline constexpr int kSurfaceProxyPushOuts = 16;    // push-out iterations (step 1)
 inline constexpr int kSurfaceProxySweepSteps = 64;  // conservative-advancement steps per segment
@@ -101,11 +113,15 @@ class SurfaceProxy {
 
   // Steps 1-3 for the tool's tip centre c; returns g. The first call starts from g = c.
   const Vec3& update(const VoxelTooth& tooth, const Vec3& c);
+  // The same steps on the sampled field of the tooth's source surface (the "field" model,
+  // reference/tooth/field_contact.h); the skin is this proxy's (min(rho/4, h/2)).
+  const Vec3& update(const FieldSolid& solid, const Vec3& c);
   // Forgets g (the next update starts from c again).
   void reset() { valid_ = false; }
   const Vec3& g() const { return g_; }
   bool valid() const { return valid_; }
   double skin() const { return skin_; }
+  proxy_detail::ProxyConstants constants() const { return {rho_, skin_, tol_}; }
 
   // Moves x into A along the shortest way (step 1); returns the final phi(x) - rho (>= 0 unless
   // the iteration cap was hit, which the crosscheck counts as penetration; 0 when x is outside

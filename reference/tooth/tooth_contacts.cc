@@ -19,10 +19,13 @@ std::uint8_t heaviest_material(std::span<const Contact> contacts) {
 ContactModel parse_contact_model(const std::string& name) {
   if (name == "faces") return ContactModel::kFaces;
   if (name == "sdf") return ContactModel::kSurfaceProxy;
-  throw InputError("contact model '" + name + "': expected \"sdf\" (the default) or \"faces\"");
+  if (name == "field") return ContactModel::kField;
+  throw InputError("contact model '" + name +
+                   "': expected \"sdf\" (the default), \"faces\" or \"field\"");
 }
 
 const char* contact_model_name(ContactModel model) {
+  if (model == ContactModel::kField) return "field";
   return model == ContactModel::kFaces ? "faces" : "sdf";
 }
 
@@ -51,12 +54,22 @@ std::size_t ToothProviderBase::begin_query(std::vector<Contact>& out) {
 
 ToothContactProvider::ToothContactProvider(VoxelTooth& tooth, ToolTip tip, double k_tooth,
                                            double b_tooth, const DrillParams* drill,
-                                           ContactModel model, SignedDistanceFn sd)
+                                           ContactModel model, SignedDistanceFn sd,
+                                           const SampledField* field)
     : ToothProviderBase(tooth.grid(), tip, k_tooth, b_tooth, drill),
       tooth_(tooth),
       model_(model),
       surface_(tip.radius, tooth.grid().voxel_size, sd),
       sd_(sd) {
+  if (model_ == ContactModel::kField) {
+    if (field == nullptr) throw InputError("contact model \"field\": no field of the tooth given");
+    if (drill != nullptr) {
+      throw InputError(
+          "contact model \"field\" does not drill yet (the field does not follow the cut): "
+          "use \"sdf\" with a drilling tool");
+    }
+    field_ = std::make_unique<FieldSolid>(tooth, *field);
+  }
   drill_contacts_.reserve(kContactCapacity);
   drill_voxels_.reserve(kContactCapacity);
 }
@@ -70,7 +83,8 @@ bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out
   drill_contacts_.clear();
   drill_voxels_.clear();
   const Vec3 c = proxy.x + proxy.R * tip_.offset_body;
-  const Vec3& g = surface_.update(tooth_, c);
+  const Vec3& g =
+      model_ == ContactModel::kField ? surface_.update(*field_, c) : surface_.update(tooth_, c);
   Contact contact;
   if (!surface_proxy_contact(tooth_, proxy, tip_, g, k_tooth_, b_tooth_, &contact, sd_)) {
     return true;
@@ -162,7 +176,7 @@ class ReferenceTooth final : public PipelineTooth {
       : tooth_(tooth),
         setup_(setup),
         provider_(tooth, setup.tip, setup.k_tooth, setup.b_tooth, setup.drilling,
-                  setup.contact_model, sd) {}
+                  setup.contact_model, sd, setup.field) {}
 
   ToothProviderBase& provider() override { return provider_; }
   const VoxelGrid& grid() const override { return tooth_.grid(); }

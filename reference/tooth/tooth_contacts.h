@@ -22,13 +22,15 @@
 #include "reference/core/contact_provider.h"
 #include "reference/tooth/collision.h"
 #include "reference/tooth/drilling.h"
+#include "reference/tooth/field_contact.h"
 #include "reference/tooth/sdf.h"
 
 namespace dentsim {
 
-enum class ContactModel { kFaces, kSurfaceProxy };
+enum class ContactModel { kFaces, kSurfaceProxy, kField };
 
-// "faces" / "sdf"; throws InputError naming the value otherwise.
+// "faces" / "sdf" / "field" (reference/tooth/field_contact.h); throws InputError naming the value
+// otherwise.
 ContactModel parse_contact_model(const std::string& name);
 const char* contact_model_name(ContactModel model);
 
@@ -102,17 +104,20 @@ class ToothContactProvider : public ToothProviderBase {
   // `drill` set the tool cuts the tooth (DrillParams validated here: InputError). Throws
   // InputError for a non-positive or non-finite tip radius. `sd`: the signed-distance query of the
   // surface proxy (kSurfaceProxy): the reference's, or the fast pipeline's twin
-  // (fast::signed_distance, fast/tooth/sdf.h).
+  // (fast::signed_distance, fast/tooth/sdf.h). kField: the surface proxy on `field` (the tooth's
+  // sampled field, reference/tooth/field_contact.h; it must outlive the provider); InputError if
+  // it is missing or drilling is on (the field does not follow the cut yet).
   ToothContactProvider(VoxelTooth& tooth, ToolTip tip, double k_tooth, double b_tooth,
                        const DrillParams* drill = nullptr,
                        ContactModel model = ContactModel::kFaces,
-                       SignedDistanceFn sd = &signed_distance);
+                       SignedDistanceFn sd = &signed_distance,
+                       const SampledField* field = nullptr);
 
   bool contacts(const Pose& proxy, std::vector<Contact>& out) override;
   int drill(std::span<const Contact> contacts, double T) override;
 
   ContactModel model() const { return model_; }
-  // The surface proxy (kSurfaceProxy; its g() is the rendered tip centre).
+  // The surface proxy (kSurfaceProxy, kField; its g() is the rendered tip centre).
   const SurfaceProxy& surface_proxy() const { return surface_; }
 
  private:
@@ -121,6 +126,7 @@ class ToothContactProvider : public ToothProviderBase {
   ContactModel model_;
   SurfaceProxy surface_;
   SignedDistanceFn sd_;
+  std::unique_ptr<FieldSolid> field_;  // kField
   std::vector<Contact> drill_contacts_;  // kSurfaceProxy: the drilled voxels' force shares
   std::vector<std::size_t> drill_voxels_;
 };
@@ -148,6 +154,8 @@ struct PipelineToothSetup {
   const DrillParams* drilling = nullptr;
   ContactModel contact_model = ContactModel::kSurfaceProxy;
   bool skip_unneeded = true;
+  // The tooth's sampled field (contact model "field"; must outlive the tooth), else null.
+  const SampledField* field = nullptr;
 };
 
 // The reference's tooth: ToothContactProvider over `tooth` (which must outlive it) with the

@@ -1,0 +1,42 @@
+// The "field" contact model (reference/tooth/field_contact.h). Beyond the thesis.
+#include "reference/tooth/field_contact.h"
+
+#include "reference/core/io.h"
+#include "reference/tooth/surface_proxy_core.h"
+
+namespace dentsim {
+
+SignedDistance FieldSolid::distance(const Vec3& x, double reach) const {
+  if (field_.deep_inside(x)) return signed_distance(tooth_, x, reach);
+  const FieldSample s = field_.sample(x);
+  SignedDistance out;
+  if (s.value >= reach) {
+    out.phi = reach;
+    out.found = false;
+    return out;
+  }
+  out.phi = s.value;
+  out.found = true;
+  const double g = s.gradient.norm();
+  out.nearest = g > 0.0 ? Vec3(x - (s.value / g) * s.gradient) : x;
+  return out;
+}
+
+Vec3 FieldSolid::normal(const Vec3& x, const SignedDistance& sd) const {
+  if (!field_.deep_inside(x)) {
+    const Vec3 grad = field_.sample(x).gradient;
+    const double g = grad.norm();
+    if (g > 0.0) return grad / g;
+  }
+  // No gradient of the field here: the voxel distance's direction.
+  const SignedDistance exact =
+      field_.deep_inside(x) ? sd : signed_distance(tooth_, x, tooth_.grid().voxel_size * tooth_.grid().n);
+  return distance_gradient(tooth_, x, exact);
+}
+
+const Vec3& SurfaceProxy::update(const FieldSolid& solid, const Vec3& c) {
+  proxy_detail::update(constants(), solid, &valid_, &g_, c);
+  return g_;
+}
+
+}  // namespace dentsim

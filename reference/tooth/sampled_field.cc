@@ -1,0 +1,403 @@
+// The sampled signed-distance field of the tooth (reference/tooth/sampled_field.h). Beyond the
+// thesis; derivation in docs/derivations/field_contact.md.
+#include "reference/tooth/sampled_field.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <unordered_map>
+
+namespace dentsim {
+
+FieldBand field_band_for_tip(double rho, double voxel_size) {
+  FieldBand band;
+  band.outside_m = 1.25 * rho + 2.0 * voxel_size;
+  band.inside_m = 2.0 * voxel_size;
+  return band;
+}
+
+// Closest point on a triangle by its Voronoi regions (vertex, edge, face), then the distance.
+double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return ap.norm();  // vertex a
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0.0 && d4 <= d3) return bp.norm();  // vertex b
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {  // edge ab
+    const double v = d1 / (d1 - d3);
+    return (p - (a + v * ab)).norm();
+  }
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0.0 && d5 <= d6) return cp.norm();  // vertex c
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {  // edge ac
+    const double w = d2 / (d2 - d6);
+    return (p - (a + w * ac)).norm();
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {  // edge bc
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return (p - (b + w * (c - b))).norm();
+  }
+  const double denom = 1.0 / (va + vb + vc);  // face
+  const double v = vb * denom, w = vc * denom;
+  return (p - (a + ab * v + ac * w)).norm();
+}
+
+float SampledField::at(int sx, int sy, int sz) const {
+  const std::int32_t id = index_[slot(sx / kFieldBrick, sy / kFieldBrick, sz / kFieldBrick)];
+  if (id >= 0) {
+    const int lx = sx % kFieldBrick, ly = sy % kFieldBrick, lz = sz % kFieldBrick;
+    return bricks_[static_cast<std::size_t>(id) * kBrickSamples +
+                   static_cast<std::size_t>(lx + kFieldBrick * (ly + kFieldBrick * lz))];
+  }
+  return id == kAllOutside ? static_cast<float>(c_out_) : static_cast<float>(-c_in_);
+}
+
+namespace {
+
+// The cell holding x: lower corner s (in [0, m - 2]) and the local coordinates t in [0, 1]^3.
+void locate(const Vec3& origin, double h, int m, const Vec3& x, int s[3], double t[3]) {
+  for (int a = 0; a < 3; ++a) {
+    const double u = std::clamp((x[a] - origin[a]) / h, 0.0, static_cast<double>(m - 1));
+    const int i = std::min(static_cast<int>(u), m - 2);
+    s[a] = i;
+    t[a] = u - i;
+  }
+}
+
+}  // namespace
+
+FieldSample SampledField::sample(const Vec3& x) const {
+  FieldSample out;
+  if (m_ < 2) return out;
+  int s[3];
+  double t[3];
+  locate(origin_, h_, m_, x, s, t);
+  double c[2][2][2];  // c[dx][dy][dz]
+  for (int dz = 0; dz < 2; ++dz) {
+    for (int dy = 0; dy < 2; ++dy) {
+      for (int dx = 0; dx < 2; ++dx) c[dx][dy][dz] = at(s[0] + dx, s[1] + dy, s[2] + dz);
+    }
+  }
+  const double tx = t[0], ty = t[1], tz = t[2];
+  // Along x on the four x-edges, then y, then z.
+  double ex[2][2], dx_edge[2][2];
+  for (int dz = 0; dz < 2; ++dz) {
+    for (int dy = 0; dy < 2; ++dy) {
+      ex[dy][dz] = c[0][dy][dz] + tx * (c[1][dy][dz] - c[0][dy][dz]);
+      dx_edge[dy][dz] = c[1][dy][dz] - c[0][dy][dz];
+    }
+  }
+  const double ey0 = ex[0][0] + ty * (ex[1][0] - ex[0][0]);
+  const double ey1 = ex[0][1] + ty * (ex[1][1] - ex[0][1]);
+  out.value = ey0 + tz * (ey1 - ey0);
+  // d/dx: bilinear (y, z) interpolation of the x-edge differences; likewise for y and z.
+  const double gx0 = dx_edge[0][0] + ty * (dx_edge[1][0] - dx_edge[0][0]);
+  const double gx1 = dx_edge[0][1] + ty * (dx_edge[1][1] - dx_edge[0][1]);
+  const double gx = gx0 + tz * (gx1 - gx0);
+  const double gy = (ex[1][0] - ex[0][0]) + tz * ((ex[1][1] - ex[0][1]) - (ex[1][0] - ex[0][0]));
+  const double gz = ey1 - ey0;
+  out.gradient = Vec3(gx, gy, gz) / h_;
+  return out;
+}
+
+bool SampledField::deep_inside(const Vec3& x) const {
+  if (m_ < 2) return false;
+  int s[3];
+  double t[3];
+  locate(origin_, h_, m_, x, s, t);
+  const float floor_value = static_cast<float>(-c_in_);
+  for (int d = 0; d < 8; ++d) {
+    if (at(s[0] + (d & 1), s[1] + ((d >> 1) & 1), s[2] + ((d >> 2) & 1)) != floor_value) {
+      return false;
+    }
+  }
+  return true;
+}
+
+SampledField build_sampled_field(const VoxelGrid& grid, const TriangleMesh& surface,
+                                 const FieldBand& band) {
+  SampledField f;
+  const double h = grid.voxel_size;
+  f.h_ = h;
+  f.c_out_ = std::max(band.outside_m, 2.0 * h);
+  f.c_in_ = band.inside_m > 0.0 ? std::max(band.inside_m, 2.0 * h) : 2.0 * h;
+  f.pad_ = static_cast<int>(std::ceil(f.c_out_ / h)) + 2;
+  const int n = grid.n;
+  f.m_ = ((n + 2 * f.pad_ + kFieldBrick - 1) / kFieldBrick) * kFieldBrick;
+  f.nb_ = f.m_ / kFieldBrick;
+  f.origin_ = grid.origin + (0.5 - f.pad_) * h * Vec3::Ones();
+  const int m = f.m_, pad = f.pad_;
+  const std::size_t slots = static_cast<std::size_t>(f.nb_) * f.nb_ * f.nb_;
+  constexpr int kB = SampledField::kBrickSamples;
+
+  // Build state: per allocated brick, the nearest distance so far and its triangle (-1: none).
+  std::vector<std::int32_t> id(slots, -1);
+  std::vector<double> dist;
+  std::vector<std::int32_t> tri;
+  const auto sample_ref = [&](int sx, int sy, int sz, bool allocate) -> std::int64_t {
+    const std::size_t sl = f.slot(sx / kFieldBrick, sy / kFieldBrick, sz / kFieldBrick);
+    if (id[sl] < 0) {
+      if (!allocate) return -1;
+      id[sl] = static_cast<std::int32_t>(dist.size() / kB);
+      dist.resize(dist.size() + kB, std::numeric_limits<double>::infinity());
+      tri.resize(tri.size() + kB, -1);
+    }
+    const int lx = sx % kFieldBrick, ly = sy % kFieldBrick, lz = sz % kFieldBrick;
+    return static_cast<std::int64_t>(id[sl]) * kB + lx + kFieldBrick * (ly + kFieldBrick * lz);
+  };
+  const auto distance_to = [&](int t, int sx, int sy, int sz) {
+    const auto& v = surface.triangles[static_cast<std::size_t>(t)];
+    return point_triangle_distance(f.sample_position(sx, sy, sz), surface.vertices[v[0]],
+                                   surface.vertices[v[1]], surface.vertices[v[2]]);
+  };
+  struct S {
+    int x, y, z;
+  };
+  std::vector<S> frontier, next;
+
+  // Layer 0: exact distances within 2 h of each triangle (its box grown by 2 h): every sample
+  // within 2 h > sqrt(3) h of the surface is exact (the no-tunnelling bound relies on it).
+  for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
+    const auto& v = surface.triangles[t];
+    int lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      const double mn = std::min({surface.vertices[v[0]][a], surface.vertices[v[1]][a],
+                                  surface.vertices[v[2]][a]}) - 2.0 * h;
+      const double mx = std::max({surface.vertices[v[0]][a], surface.vertices[v[1]][a],
+                                  surface.vertices[v[2]][a]}) + 2.0 * h;
+      lo[a] = std::max(0, static_cast<int>(std::ceil((mn - f.origin_[a]) / h)));
+      hi[a] = std::min(m - 1, static_cast<int>(std::floor((mx - f.origin_[a]) / h)));
+    }
+    for (int sz = lo[2]; sz <= hi[2]; ++sz) {
+      for (int sy = lo[1]; sy <= hi[1]; ++sy) {
+        for (int sx = lo[0]; sx <= hi[0]; ++sx) {
+          const double d = distance_to(static_cast<int>(t), sx, sy, sz);
+          const std::int64_t r = sample_ref(sx, sy, sz, true);
+          if (tri[r] < 0) frontier.push_back({sx, sy, sz});
+          if (d < dist[r]) {
+            dist[r] = d;
+            tri[r] = static_cast<std::int32_t>(t);
+          }
+        }
+      }
+    }
+  }
+  // Grow the band: face neighbours take the nearest of their neighbours' triangles.
+  // The sign of sample s: the voxel s - P of the grid (outside the grid: outside).
+  const auto sign = [&](int sx, int sy, int sz) {
+    return grid.solid(sx - pad, sy - pad, sz - pad) ? -1.0 : 1.0;
+  };
+  const double stop_out = f.c_out_ + 2.0 * h, stop_in = f.c_in_ + 2.0 * h;
+  constexpr int kNeighbour[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0},
+                                    {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  while (!frontier.empty()) {
+    next.clear();
+    for (const S& s : frontier) {
+      const std::int32_t t = tri[sample_ref(s.x, s.y, s.z, false)];
+      for (const auto& o : kNeighbour) {
+        const int x = s.x + o[0], y = s.y + o[1], z = s.z + o[2];
+        if (x < 0 || y < 0 || z < 0 || x >= m || y >= m || z >= m) continue;
+        const double d = distance_to(t, x, y, z);
+        if (d >= (sign(x, y, z) < 0.0 ? stop_in : stop_out)) continue;
+        const std::int64_t r = sample_ref(x, y, z, true);
+        if (tri[r] < 0) next.push_back({x, y, z});
+        if (d < dist[r]) {
+          dist[r] = d;
+          tri[r] = t;
+        }
+      }
+    }
+    frontier.swap(next);
+  }
+  // Descent: beyond 2 h a sample's triangle came from a neighbour and may be a few triangles off
+  // the nearest; walk the mesh (the triangles around each vertex of the current one) while a
+  // nearer one is found (on a smooth surface the distance falls monotonically towards the foot).
+  std::vector<int> star_begin(surface.vertices.size() + 1, 0), star;
+  for (const auto& t : surface.triangles) {
+    for (const int v : t) ++star_begin[static_cast<std::size_t>(v) + 1];
+  }
+  for (std::size_t v = 0; v < surface.vertices.size(); ++v) star_begin[v + 1] += star_begin[v];
+  star.resize(static_cast<std::size_t>(star_begin.back()));
+  {
+    std::vector<int> fill(star_begin.begin(), star_begin.end() - 1);
+    for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
+      for (const int v : surface.triangles[t]) star[fill[v]++] = static_cast<int>(t);
+    }
+  }
+  for (int bz = 0; bz < f.nb_; ++bz) {
+    for (int by = 0; by < f.nb_; ++by) {
+      for (int bx = 0; bx < f.nb_; ++bx) {
+        if (id[f.slot(bx, by, bz)] < 0) continue;
+        for (int l = 0; l < kB; ++l) {
+          const int x = bx * kFieldBrick + l % kFieldBrick;
+          const int y = by * kFieldBrick + (l / kFieldBrick) % kFieldBrick;
+          const int z = bz * kFieldBrick + l / (kFieldBrick * kFieldBrick);
+          const std::int64_t r = sample_ref(x, y, z, false);
+          if (tri[r] < 0 || dist[r] < 2.0 * h) continue;  // exact already (layer 0)
+          for (int walk = 0; walk < 64; ++walk) {
+            const std::int32_t at_t = tri[r];
+            for (const int v : surface.triangles[static_cast<std::size_t>(at_t)]) {
+              for (int k = star_begin[v]; k < star_begin[v + 1]; ++k) {
+                const double d = distance_to(star[k], x, y, z);
+                if (d < dist[r]) {
+                  dist[r] = d;
+                  tri[r] = star[k];
+                }
+              }
+            }
+            if (tri[r] == at_t) break;
+          }
+        }
+      }
+    }
+  }
+
+  const float out_f = static_cast<float>(f.c_out_), in_f = static_cast<float>(-f.c_in_);
+  f.index_.assign(slots, SampledField::kAllOutside);
+  std::array<float, kB> values{};
+  for (int bz = 0; bz < f.nb_; ++bz) {
+    for (int by = 0; by < f.nb_; ++by) {
+      for (int bx = 0; bx < f.nb_; ++bx) {
+        const std::size_t sl = f.slot(bx, by, bz);
+        const int x0 = bx * kFieldBrick, y0 = by * kFieldBrick, z0 = bz * kFieldBrick;
+        if (id[sl] < 0) {
+          f.index_[sl] =
+              sign(x0, y0, z0) < 0.0 ? SampledField::kAllInside : SampledField::kAllOutside;
+          continue;
+        }
+        bool all_out = true, all_in = true;
+        for (int l = 0; l < kB; ++l) {
+          const int lx = l % kFieldBrick, ly = (l / kFieldBrick) % kFieldBrick,
+                    lz = l / (kFieldBrick * kFieldBrick);
+          const double sg = sign(x0 + lx, y0 + ly, z0 + lz);
+          const std::size_t r = static_cast<std::size_t>(id[sl]) * kB + static_cast<std::size_t>(l);
+          const double d = tri[r] >= 0 ? dist[r] : std::numeric_limits<double>::infinity();
+          values[l] = static_cast<float>(std::clamp(sg * d, -f.c_in_, f.c_out_));
+          all_out = all_out && values[l] == out_f;
+          all_in = all_in && values[l] == in_f;
+        }
+        if (all_out || all_in) {
+          f.index_[sl] = all_out ? SampledField::kAllOutside : SampledField::kAllInside;
+          continue;
+        }
+        f.index_[sl] = static_cast<std::int32_t>(f.bricks_.size() / kB);
+        f.bricks_.insert(f.bricks_.end(), values.begin(), values.end());
+      }
+    }
+  }
+
+  // Lipschitz constant: the cell bound over every cell touching a stored brick (other cells have
+  // 8 equal corners).
+  double l2 = 0.0;
+  for (int bz = 0; bz < f.nb_; ++bz) {
+    for (int by = 0; by < f.nb_; ++by) {
+      for (int bx = 0; bx < f.nb_; ++bx) {
+        if (f.index_[f.slot(bx, by, bz)] < 0) continue;
+        const int lo[3] = {std::max(0, bx * kFieldBrick - 1), std::max(0, by * kFieldBrick - 1),
+                           std::max(0, bz * kFieldBrick - 1)};
+        const int hi[3] = {std::min(m - 2, bx * kFieldBrick + kFieldBrick - 1),
+                           std::min(m - 2, by * kFieldBrick + kFieldBrick - 1),
+                           std::min(m - 2, bz * kFieldBrick + kFieldBrick - 1)};
+        for (int z = lo[2]; z <= hi[2]; ++z) {
+          for (int y = lo[1]; y <= hi[1]; ++y) {
+            for (int x = lo[0]; x <= hi[0]; ++x) {
+              double c[8];
+              for (int d = 0; d < 8; ++d) c[d] = f.at(x + (d & 1), y + ((d >> 1) & 1), z + (d >> 2));
+              double mx = 0.0, my = 0.0, mz = 0.0;
+              for (int e = 0; e < 4; ++e) {
+                const int ix = 2 * e;                      // corners with x = 0: 0, 2, 4, 6
+                const int iy = (e & 1) + 4 * (e >> 1);     // y = 0: 0, 1, 4, 5
+                const int iz = e;                          // z = 0: 0, 1, 2, 3
+                mx = std::max(mx, std::abs(c[ix + 1] - c[ix]));
+                my = std::max(my, std::abs(c[iy + 2] - c[iy]));
+                mz = std::max(mz, std::abs(c[iz + 4] - c[iz]));
+              }
+              l2 = std::max(l2, mx * mx + my * my + mz * mz);
+            }
+          }
+        }
+      }
+    }
+  }
+  f.lipschitz_ = std::max(std::sqrt(l2) / h, 1e-6);
+  return f;
+}
+
+TriangleMesh triangulate_implicit(const VoxelGrid& grid,
+                                  const std::function<bool(const Vec3&)>& inside) {
+  TriangleMesh mesh;
+  mesh.groups.push_back("");
+  const int n = grid.n;
+  // Kuhn's six tetrahedra of a cell along its diagonal 0 -> 7 (corner c = x + 2 y + 4 z): for each
+  // order of the axes (a, b, c), the vertices 0, e_a, e_a + e_b, 7. Every tetrahedron edge joins
+  // corners c0 < c1 with c1 - c0 a sum of distinct unit steps, so it is keyed by its lower
+  // sample and that step (1..7).
+  constexpr int kAxisBit[3] = {1, 2, 4};
+  constexpr int kOrders[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  std::unordered_map<std::uint64_t, int> edge_vertex;
+  const auto corner_position = [&](int i, int j, int k, int c) {
+    return grid.center(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
+  };
+  const auto vertex_on = [&](int i, int j, int k, int c0, int c1, bool in0) {
+    // c0 < c1; the key names the lower corner's sample and the step.
+    const int ci = i + (c0 & 1), cj = j + ((c0 >> 1) & 1), ck = k + ((c0 >> 2) & 1);
+    const std::uint64_t key =
+        (static_cast<std::uint64_t>(grid.index(ci, cj, ck)) << 3) | static_cast<unsigned>(c1 - c0);
+    const auto it = edge_vertex.find(key);
+    if (it != edge_vertex.end()) return it->second;
+    Vec3 p_in = corner_position(i, j, k, in0 ? c0 : c1);
+    Vec3 p_out = corner_position(i, j, k, in0 ? c1 : c0);
+    for (int it2 = 0; it2 < 40; ++it2) {
+      const Vec3 mid = 0.5 * (p_in + p_out);
+      (inside(mid) ? p_in : p_out) = mid;
+    }
+    const int v = static_cast<int>(mesh.vertices.size());
+    mesh.vertices.push_back(0.5 * (p_in + p_out));
+    edge_vertex.emplace(key, v);
+    return v;
+  };
+  for (int k = 0; k + 1 < n; ++k) {
+    for (int j = 0; j + 1 < n; ++j) {
+      for (int i = 0; i + 1 < n; ++i) {
+        bool s[8];
+        int count = 0;
+        for (int c = 0; c < 8; ++c) {
+          s[c] = grid.solid(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
+          count += s[c] ? 1 : 0;
+        }
+        if (count == 0 || count == 8) continue;
+        for (const auto& order : kOrders) {
+          const int tv[4] = {0, kAxisBit[order[0]], kAxisBit[order[0]] + kAxisBit[order[1]], 7};
+          int in[4], out[4], ni = 0, no = 0;
+          for (const int c : tv) (s[c] ? in[ni++] : out[no++]) = c;
+          if (ni == 0 || no == 0) continue;
+          const auto cross = [&](int a, int b) {
+            return a < b ? vertex_on(i, j, k, a, b, s[a]) : vertex_on(i, j, k, b, a, s[b]);
+          };
+          if (ni == 1 || no == 1) {
+            const int lone = ni == 1 ? in[0] : out[0];
+            const int* others = ni == 1 ? out : in;
+            mesh.triangles.push_back(
+                {cross(lone, others[0]), cross(lone, others[1]), cross(lone, others[2])});
+          } else {
+            const int a = cross(in[0], out[0]), b = cross(in[0], out[1]);
+            const int c = cross(in[1], out[1]), d = cross(in[1], out[0]);
+            mesh.triangles.push_back({a, b, c});
+            mesh.triangles.push_back({a, c, d});
+          }
+          mesh.triangle_group.push_back(0);
+          if (ni == 2) mesh.triangle_group.push_back(0);
+        }
+      }
+    }
+  }
+  return mesh;
+}
+
+}  // namespace dentsim

@@ -1,0 +1,151 @@
+// The tooth as a smooth field (issue #30; BEYOND THE THESIS; derivation in
+// docs/derivations/field_contact.md): a sampled signed distance to the tooth's *source* surface
+// (the mesh's triangles, the procedural molar's implicit surface), stored in a narrow band of
+// sparse bricks and interpolated trilinearly, so that the surface sits between the samples
+// (sub-voxel) instead of on the voxel staircase.
+//
+// Frames and units: world frame {O}, metres. Samples sit at the centres of the tooth grid's voxels
+// (voxel_grid.h) and continue P voxels beyond the grid on every side (so that the band around a
+// surface near the grid's edge is whole): sample s = (s_x, s_y, s_z), s_a in [0, M), is at
+//   p(s) = field_origin + h s,   field_origin = grid.origin + (0.5 - P) h,
+// i.e. the centre of voxel s - P. Its value is
+//   v(s) = clamp(sigma(s) d(s), -c_in, c_out),
+// d(s) the exact (unsigned) distance from p(s) to the source surface (nearest triangle), sigma(s)
+// = -1 if voxel s - P is solid in the tooth grid, else +1 (the voxeliser's own inside test: the
+// mesh's winding number or the molar's implicit function at the voxel centre, so the field's sign
+// and the materials agree sample by sample). Clamping keeps the band narrow: only the outside
+// within c_out matters to the tool (the surface proxy keeps its centre at phi >= rho - s), the
+// inside only down to c_in.
+//
+// The field phi(x) is the trilinear interpolant of v over the lattice (coordinates clamped to the
+// lattice outside it). It is continuous everywhere, and inside one cell its gradient component
+// along axis a is the bilinear interpolation of the four a-edge differences / h; hence
+//   |grad phi| <= L_cell = sqrt(sum_a max_{a-edges of the cell} (dv / h)^2)
+// and phi is L-Lipschitz with L = max over cells of L_cell (`lipschitz()`, measured from the
+// stored samples at build: a bound of the stored field itself, whatever the source). For exact
+// distances of a surface |dv| <= h on every edge (d is 1-Lipschitz and clamping keeps that), so
+// L <= sqrt(3); on smooth surfaces L is close to 1.
+//
+// Why trilinear and not tricubic: trilinear interpolation of a 1-Lipschitz sample set has the
+// provable cell bound above, costs 8 samples per query, and reproduces planes exactly; its
+// gradient is discontinuous across cell faces by O(h kappa) (kappa the surface curvature), far
+// below the voxel staircase's. Tricubic (Catmull-Rom) would need 64 samples, may overshoot
+// (phi can dip below both neighbours: a negative lobe in free space), and has no cheap
+// Lipschitz bound, and the no-tunnelling proof rests on that bound.
+//
+// Storage: bricks of 8^3 samples (float: the values are below ~1 mm, so float keeps ~0.1 nm) for
+// every brick holding a sample with -c_in < v < c_out; a flat index (one int32 per brick slot)
+// names each slot's brick, or says that the whole slot is outside (+c_out) or inside (-c_in).
+// Memory is proportional to the surface's area times the band's width (the index adds 4 bytes
+// per 512 voxels).
+//
+// Build (`build_sampled_field`): exact point-triangle distances for the samples within 2 h of
+// each triangle (each triangle's box grown by 2 h; so every sample within 2 h of the surface is
+// exact), then the band is grown layer by layer: a sample next to an assigned one takes the
+// nearest of its assigned face neighbours' nearest triangles, and finally walks the mesh from
+// that triangle (the triangles around its vertices) while a nearer one is found. The result is
+// the distance to a real triangle, so never below the truth; on the test sphere it is exact to
+// the chord error (tests/tooth/sampled_field_test.cc).
+//
+// Real-time: value() and gradient() read 8 samples through the index; nothing allocates or throws.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "reference/core/types.h"
+#include "reference/tooth/triangle_mesh.h"
+#include "reference/tooth/voxel_grid.h"
+
+namespace dentsim {
+
+inline constexpr int kFieldBrick = 8;  // samples per brick edge
+
+// The band's half widths [m]: outside (c_out) and inside (c_in). Both are raised to at least
+// 2 h at build.
+struct FieldBand {
+  double outside_m = 1.0e-3;
+  double inside_m = 0.0;  // 0: 2 h
+};
+
+// The band a surface proxy of tip radius rho needs: it reads phi where phi < rho + s (s <= rho/4)
+// and the gradient there; c_out = 1.25 rho + 2 h leaves two cells of margin.
+FieldBand field_band_for_tip(double rho, double voxel_size);
+
+struct FieldSample {
+  double value = 0.0;  // phi(x) [m]
+  Vec3 gradient = Vec3::Zero();  // grad phi(x) (analytic gradient of the trilinear interpolant)
+};
+
+class SampledField {
+ public:
+  SampledField() = default;
+
+  // phi(x) and its gradient (the cell's; on a cell face, the cell above).
+  FieldSample sample(const Vec3& x) const;
+  double value(const Vec3& x) const { return sample(x).value; }
+  // The Lipschitz constant L of phi (header comment).
+  double lipschitz() const { return lipschitz_; }
+  double voxel_size() const { return h_; }
+  double outside_clamp() const { return c_out_; }
+  double inside_clamp() const { return c_in_; }
+  // Whether phi at x is the inside clamp at all 8 corners (deep inside: no gradient there).
+  bool deep_inside(const Vec3& x) const;
+  // Stored value of sample s (lattice coordinates, each in [0, samples_per_axis())).
+  float at(int sx, int sy, int sz) const;
+  int samples_per_axis() const { return m_; }
+  int padding() const { return pad_; }  // P
+  Vec3 sample_position(int sx, int sy, int sz) const {
+    return origin_ + h_ * Vec3(sx, sy, sz);
+  }
+  // Moves the field by t [m] (the simulator places the tooth after building it).
+  void translate(const Vec3& t) { origin_ += t; }
+  std::size_t brick_count() const { return bricks_.size() / kBrickSamples; }
+  // Bytes of bricks plus index.
+  std::size_t memory_bytes() const {
+    return bricks_.size() * sizeof(float) + index_.size() * sizeof(std::int32_t);
+  }
+
+  static constexpr int kBrickSamples = kFieldBrick * kFieldBrick * kFieldBrick;
+  static constexpr std::int32_t kAllOutside = -1;
+  static constexpr std::int32_t kAllInside = -2;
+
+ private:
+  friend SampledField build_sampled_field(const VoxelGrid&, const TriangleMesh&, const FieldBand&);
+
+  std::size_t slot(int bx, int by, int bz) const {
+    return static_cast<std::size_t>(bx) +
+           static_cast<std::size_t>(nb_) *
+               (static_cast<std::size_t>(by) + static_cast<std::size_t>(nb_) * bz);
+  }
+
+  Vec3 origin_ = Vec3::Zero();  // position of sample (0, 0, 0)
+  double h_ = 0.0;
+  int m_ = 0;    // samples per axis (a multiple of kFieldBrick)
+  int nb_ = 0;   // bricks per axis
+  int pad_ = 0;  // P
+  double c_out_ = 0.0, c_in_ = 0.0;
+  double lipschitz_ = 1.0;
+  std::vector<std::int32_t> index_;  // nb^3: brick id, kAllOutside or kAllInside
+  std::vector<float> bricks_;        // brick id * 512 + x + 8 (y + 8 z)
+};
+
+// Exact distance from p to triangle (a, b, c) (Voronoi regions of the vertices, edges and face).
+double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+
+// The field of the closed surface `surface` (world frame, the grid's) with signs from the solid
+// voxels of `grid` (header comment). `surface` must bound the grid's solid (the mesh it was
+// voxelised from, or the triangulated implicit surface below).
+SampledField build_sampled_field(const VoxelGrid& grid, const TriangleMesh& surface,
+                                 const FieldBand& band);
+
+// The surface of an implicit solid {p : inside(p)} as triangles, by marching tetrahedra over the
+// cells of voxel centres (six tetrahedra per cell), each vertex placed on its edge where `inside`
+// changes, by bisection to 2^-40 of the edge (each edge once). The signs at the voxel centres are the grid's solid
+// voxels (which must be inside() at the centres, as voxelize_procedural_molar makes them).
+TriangleMesh triangulate_implicit(const VoxelGrid& grid,
+                                  const std::function<bool(const Vec3&)>& inside);
+
+}  // namespace dentsim

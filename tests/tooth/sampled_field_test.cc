@@ -1,0 +1,188 @@
+// The sampled signed-distance field (reference/tooth/sampled_field.h): its value is the exact
+// distance to the source surface (a box mesh, a triangulated sphere, the plane of a box face) up
+// to stated bounds, its gradient is the derivative of the interpolant, its Lipschitz constant
+// bounds it, and its memory (bricks) grows with the surface's area, not the grid's volume.
+#include "reference/tooth/sampled_field.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "tooth_io/voxelize.h"
+#include "tests/tooth/field_shapes.h"
+
+namespace dentsim {
+namespace {
+
+constexpr std::uint64_t kSeed = 30;
+
+using test::box_mesh;
+
+// Exact signed distance of the box [lo, hi].
+double box_sdf(const Vec3& p, const Vec3& lo, const Vec3& hi) {
+  const Vec3 c = 0.5 * (lo + hi), e = 0.5 * (hi - lo);
+  const Vec3 q = (p - c).cwiseAbs() - e;
+  return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
+}
+
+VoxelGrid grid_from(int n, double side, const std::function<bool(const Vec3&)>& inside) {
+  VoxelGrid g(n, Vec3::Zero(), side / n);
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        if (inside(g.center(i, j, k))) g.set(i, j, k, kEnamel);
+      }
+    }
+  }
+  return g;
+}
+
+TEST(SampledField, PointTriangleDistanceMatchesDenseSampling) {
+  std::mt19937_64 rng(kSeed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    const Vec3 a(u(rng), u(rng), u(rng)), b(u(rng), u(rng), u(rng)), c(u(rng), u(rng), u(rng));
+    const Vec3 p = 2.0 * Vec3(u(rng), u(rng), u(rng));
+    double best = 1e9;
+    const int k = 300;
+    for (int i = 0; i <= k; ++i) {
+      for (int j = 0; i + j <= k; ++j) {
+        const Vec3 q = a + (b - a) * (double(i) / k) + (c - a) * (double(j) / k);
+        best = std::min(best, (p - q).norm());
+      }
+    }
+    const double d = point_triangle_distance(p, a, b, c);
+    EXPECT_LE(d, best + 1e-12);
+    EXPECT_GE(d, best - 4.0 * ((b - a).norm() + (c - a).norm()) / k);
+  }
+}
+
+// A box from a mesh: at every stored sample the field is the exact signed distance clamped to
+// the band (float rounding: 1e-9 m); near the middle of a face it is the plane's distance at any
+// point (trilinear interpolation reproduces a linear function).
+TEST(SampledField, BoxMeshSamplesAreTheExactDistanceAndFacesArePlanes) {
+  const Vec3 lo(1.13e-3, 1.37e-3, 0.91e-3), hi(4.71e-3, 4.02e-3, 3.88e-3);
+  const TriangleMesh mesh = box_mesh(lo, hi);
+  VoxelGrid grid(32, Vec3::Zero(), 6.4e-3 / 32);
+  const std::vector<std::uint8_t> in = center_winding_inside(mesh, grid);
+  for (std::size_t v = 0; v < in.size(); ++v) grid.voxels[v] = in[v] ? kEnamel : kEmpty;
+  FieldBand band;
+  band.outside_m = 0.7e-3;
+  const SampledField f = build_sampled_field(grid, mesh, band);
+  const double h = grid.voxel_size;
+  EXPECT_EQ(f.outside_clamp(), 0.7e-3);
+  EXPECT_EQ(f.inside_clamp(), 2.0 * h);
+  int checked = 0;
+  for (int z = 0; z < f.samples_per_axis(); ++z) {
+    for (int y = 0; y < f.samples_per_axis(); ++y) {
+      for (int x = 0; x < f.samples_per_axis(); ++x) {
+        const double exact = std::clamp(box_sdf(f.sample_position(x, y, z), lo, hi),
+                                        -f.inside_clamp(), f.outside_clamp());
+        ASSERT_NEAR(f.at(x, y, z), exact, 1e-9) << x << " " << y << " " << z;
+        checked += std::abs(exact) < f.outside_clamp() ? 1 : 0;
+      }
+    }
+  }
+  EXPECT_GT(checked, 5000);
+  // The top face z = hi.z, away from its edges by more than the band: a plane.
+  std::mt19937_64 rng(kSeed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int trial = 0; trial < 500; ++trial) {
+    const Vec3 p(lo.x() + 0.8e-3 + u(rng) * (hi.x() - lo.x() - 1.6e-3),
+                 lo.y() + 0.8e-3 + u(rng) * (hi.y() - lo.y() - 1.6e-3),
+                 hi.z() - 1.5 * h + u(rng) * (1.5 * h + 0.6e-3));
+    const FieldSample s = f.sample(p);
+    EXPECT_NEAR(s.value, p.z() - hi.z(), 1e-9);
+    EXPECT_NEAR((s.gradient - Vec3::UnitZ()).norm(), 0.0, 1e-5);
+  }
+  // The Lipschitz constant: at least the slope of a face, at most sqrt(3).
+  EXPECT_GE(f.lipschitz(), 1.0 - 1e-6);
+  EXPECT_LE(f.lipschitz(), std::sqrt(3.0) + 1e-6);
+}
+
+// A sphere triangulated from its implicit function: the field is within the chord and
+// interpolation bound 3 h^2 / (4 (R - c_in)) of |x - c| - R in the band, and its gradient is the
+// derivative of the interpolant (central differences inside a cell).
+TEST(SampledField, SphereFromItsImplicitFunctionIsItsDistanceAndGradient) {
+  const double side = 8e-3, r = 2.5e-3;
+  const Vec3 centre(4.03e-3, 3.97e-3, 4.11e-3);
+  const auto inside = [&](const Vec3& p) { return (p - centre).norm() < r; };
+  const VoxelGrid grid = grid_from(64, side, inside);
+  const TriangleMesh surface = triangulate_implicit(grid, inside);
+  for (const Vec3& v : surface.vertices) ASSERT_NEAR((v - centre).norm(), r, 1e-12);
+  FieldBand band;
+  band.outside_m = 0.7e-3;
+  const SampledField f = build_sampled_field(grid, surface, band);
+  const double h = grid.voxel_size;
+  const double bound = 3.0 * h * h / (4.0 * (r - f.inside_clamp()));
+  std::mt19937_64 rng(kSeed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  double worst = 0.0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    Vec3 dir(u(rng), u(rng), u(rng));
+    if (dir.norm() < 1e-3) continue;
+    dir.normalize();
+    // Depths whose cell has no clamped corner (corners are within sqrt(3) h of the point).
+    const double lo = -(f.inside_clamp() - 1.75 * h), hi = f.outside_clamp() - 1.75 * h;
+    const double d = lo + 0.5 * (u(rng) + 1.0) * (hi - lo);
+    const Vec3 p = centre + (r + d) * dir;
+    const FieldSample s = f.sample(p);
+    worst = std::max(worst, std::abs(s.value - d));
+    ASSERT_NEAR(s.value, d, bound) << "at depth " << d;
+    // Central differences of the interpolant within the cell holding p.
+    const double e = 1e-4 * h;
+    Vec3 fd;
+    for (int a = 0; a < 3; ++a) {
+      Vec3 dp = Vec3::Zero();
+      dp[a] = e;
+      fd[a] = (f.value(p + dp) - f.value(p - dp)) / (2.0 * e);
+    }
+    // Points within e of a cell face see two cells: skip them (the gradient jumps there).
+    bool near_face = false;
+    for (int a = 0; a < 3; ++a) {
+      const double w = (p[a] - f.sample_position(0, 0, 0)[a]) / h;
+      const double frac = w - std::floor(w);
+      near_face = near_face || frac < 1e-3 || frac > 1.0 - 1e-3;
+    }
+    if (!near_face) {
+      ASSERT_NEAR((fd - s.gradient).norm(), 0.0, 1e-5);
+    }
+    // The gradient points along the radius (the sphere's normal) within the chord bound.
+    EXPECT_GT(s.gradient.normalized().dot(dir), std::cos(0.1));
+  }
+  std::printf("sphere R = %.1f mm, h = %.3f mm: max |phi - d| = %.3g m (bound %.3g m), L = %.4f\n",
+              1e3 * r, 1e3 * h, worst, bound, f.lipschitz());
+  EXPECT_LE(f.lipschitz(), std::sqrt(3.0) + 1e-6);
+  EXPECT_LT(f.lipschitz(), 1.2);
+}
+
+// Bricks (memory) grow with the surface's area: a sphere of twice the radius at the same voxel
+// size takes about four times the bricks (the band's thickness is fixed), not eight.
+TEST(SampledField, BrickCountScalesWithTheSurfaceArea) {
+  const double h = 0.2e-3;
+  std::size_t bricks[2];
+  for (int s = 0; s < 2; ++s) {
+    const double r = (s == 0 ? 2.0e-3 : 4.0e-3);
+    const int n = s == 0 ? 32 : 64;
+    const Vec3 centre = Vec3::Constant(0.5 * n * h + 0.013e-3);
+    const auto inside = [&](const Vec3& p) { return (p - centre).norm() < r; };
+    const VoxelGrid grid = grid_from(n, n * h, inside);
+    FieldBand band;
+    band.outside_m = 0.8e-3;
+    const SampledField f = build_sampled_field(grid, triangulate_implicit(grid, inside), band);
+    bricks[s] = f.brick_count();
+    // Well below a dense lattice of samples.
+    const std::size_t m = static_cast<std::size_t>(f.samples_per_axis());
+    EXPECT_LT(f.brick_count() * SampledField::kBrickSamples, m * m * m / 2);
+  }
+  const double ratio = static_cast<double>(bricks[1]) / bricks[0];
+  std::printf("bricks: R = 2 mm %zu, R = 4 mm %zu, ratio %.2f (area 4, volume 8)\n", bricks[0],
+              bricks[1], ratio);
+  EXPECT_GT(ratio, 3.0);
+  EXPECT_LT(ratio, 5.0);
+}
+
+}  // namespace
+}  // namespace dentsim
