@@ -14,7 +14,10 @@ One axis z, the tick's equations at 1 kHz (reference/tick.cc, 1-DoF):
       F_c = K_vc (z_q - z2) + B_vc (v_m - V), F2 = K (s - z2) - b_t V in contact (z2 < s)
   device command: T1 = -F_c + (1 - phi) X - f_hat
 Options switch one thing at a time: --no-quant, --k, --md, --cutoff (velocity low-pass, 0 = raw
-backward difference), --L, and the remedies under study (--subcount).
+backward difference), --L, and the remedies under study: --kalman SIGMA_F (the encoder Kalman
+filter of reference/encoder_kalman.h, with the observer on its velocity as in the tick),
+--cell-coupling (the coupling sees the point of the encoder cell nearest the proxy), --foaw N
+(first-order adaptive windowing velocity), --bt (tooth damping).
 
 Prints the quiet measures of the held press (t in [1.5, 3.0] s): ripple of the contact force and of
 the device force (RMS minus 0.1 s moving average, over the mean), contact fraction, losses, static
@@ -91,39 +94,6 @@ class AlphaBeta:
         return z, v
 
 
-class SubCount:
-    """Model-based sub-count position estimate (remedy under study): predicts with the estimated
-    velocity and acceleration, projects into the encoder cell [z_q, z_q + Delta)."""
-
-    def __init__(self, delta, mode):
-        self.mode = mode
-        self.d = delta
-        self.z = None
-        self.v = 0.0
-
-    def update(self, zq, a_pred, T):
-        if self.z is None:
-            self.z = zq + 0.5 * self.d
-            return self.z, 0.0
-        z = self.z + T * self.v + 0.5 * T * T * a_pred
-        v = self.v + T * a_pred
-        lo, hi = zq, zq + self.d
-        if z < lo:  # the count says the device is ahead of the prediction: at least the edge
-            z = lo
-            if self.mode == 1:
-                v = 0.0 if v < 0 else v
-            else:
-                v = max(v, (lo - self.z) / T)
-        elif z >= hi:  # the device has not reached the next count yet
-            z = hi
-            if self.mode == 1:
-                v = 0.0 if v > 0 else v
-            else:
-                v = min(v, (hi - self.z) / T)
-        self.z, self.v = z, v
-        return z, v
-
-
 def run(a):
     T = 1e-3
     n_sub = 8
@@ -147,6 +117,8 @@ def run(a):
             return 6e-3 + 2e-3 * math.sin(2 * math.pi * 1.0 * t), 0.0
         if t < 1.5:
             return 6e-3 * (1.5 - t) / 0.5, -a.press * (t - 1.0) / 0.5
+        if a.kick and 2.0 <= t < 2.002:  # a 2 ms, 0.2 N push: rings the contact mode
+            return 0.0, -a.press - 0.2
         return 0.0, -a.press
 
     z, v = 6e-3, 0.0
@@ -158,7 +130,7 @@ def run(a):
     p_hat = 0.0
     f_hat = 0.0
     T1 = 0.0
-    sc = SubCount(delta, a.sc_mode) if a.subcount and delta > 0 else None
+    sc = None
     if a.kalman > 0 and delta > 0:
         sc = AlphaBeta(delta, T, a.kalman / M1, a.project)
     fc_log, fd_log, inc_log, pen_log, t_log = [], [], [], [], []
@@ -193,7 +165,7 @@ def run(a):
         if vf is not None and a.foaw_where == "coupling":
             vc = vf
         # observer
-        p = M1 * (vs if a.obs_subcount else (vm if "obs" in a.quant_in else vt))
+        p = M1 * (vs if (sc is not None and a.obs_subcount) else (vm if "obs" in a.quant_in else vt))
         if k == 0:
             p_hat = p
         p_hat += T * (T1 + f_hat)
@@ -201,7 +173,6 @@ def run(a):
         # proxy step, contact decided at z2 (tick k)
         incontact = z2 < s
         # affine pieces in V: F = f0 + g V
-        Fc0, Fcg = Kvc * (zs - (z2 + 0.5 * T * 0)) + Bvc * vs, -Bvc
         # PMI midpoint positions: z2_mid = z2 + T/2 V
         Fc0 = Kvc * (zs - z2) + Bvc * vc
         Fcg = -Kvc * T / 2 - Bvc
@@ -241,6 +212,21 @@ def run(a):
         pen_log.append(max(0.0, s - z))
     t_log = np.array(t_log)
     fc, fd, inc, pen = map(np.array, (fc_log, fd_log, inc_log, pen_log))
+    if a.kick:
+        # damping ratio and frequency of the ring after the push: log decrement of the peaks of
+        # the contact force about its final value
+        sel = t_log >= 2.002
+        x = fc[sel] - np.mean(fc[t_log >= a.duration - 0.2])
+        pk = [i for i in range(1, len(x) - 1) if x[i] > x[i - 1] and x[i] >= x[i + 1] and x[i] > 0]
+        amp = [x[i] for i in pk]
+        zeta, freq = float("nan"), float("nan")
+        big = [j for j in range(len(amp)) if amp[j] > 1e-3 * amp[0]] if amp else []
+        if len(big) >= 3:
+            n = big[-1]
+            delta = math.log(amp[0] / amp[n]) / n
+            zeta = delta / math.sqrt(4 * math.pi ** 2 + delta ** 2)
+            freq = n / ((pk[n] - pk[0]) * T)
+        return {"zeta": zeta, "freq_hz": freq}
     w = (t_log >= 1.5 + a.settle) & (t_log <= a.duration)
     free = (t_log >= 0.2) & (t_log < 1.0)
     out = {
@@ -281,11 +267,29 @@ def main():
     p.add_argument("--foaw-where", default="all", help="all | coupling")
     p.add_argument("--kalman", type=float, default=0.0, help="remedy: model-based Kalman estimate, sigma of the unknown force [N] (0 = off)")
     p.add_argument("--project", type=int, default=1, help="project the Kalman estimate into the cell")
-    p.add_argument("--subcount", action="store_true", help="remedy: sub-count position estimate")
-    p.add_argument("--sc-mode", type=int, default=2, help="1: zero the velocity at a cell edge, 2: the fastest velocity the cell allows")
-    p.add_argument("--subcount-vel", type=int, default=1, help="use its velocity too")
-    p.add_argument("--obs-subcount", type=int, default=0, help="observer on the sub-count velocity")
+    p.add_argument("--subcount-vel", type=int, default=1, help="the coupling and feed-forward use the Kalman velocity too")
+    p.add_argument("--obs-subcount", type=int, default=1, help="the observer uses the Kalman velocity (as the tick does)")
+    p.add_argument("--kick", action="store_true",
+                   help="push 0.2 N for 2 ms at t = 2 s and print the damping ratio and frequency "
+                        "of the contact mode (log decrement; use with --no-quant)")
+    p.add_argument("--grid", action="store_true",
+                   help="run K 3000 and 6000 x Delta 0.012, 0.03, 0.06 mm x press 0.5, 1, 2 N with "
+                        "the other options; print contact/device ripple [%%]/losses per cell, the "
+                        "mean device ripple and the free-space RMS per Delta")
     a = p.parse_args()
+    if a.grid:
+        for k in (3000.0, 6000.0):
+            cells, free, tot = [], [], 0.0
+            for d in (0.012e-3, 0.03e-3, 0.06e-3):
+                for press in (0.5, 1.0, 2.0):
+                    a.k, a.delta, a.press = k, d, press
+                    o = run(a)
+                    tot += o["ripple_device"]
+                    cells.append(f"{100 * o['ripple_contact']:.0f}/{100 * o['ripple_device']:.0f}/{o['losses']}")
+                free.append(f"{o['free_rms']:.3f}")
+            print(f"K {k:.0f}: mean device ripple {100 * tot / 9:.1f} %; " + " ".join(cells) +
+                  "; free RMS [N] " + " ".join(free))
+        return
     out = run(a)
     print(" ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in out.items()))
 

@@ -10,6 +10,10 @@ Two jobs, both small and dependency-light (python3 + numpy):
       along x meanwhile, phase "slide"), retract 4.0-4.5 s. The hand's reference sits on the
       anchor (the surface), so the press is the feed-forward force.
 
+  quiet_study.py patch KEY=VALUE ... < scene.json > variant.json
+      sets dotted keys of a scene (VALUE is JSON), e.g.
+      `dentsim run probe --show | quiet_study.py patch method.encoder_kalman=true`
+
   quiet_study.py measure DIR [--from S] [--to S] [--json]
       reads DIR/timeseries.csv of `dentsim run SCENE --out DIR` and prints the quiet measures
       over the window [from, to] (default: the press/slide/probe phase minus its first 0.5 s):
@@ -64,6 +68,19 @@ def scene(args):
             {"t_s": 4.5, "offset_mm": [x_end, 0, 6], "force_n": [0, 0, 0], "phase": "retract"},
         ]},
     }
+    json.dump(doc, sys.stdout, indent=1)
+    sys.stdout.write("\n")
+
+
+def patch(args):
+    doc = json.load(sys.stdin)
+    for kv in args.set:
+        key, value = kv.split("=", 1)
+        node = doc
+        parts = key.split(".")
+        for p in parts[:-1]:
+            node = node[p]
+        node[parts[-1]] = json.loads(value)
     json.dump(doc, sys.stdout, indent=1)
     sys.stdout.write("\n")
 
@@ -143,6 +160,8 @@ def main():
     sc.add_argument("--slide", action="store_true")
     sc.add_argument("--friction", type=float, default=0.0)
     sc.add_argument("--method-extra", default="")
+    pa = sub.add_parser("patch")
+    pa.add_argument("set", nargs="+")
     me = sub.add_parser("measure")
     me.add_argument("dir")
     me.add_argument("--from", dest="t_from", type=float)
@@ -151,6 +170,8 @@ def main():
     a = p.parse_args()
     if a.cmd == "scene":
         scene(a)
+    elif a.cmd == "patch":
+        patch(a)
     else:
         measure(a)
 
