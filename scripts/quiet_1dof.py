@@ -1,0 +1,298 @@
+#!/usr/bin/env python3
+"""1-DoF model of the pmi-pd tick on a quantised device pressed by a grip hand (issue #29 item 2;
+docs/derivations/quiet_stiffness.md).
+
+One axis z, the tick's equations at 1 kHz (reference/tick.cc, 1-DoF):
+  device + hand (true plant, RK4 substeps, force held over the tick):
+      (m_d + m_h) z'' = T1 - b_d z' + K_h (z_ref - z) - B_h z' + f_ff
+  driver: z_q = Delta floor(z / Delta); v_m = 200 Hz first-order low-pass of the backward difference
+  momentum observer (gripped hypothesis, M1 = m_d + m_h, gain L): p = M1 v_m,
+      p_hat += T (T1_prev + f_hat);  f_hat = L (p - p_hat)
+  decomposition: M_L = M1 + m2, phi = m2 / M_L, A = M_L / M_d,
+      X(V) = A (f_hat + F2(V) - D_d v_L(V)),  v_L = (1 - phi) v_m + phi V
+  proxy (PMI, implicit midpoint, affine in V): m2 (V_next - V) / T = F_c(V) + phi X(V),
+      F_c = K_vc (z_q - z2) + B_vc (v_m - V), F2 = K (s - z2) - b_t V in contact (z2 < s)
+  device command: T1 = -F_c + (1 - phi) X - f_hat
+Options switch one thing at a time: --no-quant, --k, --md, --cutoff (velocity low-pass, 0 = raw
+backward difference), --L, and the remedies under study: --kalman SIGMA_F (the encoder Kalman
+filter of reference/encoder_kalman.h, with the observer on its velocity as in the tick),
+--cell-coupling (the coupling sees the point of the encoder cell nearest the proxy), --foaw N
+(first-order adaptive windowing velocity), --bt (tooth damping).
+
+Prints the quiet measures of the held press (t in [1.5, 3.0] s): ripple of the contact force and of
+the device force (RMS minus 0.1 s moving average, over the mean), contact fraction, losses, static
+stiffness, and with --free the RMS device force while the hand moves in free space.
+"""
+import argparse
+import math
+
+import numpy as np
+
+
+def ripple(x, n=100):
+    avg = np.convolve(x, np.ones(n) / n, mode="valid")
+    core = x[n // 2:n // 2 + len(avg)]
+    m = np.mean(core)
+    return float(np.sqrt(np.mean((core - avg) ** 2)) / m) if m > 0 else float("nan")
+
+
+def foaw(hist, T, d, nmax):
+    """First-order adaptive windowing (Janabi-Sharifi et al. 2000), end-fit: the longest window
+    n <= nmax whose straight line through y_k and y_k-n passes within d of every sample between."""
+    y = hist
+    k = len(y) - 1
+    best = 0.0
+    for n in range(1, min(nmax, k) + 1):
+        v = (y[k] - y[k - n]) / (n * T)
+        ok = True
+        for j in range(1, n):
+            if abs(y[k - j] - (y[k] - v * j * T)) > d:
+                ok = False
+                break
+        if not ok:
+            break
+        best = v
+    return best
+
+
+class AlphaBeta:
+    """Steady-state Kalman filter of a double integrator driven by the model's acceleration
+    (commanded force + observer estimate over the mass); measurement z_q + Delta/2 with variance
+    Delta^2/12; process noise: the unknown force sigma_f over the mass (white acceleration)."""
+
+    def __init__(self, delta, T, sigma_a, project):
+        import numpy as _np
+        F = _np.array([[1, T], [0, 1]]); H = _np.array([[1.0, 0.0]])
+        G = _np.array([[0.5 * T * T], [T]])
+        Q = G @ G.T * sigma_a ** 2
+        R = delta ** 2 / 12
+        P = _np.eye(2) * 1e-6
+        for _ in range(20000):
+            P = F @ P @ F.T + Q
+            S = H @ P @ H.T + R
+            K = P @ H.T / S
+            P = (_np.eye(2) - K @ H) @ P
+        self.K = K.ravel()
+        self.T = T
+        self.d = delta
+        self.project = project
+        self.z = None
+        self.v = 0.0
+
+    def update(self, zq, a_pred, T):
+        if self.z is None:
+            self.z = zq + 0.5 * self.d
+            return self.z, 0.0
+        z = self.z + T * self.v + 0.5 * T * T * a_pred
+        v = self.v + T * a_pred
+        r = (zq + 0.5 * self.d) - z
+        z += self.K[0] * r
+        v += self.K[1] * r
+        if self.project:
+            z = min(max(z, zq), zq + self.d)
+        self.z, self.v = z, v
+        return z, v
+
+
+def run(a):
+    T = 1e-3
+    n_sub = 8
+    md, mh = a.mdev, a.mh
+    Kh, Bh, bd = 135.0, 6.45, 0.0125
+    m2, Kvc, Bvc = 0.05, 1200.0, a.bvc
+    M1 = md + mh
+    ML = M1 + m2
+    phi = m2 / ML
+    Md = a.md if a.md > 0 else ML + a.md_extra  # the preset's rule: M_L (with the hand) + instrument
+    A = ML / Md
+    Dd, K, bt = a.dd, a.k, a.bt
+    L = a.L
+    delta = 0.0 if a.no_quant else a.delta
+    s = 0.0  # surface
+    nT = int(a.duration / T)
+    # hand profile: free-space move 0-1 s (5 mm/s back and forth about 6 mm up), lower 1-1.5 s,
+    # press with f_ff held at the surface after 1.5 s
+    def href(t):
+        if t < 1.0:
+            return 6e-3 + 2e-3 * math.sin(2 * math.pi * 1.0 * t), 0.0
+        if t < 1.5:
+            return 6e-3 * (1.5 - t) / 0.5, -a.press * (t - 1.0) / 0.5
+        if a.kick and 2.0 <= t < 2.002:  # a 2 ms, 0.2 N push: rings the contact mode
+            return 0.0, -a.press - 0.2
+        return 0.0, -a.press
+
+    z, v = 6e-3, 0.0
+    z2, v2 = z, 0.0
+    zq_prev = z if delta == 0 else delta * math.floor(z / delta)
+    vm = 0.0
+    hist = []
+    vt, z_prev_true = 0.0, z
+    p_hat = 0.0
+    f_hat = 0.0
+    T1 = 0.0
+    sc = None
+    if a.kalman > 0 and delta > 0:
+        sc = AlphaBeta(delta, T, a.kalman / M1, a.project)
+    fc_log, fd_log, inc_log, pen_log, t_log = [], [], [], [], []
+    alpha = 1.0 - math.exp(-2 * math.pi * a.cutoff * T) if a.cutoff > 0 else 1.0
+    for k in range(nT):
+        t = k * T
+        zq = z if delta == 0 else delta * math.floor(z / delta)
+        vraw = (zq - zq_prev) / T
+        zq_prev = zq
+        vm = vm + alpha * (vraw - vm)
+        hist.append(zq)
+        vf = foaw(hist, T, delta, a.foaw) if a.foaw > 0 and delta > 0 else None
+        if vf is not None and a.foaw_where == "all":
+            vm = vf
+        vt = vt + alpha * ((z - z_prev_true) / T - vt)  # the same estimator on the true position
+        z_prev_true = z
+        zs, vs = zq, vm
+        if "pos" not in a.quant_in:
+            zs = z
+        if "vel" not in a.quant_in:
+            vs = vt
+        if sc is not None:
+            a_pred = (T1 + f_hat) / M1
+            zs, vs = sc.update(zq, a_pred, T)
+            if not a.subcount_vel:
+                vs = vm
+        if a.cell_coupling and delta > 0:
+            # remedy under study: the device position the coupling sees is the point of the
+            # encoder cell [z_q, z_q + Delta) nearest the proxy
+            zs = min(max(z2, zq), zq + delta)
+        vc = vs
+        if vf is not None and a.foaw_where == "coupling":
+            vc = vf
+        # observer
+        p = M1 * (vs if (sc is not None and a.obs_subcount) else (vm if "obs" in a.quant_in else vt))
+        if k == 0:
+            p_hat = p
+        p_hat += T * (T1 + f_hat)
+        f_hat = L * (p - p_hat)
+        # proxy step, contact decided at z2 (tick k)
+        incontact = z2 < s
+        # affine pieces in V: F = f0 + g V
+        # PMI midpoint positions: z2_mid = z2 + T/2 V
+        Fc0 = Kvc * (zs - z2) + Bvc * vc
+        Fcg = -Kvc * T / 2 - Bvc
+        if incontact:
+            F20, F2g = K * (s - z2), -K * T / 2 - bt
+        else:
+            F20, F2g = 0.0, 0.0
+        vL0, vLg = (1 - phi) * vs, phi
+        X0 = A * (f_hat + F20 - Dd * vL0)
+        Xg = A * (F2g - Dd * vLg)
+        # m2 (2V - 2 v2)/T = Fc0 + Fcg V + phi (X0 + Xg V)
+        lhs = 2 * m2 / T - Fcg - phi * Xg
+        V = (2 * m2 / T * v2 + Fc0 + phi * X0) / lhs
+        Fc = Fc0 + Fcg * V
+        X = X0 + Xg * V
+        F2 = F20 + F2g * V
+        T1 = -Fc + (1 - phi) * X - f_hat
+        if a.sat > 0:
+            T1 = max(-a.sat, min(a.sat, T1))
+        z2, v2 = z2 + T * V, 2 * V - v2
+        # plant
+        zr, fff = href(t)
+        h = T / n_sub
+        for _ in range(n_sub):
+            def acc(zz, vv):
+                return (T1 - bd * vv + Kh * (zr - zz) - Bh * vv + fff) / M1
+            k1v, k1z = acc(z, v), v
+            k2v, k2z = acc(z + h / 2 * k1z, v + h / 2 * k1v), v + h / 2 * k1v
+            k3v, k3z = acc(z + h / 2 * k2z, v + h / 2 * k2v), v + h / 2 * k2v
+            k4v, k4z = acc(z + h * k3z, v + h * k3v), v + h * k3v
+            z += h / 6 * (k1z + 2 * k2z + 2 * k3z + k4z)
+            v += h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
+        t_log.append(t)
+        fc_log.append(abs(F2) if incontact else 0.0)
+        fd_log.append(abs(T1))
+        inc_log.append(incontact)
+        pen_log.append(max(0.0, s - z))
+    t_log = np.array(t_log)
+    fc, fd, inc, pen = map(np.array, (fc_log, fd_log, inc_log, pen_log))
+    if a.kick:
+        # damping ratio and frequency of the ring after the push: log decrement of the peaks of
+        # the contact force about its final value
+        sel = t_log >= 2.002
+        x = fc[sel] - np.mean(fc[t_log >= a.duration - 0.2])
+        pk = [i for i in range(1, len(x) - 1) if x[i] > x[i - 1] and x[i] >= x[i + 1] and x[i] > 0]
+        amp = [x[i] for i in pk]
+        zeta, freq = float("nan"), float("nan")
+        big = [j for j in range(len(amp)) if amp[j] > 1e-3 * amp[0]] if amp else []
+        if len(big) >= 3:
+            n = big[-1]
+            delta = math.log(amp[0] / amp[n]) / n
+            zeta = delta / math.sqrt(4 * math.pi ** 2 + delta ** 2)
+            freq = n / ((pk[n] - pk[0]) * T)
+        return {"zeta": zeta, "freq_hz": freq}
+    w = (t_log >= 1.5 + a.settle) & (t_log <= a.duration)
+    free = (t_log >= 0.2) & (t_log < 1.0)
+    out = {
+        "ripple_contact": ripple(fc[w]),
+        "ripple_device": ripple(fd[w]),
+        "contact_fraction": float(np.mean(inc[w])),
+        "losses": int(np.sum(inc[w][:-1] & ~inc[w][1:])),
+        "k_static": float(np.mean(fc[w]) / np.mean(pen[w])) if np.mean(pen[w]) > 0 else float("nan"),
+        "mean_force": float(np.mean(fc[w])),
+        "free_rms": float(np.sqrt(np.mean(fd[free] ** 2))),
+    }
+    return out
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--k", type=float, default=3000.0, help="K_tooth [N/m]")
+    p.add_argument("--bt", type=float, default=5.0, help="tooth damping [N s/m]")
+    p.add_argument("--delta", type=float, default=0.1e-3, help="tip quantum along z [m]")
+    p.add_argument("--no-quant", action="store_true")
+    p.add_argument("--mdev", type=float, default=0.136, help="device apparent mass along z [kg]")
+    p.add_argument("--mh", type=float, default=0.554, help="hand mass [kg]")
+    p.add_argument("--md", type=float, default=0.0, help="desired tool mass M_d [kg] (0: the preset's rule)")
+    p.add_argument("--md-extra", type=float, default=0.01, help="instrument mass over M_L [kg] (explorer)")
+    p.add_argument("--dd", type=float, default=0.2, help="D_d [N s/m]")
+    p.add_argument("--bvc", type=float, default=4.0, help="coupling damping [N s/m]")
+    p.add_argument("--L", type=float, default=30.0, help="observer gain [1/s]")
+    p.add_argument("--cutoff", type=float, default=200.0, help="velocity low-pass [Hz], 0 = none")
+    p.add_argument("--press", type=float, default=0.5, help="hand feed-forward [N]")
+    p.add_argument("--sat", type=float, default=0.0, help="force saturation [N] (0 = none)")
+    p.add_argument("--duration", type=float, default=3.0)
+    p.add_argument("--settle", type=float, default=0.5)
+    p.add_argument("--quant-in", default="pos,vel,obs",
+                   help="where the quantised signal enters: pos (coupling/contact position), vel "
+                        "(coupling and feed-forward velocity), obs (observer momentum)")
+    p.add_argument("--cell-coupling", action="store_true", help="remedy: coupling to the encoder cell")
+    p.add_argument("--foaw", type=int, default=0, help="velocity: adaptive windowing, max window [ticks] (0 = the low-pass)")
+    p.add_argument("--foaw-where", default="all", help="all | coupling")
+    p.add_argument("--kalman", type=float, default=0.0, help="remedy: model-based Kalman estimate, sigma of the unknown force [N] (0 = off)")
+    p.add_argument("--project", type=int, default=1, help="project the Kalman estimate into the cell")
+    p.add_argument("--subcount-vel", type=int, default=1, help="the coupling and feed-forward use the Kalman velocity too")
+    p.add_argument("--obs-subcount", type=int, default=1, help="the observer uses the Kalman velocity (as the tick does)")
+    p.add_argument("--kick", action="store_true",
+                   help="push 0.2 N for 2 ms at t = 2 s and print the damping ratio and frequency "
+                        "of the contact mode (log decrement; use with --no-quant)")
+    p.add_argument("--grid", action="store_true",
+                   help="run K 3000 and 6000 x Delta 0.012, 0.03, 0.06 mm x press 0.5, 1, 2 N with "
+                        "the other options; print contact/device ripple [%%]/losses per cell, the "
+                        "mean device ripple and the free-space RMS per Delta")
+    a = p.parse_args()
+    if a.grid:
+        for k in (3000.0, 6000.0):
+            cells, free, tot = [], [], 0.0
+            for d in (0.012e-3, 0.03e-3, 0.06e-3):
+                for press in (0.5, 1.0, 2.0):
+                    a.k, a.delta, a.press = k, d, press
+                    o = run(a)
+                    tot += o["ripple_device"]
+                    cells.append(f"{100 * o['ripple_contact']:.0f}/{100 * o['ripple_device']:.0f}/{o['losses']}")
+                free.append(f"{o['free_rms']:.3f}")
+            print(f"K {k:.0f}: mean device ripple {100 * tot / 9:.1f} %; " + " ".join(cells) +
+                  "; free RMS [N] " + " ".join(free))
+        return
+    out = run(a)
+    print(" ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in out.items()))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,180 @@
+#!/usr/bin/env python3
+"""The quiet-stiffness study of docs/derivations/quiet_stiffness.md (issue #29, items 2-3).
+
+Two jobs, both small and dependency-light (python3 + numpy):
+
+  quiet_study.py scene [--k N/M] [--quantize 0|1] [--press N] [--preset NAME] [--slide]
+                       [--friction MU] [--method-extra JSON] > scene.json
+      writes a static-press (or slide) scene on the procedural molar: approach 0-1 s, press down
+      to the anchor 1.0-1.5 s, hold 1.5-4.0 s (phase "press"; with --slide the hand moves 3 mm
+      along x meanwhile, phase "slide"), retract 4.0-4.5 s. The hand's reference sits on the
+      anchor (the surface), so the press is the feed-forward force.
+
+  quiet_study.py patch KEY=VALUE ... < scene.json > variant.json
+      sets dotted keys of a scene (VALUE is JSON), e.g.
+      `dentsim run probe --show | quiet_study.py patch method.encoder_kalman=true`
+
+  quiet_study.py measure DIR [--from S] [--to S] [--json]
+      reads DIR/timeseries.csv of `dentsim run SCENE --out DIR` and prints the quiet measures
+      over the window [from, to] (default: the press/slide/probe phase minus its first 0.5 s):
+        ripple_contact   RMS(F - F averaged over 0.1 s) / mean F, F the contact force
+        ripple_device    the same for the force on the device (what the hand feels)
+        contact_fraction ticks with a contact / ticks in the window
+        losses           contact -> no-contact transitions in the window
+        k_static         mean contact force / mean device penetration [N/m]
+        free_rms         RMS force on the device over ticks without contact before the
+                         window, while the hand moves (0.2 s to the first contact) [N]
+      These are this study's own measures; the run report's (device/quiet_measures.h) are the
+      product's.
+"""
+import argparse
+import csv
+import json
+import sys
+
+import numpy as np
+
+
+def scene(args):
+    method = {"name": "pmi-pd", "k_vc_n_per_m": 1200, "b_vc_n_s_per_m": 4,
+              "k_vc_ang_n_m_per_rad": 0.3, "b_vc_ang_n_m_s_per_rad": 0.001,
+              "observer_gain_per_s": 30, "friction_mu": args.friction,
+              "grasp_mass_scale": 1.0, "grip_detector": True}
+    if args.method_extra:
+        method.update(json.loads(args.method_extra))
+    f = -abs(args.press)
+    x_end = 3.0 if args.slide else 0.0
+    hold = "slide" if args.slide else "press"
+    doc = {
+        "dentsim_scene": 1,
+        "name": "quiet-study",
+        "description": "Static press (or slide) on the molar for the quiet-stiffness study.",
+        "duration_s": 4.5,
+        "tick_hz": 1000,
+        "tooth": {"source": "procedural", "resolution": 128, "k_tooth_n_per_m": args.k,
+                  "b_tooth_n_s_per_m": args.b_tooth, "anchor_offset_mm": [0, 0, -6],
+                  "contact_model": "sdf"},
+        "tool": {"preset": args.preset, "bur_radius_mm": 0.4, "bur_speed_rpm": 0},
+        "device": {"type": "simulated-phantom", "jitter_us": 0, "quantize": bool(args.quantize),
+                   "saturate": True},
+        "method": method,
+        "proxy": {"mass_kg": 0.05, "inertia_kg_m2": 1e-5, "damping_n_s_per_m": 0.0,
+                  "damping_ang_n_m_s_per_rad": 0.0},
+        "hand": {"script": [
+            {"t_s": 0.0, "offset_mm": [0, 0, 6], "force_n": [0, 0, 0], "phase": "approach"},
+            {"t_s": 1.0, "offset_mm": [0, 0, 1], "force_n": [0, 0, 0], "phase": "approach"},
+            {"t_s": 1.5, "offset_mm": [0, 0, 0], "force_n": [0, 0, f], "phase": hold},
+            {"t_s": 4.0, "offset_mm": [x_end, 0, 0], "force_n": [0, 0, f], "phase": hold},
+            {"t_s": 4.5, "offset_mm": [x_end, 0, 6], "force_n": [0, 0, 0], "phase": "retract"},
+        ]},
+    }
+    json.dump(doc, sys.stdout, indent=1)
+    sys.stdout.write("\n")
+
+
+def patch(args):
+    doc = json.load(sys.stdin)
+    for kv in args.set:
+        key, value = kv.split("=", 1)
+        node = doc
+        parts = key.split(".")
+        for p in parts[:-1]:
+            node = node[p]
+        node[parts[-1]] = json.loads(value)
+    json.dump(doc, sys.stdout, indent=1)
+    sys.stdout.write("\n")
+
+
+def read_series(path):
+    with open(path, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    cols = {}
+    for k in rows[0]:
+        if k == "phase":
+            cols[k] = np.array([r[k] for r in rows])
+        else:
+            cols[k] = np.array([float(r[k]) for r in rows])
+    return cols
+
+
+def ripple(x, n_avg):
+    """RMS of x minus its centred moving average over n_avg ticks, over the mean of x."""
+    if len(x) <= n_avg:
+        return float("nan")
+    kern = np.ones(n_avg) / n_avg
+    avg = np.convolve(x, kern, mode="valid")
+    half = n_avg // 2
+    core = x[half:half + len(avg)]
+    mean = np.mean(core)
+    return float(np.sqrt(np.mean((core - avg) ** 2)) / mean) if mean > 0 else float("nan")
+
+
+def measure(args):
+    s = read_series(args.dir + "/timeseries.csv")
+    t = s["t_s"]
+    dt = float(np.median(np.diff(t)))
+    if args.t_from is None:
+        held = np.isin(s["phase"], ["press", "slide", "probe", "drill"])
+        if not held.any():
+            sys.exit("quiet_study: no press/slide/probe/drill phase in " + args.dir)
+        t0 = t[held][0] + 0.5
+        t1 = t[held][-1]
+    else:
+        t0, t1 = args.t_from, args.t_to
+    w = (t >= t0) & (t <= t1)
+    inc = s["contacts"][w] > 0
+    fc = s["contact_force_n"][w]
+    fd = s["device_force_n"][w]
+    pen = s["device_penetration_m"][w]
+    n_avg = int(round(0.1 / dt))
+    first_contact = t[s["contacts"] > 0][0] if (s["contacts"] > 0).any() else t[-1]
+    free = (t >= 0.2) & (t < first_contact - 0.05) & (s["contacts"] == 0)
+    out = {
+        "window_s": [float(t0), float(t1)],
+        "ripple_contact": ripple(fc, n_avg),
+        "ripple_device": ripple(fd, n_avg),
+        "contact_fraction": float(np.mean(inc)),
+        "losses": int(np.sum(inc[:-1] & ~inc[1:])),
+        "mean_contact_force_n": float(np.mean(fc)),
+        "k_static_n_per_m": float(np.mean(fc) / np.mean(pen)) if np.mean(pen) > 0 else float("nan"),
+        "free_rms_n": float(np.sqrt(np.mean(s["device_force_n"][free] ** 2))) if free.any() else float("nan"),
+        "energy_virtual_j": float(s["energy_virtual_j"][-1]),
+        "hand_work_min_j": float(np.min(s["hand_work_j"])),
+    }
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(" ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
+                       for k, v in out.items() if k != "window_s"))
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = p.add_subparsers(dest="cmd", required=True)
+    sc = sub.add_parser("scene")
+    sc.add_argument("--k", type=float, default=3000.0)
+    sc.add_argument("--b-tooth", type=float, default=5.0)
+    sc.add_argument("--quantize", type=int, default=1)
+    sc.add_argument("--press", type=float, default=0.5)
+    sc.add_argument("--preset", default="explorer")
+    sc.add_argument("--slide", action="store_true")
+    sc.add_argument("--friction", type=float, default=0.0)
+    sc.add_argument("--method-extra", default="")
+    pa = sub.add_parser("patch")
+    pa.add_argument("set", nargs="+")
+    me = sub.add_parser("measure")
+    me.add_argument("dir")
+    me.add_argument("--from", dest="t_from", type=float)
+    me.add_argument("--to", dest="t_to", type=float)
+    me.add_argument("--json", action="store_true")
+    a = p.parse_args()
+    if a.cmd == "scene":
+        scene(a)
+    elif a.cmd == "patch":
+        patch(a)
+    else:
+        measure(a)
+
+
+if __name__ == "__main__":
+    main()
