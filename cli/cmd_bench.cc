@@ -8,7 +8,6 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <vector>
 
@@ -81,8 +80,7 @@ void run(Options& o) {
   // Ctrl-C / SIGTERM: no new run starts, the runs done so far go to --json marked partial, exit
   // 130 / 143 (cli/interrupt.h).
   const StopOnSignal stop;
-  std::mutex done_mu;
-  nlohmann::json done_runs = nlohmann::json::array();
+  StoppableJobs jobs(stop);
   TimeVsErrorResult r;
   try {
     r = run_time_vs_error(
@@ -99,29 +97,12 @@ void run(Options& o) {
         [&](int n, const std::function<nlohmann::json(int)>& job) {
           SweepOptions so;
           so.results_on_every_rank = true;
-          const std::function<nlohmann::json(int)> stoppable = [&](int i) {
-            if (stop.requested()) throw std::runtime_error("interrupted");
-            nlohmann::json out = job(i);
-            const std::lock_guard<std::mutex> lock(done_mu);
-            done_runs.push_back({{"index", i}, {"result", out}});
-            return out;
-          };
-          return sweep(n, stoppable, {}, so);
+          return sweep(n, jobs.wrap("runs", job), {}, so);
         });
   } catch (const std::exception&) {
     if (!stop.requested()) throw;
     bar.finish();
-    const std::string why = "stopped by " + stop.signal_name() + " after " +
-                            std::to_string(done_runs.size()) + " runs of this rank";
-    if (!quiet && !o.json.empty()) {
-      write_json(o.json,
-                 {{"partial", true}, {"partial_reason", why}, {"completed_runs", done_runs}});
-    }
-    throw Interrupted("bench " + why +
-                          (o.json.empty() ? std::string("; no --json given, nothing written")
-                                          : "; partial results in " + o.json +
-                                                " (\"partial\": true, \"completed_runs\")"),
-                      stop.exit_status());
+    throw jobs.stopped("bench", o.json, !quiet);
   }
   bar.finish();
   if (quiet) return;  // rank 0 prints and writes

@@ -11,7 +11,6 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -373,23 +372,15 @@ void run_zwidth(const ZwidthOptions& o) {
   // Ctrl-C / SIGTERM: no new job starts (the running ones finish), the jobs done so far go to
   // --json marked partial, exit 130 / 143 (cli/interrupt.h).
   const StopOnSignal stop;
-  std::mutex done_mu;
-  nlohmann::json done_jobs = nlohmann::json::array();
+  StoppableJobs jobs(stop);
   ProgressBar bar("zwidth", writes_outputs());
   const ZwidthJobRunner runner = [&](const std::string& stage, int n,
                                      const std::function<nlohmann::json(int)>& job) {
     SweepOptions so;
     so.threads = e.threads;
     so.results_on_every_rank = true;
-    const std::function<nlohmann::json(int)> stoppable = [&](int i) {
-      if (stop.requested()) throw std::runtime_error("interrupted");
-      nlohmann::json out = job(i);
-      const std::lock_guard<std::mutex> lock(done_mu);
-      done_jobs.push_back({{"stage", stage}, {"index", i}, {"result", out}});
-      return out;
-    };
     return sweep(
-        n, stoppable,
+        n, jobs.wrap(stage, job),
         [&stage, &bar, alone](int done, int owned) {
           if (!alone) {
             bar.update(
@@ -440,19 +431,7 @@ void run_zwidth(const ZwidthOptions& o) {
     if (!stop.requested()) throw;
     bar.finish();
     // What it has: every job this rank finished, in the wire format of the sweep.
-    const std::string why = "stopped by " + stop.signal_name() + " after " +
-                            std::to_string(done_jobs.size()) + " jobs of this rank";
-    if (writes_outputs() && !o.json.empty()) {
-      write_json(o.json, {{"partial", true},
-                          {"partial_reason", why},
-                          {"grid_runs", grid_runs},
-                          {"completed_jobs", done_jobs}});
-    }
-    throw Interrupted("zwidth " + why +
-                          (o.json.empty() ? std::string("; no --json given, nothing written")
-                                          : "; partial results in " + o.json +
-                                                " (\"partial\": true, \"completed_jobs\")"),
-                      stop.exit_status());
+    throw jobs.stopped("zwidth", o.json, writes_outputs(), {{"grid_runs", grid_runs}});
   }
   bar.finish();
   if (!writes_outputs()) return;  // rank 0 prints and writes

@@ -2,6 +2,8 @@
 
 #include <csignal>
 
+#include "cli/registry.h"
+
 namespace dentsim::cli {
 namespace {
 
@@ -52,6 +54,35 @@ std::string StopOnSignal::signal_name() const {
     default:
       return "signal " + std::to_string(signal());
   }
+}
+
+std::function<nlohmann::json(int)> StoppableJobs::wrap(
+    const std::string& stage, const std::function<nlohmann::json(int)>& job) {
+  return [this, stage, job](int i) {
+    if (stop_.requested()) throw std::runtime_error("interrupted before job " + std::to_string(i));
+    nlohmann::json out = job(i);
+    const std::lock_guard<std::mutex> lock(mu_);
+    done_.push_back({{"stage", stage}, {"index", i}, {"result", out}});
+    return out;
+  };
+}
+
+Interrupted StoppableJobs::stopped(const std::string& command, const std::string& json, bool write,
+                                   nlohmann::json extra) {
+  const std::lock_guard<std::mutex> lock(mu_);
+  const std::string why = "stopped by " + stop_.signal_name() + " after " +
+                          std::to_string(done_.size()) + " jobs of this rank";
+  if (write && !json.empty()) {
+    extra["partial"] = true;
+    extra["partial_reason"] = why;
+    extra["completed_jobs"] = done_;
+    write_json(json, extra);
+  }
+  return Interrupted(command + " " + why +
+                         (json.empty() ? std::string("; no --json given, nothing written")
+                                       : "; partial results in " + json +
+                                             " (\"partial\": true, \"completed_jobs\")"),
+                     stop_.exit_status());
 }
 
 }  // namespace dentsim::cli

@@ -8,6 +8,9 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
+#include <mutex>
+#include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
 
@@ -40,6 +43,25 @@ class Interrupted : public std::runtime_error {
 
  private:
   int status_;
+};
+
+// The jobs of a sweep (zwidth, bench; cli/mpi_sweep.h) that a signal may stop: wrap() makes a job
+// refuse to start once the signal came and keeps each finished result; stopped() writes what this
+// rank finished to `json` ({"partial": true, "partial_reason", "completed_jobs": [{"stage",
+// "index", "result"}], plus `extra`) and returns the Interrupted to throw.
+class StoppableJobs {
+ public:
+  explicit StoppableJobs(const StopOnSignal& stop) : stop_(stop) {}
+  std::function<nlohmann::json(int)> wrap(const std::string& stage,
+                                          const std::function<nlohmann::json(int)>& job);
+  // `write`: this rank writes the outputs (rank 0).
+  Interrupted stopped(const std::string& command, const std::string& json, bool write,
+                      nlohmann::json extra = nlohmann::json::object());
+
+ private:
+  const StopOnSignal& stop_;
+  std::mutex mu_;
+  nlohmann::json done_ = nlohmann::json::array();
 };
 
 }  // namespace dentsim::cli
