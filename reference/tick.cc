@@ -146,7 +146,7 @@ void encoder_kalman_step(const PipelineModel& m, PipelineData& d) {
     if (!accel.allFinite()) accel.setZero();
     // sigma_a,i = sigma_f (|J_v,i| + lever |J_w,i|) / M_ii: the force the model does not know.
     const EncoderKalmanParams& p = m.encoder_kalman_params;
-    Vec6 sigma_a;
+    Vec6 sigma_a = Vec6::Zero();
     for (int i = 0; i < 6; ++i) {
       const double lever =
           t.J_t.col(i).head<3>().norm() + p.grip_lever_m * t.J_t.col(i).tail<3>().norm();
