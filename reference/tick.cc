@@ -10,6 +10,7 @@
 #include "reference/core/io.h"
 #include "reference/coupling.h"
 #include "reference/decomposition.h"
+#include "reference/encoder_kalman.h"
 #include "reference/explicit_euler.h"
 #include "reference/friction.h"
 #include "reference/grip_detector.h"
@@ -87,6 +88,32 @@ PipelineModel make_pipeline_model(const SixDofDeviceModel& device, const Pipelin
     m.torque_limit = config.torque_limit;
   }
   m.compensate_gravity = config.compensate_gravity;
+  if (config.encoder_kalman) {
+    if (config.encoder_quantum.size() != 0 && config.encoder_quantum.size() != n) {
+      throw std::invalid_argument("encoder quantum has " +
+                                  std::to_string(config.encoder_quantum.size()) +
+                                  " entries; the device has " + std::to_string(n) + " joints");
+    }
+    for (int i = 0; i < config.encoder_quantum.size(); ++i) {
+      if (!(config.encoder_quantum(i) >= 0.0) || !std::isfinite(config.encoder_quantum(i))) {
+        throw std::invalid_argument("encoder quantum[" + std::to_string(i) + "] = " +
+                                    std::to_string(config.encoder_quantum(i)) +
+                                    " (expected finite and >= 0)");
+      }
+    }
+    const EncoderKalmanParams& ek = config.encoder_kalman_params;
+    if (!(ek.force_sigma_n > 0.0) || !std::isfinite(ek.force_sigma_n) ||
+        !(ek.grip_lever_m >= 0.0) || !std::isfinite(ek.grip_lever_m)) {
+      throw std::invalid_argument(
+          "encoder Kalman filter: force_sigma_n must be > 0 and grip_lever_m >= 0, both finite");
+    }
+    m.encoder_kalman = true;
+    if (config.encoder_quantum.size() == n) m.encoder_quantum = config.encoder_quantum;
+    m.encoder_kalman_params = ek;
+    // The filter's velocity carries no driver low-pass and is no backward difference: the
+    // observer takes the torque as it was applied (reference/observer.h, unmatched input).
+    m.observer_input = ObserverInput{};
+  }
   m.skip_unneeded = config.skip_unneeded;
   if (!m.skip_unneeded && config.method != Method::kPmiPd) {
     // The decomposition runs (and is discarded) with skips off: it needs M_d factorised.
@@ -97,7 +124,44 @@ PipelineModel make_pipeline_model(const SixDofDeviceModel& device, const Pipelin
 
 namespace reference {
 
+namespace {
+
+// The encoder Kalman filter's step (reference/encoder_kalman.h): predicts with the model terms of
+// the tick that just ended (d.dev, the hypothesis in force, the torque applied over it and the
+// observer's estimate), corrects with the sample, and puts the estimate in d.q, d.qd.
+void encoder_kalman_step(const PipelineModel& m, PipelineData& d) {
+  if (!d.enc.ready) {
+    encoder_kalman_reset(d.q, d.qd, m.encoder_quantum, d.enc);
+  } else {
+    const double T = d.have_prev && d.t > d.t_prev ? d.t - d.t_prev : d.T;
+    const DeviceTerms& t = d.dev;
+    const bool gripped = m.grasp && d.grip.gripped;
+    Mat6 M = t.M;
+    if (gripped) M += d.M_hand;
+    Vec6 f_hat = Vec6::Zero();
+    if (m.observe) f_hat = gripped ? d.obs1.f_hat : d.obs0.f_hat;
+    const Eigen::LLT<Mat6> llt(M);
+    Vec6 accel = Vec6::Zero();
+    if (llt.info() == Eigen::Success) accel = llt.solve(d.tau_prev + f_hat - t.g - t.tau_f);
+    if (!accel.allFinite()) accel.setZero();
+    // sigma_a,i = sigma_f (|J_v,i| + lever |J_w,i|) / M_ii: the force the model does not know.
+    const EncoderKalmanParams& p = m.encoder_kalman_params;
+    Vec6 sigma_a = Vec6::Zero();
+    for (int i = 0; i < 6; ++i) {
+      const double lever =
+          t.J_t.col(i).head<3>().norm() + p.grip_lever_m * t.J_t.col(i).tail<3>().norm();
+      sigma_a(i) = M(i, i) > 0.0 ? p.force_sigma_n * lever / M(i, i) : 0.0;
+    }
+    encoder_kalman_update(d.q, d.qd, m.encoder_quantum, accel, sigma_a, T, d.enc);
+  }
+  d.q = d.enc.q;
+  d.qd = d.enc.qd;
+}
+
+}  // namespace
+
 TickStatus device_terms(const PipelineModel& m, PipelineData& d) {
+  if (m.encoder_kalman) encoder_kalman_step(m, d);
   // One pass of the device model: x1, R1, J_t (V1 = J_t qd), M, C^T qd, g, tau_f   (2.1), (2.2)
   DeviceTerms& t = d.dev;
   m.device->terms(d.q, d.qd, m.grasp, t);
@@ -287,6 +351,7 @@ TickStatus drill(const PipelineModel&, PipelineData& d) {
 }
 
 TickStatus reset(const PipelineModel& m, PipelineData& d) {
+  d.enc.ready = false;
   const TickStatus st = device_terms(m, d);
   if (st != TickStatus::kOk) return st;
   d.proxy = ProxyState{};

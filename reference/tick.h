@@ -53,6 +53,12 @@ struct PipelineConfig {
   const GraspMassModel* grasp_model = nullptr;
   GripDetectorParams grip_detector;
   bool skip_unneeded = true;  // PipelineModel::skip_unneeded
+  // The encoder Kalman filter (reference/encoder_kalman.h): a sub-count estimate of (q, qd) from
+  // the quantised encoders, per joint quantum `encoder_quantum` (the device's; empty or zero:
+  // that joint passes through). Off by default.
+  bool encoder_kalman = false;
+  VecX encoder_quantum;
+  EncoderKalmanParams encoder_kalman_params;
 };
 
 // Validates `config` against `device` and builds the constant model of the tick. Throws

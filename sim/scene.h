@@ -66,6 +66,9 @@ struct SceneMethod {
   // With grasp_mass_scale > 0 and pmi-pd: a grip detector decides tick by tick whether the hand
   // is on the tool (reference/grip_detector.h) instead of assuming it always is.
   bool grip_detector = false;
+  // Remedy of issue #29 (docs/derivations/quiet_stiffness.md): the pipeline estimates the joint
+  // state between encoder counts with the device model (reference/encoder_kalman.h).
+  bool encoder_kalman = false;
   FrictionParams friction;
   ProxyParams proxy;
 };

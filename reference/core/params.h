@@ -89,6 +89,15 @@ struct ObserverInput {
   double lowpass_hz = 0.0;                 // > 0: u low-passed like qd (first order, f_c [Hz])
 };
 
+// The encoder Kalman filter's model of what it does not know (reference/encoder_kalman.h).
+struct EncoderKalmanParams {
+  // The force the model does not know, per axis [N]: the observer's accuracy target (issue #29:
+  // 0.05 N). The quiet measures change little between 0.05 and 1 N
+  // (docs/derivations/quiet_stiffness.md).
+  double force_sigma_n = 0.05;
+  double grip_lever_m = 0.01;  // a pen grip's lever for the hand's torque [m]
+};
+
 // The sensorless grip detector's band, power filter and CUSUM thresholds
 // (reference/grip_detector.h).
 struct GripDetectorParams {

@@ -109,6 +109,11 @@ struct PipelineModel {
   bool saturate = false;
   Vec6 torque_limit = Vec6::Zero();  // [N m]
   bool compensate_gravity = true;
+  // The encoder Kalman filter (reference/encoder_kalman.h; issue #29): device_terms replaces the
+  // sample's quantised (q, qd) by the filter's sub-count estimate, which every later stage uses.
+  bool encoder_kalman = false;
+  Vec6 encoder_quantum = Vec6::Zero();  // per joint [rad]; 0 = that joint is not quantised
+  EncoderKalmanParams encoder_kalman_params;
   // Skip what the scene does not need (fast/ only; fast/README.md "Skips"): the observer without
   // a gain, the grip detector without a hand mass, the decomposition unless the method uses it,
   // friction when off, contact work on an empty set, drilling unless the tool drills, the tooth's
@@ -123,6 +128,13 @@ struct PipelineModel {
 template <class V>
 struct MomentumObserverState {
   V p_hat, f_hat, beta_prev, tau_prev, u_f;
+  bool ready = false;
+};
+
+// The encoder Kalman filter's estimate (reference/encoder_kalman.h).
+struct EncoderKalmanState {
+  Vec6 q = Vec6::Zero();   // estimated joint angles
+  Vec6 qd = Vec6::Zero();  // estimated joint velocities
   bool ready = false;
 };
 
@@ -192,6 +204,9 @@ struct PipelineData {
   Mat6 J1 = Mat6::Identity();     // J_t^-1: qd = J1 V1 (2.2)
   Mat6 M_hand = Mat6::Zero();     // J_t^T Mt J_t (grasp)
   Vec6 CTqd_hand = Vec6::Zero();  // dJ_t/dt^T Mt V1 (grasp)
+
+  // device_terms: the encoder Kalman filter's state (PipelineModel::encoder_kalman)
+  EncoderKalmanState enc;
 
   // observe
   MomentumObserverState<Vec6> obs0, obs1;  // obs0: the device (H0), obs1: device + hand (H1)

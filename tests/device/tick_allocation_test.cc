@@ -1,8 +1,8 @@
 // The servo tick allocates nothing (docs/design.md "The tick as Model/Data stages"; issue "The tick
 // as an engine"): every implementation in the registry (fast/registry.h), every method, with and
-// without the grip detector, over 10^4 ticks of the drill scene in contact and drilling, counted
-// with a global operator new hook around the loop owner's step (read -> tick -> write ->
-// advance on the simulated Phantom).
+// without the grip detector (and with issue #29's encoder Kalman filter), over 10^4 ticks of the
+// drill scene in contact and drilling, counted with a global operator new hook around the loop
+// owner's step (read -> tick -> write -> advance on the simulated Phantom).
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -20,13 +20,16 @@ struct Variant {
   const char* name;
   Method method;
   bool grip_detector;
+  bool encoder_kalman = false;
 };
 
 TEST(TickAllocation, DrillSceneTicksAllocateNothingForEveryImplementationAndMethod) {
   const Variant variants[] = {{"explicit", Method::kExplicitVc, false},
                               {"pmi", Method::kPmiVc, false},
                               {"pmi-pd", Method::kPmiPd, false},
-                              {"pmi-pd + grip detector", Method::kPmiPd, true}};
+                              {"pmi-pd + grip detector", Method::kPmiPd, true},
+                              {"pmi-pd + grip detector + encoder kalman", Method::kPmiPd, true,
+                               true}};
   constexpr long kTicks = 10000;
   for (const StageTable* table : stage_tables()) {
     for (const Variant& v : variants) {
@@ -37,6 +40,7 @@ TEST(TickAllocation, DrillSceneTicksAllocateNothingForEveryImplementationAndMeth
         scene.method.grasp_mass_scale = 1.0;
         scene.method.grip_detector = true;
       }
+      scene.method.encoder_kalman = v.encoder_kalman;
       SceneRigOptions options;
       options.pipeline = table->implementation;
       const std::unique_ptr<SceneRig> rig = build_scene_rig(scene, options);

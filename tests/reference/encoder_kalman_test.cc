@@ -1,0 +1,128 @@
+// The encoder Kalman filter (reference/encoder_kalman.h; issue #29 item 3): Kalata's closed-form
+// gains against the iterated Riccati equation, the estimate never leaves the encoder cell and
+// beats the cell centre and the driver's backward difference on a quantised trajectory whose
+// acceleration the model knows, and the fast pipeline equals the reference tick for tick with the
+// filter on (the stage is shared: fast::device_terms calls the reference's).
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "device/closed_loop.h"
+#include "sim/scene.h"
+#include "sim/simulator.h"
+#include "reference/encoder_kalman.h"
+
+namespace dentsim {
+namespace {
+
+TEST(EncoderKalman, KalataGainsAreTheSteadyStateKalmanGains) {
+  const double T = 1e-3, sigma_m = 1.0;
+  for (const double lambda : {1e-4, 8.3e-3, 0.1, 1.0, 5.0}) {
+    const double sigma_a = lambda * sigma_m / (T * T);
+    Eigen::Matrix2d F;
+    F << 1.0, T, 0.0, 1.0;
+    const Eigen::Vector2d G(0.5 * T * T, T);
+    const Eigen::Matrix2d Q = G * G.transpose() * sigma_a * sigma_a;
+    Eigen::Matrix2d P = Eigen::Matrix2d::Identity();
+    Eigen::Vector2d K = Eigen::Vector2d::Zero();
+    for (int k = 0; k < 200000; ++k) {
+      P = F * P * F.transpose() + Q;
+      K = P.col(0) / (P(0, 0) + sigma_m * sigma_m);
+      P = P - K * P.row(0);
+    }
+    double alpha = 0.0, beta = 0.0;
+    alpha_beta_gains(lambda, &alpha, &beta);
+    EXPECT_NEAR(alpha, K(0), 1e-9 * K(0)) << lambda;
+    EXPECT_NEAR(beta, K(1) * T, 1e-9 * K(1) * T) << lambda;
+  }
+}
+
+// One joint moving q(t) = A sin(w t) (a = -w^2 q known to the filter), read by a floor encoder.
+TEST(EncoderKalman, EstimateStaysInTheCellAndBeatsTheCountAndTheBackwardDifference) {
+  const double T = 1e-3, delta = 1.0e-4, A = 2e-3, w = 2.0 * M_PI * 2.0;
+  Vec6 quantum = Vec6::Zero();
+  quantum(0) = delta;
+  Vec6 sigma_a = Vec6::Zero();
+  sigma_a(0) = 1.0;  // [rad/s^2]: an unknown torque the filter allows for
+  EncoderKalmanState s;
+  auto meas = [&](double t) { return delta * std::floor(A * std::sin(w * t) / delta); };
+  Vec6 q_m = Vec6::Zero(), qd_m = Vec6::Zero();
+  q_m(0) = meas(0.0);
+  encoder_kalman_reset(q_m, qd_m, quantum, s);
+  double e_filter = 0.0, e_cell = 0.0, ev_filter = 0.0, ev_diff = 0.0;
+  long n = 0;
+  double q_prev = q_m(0);
+  for (int k = 1; k <= 4000; ++k) {
+    const double t = k * T;
+    q_m(0) = meas(t);
+    Vec6 accel = Vec6::Zero();
+    accel(0) = -w * w * A * std::sin(w * (t - T));  // over the tick that just ended
+    encoder_kalman_update(q_m, qd_m, quantum, accel, sigma_a, T, s);
+    ASSERT_GE(s.q(0), q_m(0));
+    ASSERT_LE(s.q(0), q_m(0) + delta);
+    const double q_true = A * std::sin(w * t), v_true = A * w * std::cos(w * t);
+    if (k > 500) {
+      e_filter += std::pow(s.q(0) - q_true, 2);
+      e_cell += std::pow(q_m(0) + 0.5 * delta - q_true, 2);
+      ev_filter += std::pow(s.qd(0) - v_true, 2);
+      ev_diff += std::pow((q_m(0) - q_prev) / T - v_true, 2);
+      ++n;
+    }
+    q_prev = q_m(0);
+  }
+  const double rms_filter = std::sqrt(e_filter / n), rms_cell = std::sqrt(e_cell / n);
+  const double rmsv_filter = std::sqrt(ev_filter / n), rmsv_diff = std::sqrt(ev_diff / n);
+  std::printf("position rms: filter %.3e, cell centre %.3e (Delta/sqrt(12) = %.3e) rad\n",
+              rms_filter, rms_cell, delta / std::sqrt(12.0));
+  std::printf("velocity rms: filter %.3e, backward difference %.3e rad/s\n", rmsv_filter, rmsv_diff);
+  EXPECT_LT(rms_filter, 0.7 * rms_cell);
+  EXPECT_LT(rmsv_filter, 0.1 * rmsv_diff);
+  // Joints without a quantum pass the measurement through.
+  EXPECT_EQ(s.q(1), q_m(1));
+  EXPECT_EQ(s.qd(1), qd_m(1));
+}
+
+// The probe scene with the filter on: the fast pipeline equals the reference in free space (the
+// contact stage's round-off differs by design afterwards: tests/fast/tick_test.cc), and the filter
+// changes the torque (it is on).
+TEST(EncoderKalman, FastPipelineEqualsTheReferenceWithTheFilterOn) {
+  Scene scene = load_scene("probe");
+  auto torques = [&](const std::string& pipeline, bool on) {
+    Scene s = scene;
+    s.method.encoder_kalman = on;
+    SceneRigOptions options;
+    options.pipeline = pipeline;
+    const std::unique_ptr<SceneRig> rig = build_scene_rig(s, options);
+    rig->loop->start();
+    std::vector<VecX> out;
+    for (int k = 0; k < 700; ++k) {  // 0.7 s of the approach, in free space (contact at 0.76 s)
+      const TickResult& r = rig->loop->step();
+      EXPECT_TRUE(r.contacts.empty());
+      out.push_back(r.tau);
+    }
+    EXPECT_FALSE(rig->loop->faulted());
+    return out;
+  };
+  const auto ref = torques("reference", true);
+  const auto fast = torques("fast", true);
+  const auto off = torques("reference", false);
+  double max_diff = 0.0, max_tau = 0.0, max_change = 0.0;
+  for (std::size_t k = 0; k < ref.size(); ++k) {
+    max_diff = std::max(max_diff, (ref[k] - fast[k]).cwiseAbs().maxCoeff());
+    max_tau = std::max(max_tau, ref[k].cwiseAbs().maxCoeff());
+    max_change = std::max(max_change, (ref[k] - off[k]).cwiseAbs().maxCoeff());
+  }
+  std::printf("fast vs reference: max torque diff %.3e N m (largest %.3e), filter on vs off %.3e\n",
+              max_diff, max_tau, max_change);
+  EXPECT_LE(max_diff, 1e-9 * max_tau);
+  EXPECT_GT(max_change, 1e-3 * max_tau);
+}
+
+}  // namespace
+}  // namespace dentsim
