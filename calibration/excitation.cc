@@ -280,7 +280,8 @@ ExcitationOutcome run_guarded_excitation(Device& device, const PhantomParams& pr
   };
   while (true) {
     device.read(s);
-    out.stop_t = started ? s.t - t_exc0 : s.t - t_dev0;
+    // The time of the stop: the last sample before a fault, a guard or the stop request.
+    if (!out.interrupted && !out.complete) out.stop_t = started ? s.t - t_exc0 : s.t - t_dev0;
     if (device.faults() != kFaultNone) {
       out.fault = device.faults();
       if (!out.complete) stop_now("device fault " + fault_string(out.fault) + " " + when(s.t));
@@ -304,12 +305,15 @@ ExcitationOutcome run_guarded_excitation(Device& device, const PhantomParams& pr
     std::string hard;
     for (int j = 0; j < 6 && hard.empty(); ++j) {
       char buf[200];
-      if (speed(j) > qd_stop(j)) {
+      // The speed and range stops guard the excitation; before it, an arm that moves while the
+      // torque ramps in (a gimbal falling onto its stop under gravity) is held by the PD.
+      const bool exciting = phase == Phase::kExcite || phase == Phase::kFadeOut;
+      if (exciting && speed(j) > qd_stop(j)) {
         std::snprintf(buf, sizeof buf, "velocity guard: joint %d at %.3g rad/s, beyond %.3g rad/s",
                       j + 1, speed(j), qd_stop(j));
         hard = buf;
-      } else if (q(j) < prior.q_min_rad(j) - g.range_tolerance_rad ||
-                 q(j) > prior.q_max_rad(j) + g.range_tolerance_rad) {
+      } else if (exciting && (q(j) < prior.q_min_rad(j) - g.range_tolerance_rad ||
+                              q(j) > prior.q_max_rad(j) + g.range_tolerance_rad)) {
         std::snprintf(buf, sizeof buf, "workspace guard: joint %d at %.4g rad, outside [%.4g, %.4g]",
                       j + 1, q(j), prior.q_min_rad(j), prior.q_max_rad(j));
         hard = buf;

@@ -163,7 +163,8 @@ ExcitationOutcome run_excitation_until_stop(Device& device, const PhantomParams&
 // qd_max, or a command is clamped, the excitation's time scale backs off (down to
 // min_time_scale; the path, inside the joint limits, is unchanged) and recovers afterwards. The
 // run stops, zero torque at once, the log kept and marked incomplete, on: a device fault, a
-// non-finite sample, a joint beyond velocity_stop x qd_max or outside the prior's joint range
+// non-finite sample, a joint beyond velocity_stop x qd_max during the excitation (before it, an
+// arm that moves while the torque ramps in is held by the PD), or outside the prior's joint range
 // (by more than range_tolerance_rad), or the stop request (then through the clean stop).
 struct GuardedExcitationParams {
   double torque_ramp_s = 1.0;

@@ -54,7 +54,9 @@ std::vector<std::string> calibration_log_columns() {
 
 std::string calibration_log_to_text(const CalibrationLog& log) {
   std::string s = "# dentsim calibration log v1 (columns: docs/calibration.md)\n";
-  if (!log.incomplete.empty()) s += "# " + std::string(kIncompletePrefix) + log.incomplete + "\n";
+  if (!log.incomplete.empty()) {
+    s += "# " + std::string(kIncompletePrefix) + " " + log.incomplete + "\n";
+  }
   for (const auto& c : log.comments) {
     s += '#';
     s += c;

@@ -128,8 +128,12 @@ TEST(CalibrateCli, ExciteThenCalibrateOnTheSimulatedPhantom) {
     for (const auto& n : j.at("not_identifiable_left_at_prior")) left = left || n == name;
     for (const auto& m : j.at("not_identifiable_moved")) moved = moved || m.at("name") == name;
     EXPECT_EQ(left + moved + e.at("identifiable").get<bool>(), 1) << name;
-    if (left) EXPECT_LE(std::abs(value - prior), 1e-6 * std::abs(prior)) << name;
-    if (moved) EXPECT_GT(std::abs(value - prior), 1e-6 * std::abs(prior)) << name;
+    if (left) {
+      EXPECT_LE(std::abs(value - prior), 1e-6 * std::abs(prior)) << name;
+    }
+    if (moved) {
+      EXPECT_GT(std::abs(value - prior), 1e-6 * std::abs(prior)) << name;
+    }
   }
   EXPECT_TRUE(j.at("log_incomplete").is_null());
   // The fitted model says it was fitted, and from which log.
@@ -326,18 +330,20 @@ TEST(CalibrateCli, FaultedExcitationLeavesAnIncompleteLogCalibrateRefusesUnlessA
   const Cmd ex = run("excite --model " + (d / "prior.json").string() + " -o " + log +
                      " --duration 5 --design-iterations 0 --inject-fault device-loss@6.5");
   EXPECT_EQ(ex.status, 3) << ex.output;
-  EXPECT_THAT(ex.output, HasSubstr("excite: device fault scheduler_stopped at t = 3.0"));
+  EXPECT_THAT(ex.output, HasSubstr("excite: device fault scheduler_stopped at t = "));
   EXPECT_THAT(ex.output, HasSubstr("marked incomplete) -> " + log));
   const CalibrationLog l = read_calibration_log(log);
-  EXPECT_THAT(l.incomplete, HasSubstr("device fault scheduler_stopped at t = 3.0"));
+  EXPECT_THAT(l.incomplete, HasSubstr("device fault scheduler_stopped at t = "));
+  EXPECT_THAT(ex.output, HasSubstr(l.incomplete + "; the log up to the stop"));
   EXPECT_GT(l.size(), 2500);
-  EXPECT_LT(l.t.back(), 3.01);
+  EXPECT_GT(l.t.back(), 2.9);
+  EXPECT_LT(l.t.back(), 3.05);
   const std::string out = " --json " + (d / "fit.json").string() + " -o " +
                           (d / "fitted.json").string() + " --max-samples 400";
   const Cmd refused = run("calibrate " + log + out);
   EXPECT_EQ(refused.status, 2) << refused.output;
-  EXPECT_THAT(refused.output, HasSubstr(log + ": the log is marked incomplete (device fault "
-                                              "scheduler_stopped at t = 3.0"));
+  EXPECT_THAT(refused.output,
+              HasSubstr(log + ": the log is marked incomplete (" + l.incomplete + ")"));
   EXPECT_THAT(refused.output, HasSubstr("unless --allow-incomplete is given"));
   EXPECT_FALSE(fs::exists(d / "fit.json"));
   EXPECT_FALSE(fs::exists(d / "fitted.json"));
