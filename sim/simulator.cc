@@ -122,6 +122,9 @@ constexpr double kHardwareWatchdogPeriods = 20.0;
 constexpr double kMaxSaturationS = 2.0;
 
 double SceneRig::tip_depth(const Pose& pose) {
+  if (field) {  // the "field" model: the tip sphere's overlap with the field's own solid
+    return std::max(0.0, tip.radius - field->value(pose.x + pose.R * tip.offset_body));
+  }
   tip_contacts(pose, &measure_contacts);
   double d = 0.0;
   for (const Contact& c : measure_contacts) d = std::max(d, c.depth);
