@@ -39,4 +39,24 @@ AffineWrench contact_wrench_unchecked(std::span<const Contact> contacts, const P
   return F;
 }
 
+void add_anchored_spring_unchecked(AffineWrench* F, std::span<const Contact> contacts,
+                                   const Pose& proxy, double T, Scheme scheme, const Vec3& center) {
+  if (scheme != Scheme::kMidpoint) return;
+  const ContactWeights w(contacts);
+  const Mat3 Rt = proxy.R.transpose();
+  for (const Contact& c : contacts) {
+    const Vec3 x_c = proxy.x + proxy.R * c.r;
+    if (!(c.n.dot(c.x_o - x_c) > 0.0)) continue;  // unilateral, as the normal part
+    const double g = 0.5 * T * w(c) * c.stiffness;
+    const Vec3 t1 = c.n.unitOrthogonal();
+    const Vec3 t2 = c.n.cross(t1);
+    for (const Vec3& t : {t1, t2}) {
+      Vec6 b;
+      b.head<3>() = t;
+      b.tail<3>() = center.cross(Rt * t);  // S(o) R^T t
+      F->G.noalias() -= (g * b) * b.transpose();
+    }
+  }
+}
+
 }  // namespace dentsim::fast

@@ -19,4 +19,9 @@ namespace dentsim::fast {
 AffineWrench contact_wrench_unchecked(std::span<const Contact> contacts, const Pose& proxy,
                                       double T, Scheme scheme);
 
+// Twin of reference/contact.h's add_anchored_spring_unchecked: -w K T/2 b_j b_j^T for two
+// tangents t_j of n, b_j = J_o^T t_j = [t_j; o x (R^T t_j)] (I - n n^T = t1 t1^T + t2 t2^T).
+void add_anchored_spring_unchecked(AffineWrench* F, std::span<const Contact> contacts,
+                                   const Pose& proxy, double T, Scheme scheme, const Vec3& center);
+
 }  // namespace dentsim::fast

@@ -2,6 +2,7 @@
 
 #include "fast/contact.h"
 #include "fast/pmi.h"
+#include "reference/contact.h"
 #include "reference/decomposition.h"
 #include "reference/grip_detector.h"
 #include "reference/observer.h"
@@ -71,6 +72,10 @@ TickStatus assemble(const PipelineModel& m, PipelineData& d) {
     d.contact = AffineWrench{};
   } else {
     d.contact = fast::contact_wrench_unchecked(d.r.contacts, d.proxy.pose, d.T, m.scheme);
+    if (const Vec3* o = anchored_spring_center(d.env)) {
+      fast::add_anchored_spring_unchecked(&d.contact, d.r.contacts, d.proxy.pose, d.T, m.scheme,
+                                          *o);
+    }
   }
   const TickStatus st = reference::detail::assemble_given_contact(m, d);
   if (st == TickStatus::kOk && !m.skip_unneeded && m.method != Method::kPmiPd) {

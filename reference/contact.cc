@@ -130,6 +130,18 @@ AffineWrench contact_wrench_unchecked(std::span<const Contact> contacts, const P
   return F;
 }
 
+void add_anchored_spring_unchecked(AffineWrench* F, std::span<const Contact> contacts,
+                                   const Pose& proxy, double T, Scheme scheme, const Vec3& center) {
+  if (scheme != Scheme::kMidpoint) return;
+  const ContactWeights w(contacts);
+  const Mat36 Jo = contact_point_jacobian(center, proxy.R);  // the centre's velocity J_o V
+  for (const Contact& c : contacts) {
+    if (!(penetration_depth(c, proxy) > 0.0)) continue;
+    const Mat3 P = Mat3::Identity() - c.n * c.n.transpose();
+    F->G -= (0.5 * T * w(c) * c.stiffness) * (Jo.transpose() * P * Jo);
+  }
+}
+
 double contact_potential(std::span<const Contact> contacts, const Pose& proxy) {
   const std::vector<double> w = contact_weights(contacts);  // validates the weights
   double U = 0.0;

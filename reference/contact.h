@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "reference/core/affine_wrench.h"
+#include "reference/core/contact_provider.h"
 #include "reference/core/params.h"
 #include "reference/core/types.h"
 
@@ -93,6 +94,24 @@ AffineWrench contact_wrench(std::span<const Contact> contacts, const Pose& proxy
 // once): never throws, never allocates.
 AffineWrench contact_wrench_unchecked(std::span<const Contact> contacts, const Pose& proxy,
                                       double T, Scheme scheme);
+
+// The surface-proxy contact's spring across its normal (reference/tooth/sdf.h, issue #32): that
+// contact renders K (g - c) to an anchor g the tick holds fixed, c = x2 + R2 o the tool sphere's
+// centre (o = `center`, proxy body frame), so its force turns with the tool: it is as stiff across
+// n as along it. contact_wrench integrates only the part along n; this adds, under kMidpoint, the
+// midpoint value of the rest to F (f0 is along n and gains nothing):
+//     G -= sum_i w_i K_i T/2 J_o^T (I - n_i n_i^T) J_o,   J_o = J_c(o, R2),
+// over the penetrating members. Left out, the turning is integrated explicitly: on a light proxy
+// on a stiff tooth (K T^2 / m ~ 1) the tool oscillates across n with growing amplitude (the stress
+// run of docs/results/reliability.md: PMI drilling at 500 Hz, 2e78 N); with it the anchored spring
+// is the exact midpoint spring, energy-neutral (tests/reference/contact_test.cc). kExplicit: no
+// change. Never throws, never allocates.
+void add_anchored_spring_unchecked(AffineWrench* F, std::span<const Contact> contacts,
+                                   const Pose& proxy, double T, Scheme scheme, const Vec3& center);
+// The tool sphere's centre o (proxy body frame) when `env` renders the surface-proxy contact (the
+// tick's assemble stage then adds the spring across the normal above); nullptr for any other
+// environment. Defined with the tooth (reference/tooth/tooth_contacts.cc).
+const Vec3* anchored_spring_center(const ContactProvider* env);
 
 // Contact potential U = sum_i w_i 1/2 K_i delta_i^2 over members with delta_i > 0 [J].
 // -dU/dt = V^T F(V) for the spring part (F at kExplicit without damping).

@@ -164,8 +164,12 @@ TickStatus collide(const PipelineModel&, PipelineData& d) {
 
 TickStatus assemble(const PipelineModel& m, PipelineData& d) {
   d.contact = contact_wrench_unchecked(d.r.contacts, d.proxy.pose, d.T, m.scheme);
+  if (const Vec3* o = anchored_spring_center(d.env)) {
+    add_anchored_spring_unchecked(&d.contact, d.r.contacts, d.proxy.pose, d.T, m.scheme, *o);
+  }
   return detail::assemble_given_contact(m, d);
 }
+
 
 namespace detail {
 

@@ -1,5 +1,7 @@
 #include "reference/tooth/tooth_contacts.h"
 
+#include "reference/contact.h"
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -152,6 +154,14 @@ void ToothProviderBase::record_drill(std::span<const Contact> contacts, std::uin
     rec.removed[m] = static_cast<int>(drill_state_.removed_voxels[m] - removed_before[m]);
   }
   drill_log_.push_back(rec);
+}
+
+const Vec3* anchored_spring_center(const ContactProvider* env) {
+  // The surface-proxy contact renders a spring to an anchor (reference/contact.h); the face
+  // model's force stays along the face normal. A pointer cast: no allocation, no throw.
+  const auto* tooth = dynamic_cast<const ToothContactProvider*>(env);
+  if (tooth == nullptr || tooth->model() != ContactModel::kSurfaceProxy) return nullptr;
+  return &tooth->tip().offset_body;
 }
 
 }  // namespace dentsim
