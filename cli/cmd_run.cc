@@ -15,6 +15,7 @@
 #include "cli/registry.h"
 #include "cli/run_view.h"
 #include "device/fault_injection.h"
+#include "device/scene_stability.h"
 #include "device/run_report.h"
 #include "device/scene.h"
 #include "device/simulator.h"
@@ -43,6 +44,7 @@ struct RunCliOptions {
   std::string hd_library;
   std::string hd_loop = "callback";
   bool no_skip = false;  // --no-skip
+  bool force = false;    // --force: run a scene its method's stability bound refuses
 };
 
 // timeseries.csv: the columns of run_series_columns() (device/run_report.h, shared with the
@@ -199,6 +201,8 @@ void run(const RunCliOptions& o) {
           ? load_scene_patched(o.scene, {{"tick_hz", o.tick_hz}},
                                "at --tick-hz " + std::to_string(static_cast<long>(o.tick_hz)))
           : load_scene(o.scene);
+  // What cannot be stable is refused before the run (device/scene_stability.h).
+  if (!o.force) check_scene_stability(scene);
   std::error_code ec;
   std::filesystem::create_directories(o.out, ec);
   if (ec || !std::filesystem::is_directory(o.out)) {
@@ -308,6 +312,9 @@ void setup_run(CLI::App& app) {
   sub->add_option("--record", o->record,
                   "Record every tick's device sample, command and contact count to FILE (a "
                   "session for `dentsim replay`; kept up to a fault)");
+  sub->add_flag("--force", o->force,
+                "Run a scene that its method's stability conditions refuse (an experiment; the "
+                "supervisor still ends a diverging run in a named fault, device/scene_stability.h)");
   sub->add_flag("--list", o->list, "List the built-in scenes");
   sub->add_flag("--view", o->view.view,
                 "Show the simulation live in a 3-D window, paced at real time (docs/view.md)");
