@@ -287,6 +287,10 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   SupervisorLimits supervision;
   supervision.tool_radius_m = g.tip.radius;
   supervision.nominal_period_s = g.tick;
+  // A late tick is ridden through up to what the momentum observer integrates stably in one
+  // step (L T_k < 2, reference/observer.h), and never less than 5 periods: 67 ms at the
+  // built-ins' L = 30 /s. Beyond it the estimate (and pmi-pd's feed-forward) would overshoot.
+  supervision.max_tick_s = std::max(5.0 * g.tick, 2.0 / scene.method.observer_gain);
   g.supervisor = std::make_unique<VirtualSupervisor>(supervision);
   g.loop->set_supervisor(g.supervisor.get());
   return rig;

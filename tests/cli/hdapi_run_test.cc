@@ -100,7 +100,8 @@ void expect_matches_direct(const std::string& extra, const std::string& direct_h
 // (24 % with three busy processes beside it). On a loaded machine the scheduler skips ticks (1707
 // of 2000 once, issue #32): the loop rides through them — each skipped tick lengthens the
 // measured T_k the pipeline integrates over, counted in `late_ticks` (T_k > 1.5 periods) — and
-// only a tick past the supervisor's bound (max(50 ms, 5 periods)) would be a fault. What holds
+// only a tick past the supervisor's bound (max(5 periods, 2/L) = 67 ms here: the observer's
+// L T_k < 2) is a fault (under load average ~18 the emulator's scheduler once left 51 ms). What holds
 // whatever the load: the device's clock covers the duration (expect_matches_direct), no record
 // is dropped, at most one tick per scheduler tick, and every tick the scheduler skipped shows as
 // a late tick, none beyond the bound.
@@ -117,7 +118,7 @@ TEST(HdapiRun, EmulatorRunMatchesTheDirectRunAtItsRate) {
   if (ticks < 1990) {
     EXPECT_GT(late, 0) << "ticks were skipped without a late tick";
   }
-  EXPECT_LT(longest, 0.05);
+  EXPECT_LT(longest, 2.0 / 30.0);
   EXPECT_GE(longest, 0.5e-3);  // the device clock advanced by about a period per tick
 }
 
