@@ -22,6 +22,7 @@
 #include "sim/run_report.h"
 #include "sim/scene.h"
 #include "sim/simulator.h"
+#include "sim/scene_stability.h"
 #include "fast/registry.h"
 #include "reference/core/io.h"
 #include "reference/tooth/materials.h"
@@ -47,6 +48,7 @@ struct RunCliOptions {
   std::string hd_library;
   std::string hd_loop = "callback";
   bool no_skip = false;  // --no-skip
+  bool force = false;    // --force: run a scene its method's stability bound refuses
 };
 
 // timeseries.csv: the columns of run_series_columns() (sim/run_report.h, shared with the
@@ -305,6 +307,8 @@ void run(const RunCliOptions& o) {
           ? load_scene_patched(o.scene, {{"tick_hz", o.tick_hz}},
                                "at --tick-hz " + std::to_string(static_cast<long>(o.tick_hz)))
           : load_scene(o.scene);
+  // What cannot be stable is refused before the run (sim/scene_stability.h).
+  if (!o.force) check_scene_stability(scene);
   make_output_dir({"--out", o.out});
   // Ctrl-C / SIGTERM: the loop stops at a tick boundary and every output of the ticks that ran is
   // written, report.json "partial": true (cli/interrupt.h). Installed before the first line.
@@ -459,6 +463,9 @@ void setup_run(CLI::App& app) {
   sub->add_option("--record", o->record,
                   "Record every tick's device sample, command and contact count to FILE (a "
                   "session for `dentsim replay`; kept up to a fault)");
+  sub->add_flag("--force", o->force,
+                "Run a scene that its method's stability conditions refuse (an experiment; the "
+                "supervisor still ends a diverging run in a named fault, sim/scene_stability.h)");
   sub->add_flag("--list", o->list, "List the built-in scenes");
   sub->add_flag("--view", o->view.view,
                 "Show the simulation live in a 3-D window, paced at real time (docs/view.md)");

@@ -21,6 +21,9 @@ void ClosedLoop::set_safety_chain(SafetyChain* chain) {
 }
 
 const char* ClosedLoop::fault_name() const {
+  if (fault_ == TickStatus::kOk && supervisor_fault_ != SupervisorFault::kNone) {
+    return supervisor_fault_name(supervisor_fault_);
+  }
   if (fault_ != TickStatus::kOk || device_faults_ == kFaultNone) return tick_status_name(fault_);
   return dentsim::fault_name(static_cast<DeviceFault>(device_faults_ & (~device_faults_ + 1u)));
 }
@@ -28,6 +31,8 @@ const char* ClosedLoop::fault_name() const {
 void ClosedLoop::start() {
   device_.read(sample_);
   device_faults_ = kFaultNone;
+  supervisor_fault_ = SupervisorFault::kNone;
+  if (supervisor_ != nullptr) supervisor_->start();
   if (safety_ != nullptr) safety_->start(sample_.t);
   fault_ = pipeline_.reset(sample_);
   fault_t_ = sample_.t;
@@ -56,6 +61,10 @@ const TickResult& ClosedLoop::decide() {
   if (!faulted() && r.status != TickStatus::kOk) {
     fault_ = r.status;
     fault_t_ = sample_.t;
+  }
+  if (!faulted() && supervisor_ != nullptr) {
+    supervisor_fault_ = supervisor_->check(r, pipeline_.proxy(), T_);
+    if (supervisor_fault_ != SupervisorFault::kNone) fault_t_ = sample_.t;
   }
   if (!faulted() && safety_ != nullptr) {
     const std::uint32_t f = safety_->apply(sample_, r.tau, last_exec_s_, nullptr, tau_safe_);

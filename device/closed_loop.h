@@ -37,6 +37,7 @@
 
 #include "device/device.h"
 #include "device/safety_chain.h"
+#include "device/virtual_supervisor.h"
 #include "reference/tick.h"
 
 namespace dentsim {
@@ -55,6 +56,10 @@ class ClosedLoop {
   // Runs every command through `chain` (nullptr: none) and latches the device's own faults; the
   // chain must outlive the loop. Call before start().
   void set_safety_chain(SafetyChain* chain);
+  // Checks every tick's result with `supervisor` (nullptr: none; device/virtual_supervisor.h)
+  // before its torque goes anywhere: a violated invariant latches its named fault and the loop
+  // commands zero torque on that very tick. Must outlive the loop; call before start().
+  void set_supervisor(VirtualSupervisor* supervisor) { supervisor_ = supervisor; }
   // One tick: read, tick, write, advance. Returns the tick's result (valid until the next step).
   const TickResult& step();
   // The same tick in callback form, for a device whose own clock calls us (HDAPI's scheduler:
@@ -74,7 +79,12 @@ class ClosedLoop {
   // flag's name), and the time of the sample it was raised on.
   TickStatus fault() const { return fault_; }
   std::uint32_t device_faults() const { return device_faults_; }
-  bool faulted() const { return fault_ != TickStatus::kOk || device_faults_ != kFaultNone; }
+  bool faulted() const {
+    return fault_ != TickStatus::kOk || device_faults_ != kFaultNone ||
+           supervisor_fault_ != SupervisorFault::kNone;
+  }
+  // The latched supervisor fault (kNone while none).
+  SupervisorFault supervisor_fault() const { return supervisor_fault_; }
   const char* fault_name() const;
   double fault_time() const { return fault_t_; }
   // The torque commanded on the last step (zero once faulted) [N m].
@@ -100,6 +110,8 @@ class ClosedLoop {
   VecX tau_gravity_prev_;      // callback form: the previous tick's gravity compensation
   double last_exec_s_ = -1.0;  // the previous tick's CPU time (the watchdog's input) [s]
   std::uint32_t device_faults_ = kFaultNone;
+  VirtualSupervisor* supervisor_ = nullptr;
+  SupervisorFault supervisor_fault_ = SupervisorFault::kNone;
 };
 
 }  // namespace dentsim

@@ -25,6 +25,9 @@ nlohmann::json run_report_json(const Scene& scene, const RunResult& r) {
   j["max_penetration_m"] = r.max_penetration_m;
   j["rendered_stiffness_n_per_m"] = r.rendered_stiffness_n_per_m;
   j["virtual_energy_generated_j"] = r.virtual_energy_generated_j;
+  j["virtual_contact_work_j"] = r.virtual_contact_work_j;
+  j["late_ticks"] = r.late_ticks;
+  j["max_tick_s"] = r.max_tick_s;
   j["device"] = r.device;
   if (!r.hd_loop.empty()) {
     j["hd_loop"] = r.hd_loop;

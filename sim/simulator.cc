@@ -296,6 +296,15 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   g.loop_device = loop_device;
   g.loop = std::make_unique<ClosedLoop>(*loop_device, *g.pipeline, *g.contacts);
   g.loop->set_safety_chain(g.safety.get());
+  SupervisorLimits supervision;
+  supervision.tool_radius_m = g.tip.radius;
+  supervision.nominal_period_s = g.tick;
+  // A late tick is ridden through up to what the momentum observer integrates stably in one
+  // step (L T_k < 2, reference/observer.h), and never less than 5 periods: 67 ms at the
+  // built-ins' L = 30 /s. Beyond it the estimate (and pmi-pd's feed-forward) would overshoot.
+  supervision.max_tick_s = std::max(5.0 * g.tick, 2.0 / scene.method.observer_gain);
+  g.supervisor = std::make_unique<VirtualSupervisor>(supervision);
+  g.loop->set_supervisor(g.supervisor.get());
   return rig;
 }
 
@@ -616,6 +625,14 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   res.timing.emplace_back("tick", stats_of(stage_us[kStageCount]));
   res.timing.emplace_back("device_simulation", stats_of(stage_us[kStageCount + 1]));
   res.tooth_after = rig->tooth_grid();
+  const VirtualSupervisor& sup = *rig->supervisor;
+  res.virtual_contact_work_j = sup.contact_work_j();
+  res.late_ticks = sup.late_ticks();
+  res.max_tick_s = sup.max_tick_s();
+  if (sup.fault() != SupervisorFault::kNone && !res.faults.empty() &&
+      res.faults.front().rfind(supervisor_fault_name(sup.fault()), 0) == 0) {
+    res.faults.front() += " (" + sup.describe() + ")";
+  }
   const bool faulted = callback ? !res.faults.empty() : loop.faulted();
   res.torque_after_fault_n_m = faulted ? driven.applied_torque().norm() : 0.0;
   return res;

@@ -119,6 +119,11 @@ struct RunResult {
   double max_penetration_m = 0.0;
   double rendered_stiffness_n_per_m = 0.0;
   double virtual_energy_generated_j = 0.0;
+  // The supervisor (device/virtual_supervisor.h): the contact's work on the proxy W_c [J] (<= 0:
+  // passive), the ticks longer than 1.5 nominal periods (ridden through) and the longest [s].
+  double virtual_contact_work_j = 0.0;
+  long late_ticks = 0;
+  double max_tick_s = 0.0;
   double hand_work_j = 0.0;                                 // W_h at the end
   double hand_work_min_j = 0.0;                             // min over the run of W_h(t) (<= 0)
   std::array<double, kMaterialCount> removed_volume_mm3{};  // per Material id (0 unused)
@@ -206,6 +211,9 @@ struct SceneRig {
   // guards (clock, encoder jumps, velocity); no rate limit, ramp or watchdog in simulation, and a
   // saturation equal to the pipeline's own, so a healthy run's torques are unchanged.
   std::unique_ptr<SafetyChain> safety;
+  // The supervisor of the virtual side (device/virtual_supervisor.h): the tool's radius from the
+  // scene, every other limit its default.
+  std::unique_ptr<VirtualSupervisor> supervisor;
   std::unique_ptr<ClosedLoop> loop;
 
   // The grid of the tooth the pipeline drills, and the contact set of the tool tip at `pose` on

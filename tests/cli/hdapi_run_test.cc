@@ -20,6 +20,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -97,14 +98,29 @@ void expect_matches_direct(const std::string& extra, const std::string& direct_h
 // tighter than the caller form's. The backend's safety chain ramps force in over the first 0.5 s
 // (the direct simulated run does not), so the arm starts lower and the tool arrives a little
 // differently: measured over 7 runs, stiffness 1-5 %, max force 0-11 %, contact ticks 5-18 %
-// (24 % with three busy processes beside it). Fewer than 1800 ticks means the scheduler skipped
-// ticks: the machine is too loaded for a real-time comparison.
+// (24 % with three busy processes beside it). On a loaded machine the scheduler skips ticks (1707
+// of 2000 once, issue #32): the loop rides through them — each skipped tick lengthens the
+// measured T_k the pipeline integrates over, counted in `late_ticks` (T_k > 1.5 periods) — and
+// only a tick past the supervisor's bound (max(5 periods, 2/L) = 67 ms here: the observer's
+// L T_k < 2) is a fault (under load average ~18 the emulator's scheduler once left 51 ms). What holds
+// whatever the load: the device's clock covers the duration (expect_matches_direct), no record
+// is dropped, at most one tick per scheduler tick, and every tick the scheduler skipped shows as
+// a late tick, none beyond the bound.
 TEST(HdapiRun, EmulatorRunMatchesTheDirectRunAtItsRate) {
   nlohmann::json e;
   expect_matches_direct("", "1000", "callback", {0.20, 0.30, 0.35, 0.30}, &e);
   EXPECT_EQ(e["callback_dropped_ticks"].get<long>(), 0);
-  EXPECT_GT(e["ticks"].get<long>(), 1800);
-  EXPECT_LE(e["ticks"].get<long>(), 2001);
+  const long ticks = e["ticks"].get<long>();
+  EXPECT_GT(ticks, 0);
+  EXPECT_LE(ticks, 2001);
+  const long late = e["late_ticks"].get<long>();
+  const double longest = e["max_tick_s"].get<double>();
+  std::printf("ticks %ld, late ticks %ld, longest tick %.2f ms\n", ticks, late, longest * 1e3);
+  if (ticks < 1990) {
+    EXPECT_GT(late, 0) << "ticks were skipped without a late tick";
+  }
+  EXPECT_LT(longest, 2.0 / 30.0);
+  EXPECT_GE(longest, 0.5e-3);  // the device clock advanced by about a period per tick
 }
 
 // The drill scene (contact, drilling through enamel into dentin) with the tick in the vendor's

@@ -10,6 +10,7 @@
 
 #include "sim/scene.h"
 #include "sim/simulator.h"
+#include "sim/scene_stability.h"
 #include "fast/registry.h"
 #include "tests/support/alloc_counter.h"
 
@@ -59,7 +60,14 @@ TEST(TickAllocation, DrillSceneTicksAllocateNothingForEveryImplementationAndMeth
       }
       std::printf("%s / %s: %ld ticks, %ld in contact, %ld voxels drilled, %ld allocations\n",
                   table->implementation, v.name, kTicks, contact_ticks, removed, allocs);
-      EXPECT_FALSE(loop.faulted()) << loop.fault_name();
+      if (scene_stability_problems(scene).empty()) {
+        EXPECT_FALSE(loop.faulted()) << loop.fault_name();
+      } else if (loop.faulted()) {
+        // Explicit Euler on this scene is outside its bound (sim/scene_stability.h: `dentsim
+        // run` refuses it): the supervisor may end it, and the ticks after the fault (zero
+        // torque) allocate nothing either.
+        EXPECT_NE(loop.supervisor_fault(), SupervisorFault::kNone) << loop.fault_name();
+      }
       EXPECT_EQ(allocs, 0);
       // The count means something only if the tick did the work: in contact and drilling.
       EXPECT_GT(contact_ticks, kTicks / 10);

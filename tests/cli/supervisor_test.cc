@@ -1,0 +1,132 @@
+// The supervisor through `dentsim run` (issue #32): a harsh scene either stays bounded or ends in a
+// named fault with zero torque and its outputs written (exit status non-zero, one line naming the
+// fault and its figure); no report holds null or a non-finite number for a measured figure; the
+// stress run whose PMI proxy exploded while drilling at 500 Hz ends safely in both pipelines; a
+// scene outside its method's stability bound is refused before the run (exit 2,
+// naming the field and the bound) and `--force` runs it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "tests/support/cli.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using dentsim::testing::fresh_temp_dir;
+using dentsim::testing::read_json_file;
+using dentsim::testing::run_dentsim;
+
+const std::string kData = std::string(DENTSIM_SOURCE_DIR) + "/tests/validation/data/";
+
+// The Phantom's peak force (PHANTOM.md) and the supervisor's default bound, 4 x it.
+constexpr double kForceBoundN = 4.0 * 8.5;
+
+// Every number in `j` is finite and nothing is null, except the keys a report leaves null by
+// design (`pulp_exposed_at_s` when the pulp was never opened).
+void expect_no_null(const nlohmann::json& j, const std::string& path) {
+  if (j.is_object()) {
+    for (auto it = j.begin(); it != j.end(); ++it) {
+      if (it.key() == "pulp_exposed_at_s") continue;
+      expect_no_null(it.value(), path + "." + it.key());
+    }
+  } else if (j.is_array()) {
+    for (std::size_t i = 0; i < j.size(); ++i) expect_no_null(j[i], path + "[" + std::to_string(i) + "]");
+  } else {
+    EXPECT_FALSE(j.is_null()) << path;
+    if (j.is_number()) {
+      EXPECT_TRUE(std::isfinite(j.get<double>())) << path;
+    }
+  }
+}
+
+// Whether `fault` is one of the supervisor's named faults.
+bool is_supervisor_fault(const std::string& fault) {
+  for (const char* name : {"virtual_non_finite", "contact_force_beyond_bound",
+                           "coupling_force_beyond_bound", "proxy_too_deep", "proxy_too_far",
+                           "virtual_energy_growth"}) {
+    if (fault.rfind(name, 0) == 0) return true;
+  }
+  return false;
+}
+
+// The stress run of docs/results/reliability.md (seed 2026, run 1401: PMI drilling at 500 Hz, a
+// 50 g proxy, K_tooth 26694 N/m): its contact force reached 2e78 N with `faults: none`. The cause
+// (the surface proxy's spring across the normal is explicit in PMI's step) is found; its fix is
+// not in the tick yet (reliability.md), so the run must end safely: bounded with no fault, or in
+// one of the supervisor's named faults with zero torque and finite figures, exit status 1.
+TEST(SupervisorCli, StressRunThatExplodedWhileDrillingAt500HzEndsSafely) {
+  for (const char* pipeline : {"reference", "fast"}) {
+    const fs::path out = fresh_temp_dir(std::string("dentsim_sup_stress_") + pipeline);
+    const auto r = run_dentsim("run " + kData + "stress_2026_run1401_pmi_drill_500hz.json --pipeline " +
+                               pipeline + " --out " + out.string());
+    const nlohmann::json j = read_json_file(out / "report.json");
+    expect_no_null(j, pipeline);
+    EXPECT_LE(j.at("max_contact_force_n").get<double>(), kForceBoundN) << pipeline;
+    if (j.at("faults").empty()) {
+      EXPECT_EQ(r.status, 0) << r.output;
+      EXPECT_EQ(j.at("ticks").get<long>(), 2000);
+    } else {
+      EXPECT_EQ(r.status, 1) << r.output;
+      ASSERT_EQ(j.at("faults").size(), 1u) << r.output;
+      EXPECT_TRUE(is_supervisor_fault(j.at("faults")[0].get<std::string>())) << j.at("faults");
+      EXPECT_EQ(j.at("torque_after_fault_n_m").get<double>(), 0.0);
+    }
+  }
+}
+
+// A scene that cannot be stable (explicit Euler at 100 Hz without damping) is refused before the
+// run, naming the field and the bound; `--force` runs it, and the supervisor ends it in a named
+// fault: zero torque, the report written with finite figures, exit status 1, one line.
+TEST(SupervisorCli, UnstableSceneIsRefusedAndForcedItEndsInANamedFault) {
+  const std::string scene = kData + "harsh32_explicit_100hz.json";
+  const fs::path out = fresh_temp_dir("dentsim_sup_explicit");
+  const auto refused = run_dentsim("run " + scene + " --out " + out.string());
+  EXPECT_EQ(refused.status, 2) << refused.output;
+  EXPECT_NE(refused.output.find("method.k_vc_n_per_m"), std::string::npos) << refused.output;
+  EXPECT_NE(refused.output.find("K T < b"), std::string::npos) << refused.output;
+  EXPECT_NE(refused.output.find("--force"), std::string::npos) << refused.output;
+  EXPECT_FALSE(fs::exists(out / "report.json"));
+
+  const auto forced = run_dentsim("run " + scene + " --force --out " + out.string());
+  EXPECT_EQ(forced.status, 1) << forced.output;
+  const nlohmann::json j = read_json_file(out / "report.json");
+  ASSERT_EQ(j.at("faults").size(), 1u) << forced.output;
+  const std::string fault = j.at("faults")[0].get<std::string>();
+  EXPECT_TRUE(is_supervisor_fault(fault)) << fault;
+  EXPECT_EQ(j.at("torque_after_fault_n_m").get<double>(), 0.0);
+  EXPECT_LE(j.at("max_contact_force_n").get<double>(), kForceBoundN);
+  expect_no_null(j, "report");
+  EXPECT_TRUE(fs::exists(out / "timeseries.csv"));
+  // The error is one line naming the fault.
+  std::istringstream lines(forced.output);
+  int error_lines = 0;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("dentsim: failed:", 0) == 0) {
+      ++error_lines;
+      EXPECT_NE(line.find(fault.substr(0, fault.find(' '))), std::string::npos) << line;
+    }
+  }
+  EXPECT_EQ(error_lines, 1) << forced.output;
+}
+
+// The built-in scenes pass the load-time check (run with --duration to keep it short: the whole
+// scene is checked either way) and the supervisor stays quiet on them.
+TEST(SupervisorCli, BuiltinScenesLoadAndRunWithoutAFault) {
+  for (const char* scene : {"probe", "probe-groove", "drill"}) {
+    const fs::path out = fresh_temp_dir(std::string("dentsim_sup_builtin_") + scene);
+    const auto r = run_dentsim(std::string("run ") + scene + " --duration 2 --out " + out.string());
+    EXPECT_EQ(r.status, 0) << r.output;
+    const nlohmann::json j = read_json_file(out / "report.json");
+    EXPECT_TRUE(j.at("faults").empty()) << scene;
+    EXPECT_LE(j.at("virtual_contact_work_j").get<double>(), 0.05) << scene;
+    expect_no_null(j, scene);
+  }
+}
+
+}  // namespace
