@@ -211,8 +211,12 @@ void setup_excite(CLI::App& app) {
       ExcitationOutcome r;
       {
         ExciteSignals signals;
-        r = run_guarded_excitation(d, p, exc, opt->duration, GuardedExcitationParams{},
-                                   TrackingParams{}, &g_excite_stop);
+        // Through the HDAPI read/write/advance loop (every one or two scheduler ticks) the gimbal's
+        // low-passed speed peaked near 9 rad/s on the emulator: the stop at 5 x the excitation's
+        // 2 rad/s, half the safety chain's 20 rad/s.
+        GuardedExcitationParams gp;
+        gp.velocity_stop = 5.0;
+        r = run_guarded_excitation(d, p, exc, opt->duration, gp, TrackingParams{}, &g_excite_stop);
       }
       r.log.comments.push_back(" device: hdapi (" + dev.info().library + ", model " +
                                dev.info().model + ", serial " + dev.info().serial + ")");
