@@ -33,6 +33,10 @@ def test_replay_equals_dentsim_replay_json(drill_session, cli, tmp_path, pipelin
     rec, _ = drill_session
     cli("replay", rec, "--pipeline", pipeline, "--json", tmp_path / "replay.json")
     expected = json.loads((tmp_path / "replay.json").read_text())
+    # The command adds its verdict (issue #33: recorded_pipeline, verdict, failed_checks) to the
+    # numbers both build with replay_report_json.
+    assert expected.pop("recorded_pipeline") == "fast"
+    assert expected.pop("verdict") == "PASS" and expected.pop("failed_checks") == []
     r = dentsim.replay(rec, pipeline=pipeline)
     assert r == expected
     assert r["ticks"] == round(DRILL_S * 1000)
