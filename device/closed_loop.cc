@@ -62,16 +62,18 @@ const TickResult& ClosedLoop::decide() {
     fault_ = r.status;
     fault_t_ = sample_.t;
   }
-  if (!faulted() && supervisor_ != nullptr) {
-    supervisor_fault_ = supervisor_->check(r, pipeline_.proxy(), T_);
-    if (supervisor_fault_ != SupervisorFault::kNone) fault_t_ = sample_.t;
-  }
+  // The device's and the sample's faults first (the safety chain: a jumped encoder, a frozen
+  // clock, ...): they are the cause when the tick's figures then run away too.
   if (!faulted() && safety_ != nullptr) {
     const std::uint32_t f = safety_->apply(sample_, r.tau, last_exec_s_, nullptr, tau_safe_);
     if (f != kFaultNone) {
       device_faults_ = f;
       fault_t_ = sample_.t;
     }
+  }
+  if (!faulted() && supervisor_ != nullptr) {
+    supervisor_fault_ = supervisor_->check(r, pipeline_.proxy(), T_);
+    if (supervisor_fault_ != SupervisorFault::kNone) fault_t_ = sample_.t;
   }
   last_exec_s_ = exec_s;
   if (faulted()) {

@@ -14,6 +14,9 @@ nlohmann::json run_report_json(const Scene& scene, const RunResult& r) {
   j["method"] = method_name(scene.method.method);
   j["device_model"] = r.device_model;
   j["pipeline"] = r.pipeline;
+  // Stopped early (RunOptions::stop, e.g. Ctrl-C): the figures cover the ticks that ran; the
+  // command adds its reason (cli/cmd_run.cc).
+  j["partial"] = r.stopped;
   j["skip_unneeded"] = r.skip_unneeded;
   j["tick_hz"] = scene.tick_hz;
   j["simulated_s"] = r.simulated_s;
@@ -90,8 +93,11 @@ QuietReport run_quiet_report(const Scene& scene, const RunResult& r, const Quiet
 }
 
 nlohmann::json quiet_report_json(const QuietReport& q) {
-  auto opt = [](const std::optional<double>& v) {
-    return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+  // A figure that was not measured (no steady stretch long enough for a ripple, no penetration
+  // for a stiffness, no still stretch for a power) is left out, never written as null (issue #32:
+  // no report holds null for a measured figure).
+  auto put = [](nlohmann::json& o, const char* key, const std::optional<double>& v) {
+    if (v) o[key] = *v;
   };
   const QuietBounds& b = q.bounds;
   nlohmann::json j;
@@ -106,14 +112,12 @@ nlohmann::json quiet_report_json(const QuietReport& q) {
   j["tip_quantum_m"] = q.tip_quantum_m;
   nlohmann::json phases = nlohmann::json::array();
   for (const QuietPhase& p : q.phases) {
-    phases.push_back({{"phase", p.phase},
+    nlohmann::json ph = {{"phase", p.phase},
                       {"kind", p.kind},
                       {"t_begin_s", p.t_begin_s},
                       {"t_end_s", p.t_end_s},
                       {"steady_from_s", p.steady_from_s},
                       {"ticks", p.ticks},
-                      {"ripple_contact_force", opt(p.ripple_contact_force)},
-                      {"ripple_device_force", opt(p.ripple_device_force)},
                       {"contact_fraction", p.contact_fraction},
                       {"contact_losses", p.contact_losses},
                       {"oscillation_amplitude_m", p.oscillation_amplitude_m},
@@ -121,9 +125,12 @@ nlohmann::json quiet_report_json(const QuietReport& q) {
                       {"mean_contact_force_n", p.mean_contact_force_n},
                       {"mean_device_force_n", p.mean_device_force_n},
                       {"mean_device_penetration_m", p.mean_penetration_m},
-                      {"static_stiffness_n_per_m", opt(p.static_stiffness_n_per_m)},
                       {"motor_energy_j", p.motor_energy_j},
-                      {"quiet", p.quiet}});
+                      {"quiet", p.quiet}};
+    put(ph, "ripple_contact_force", p.ripple_contact_force);
+    put(ph, "ripple_device_force", p.ripple_device_force);
+    put(ph, "static_stiffness_n_per_m", p.static_stiffness_n_per_m);
+    phases.push_back(ph);
   }
   j["phases"] = phases;
   const QuietFreeSpace& f = q.free_space;
@@ -134,10 +141,10 @@ nlohmann::json quiet_report_json(const QuietReport& q) {
       {"still_force_rms_n", f.still_force_rms_n},
       {"still_pulses", f.still_pulses},
       {"still_pulse_rate_per_s", f.still_pulse_rate_per_s},
-      {"still_motor_energy_j", f.still_motor_energy_j},
-      {"still_motor_power_w", f.still_s > 0.0 ? nlohmann::json(f.still_motor_energy_j / f.still_s)
-                                              : nlohmann::json(nullptr)}};
-  j["quiet"] = q.quiet ? nlohmann::json(*q.quiet) : nlohmann::json(nullptr);
+      {"still_motor_energy_j", f.still_motor_energy_j}};
+  if (f.still_s > 0.0) j["free_space"]["still_motor_power_w"] = f.still_motor_energy_j / f.still_s;
+  // No steady press or slide phase: no verdict (the key is left out).
+  if (q.quiet) j["quiet"] = *q.quiet;
   return j;
 }
 

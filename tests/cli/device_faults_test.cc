@@ -99,12 +99,18 @@ TEST(DeviceFaults, TorqueSaturatedForSecondsStopsSafely) {
   EXPECT_EQ(r.status, 1) << r.output;
   const nlohmann::json report = dentsim::testing::read_json_file(dir / "out" / "report.json");
   ASSERT_EQ(report["faults"].size(), 1u) << report;
-  EXPECT_EQ(report["faults"][0].get<std::string>().rfind("sustained_saturation at t = ", 0), 0u)
-      << report["faults"];
+  const std::string fault = report["faults"][0].get<std::string>();
   EXPECT_EQ(report["torque_after_fault_n_m"].get<double>(), 0.0);
-  // At least the 2 s the chain allows, in contact, before the stop.
-  EXPECT_GT(report["ticks"].get<long>(), 2000);
-  EXPECT_GT(report["contact_ticks"].get<long>(), 1500);
+  if (fault.rfind("sustained_saturation at t = ", 0) == 0) {
+    // At least the 2 s the chain allows, in contact, before the stop.
+    EXPECT_GT(report["ticks"].get<long>(), 2000);
+    EXPECT_GT(report["contact_ticks"].get<long>(), 1500);
+  } else {
+    // Or the supervisor (issue #32) stops it earlier: the proxy driven into the tooth by a hand
+    // the motors cannot hold puts the contact force past 4 x the device's peak force.
+    EXPECT_EQ(fault.rfind("contact_force_beyond_bound at t = ", 0), 0u) << fault;
+    EXPECT_GT(report["contact_ticks"].get<long>(), 0);
+  }
   EXPECT_TRUE(fs::exists(dir / "out" / "timeseries.csv"));
 }
 
