@@ -98,7 +98,9 @@ struct PipelineModel {
   CouplingGains coupling;
   FrictionParams friction;
   ToolDynamics tool;
-  Eigen::LLT<Mat6> tool_Md_llt;       // M_d = L L^T, factorised once (kPmiPd)
+  // M_d = L L^T, factorised once (kPmiPd). Built on the identity so a model that never
+  // factorises (every other method) still copies a defined info() (UBSan: Eigen leaves it unset).
+  Eigen::LLT<Mat6> tool_Md_llt{Mat6::Identity()};
   bool observe = false;               // an observer runs (gain set)
   Vec6 observer_gain = Vec6::Zero();  // L [1/s]
   ObserverInput observer_input;
