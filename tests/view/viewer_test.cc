@@ -103,6 +103,48 @@ class Xvfb {
   int display_ = -1;
 };
 
+// Sets an environment variable for the scope and restores what was there (or its absence).
+class ScopedEnv {
+ public:
+  ScopedEnv(const char* name, const std::string& value) : name_(name) {
+    const char* old = std::getenv(name);
+    had_ = old != nullptr;
+    if (had_) old_ = old;
+    setenv(name, value.c_str(), 1);
+  }
+  ~ScopedEnv() {
+    if (had_) {
+      setenv(name_, old_.c_str(), 1);
+    } else {
+      unsetenv(name_);
+    }
+  }
+  ScopedEnv(const ScopedEnv&) = delete;
+  ScopedEnv& operator=(const ScopedEnv&) = delete;
+
+ private:
+  const char* name_;
+  bool had_ = false;
+  std::string old_;
+};
+
+// The DISPLAY of `server`, for the scope.
+ScopedEnv display_of(const Xvfb& server) {
+  char display[16];  // (not ":" + std::to_string: GCC 12's -Wrestrict false positive)
+  std::snprintf(display, sizeof display, ":%d", server.display());
+  return ScopedEnv("DISPLAY", display);
+}
+
+// Under the sanitizers (scripts/test.sh): no leak check for a process that opens a window. Mesa's
+// GLX driver, which GLFW loads and unloads, leaves ~5 kB allocated at exit from frames in the
+// unloaded library that LeakSanitizer cannot name (so scripts/lsan.supp cannot suppress them);
+// address and UB errors still abort. The headless renderer runs with the leak check on.
+ScopedEnv no_leak_check_for_the_window() {
+  const char* old = std::getenv("ASAN_OPTIONS");
+  const std::string keep = old != nullptr ? old : "";
+  return ScopedEnv("ASAN_OPTIONS", keep.empty() ? "detect_leaks=0" : keep + ":detect_leaks=0");
+}
+
 bool in_overlay(int x, int y) { return x < kOverlayWidth && y < kOverlayHeight; }
 
 TEST(ViewerXvfb, WindowShowsTheDrillingAndMatchesTheHeadlessRender) {
@@ -118,32 +160,12 @@ TEST(ViewerXvfb, WindowShowsTheDrillingAndMatchesTheHeadlessRender) {
   // 1.8 s of the drill scene at real time: the approach, then 0.3 s of drilling into the enamel
   // (from t = 1.5 s). The window writes first.png (first frame with the tooth) and last.png (the
   // first frame after the run ended, i.e. the state after the last tick) and closes.
-  const char* old_display = std::getenv("DISPLAY");
-  const std::string saved = old_display != nullptr ? old_display : "";
-  char display[16];
-  std::snprintf(display, sizeof display, ":%d", server.display());
-  setenv("DISPLAY", display, 1);
-  // Under the sanitizers (scripts/test.sh): no leak check for this one process. Mesa's GLX driver,
-  // which GLFW loads and unloads, leaves ~5 kB allocated at exit from frames in the unloaded
-  // library that LeakSanitizer cannot name (so scripts/lsan.supp cannot suppress them); address
-  // and UB errors still abort. The headless renderer runs with the leak check on.
-  const char* old_asan = std::getenv("ASAN_OPTIONS");
-  const std::string saved_asan = old_asan != nullptr ? old_asan : "";
-  setenv(
-      "ASAN_OPTIONS",
-      (saved_asan.empty() ? std::string("detect_leaks=0") : saved_asan + ":detect_leaks=0").c_str(),
-      1);
-  const auto live = run_dentsim("run drill --duration 1.8 --view --view-shots " +
-                                (dir / "shots").string() + " --out " + (dir / "run").string());
-  if (old_asan != nullptr) {
-    setenv("ASAN_OPTIONS", saved_asan.c_str(), 1);
-  } else {
-    unsetenv("ASAN_OPTIONS");
-  }
-  if (old_display != nullptr) {
-    setenv("DISPLAY", saved.c_str(), 1);
-  } else {
-    unsetenv("DISPLAY");
+  dentsim::testing::CliRun live;
+  {
+    const ScopedEnv display = display_of(server);
+    const ScopedEnv no_leak_check = no_leak_check_for_the_window();
+    live = run_dentsim("run drill --duration 1.8 --view --view-shots " + (dir / "shots").string() +
+                       " --out " + (dir / "run").string());
   }
   ASSERT_EQ(live.status, 0) << live.output;
   const auto headless =
@@ -241,19 +263,14 @@ TEST(ViewerXvfb, SigtermClosesTheWindowAndKeepsTheOutputs) {
   if (xvfb.empty()) GTEST_SKIP() << "Xvfb is not installed (scripts/setup.sh installs xvfb)";
   const Xvfb server(xvfb);
   ASSERT_GE(server.display(), 0) << "could not start Xvfb on a free display";
-  const char* old_display = std::getenv("DISPLAY");
-  const std::string saved = old_display != nullptr ? old_display : "";
-  char display[16];
-  std::snprintf(display, sizeof display, ":%d", server.display());
-  setenv("DISPLAY", display, 1);
   const fs::path out = temp_dir("sigterm") / "out";
-  const dentsim::testing::Signalled r = dentsim::testing::run_and_signal(
-      {"run", "probe", "--view", "--duration", "600", "--out", out.string()}, "dentsim run: scene",
-      SIGTERM);
-  if (old_display != nullptr) {
-    setenv("DISPLAY", saved.c_str(), 1);
-  } else {
-    unsetenv("DISPLAY");
+  dentsim::testing::Signalled r;
+  {
+    const ScopedEnv display = display_of(server);
+    const ScopedEnv no_leak_check = no_leak_check_for_the_window();
+    r = dentsim::testing::run_and_signal(
+        {"run", "probe", "--view", "--duration", "600", "--out", out.string()},
+        "dentsim run: scene", SIGTERM);
   }
   EXPECT_EQ(r.status, 143) << r.output;
   const nlohmann::json report = dentsim::testing::read_json_file(out / "report.json");
