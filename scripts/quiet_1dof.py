@@ -134,10 +134,12 @@ def run(a):
     if a.kalman > 0 and delta > 0:
         sc = AlphaBeta(delta, T, a.kalman / M1, a.project)
     fc_log, fd_log, inc_log, pen_log, t_log = [], [], [], [], []
+    ea_true_log, ea_count_log, dT1_log = [], [], []
+    T1_log_prev, zq_log_prev, T1_first_prev = 0.0, zq_prev, 0.0
     # passivity observer/controller state (--pc): the energy the controller has absorbed at the
     # device port, from the displacement the driver reports, and the encoder-error allowance
     E_obs, E_allow, zs_prev, T1_cmd_prev, pc_energy, pc_fire, pc_tv = 0.0, 0.0, None, 0.0, 0.0, 0, 0.0
-    alpha_max = md / T  # the largest damping an explicit tick applies stably to the device alone
+    alpha_max = a.pc_max if a.pc_max > 0 else md / T  # default: the largest damping an explicit tick applies stably to the device alone
     alpha = 1.0 - math.exp(-2 * math.pi * a.cutoff * T) if a.cutoff > 0 else 1.0
     for k in range(nT):
         t = k * T
@@ -171,11 +173,12 @@ def run(a):
         if a.lead:
             # lag compensation: the velocity the coupling damper and D_d see is the measured one
             # advanced over the loop's known lags with the model's acceleration (the command over
-            # the tick that ended plus the observer's estimate, over M1): the low-pass's lag
-            # 1/(2 pi f_c), the backward difference's T/2 and the zero-order hold's T/2
+            # the tick that ended plus the observer's estimate, over M1): the zero-order hold's
+            # T/2, the backward difference's T/2 and the discrete low-pass's exact lag on a ramp,
+            # T (1 - a) / a with a = 1 - exp(-2 pi f_c T)
             lag = 0.5 * T
             if sc is None or not a.subcount_vel:  # the driver's estimate: difference + low-pass
-                lag += 0.5 * T + (1.0 / (2 * math.pi * a.cutoff) if a.cutoff > 0 else 0.0)
+                lag += 0.5 * T + (T * (1 - alpha) / alpha if a.cutoff > 0 else 0.0)
             vc = vs + lag * (T1 + f_hat) / M1
             vs = vc
         # observer
@@ -246,6 +249,7 @@ def run(a):
             T1 = max(-a.sat, min(a.sat, T1))
         z2, v2 = z2 + T * V, 2 * V - v2
         # plant
+        z_before = z
         zr, fff = href(t)
         h = T / n_sub
         for _ in range(n_sub):
@@ -262,6 +266,14 @@ def run(a):
         fd_log.append(abs(T1))
         inc_log.append(incontact)
         pen_log.append(max(0.0, s - z))
+        # the device port's energy absorbed by the controller over this tick: true (the plant's
+        # displacement) and as the driver's counts report it (the last tick's command over the
+        # last count step)
+        ea_true_log.append(-T1 * (z - z_before))
+        ea_count_log.append(-T1_log_prev * (zq - zq_log_prev))
+        T1_log_prev, zq_log_prev = T1, zq
+        dT1_log.append(abs(T1 - T1_first_prev))
+        T1_first_prev = T1
     t_log = np.array(t_log)
     fc, fd, inc, pen = map(np.array, (fc_log, fd_log, inc_log, pen_log))
     if a.kick:
@@ -289,6 +301,9 @@ def run(a):
         "k_static": float(np.mean(fc[w]) / np.mean(pen[w])) if np.mean(pen[w]) > 0 else float("nan"),
         "mean_force": float(np.mean(fc[w])),
         "free_rms": float(np.sqrt(np.mean(fd[free] ** 2))),
+        "port_true_mW": 1e3 * float(np.mean(np.array(ea_true_log)[w]) / T),
+        "port_count_mW": 1e3 * float(np.mean(np.array(ea_count_log)[w]) / T),
+        "allow_mW": 1e3 * float(delta * np.mean(np.array(dT1_log)[w]) / T),
         "pc_fired": pc_fire,
         "pc_mJ": 1e3 * pc_energy,
     }
@@ -324,6 +339,7 @@ def main():
     p.add_argument("--subcount-vel", type=int, default=1, help="the coupling and feed-forward use the Kalman velocity too")
     p.add_argument("--obs-subcount", type=int, default=1, help="the observer uses the Kalman velocity (as the tick does)")
     p.add_argument("--pc", default="none", help="passivity observer/controller on the device port: none | raw | allow (with the encoder-error allowance)")
+    p.add_argument("--pc-max", type=float, default=0.0, help="the passivity controller's largest damping [N s/m] (0: m_d / T)")
     p.add_argument("--eb", action="store_true", help="energy bounding (Kim & Ryu) with the device's physical damping")
     p.add_argument("--lead", action="store_true", help="lag compensation: the coupling/D_d velocity advanced over the loop's lags with the model")
     p.add_argument("--contact-zeta", type=float, default=0.0, help="contact damping 2 zeta sqrt(K M_d) added in contact (0 = off)")
