@@ -17,7 +17,11 @@ Options switch one thing at a time: --no-quant, --k, --md, --cutoff (velocity lo
 backward difference), --L, and the remedies under study: --kalman SIGMA_F (the encoder Kalman
 filter of reference/encoder_kalman.h, with the observer on its velocity as in the tick),
 --cell-coupling (the coupling sees the point of the encoder cell nearest the proxy), --foaw N
-(first-order adaptive windowing velocity), --bt (tooth damping).
+(first-order adaptive windowing velocity), --bt (tooth damping); for the stiff contact mode
+(docs/derivations/quiet_stiffness.md section 5): --pc raw|allow (a passivity observer/controller on
+the device port, with the encoder-error allowance), --eb (energy bounding), --lead (loop-lag
+compensation, reference/lag_compensation.h), --contact-zeta (damping in contact), and the
+diagnostics --ideal-obs / --freeze-obs. --grid2 runs the stiff grid (K 6000-18000 N/m).
 
 Prints the quiet measures of the held press (t in [1.5, 3.0] s): ripple of the contact force and of
 the device force (RMS minus 0.1 s moving average, over the mean), contact fraction, losses, static
