@@ -18,6 +18,7 @@
 #include "reference/lag_compensation.h"
 #include "sim/scene.h"
 #include "sim/simulator.h"
+#include "tests/support/crosscheck_rows.h"
 #include "validation/crosscheck_fast.h"
 
 namespace dentsim {
@@ -115,14 +116,7 @@ TEST(LagCompensation, FastPipelineEqualsTheReferenceWithTheCompensationOn) {
   for (const std::string& f : r.failures) ADD_FAILURE() << f;
   EXPECT_TRUE(r.ok);
   ASSERT_FALSE(r.stages.empty());
-  for (const StageCrosscheck& s : r.stages) {
-    std::printf("%s %-34s %-13s max_rel %.3e (%ld samples, %ld in contact)\n",
-                s.implementation.c_str(), s.config.c_str(), s.stage.c_str(), s.max_rel, s.samples,
-                s.contact_samples);
-    EXPECT_LE(s.max_rel, o.max_rel_bound) << s.config << " " << s.stage;
-    EXPECT_EQ(s.count_mismatches, 0) << s.config << " " << s.stage;
-    EXPECT_GT(s.contact_samples, s.samples / 20) << s.config << " " << s.stage;
-  }
+  for (const StageCrosscheck& s : r.stages) testing::expect_stage_row_agrees(o, s);
   // On vs off: the same scene's torques differ (in free space already: the hand moves the tool).
   auto torques = [](bool on) {
     Scene s = load_scene("probe");
