@@ -14,6 +14,7 @@
 #include "reference/explicit_euler.h"
 #include "reference/friction.h"
 #include "reference/grip_detector.h"
+#include "reference/lag_compensation.h"
 #include "reference/observer.h"
 #include "reference/pmi.h"
 
@@ -114,6 +115,18 @@ PipelineModel make_pipeline_model(const SixDofDeviceModel& device, const Pipelin
     // observer takes the torque as it was applied (reference/observer.h, unmatched input).
     m.observer_input = ObserverInput{};
   }
+  m.lag_compensation = config.lag_compensation;
+  if (config.lag_compensation) {
+    if (!(config.velocity_estimate.lowpass_hz >= 0.0) ||
+        !std::isfinite(config.velocity_estimate.lowpass_hz)) {
+      throw std::invalid_argument("lag compensation: velocity_estimate.lowpass_hz = " +
+                                  std::to_string(config.velocity_estimate.lowpass_hz) +
+                                  " (expected finite and >= 0)");
+    }
+    // The encoder Kalman filter's estimate replaces the driver's: it has no difference or
+    // low-pass lag (reference/encoder_kalman.h).
+    m.velocity_estimate = config.encoder_kalman ? ObserverInput{} : config.velocity_estimate;
+  }
   m.skip_unneeded = config.skip_unneeded;
   if (!m.skip_unneeded && config.method != Method::kPmiPd) {
     // The decomposition runs (and is discarded) with skips off: it needs M_d factorised.
@@ -126,6 +139,26 @@ namespace reference {
 
 namespace {
 
+// The device model's joint acceleration under the torque applied over the tick that ended and the
+// observer's estimate of the hand, a = M^-1 (tau_prev + f_hat - g - tau_f), with the terms `t`
+// and the hypothesis in force of the grip detector (Coriolis neglected at haptic speeds). Its
+// inertia in *M. Zero if M is not SPD or a is not finite. Used by the encoder Kalman filter's
+// prediction and the loop-lag compensation.
+Vec6 model_joint_acceleration(const PipelineModel& m, const PipelineData& d, const DeviceTerms& t,
+                              Mat6* M_out) {
+  const bool gripped = m.grasp && d.grip.gripped;
+  Mat6& M = *M_out;
+  M = t.M;
+  if (gripped) M += d.M_hand;
+  Vec6 f_hat = Vec6::Zero();
+  if (m.observe) f_hat = gripped ? d.obs1.f_hat : d.obs0.f_hat;
+  const Eigen::LLT<Mat6> llt(M);
+  Vec6 accel = Vec6::Zero();
+  if (llt.info() == Eigen::Success) accel = llt.solve(d.tau_prev + f_hat - t.g - t.tau_f);
+  if (!accel.allFinite()) accel.setZero();
+  return accel;
+}
+
 // The encoder Kalman filter's step (reference/encoder_kalman.h): predicts with the model terms of
 // the tick that just ended (d.dev, the hypothesis in force, the torque applied over it and the
 // observer's estimate), corrects with the sample, and puts the estimate in d.q, d.qd.
@@ -135,15 +168,8 @@ void encoder_kalman_step(const PipelineModel& m, PipelineData& d) {
   } else {
     const double T = d.have_prev && d.t > d.t_prev ? d.t - d.t_prev : d.T;
     const DeviceTerms& t = d.dev;
-    const bool gripped = m.grasp && d.grip.gripped;
-    Mat6 M = t.M;
-    if (gripped) M += d.M_hand;
-    Vec6 f_hat = Vec6::Zero();
-    if (m.observe) f_hat = gripped ? d.obs1.f_hat : d.obs0.f_hat;
-    const Eigen::LLT<Mat6> llt(M);
-    Vec6 accel = Vec6::Zero();
-    if (llt.info() == Eigen::Success) accel = llt.solve(d.tau_prev + f_hat - t.g - t.tau_f);
-    if (!accel.allFinite()) accel.setZero();
+    Mat6 M;
+    const Vec6 accel = model_joint_acceleration(m, d, t, &M);
     // sigma_a,i = sigma_f (|J_v,i| + lever |J_w,i|) / M_ii: the force the model does not know.
     const EncoderKalmanParams& p = m.encoder_kalman_params;
     Vec6 sigma_a = Vec6::Zero();
@@ -177,6 +203,14 @@ TickStatus device_terms(const PipelineModel& m, PipelineData& d) {
   d.r.device = t.pose;
   d.r.V1.noalias() = t.J_t * d.qd;  // V1 = J_t qd                                   (2.2)
   if (m.grasp) grasp_mass_terms(m.grasp_mass.Mt, t, d.r.V1, &d.M_hand, &d.CTqd_hand);
+  if (m.lag_compensation && d.have_prev) {
+    // Loop-lag compensation (reference/lag_compensation.h): the coupling and D_d see the velocity
+    // at the midpoint of the coming tick; the observer and the hand's terms keep the measured one.
+    const double T_last = d.t > d.t_prev ? d.t - d.t_prev : d.T;
+    Mat6 M;
+    const Vec6 accel = model_joint_acceleration(m, d, t, &M);
+    d.r.V1.noalias() = t.J_t * (d.qd + loop_velocity_lag(m.velocity_estimate, T_last, d.T) * accel);
+  }
   return TickStatus::kOk;
 }
 

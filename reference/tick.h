@@ -59,6 +59,12 @@ struct PipelineConfig {
   bool encoder_kalman = false;
   VecX encoder_quantum;
   EncoderKalmanParams encoder_kalman_params;
+  // Loop-lag compensation (reference/lag_compensation.h): the coupling and the decomposition's
+  // D_d see the device velocity advanced over the loop's known lags with the device model. Off by
+  // default. `velocity_estimate` describes the driver's velocity estimate (a backward difference?
+  // its low-pass cut-off): device/device.h matched_observer_input of the device's capabilities.
+  bool lag_compensation = false;
+  ObserverInput velocity_estimate;
 };
 
 // Validates `config` against `device` and builds the constant model of the tick. Throws

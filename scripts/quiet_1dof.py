@@ -17,7 +17,11 @@ Options switch one thing at a time: --no-quant, --k, --md, --cutoff (velocity lo
 backward difference), --L, and the remedies under study: --kalman SIGMA_F (the encoder Kalman
 filter of reference/encoder_kalman.h, with the observer on its velocity as in the tick),
 --cell-coupling (the coupling sees the point of the encoder cell nearest the proxy), --foaw N
-(first-order adaptive windowing velocity), --bt (tooth damping).
+(first-order adaptive windowing velocity), --bt (tooth damping); for the stiff contact mode
+(docs/derivations/quiet_stiffness.md section 5): --pc raw|allow (a passivity observer/controller on
+the device port, with the encoder-error allowance), --eb (energy bounding), --lead (loop-lag
+compensation, reference/lag_compensation.h), --contact-zeta (damping in contact), and the
+diagnostics --ideal-obs / --freeze-obs. --grid2 runs the stiff grid (K 6000-18000 N/m).
 
 Prints the quiet measures of the held press (t in [1.5, 3.0] s): ripple of the contact force and of
 the device force (RMS minus 0.1 s moving average, over the mean), contact fraction, losses, static
@@ -134,6 +138,12 @@ def run(a):
     if a.kalman > 0 and delta > 0:
         sc = AlphaBeta(delta, T, a.kalman / M1, a.project)
     fc_log, fd_log, inc_log, pen_log, t_log = [], [], [], [], []
+    ea_true_log, ea_count_log, dT1_log = [], [], []
+    T1_log_prev, zq_log_prev, T1_first_prev = 0.0, zq_prev, 0.0
+    # passivity observer/controller state (--pc): the energy the controller has absorbed at the
+    # device port, from the displacement the driver reports, and the encoder-error allowance
+    E_obs, E_allow, zs_prev, T1_cmd_prev, pc_energy, pc_fire, pc_tv = 0.0, 0.0, None, 0.0, 0.0, 0, 0.0
+    alpha_max = a.pc_max if a.pc_max > 0 else md / T  # default: the largest damping an explicit tick applies stably to the device alone
     alpha = 1.0 - math.exp(-2 * math.pi * a.cutoff * T) if a.cutoff > 0 else 1.0
     for k in range(nT):
         t = k * T
@@ -164,24 +174,44 @@ def run(a):
         vc = vs
         if vf is not None and a.foaw_where == "coupling":
             vc = vf
+        if a.lead:
+            # lag compensation: the velocity the coupling damper and D_d see is the measured one
+            # advanced over the loop's known lags with the model's acceleration (the command over
+            # the tick that ended plus the observer's estimate, over M1): the zero-order hold's
+            # T/2, the backward difference's T/2 and the discrete low-pass's exact lag on a ramp,
+            # T (1 - a) / a with a = 1 - exp(-2 pi f_c T)
+            lag = 0.5 * T
+            if sc is None or not a.subcount_vel:  # the driver's estimate: difference + low-pass
+                lag += 0.5 * T + (T * (1 - alpha) / alpha if a.cutoff > 0 else 0.0)
+            vc = vs + lag * (T1 + f_hat) / M1
+            vs = vc
         # observer
         p = M1 * (vs if (sc is not None and a.obs_subcount) else (vm if "obs" in a.quant_in else vt))
         if k == 0:
             p_hat = p
         p_hat += T * (T1 + f_hat)
         f_hat = L * (p - p_hat)
+        if a.ideal_obs:  # diagnostic: the hand's true force, no observer lag
+            zr_, fff_ = href(t)
+            f_hat = Kh * (zr_ - z) - Bh * v + fff_
+        if a.freeze_obs:  # diagnostic: the observer's estimate low-passed at 1 Hz (no loop at 20 Hz)
+            f_slow = f_hat if k == 0 else f_slow + (1 - math.exp(-2 * math.pi * T)) * (f_hat - f_slow)
+            f_hat_used = f_slow
+        else:
+            f_hat_used = f_hat
         # proxy step, contact decided at z2 (tick k)
         incontact = z2 < s
         # affine pieces in V: F = f0 + g V
         # PMI midpoint positions: z2_mid = z2 + T/2 V
         Fc0 = Kvc * (zs - z2) + Bvc * vc
         Fcg = -Kvc * T / 2 - Bvc
+        bt_k = bt + (2 * a.contact_zeta * math.sqrt(K * Md) if a.contact_zeta > 0 else 0.0)
         if incontact:
-            F20, F2g = K * (s - z2), -K * T / 2 - bt
+            F20, F2g = K * (s - z2), -K * T / 2 - bt_k
         else:
             F20, F2g = 0.0, 0.0
         vL0, vLg = (1 - phi) * vs, phi
-        X0 = A * (f_hat + F20 - Dd * vL0)
+        X0 = A * (f_hat_used + F20 - Dd * vL0)
         Xg = A * (F2g - Dd * vLg)
         # m2 (2V - 2 v2)/T = Fc0 + Fcg V + phi (X0 + Xg V)
         lhs = 2 * m2 / T - Fcg - phi * Xg
@@ -189,11 +219,41 @@ def run(a):
         Fc = Fc0 + Fcg * V
         X = X0 + Xg * V
         F2 = F20 + F2g * V
-        T1 = -Fc + (1 - phi) * X - f_hat
+        T1 = -Fc + (1 - phi) * X - f_hat_used
+        if a.pc != "none":
+            # time-domain passivity observer/controller (Hannaford & Ryu 2002) on the device port,
+            # impedance causality: E_obs = -sum T1_(j-1) (z_j - z_(j-1)) from the driver's position
+            # (the energy the controller absorbed). The encoder hides at most Delta |T1_n| +
+            # Delta sum |T1_j - T1_(j-1)| of it (summation by parts of sum T1 (e_j - e_(j-1)),
+            # 0 <= e < Delta): 'allow' fires only past that bound, 'raw' on E_obs < 0.
+            if zs_prev is not None:
+                E_obs += -T1_cmd_prev * (zs - zs_prev)
+            if a.pc == "allow":
+                E_allow = delta * (abs(T1_cmd_prev) + pc_tv)
+            excess = -(E_obs + (E_allow if a.pc == "allow" else 0.0))
+            if excess > 0 and abs(vs) > 0:
+                alpha = min(excess / (T * vs * vs), alpha_max)
+                f_pc = -alpha * vs
+                T1 += f_pc
+                pc_fire += 1
+                pc_energy += alpha * vs * vs * T
+                E_obs += alpha * vs * vs * T
+            zs_prev = zs
+        if a.eb:
+            # energy bounding (Kim & Ryu 2010): the energy the zero-order hold may generate over a
+            # tick is bounded by what the device's physical damping b dissipates, 1/2 |dT1 dz| <=
+            # b dz^2 / T -> |dT1| <= 2 b |dz| / T (dz from the driver: no change inside a cell)
+            dz = (zs - zs_prev) if zs_prev is not None else 0.0
+            lim = 2 * bd * abs(dz) / T
+            T1 = T1_cmd_prev + max(-lim, min(lim, T1 - T1_cmd_prev)) if zs_prev is not None else T1
+            zs_prev = zs
+        pc_tv += abs(T1 - T1_cmd_prev)
+        T1_cmd_prev = T1
         if a.sat > 0:
             T1 = max(-a.sat, min(a.sat, T1))
         z2, v2 = z2 + T * V, 2 * V - v2
         # plant
+        z_before = z
         zr, fff = href(t)
         h = T / n_sub
         for _ in range(n_sub):
@@ -210,6 +270,14 @@ def run(a):
         fd_log.append(abs(T1))
         inc_log.append(incontact)
         pen_log.append(max(0.0, s - z))
+        # the device port's energy absorbed by the controller over this tick: true (the plant's
+        # displacement) and as the driver's counts report it (the last tick's command over the
+        # last count step)
+        ea_true_log.append(-T1 * (z - z_before))
+        ea_count_log.append(-T1_log_prev * (zq - zq_log_prev))
+        T1_log_prev, zq_log_prev = T1, zq
+        dT1_log.append(abs(T1 - T1_first_prev))
+        T1_first_prev = T1
     t_log = np.array(t_log)
     fc, fd, inc, pen = map(np.array, (fc_log, fd_log, inc_log, pen_log))
     if a.kick:
@@ -237,6 +305,11 @@ def run(a):
         "k_static": float(np.mean(fc[w]) / np.mean(pen[w])) if np.mean(pen[w]) > 0 else float("nan"),
         "mean_force": float(np.mean(fc[w])),
         "free_rms": float(np.sqrt(np.mean(fd[free] ** 2))),
+        "port_true_mW": 1e3 * float(np.mean(np.array(ea_true_log)[w]) / T),
+        "port_count_mW": 1e3 * float(np.mean(np.array(ea_count_log)[w]) / T),
+        "allow_mW": 1e3 * float(delta * np.mean(np.array(dT1_log)[w]) / T),
+        "pc_fired": pc_fire,
+        "pc_mJ": 1e3 * pc_energy,
     }
     return out
 
@@ -269,6 +342,13 @@ def main():
     p.add_argument("--project", type=int, default=1, help="project the Kalman estimate into the cell")
     p.add_argument("--subcount-vel", type=int, default=1, help="the coupling and feed-forward use the Kalman velocity too")
     p.add_argument("--obs-subcount", type=int, default=1, help="the observer uses the Kalman velocity (as the tick does)")
+    p.add_argument("--pc", default="none", help="passivity observer/controller on the device port: none | raw | allow (with the encoder-error allowance)")
+    p.add_argument("--pc-max", type=float, default=0.0, help="the passivity controller's largest damping [N s/m] (0: m_d / T)")
+    p.add_argument("--eb", action="store_true", help="energy bounding (Kim & Ryu) with the device's physical damping")
+    p.add_argument("--lead", action="store_true", help="lag compensation: the coupling/D_d velocity advanced over the loop's lags with the model")
+    p.add_argument("--contact-zeta", type=float, default=0.0, help="contact damping 2 zeta sqrt(K M_d) added in contact (0 = off)")
+    p.add_argument("--ideal-obs", action="store_true", help="diagnostic: f_hat = the hand's true force")
+    p.add_argument("--freeze-obs", action="store_true", help="diagnostic: f_hat low-passed at 1 Hz in the decomposition")
     p.add_argument("--kick", action="store_true",
                    help="push 0.2 N for 2 ms at t = 2 s and print the damping ratio and frequency "
                         "of the contact mode (log decrement; use with --no-quant)")
@@ -276,7 +356,30 @@ def main():
                    help="run K 3000 and 6000 x Delta 0.012, 0.03, 0.06 mm x press 0.5, 1, 2 N with "
                         "the other options; print contact/device ripple [%%]/losses per cell, the "
                         "mean device ripple and the free-space RMS per Delta")
+    p.add_argument("--grid2", action="store_true",
+                   help="the stiff grid: K 6000, 9000, 12000, 18000 x Delta 0, 0.012, 0.03 mm x press "
+                        "0.5, 1, 2 N; per K: mean contact / device ripple [%%], total losses, mean "
+                        "static stiffness, worst cell, free RMS per Delta")
+    p.add_argument("--cells", action="store_true", help="with --grid2: print every cell")
     a = p.parse_args()
+    if a.grid2:
+        for k in (6000.0, 9000.0, 12000.0, 18000.0):
+            rc, rd, loss, ks, free, worst, fired = [], [], 0, [], [], 0.0, 0
+            for d in (0.0, 0.012e-3, 0.03e-3):
+                for press in (0.5, 1.0, 2.0):
+                    a.k, a.delta, a.press, a.no_quant = k, d, press, d == 0.0
+                    o = run(a)
+                    rc.append(o["ripple_contact"]); rd.append(o["ripple_device"])
+                    loss += o["losses"]; ks.append(o["k_static"]); fired += o["pc_fired"]
+                    worst = max(worst, o["ripple_contact"], o["ripple_device"])
+                    if a.cells:
+                        print(f"  K {k:.0f} Delta {1e3 * d:.3f} mm press {press} N: " + " ".join(
+                            f"{kk}={vv:.4g}" if isinstance(vv, float) else f"{kk}={vv}" for kk, vv in o.items()))
+                free.append(f"{o['free_rms']:.3f}")
+            print(f"K {k:.0f}: ripple contact {100 * np.mean(rc):.1f} % device {100 * np.mean(rd):.1f} % "
+                  f"worst {100 * worst:.0f} %; losses {loss}; k_static {np.nanmean(ks):.0f}; free RMS "
+                  + " ".join(free) + (f"; pc ticks {fired}" if a.pc != "none" else ""))
+        return
     if a.grid:
         for k in (3000.0, 6000.0):
             cells, free, tot = [], [], 0.0

@@ -69,6 +69,9 @@ struct SceneMethod {
   // Remedy of issue #29 (docs/derivations/quiet_stiffness.md): the pipeline estimates the joint
   // state between encoder counts with the device model (reference/encoder_kalman.h).
   bool encoder_kalman = false;
+  // Remedy of issue #29 for the stiff contact mode: the coupling and D_d see the device velocity
+  // advanced over the loop's known lags with the device model (reference/lag_compensation.h).
+  bool lag_compensation = false;
   FrictionParams friction;
   ProxyParams proxy;
 };

@@ -247,6 +247,8 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   if (detect) pc.grasp_model = g.grasp.get();
   pc.encoder_kalman = scene.method.encoder_kalman;
   pc.encoder_quantum = g.device->capabilities().encoder_quantum;
+  pc.lag_compensation = scene.method.lag_compensation;
+  pc.velocity_estimate = matched_observer_input(g.device->capabilities());
   pc.skip_unneeded = options.skip_unneeded;
   if (options.configure_pipeline) options.configure_pipeline(pc);
   g.pipeline = make_pipeline(options.pipeline, belief, pc);

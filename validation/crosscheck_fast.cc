@@ -168,6 +168,7 @@ Scene config_scene(const StageConfig& c) {
   scene.method.grasp_mass_scale = 1.0;  // the hand's terms in every configuration
   scene.method.grip_detector = c.grip_detector;
   scene.tooth.contact_model = c.contact_model;
+  scene.method.lag_compensation = c.lag_compensation;
   return scene;
 }
 
@@ -431,7 +432,8 @@ void check_scene(const std::string& name, const CheckedImplementation& impl,
 }  // namespace
 
 std::string StageConfig::name() const {
-  return scene + "/" + contact_model + "/" + method_name(method) + (grip_detector ? "+grip" : "");
+  return scene + "/" + contact_model + "/" + method_name(method) + (grip_detector ? "+grip" : "") +
+         (lag_compensation ? "+lag" : "");
 }
 
 namespace {

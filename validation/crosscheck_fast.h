@@ -75,6 +75,8 @@ struct StageConfig {
   // device model carries the hand's mass all the time (a fixed GraspMassModel).
   bool grip_detector = true;
   std::string contact_model = "faces";  // "sdf" or "faces"
+  // Issue #29's loop-lag compensation (scene key method.lag_compensation; "+lag" in the name).
+  bool lag_compensation = false;
   // "drill/faces/pmi-pd+grip": scene/contact model/method, "+grip" with the detector.
   std::string name() const;
 };

@@ -116,6 +116,11 @@ struct PipelineModel {
   bool encoder_kalman = false;
   Vec6 encoder_quantum = Vec6::Zero();  // per joint [rad]; 0 = that joint is not quantised
   EncoderKalmanParams encoder_kalman_params;
+  // Loop-lag compensation (reference/lag_compensation.h; issue #29): device_terms sets V1 =
+  // J_t (qd + lag a) with the lag of `velocity_estimate` (none with the encoder Kalman filter)
+  // plus the zero-order hold's half tick, a the device model's acceleration.
+  bool lag_compensation = false;
+  ObserverInput velocity_estimate;
   // Skip what the scene does not need (fast/ only; fast/README.md "Skips"): the observer without
   // a gain, the grip detector without a hand mass, the decomposition unless the method uses it,
   // friction when off, contact work on an empty set, drilling unless the tool drills, the tooth's
@@ -172,7 +177,7 @@ class ContactBuffer : public std::vector<Contact> {
 struct TickResult {
   TickStatus status = TickStatus::kOk;
   Pose device;                       // x1, R1
-  Vec6 V1 = Vec6::Zero();            // device twist
+  Vec6 V1 = Vec6::Zero();            // device twist (lag-compensated when the model says so)
   Vec6 F1_hat = Vec6::Zero();        // human wrench estimate (maximal), zero without observer
   Vec6 T1_vc = Vec6::Zero();         // coupling wrench on the device
   Vec6 T1_pd = Vec6::Zero();         // decomposition feed-forward on the device

@@ -1,8 +1,9 @@
 // The servo tick allocates nothing (docs/design.md "The tick as Model/Data stages"; issue "The tick
 // as an engine"): every implementation in the registry (fast/registry.h), every method, with and
-// without the grip detector (and with issue #29's encoder Kalman filter), over 10^4 ticks of the
-// drill scene in contact and drilling, counted with a global operator new hook around the loop
-// owner's step (read -> tick -> write -> advance on the simulated Phantom).
+// without the grip detector (and with issue #29's encoder Kalman filter and loop-lag
+// compensation), over 10^4 ticks of the drill scene in contact and drilling, counted with a global
+// operator new hook around the loop owner's step (read -> tick -> write -> advance on the
+// simulated Phantom).
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -22,6 +23,7 @@ struct Variant {
   Method method;
   bool grip_detector;
   bool encoder_kalman = false;
+  bool lag_compensation = false;
 };
 
 TEST(TickAllocation, DrillSceneTicksAllocateNothingForEveryImplementationAndMethod) {
@@ -30,7 +32,9 @@ TEST(TickAllocation, DrillSceneTicksAllocateNothingForEveryImplementationAndMeth
                               {"pmi-pd", Method::kPmiPd, false},
                               {"pmi-pd + grip detector", Method::kPmiPd, true},
                               {"pmi-pd + grip detector + encoder kalman", Method::kPmiPd, true,
-                               true}};
+                               true},
+                              {"pmi-pd + grip detector + lag compensation", Method::kPmiPd, true,
+                               false, true}};
   constexpr long kTicks = 10000;
   for (const StageTable* table : stage_tables()) {
     for (const Variant& v : variants) {
@@ -42,6 +46,7 @@ TEST(TickAllocation, DrillSceneTicksAllocateNothingForEveryImplementationAndMeth
         scene.method.grip_detector = true;
       }
       scene.method.encoder_kalman = v.encoder_kalman;
+      scene.method.lag_compensation = v.lag_compensation;
       SceneRigOptions options;
       options.pipeline = table->implementation;
       const std::unique_ptr<SceneRig> rig = build_scene_rig(scene, options);

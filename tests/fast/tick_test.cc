@@ -11,6 +11,7 @@
 #include <string>
 
 #include "fast/registry.h"
+#include "tests/support/crosscheck_rows.h"
 #include "tests/support/stress.h"
 #include "validation/crosscheck_fast.h"
 
@@ -36,16 +37,7 @@ void expect_rows_agree(const FastCrosscheckOptions& o, const FastCrosscheckResul
   ASSERT_EQ(r.shared.size(), 2u * implementations);
   const std::size_t rows = static_cast<std::size_t>(kStageCount) - 2 + 1;
   ASSERT_EQ(r.stages.size(), rows * o.stage_configs.size() * implementations);
-  for (const StageCrosscheck& s : r.stages) {
-    std::printf("%s %-28s %-13s max_rel %.3e (%ld samples, %ld in contact)\n",
-                s.implementation.c_str(), s.config.c_str(), s.stage.c_str(), s.max_rel, s.samples,
-                s.contact_samples);
-    EXPECT_LE(s.max_rel, o.max_rel_bound) << s.config << " " << s.stage;
-    EXPECT_EQ(s.count_mismatches, 0) << s.config << " " << s.stage;
-    EXPECT_EQ(s.samples, o.stage_ticks) << s.config;
-    // A check that barely met contact would prove little.
-    EXPECT_GT(s.contact_samples, s.samples / 20) << s.config << " " << s.stage;
-  }
+  for (const StageCrosscheck& s : r.stages) testing::expect_stage_row_agrees(o, s);
   // Adversarial states (validation/crosscheck_fast.h): tick lengths 1e-5 to 1e-2 s, the proxy's
   // rotation near 0 and near pi, saturation, a deeper proxy, no friction; every compared stage but
   // drill.
