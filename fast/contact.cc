@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 
+#include "reference/anchored_spring.h"
 #include "reference/contact.h"
 
 namespace dentsim::fast {
@@ -42,10 +43,10 @@ AffineWrench contact_wrench_unchecked(std::span<const Contact> contacts, const P
 void add_anchored_spring_unchecked(AffineWrench* F, std::span<const Contact> contacts,
                                    const Pose& proxy, double T, Scheme scheme,
                                    const AnchoredSpring& spring, double b_lin, double b_ang) {
-  if (scheme != Scheme::kMidpoint || !(spring.held > 0.0)) return;
-  const double k_free = 2.0 * anchored_spring_damping(spring.center, b_lin, b_ang) / T;
-  const ContactWeights w(contacts);
+  const double k_free = anchored_spring_explicit_stiffness(spring, T, scheme, b_lin, b_ang);
+  if (k_free < 0.0) return;
   const Mat3 Rt = proxy.R.transpose();
+  const ContactWeights w(contacts);
   for (const Contact& c : contacts) {
     const Vec3 x_c = proxy.x + proxy.R * c.r;
     if (!(c.n.dot(c.x_o - x_c) > 0.0)) continue;  // unilateral, as the part along n

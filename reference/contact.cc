@@ -7,6 +7,7 @@
 #include <sstream>
 #include <string>
 
+#include "reference/anchored_spring.h"
 #include "reference/core/io.h"
 #include "reference/core/so3.h"
 
@@ -138,11 +139,17 @@ double anchored_spring_damping(const Vec3& center, double b_lin, double b_ang) {
   return 1.0 / (1.0 / b_lin + o2 / b_ang);
 }
 
+double anchored_spring_explicit_stiffness(const AnchoredSpring& spring, double T, Scheme scheme,
+                                          double b_lin, double b_ang) {
+  if (scheme != Scheme::kMidpoint || !(spring.held > 0.0)) return -1.0;
+  return 2.0 * anchored_spring_damping(spring.center, b_lin, b_ang) / T;
+}
+
 void add_anchored_spring_unchecked(AffineWrench* F, std::span<const Contact> contacts,
                                    const Pose& proxy, double T, Scheme scheme,
                                    const AnchoredSpring& spring, double b_lin, double b_ang) {
-  if (scheme != Scheme::kMidpoint || !(spring.held > 0.0)) return;
-  const double k_free = 2.0 * anchored_spring_damping(spring.center, b_lin, b_ang) / T;
+  const double k_free = anchored_spring_explicit_stiffness(spring, T, scheme, b_lin, b_ang);
+  if (k_free < 0.0) return;
   const ContactWeights w(contacts);
   const Mat36 Jo = contact_point_jacobian(spring.center, proxy.R);  // the centre's velocity
   for (const Contact& c : contacts) {
