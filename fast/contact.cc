@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 
+#include "reference/anchored_spring.h"
 #include "reference/contact.h"
 
 namespace dentsim::fast {
@@ -37,6 +38,38 @@ AffineWrench contact_wrench_unchecked(std::span<const Contact> contacts, const P
   F.f0 = f0;
   F.G = G;
   return F;
+}
+
+void add_anchored_spring_unchecked(AffineWrench* F, std::span<const Contact> contacts,
+                                   const Pose& proxy, double T, Scheme scheme,
+                                   const AnchoredSpring& spring, double b_lin, double b_ang) {
+  const double k_free = anchored_spring_explicit_stiffness(spring, T, scheme, b_lin, b_ang);
+  if (k_free < 0.0) return;
+  const Mat3 Rt = proxy.R.transpose();
+  const ContactWeights w(contacts);
+  for (const Contact& c : contacts) {
+    const Vec3 x_c = proxy.x + proxy.R * c.r;
+    if (!(c.n.dot(c.x_o - x_c) > 0.0)) continue;  // unilateral, as the part along n
+    const double k_imp = spring.held * w(c) * c.stiffness - k_free;
+    if (!(k_imp > 0.0)) continue;  // within the explicit bound
+    const double g = 0.5 * T * k_imp;
+    const Vec3 t1 = c.n.unitOrthogonal();
+    const Vec3 t2 = c.n.cross(t1);
+    for (const Vec3& t : {t1, t2}) {
+      Vec6 b;
+      b.head<3>() = t;
+      b.tail<3>() = spring.center.cross(Rt * t);  // S(o) R^T t
+      for (int j = 0; j < 6; ++j) {  // -g b b^T, symmetric exactly (as G above)
+        const double gb = g * b(j);
+        for (int i = 0; i < j; ++i) {
+          const double v = gb * b(i);
+          F->G(i, j) -= v;
+          F->G(j, i) -= v;
+        }
+        F->G(j, j) -= gb * b(j);
+      }
+    }
+  }
 }
 
 }  // namespace dentsim::fast

@@ -11,6 +11,7 @@
 
 #include <span>
 
+#include "reference/contact.h"
 #include "reference/core/affine_wrench.h"
 #include "reference/core/params.h"
 
@@ -18,5 +19,12 @@ namespace dentsim::fast {
 
 AffineWrench contact_wrench_unchecked(std::span<const Contact> contacts, const Pose& proxy,
                                       double T, Scheme scheme);
+
+// Twin of reference/contact.h's add_anchored_spring_unchecked (same K_imp, same b_t from
+// reference's anchored_spring_damping): -K_imp T/2 b_j b_j^T for two tangents t_j of n,
+// b_j = J_o^T t_j = [t_j; o x (R^T t_j)] (I - n n^T = t1 t1^T + t2 t2^T).
+void add_anchored_spring_unchecked(AffineWrench* F, std::span<const Contact> contacts,
+                                   const Pose& proxy, double T, Scheme scheme,
+                                   const AnchoredSpring& spring, double b_lin, double b_ang);
 
 }  // namespace dentsim::fast

@@ -71,6 +71,11 @@ TickStatus assemble(const PipelineModel& m, PipelineData& d) {
     d.contact = AffineWrench{};
   } else {
     d.contact = fast::contact_wrench_unchecked(d.r.contacts, d.proxy.pose, d.T, m.scheme);
+    if (const AnchoredSpring* a = anchored_spring(d.env)) {  // the surface proxy (issue #32)
+      fast::add_anchored_spring_unchecked(&d.contact, d.r.contacts, d.proxy.pose, d.T, m.scheme,
+                                          *a, m.coupling.b_lin + m.proxy.damping_lin,
+                                          m.coupling.b_ang + m.proxy.damping_ang);
+    }
   }
   const TickStatus st = reference::detail::assemble_given_contact(m, d);
   if (st == TickStatus::kOk && !m.skip_unneeded && m.method != Method::kPmiPd) {

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <string>
 
+#include "reference/anchored_spring.h"
 #include "reference/core/io.h"
 #include "reference/core/so3.h"
 
@@ -128,6 +129,36 @@ AffineWrench contact_wrench_unchecked(std::span<const Contact> contacts, const P
     F.G += (Jt * c.n) * (g * d);
   }
   return F;
+}
+
+double anchored_spring_damping(const Vec3& center, double b_lin, double b_ang) {
+  if (!(b_lin > 0.0)) return 0.0;
+  const double o2 = center.squaredNorm();
+  if (o2 == 0.0) return b_lin;
+  if (!(b_ang > 0.0)) return 0.0;
+  return 1.0 / (1.0 / b_lin + o2 / b_ang);
+}
+
+double anchored_spring_explicit_stiffness(const AnchoredSpring& spring, double T, Scheme scheme,
+                                          double b_lin, double b_ang) {
+  if (scheme != Scheme::kMidpoint || !(spring.held > 0.0)) return -1.0;
+  return 2.0 * anchored_spring_damping(spring.center, b_lin, b_ang) / T;
+}
+
+void add_anchored_spring_unchecked(AffineWrench* F, std::span<const Contact> contacts,
+                                   const Pose& proxy, double T, Scheme scheme,
+                                   const AnchoredSpring& spring, double b_lin, double b_ang) {
+  const double k_free = anchored_spring_explicit_stiffness(spring, T, scheme, b_lin, b_ang);
+  if (k_free < 0.0) return;
+  const ContactWeights w(contacts);
+  const Mat36 Jo = contact_point_jacobian(spring.center, proxy.R);  // the centre's velocity
+  for (const Contact& c : contacts) {
+    if (!(penetration_depth(c, proxy) > 0.0)) continue;  // unilateral, as the part along n
+    const double k_imp = spring.held * w(c) * c.stiffness - k_free;
+    if (!(k_imp > 0.0)) continue;  // within the explicit bound
+    const Mat3 P = Mat3::Identity() - c.n * c.n.transpose();
+    F->G -= (0.5 * T * k_imp) * (Jo.transpose() * P * Jo);
+  }
 }
 
 double contact_potential(std::span<const Contact> contacts, const Pose& proxy) {

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "reference/core/affine_wrench.h"
+#include "reference/core/contact_provider.h"
 #include "reference/core/params.h"
 #include "reference/core/types.h"
 
@@ -93,6 +94,39 @@ AffineWrench contact_wrench(std::span<const Contact> contacts, const Pose& proxy
 // once): never throws, never allocates.
 AffineWrench contact_wrench_unchecked(std::span<const Contact> contacts, const Pose& proxy,
                                       double T, Scheme scheme);
+
+// The surface-proxy contact's spring across its normal (issue #32; reference/tooth/sdf.h): that
+// contact renders K (g - c) to an anchor g, c = x2 + R2 o the tool sphere's centre. Across n the
+// force turns with the tool only as far as the anchor does not follow it: the across-normal
+// stiffness is K_t = h w K, h = 1 - (how far g follows c across n) in [0, 1] (0 where g slides
+// freely on a face, 1 where it is held, as in a drilled hole). contact_wrench integrates only the
+// part along n; the rest is evaluated at t_k, i.e. explicitly inside the implicit step. Over one
+// PMI tick with an explicit spring K_e and the implicit damping C (coupling and proxy dampers),
+//     E_k+1 - E_k = -T V_hat^T (C - T/2 K_e J_o^T (I - n n^T) J_o) V_hat
+// (the implicit elements are energy-neutral or dissipative), so the explicit part is stable
+// iff K_e T/2 <= b_t, b_t the damping C gives the centre across n (a 1-DoF check: the map of
+// m x'' = -K_e x_k - K_c x_hat - b v_hat has determinant 1 + 2T(K_e T - 2b)/(4m + K_c T^2 + 2bT):
+// < 1 iff K_e T < 2b, whatever m and K_c; docs/derivations/sdf_contact.md §3a).
+// 1/b_t <= 1/b_lin + |o|^2/b_ang bounds the centre's mobility across n, so
+//     b_t = 1 / (1/b_lin + |o|^2/b_ang)    (0 if b_lin = 0, or b_ang = 0 with o != 0).
+// add_anchored_spring_unchecked keeps the spring explicit up to that bound and integrates the
+// excess, K_imp = K_t - 2 b_t/T when positive, at its midpoint value (under kMidpoint only):
+//     G -= sum_i K_imp,i T/2 J_o^T (I - n_i n_i^T) J_o,   J_o = J_c(o, R2),
+// over the penetrating members. Where K_t T/2 <= b_t nothing is added (F unchanged, bit for bit).
+struct AnchoredSpring {
+  Vec3 center = Vec3::Zero();  // o, the tool sphere's centre in the proxy body frame [m]
+  double held = 0.0;           // h in [0, 1]: the fraction of K the anchor holds across n
+};
+// The damping b_t [N s/m] the implicit step gives the centre o across any direction (above).
+double anchored_spring_damping(const Vec3& center, double b_lin, double b_ang);
+// kExplicit: no change. b_lin, b_ang: the implicit linear and angular damping on the proxy
+// (coupling plus proxy damping). Never throws, never allocates.
+void add_anchored_spring_unchecked(AffineWrench* F, std::span<const Contact> contacts,
+                                   const Pose& proxy, double T, Scheme scheme,
+                                   const AnchoredSpring& spring, double b_lin, double b_ang);
+// The anchored spring of `env` when it renders the surface-proxy contact (kSurfaceProxy, kField),
+// else nullptr. Defined with the tooth (reference/tooth/tooth_contacts.cc).
+const AnchoredSpring* anchored_spring(const ContactProvider* env);
 
 // Contact potential U = sum_i w_i 1/2 K_i delta_i^2 over members with delta_i > 0 [J].
 // -dU/dt = V^T F(V) for the spring part (F at kExplicit without damping).

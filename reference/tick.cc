@@ -262,6 +262,11 @@ TickStatus collide(const PipelineModel&, PipelineData& d) {
 
 TickStatus assemble(const PipelineModel& m, PipelineData& d) {
   d.contact = contact_wrench_unchecked(d.r.contacts, d.proxy.pose, d.T, m.scheme);
+  if (const AnchoredSpring* a = anchored_spring(d.env)) {  // the surface proxy (issue #32)
+    add_anchored_spring_unchecked(&d.contact, d.r.contacts, d.proxy.pose, d.T, m.scheme, *a,
+                                  m.coupling.b_lin + m.proxy.damping_lin,
+                                  m.coupling.b_ang + m.proxy.damping_ang);
+  }
   return detail::assemble_given_contact(m, d);
 }
 

@@ -100,6 +100,13 @@ StressResult run_stress(const StressConfig& c, const std::function<void(long, lo
       ++res.rejected_configs;
       continue;
     }
+    if ((!c.only_method.empty() && d.patch["method"]["name"] != c.only_method) ||
+        (!c.only_scene.empty() && d.scene != c.only_scene)) {
+      ++res.skipped_runs;
+      ++res.runs;
+      res.ticks += std::min(c.ticks_per_run, c.ticks - res.ticks);
+      continue;
+    }
     SceneRigOptions o;
     o.pipeline = d.pipeline;
     const std::unique_ptr<SceneRig> rig = build_scene_rig(scene, o);

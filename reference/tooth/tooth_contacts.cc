@@ -87,8 +87,10 @@ bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out
       model_ == ContactModel::kField ? surface_.update(*field_, c) : surface_.update(tooth_, c);
   Contact contact;
   if (!surface_proxy_contact(tooth_, proxy, tip_, g, k_tooth_, b_tooth_, &contact, sd_)) {
+    measure_anchor(c, g, false);
     return true;
   }
+  measure_anchor(c, g, true);
   if (out.capacity() < 1) return false;
   out.push_back(contact);
   if (!drills_) return true;
@@ -112,6 +114,29 @@ bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out
     drill_voxels_.push_back(v);
   }
   return true;
+}
+
+void ToothContactProvider::measure_anchor(const Vec3& c, const Vec3& g, bool in_contact) {
+  anchored_.center = tip_.offset_body;
+  if (!in_contact) {
+    anchored_.held = 0.0;
+  } else if (have_last_) {
+    const Vec3 n = (g - c).normalized();
+    const Vec3 dc = c - c_last_;
+    const Vec3 dg = g - g_last_;
+    const Vec3 dc_t = dc - n.dot(dc) * n;
+    const Vec3 dg_t = dg - n.dot(dg) * n;
+    const double moved2 = dc_t.squaredNorm();
+    // g is found to the proxy's tolerance (1e-9 rho): a motion across n of 1e-6 rho or less
+    // (0.4 nm per tick for a 0.4 mm tip) says nothing about the anchor; h is kept.
+    const double still = 1e3 * surface_.constants().tol;
+    if (moved2 > still * still) {
+      anchored_.held = std::clamp(1.0 - dg_t.dot(dc_t) / moved2, 0.0, 1.0);
+    }
+  }
+  have_last_ = true;
+  c_last_ = c;
+  g_last_ = g;
 }
 
 int ToothContactProvider::drill(std::span<const Contact> contacts, double T) {
@@ -198,6 +223,14 @@ std::unique_ptr<PipelineTooth> make_reference_tooth(VoxelTooth& tooth,
                                                     const PipelineToothSetup& setup,
                                                     SignedDistanceFn sd) {
   return std::make_unique<ReferenceTooth>(tooth, setup, sd);
+}
+
+const AnchoredSpring* anchored_spring(const ContactProvider* env) {
+  // The surface-proxy contact renders a spring to an anchor (reference/contact.h); the face
+  // model's force stays along the face normal. A pointer cast: no allocation, no throw.
+  const auto* tooth = dynamic_cast<const ToothContactProvider*>(env);
+  if (tooth == nullptr || tooth->model() == ContactModel::kFaces) return nullptr;
+  return &tooth->anchored_spring();
 }
 
 }  // namespace dentsim

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "reference/contact.h"
 #include "reference/core/contact_provider.h"
 #include "reference/tooth/collision.h"
 #include "reference/tooth/drilling.h"
@@ -119,8 +120,19 @@ class ToothContactProvider : public ToothProviderBase {
   ContactModel model() const { return model_; }
   // The surface proxy (kSurfaceProxy, kField; its g() is the rendered tip centre).
   const SurfaceProxy& surface_proxy() const { return surface_; }
+  // The surface-proxy contact's spring across its normal (reference/contact.h, issue #32): the
+  // tip centre o and the held fraction h, measured by each contacts() call from how far the
+  // anchor g followed the tool's centre c across n since the last call,
+  //     h = clamp(1 - (P dg)^T (P dc) / |P dc|^2, 0, 1),   P = I - n n^T,
+  // kept while c barely moves across n (|P dc| <= 1e-6 rho, a thousand times the proxy's
+  // tolerance), 0 out of contact.
+  // A flat face: g follows c, h = 0; a held anchor (a drilled hole, a corner): h = 1; a concave
+  // face of radius r_A at depth delta: delta / (r_A + delta).
+  const AnchoredSpring& anchored_spring() const { return anchored_; }
 
  private:
+  void measure_anchor(const Vec3& c, const Vec3& g, bool in_contact);
+
   VoxelTooth& tooth_;
   CollisionScratch scratch_;
   ContactModel model_;
@@ -129,6 +141,10 @@ class ToothContactProvider : public ToothProviderBase {
   std::unique_ptr<FieldSolid> field_;  // kField
   std::vector<Contact> drill_contacts_;  // kSurfaceProxy: the drilled voxels' force shares
   std::vector<std::size_t> drill_voxels_;
+  AnchoredSpring anchored_;   // the held fraction of the last contacts() call
+  bool have_last_ = false;    // c_last_, g_last_ hold the last call's tip centre and anchor
+  Vec3 c_last_ = Vec3::Zero();
+  Vec3 g_last_ = Vec3::Zero();
 };
 
 // The tooth as one implementation of the tick holds it (fast/registry.h, Implementation::tooth):

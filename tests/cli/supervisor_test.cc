@@ -56,27 +56,26 @@ bool is_supervisor_fault(const std::string& fault) {
 }
 
 // The stress run of docs/results/reliability.md (seed 2026, run 1401: PMI drilling at 500 Hz, a
-// 50 g proxy, K_tooth 26694 N/m): its contact force reached 2e78 N with `faults: none`. The cause
-// (the surface proxy's spring across the normal is explicit in PMI's step) is found; its fix is
-// not in the tick yet (reliability.md), so the run must end safely: bounded with no fault, or in
-// one of the supervisor's named faults with zero torque and finite figures, exit status 1.
-TEST(SupervisorCli, StressRunThatExplodedWhileDrillingAt500HzEndsSafely) {
+// 50 g proxy, K_tooth 26694 N/m, b_vc 5.4 N s/m): its contact force reached 2e78 N with `faults:
+// none`. The cause: the surface proxy's spring across the normal, held by the drilled hole, was
+// explicit inside PMI's step (K T/2 = 26.7 N s/m against b = 5.4 N s/m: energy x2 per tick). With
+// the excess over that bound integrated at its midpoint (reference/contact.h
+// add_anchored_spring_unchecked) the run stays bounded: no fault, every tick, exit 0, passive at
+// the hand, the force that of a 2-5 N push on a stiff tooth (measured 25.4 N reference, 15.4 N
+// fast; the supervisor's bound is 34 N).
+TEST(SupervisorCli, StressRunThatExplodedWhileDrillingAt500HzStaysBounded) {
   for (const char* pipeline : {"reference", "fast"}) {
     const fs::path out = fresh_temp_dir(std::string("dentsim_sup_stress_") + pipeline);
     const auto r = run_dentsim("run " + kData + "stress_2026_run1401_pmi_drill_500hz.json --pipeline " +
                                pipeline + " --out " + out.string());
     const nlohmann::json j = read_json_file(out / "report.json");
     expect_no_null(j, pipeline);
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_TRUE(j.at("faults").empty()) << j.at("faults");
+    EXPECT_EQ(j.at("ticks").get<long>(), 2000);
     EXPECT_LE(j.at("max_contact_force_n").get<double>(), kForceBoundN) << pipeline;
-    if (j.at("faults").empty()) {
-      EXPECT_EQ(r.status, 0) << r.output;
-      EXPECT_EQ(j.at("ticks").get<long>(), 2000);
-    } else {
-      EXPECT_EQ(r.status, 1) << r.output;
-      ASSERT_EQ(j.at("faults").size(), 1u) << r.output;
-      EXPECT_TRUE(is_supervisor_fault(j.at("faults")[0].get<std::string>())) << j.at("faults");
-      EXPECT_EQ(j.at("torque_after_fault_n_m").get<double>(), 0.0);
-    }
+    EXPECT_GT(j.at("max_contact_force_n").get<double>(), 1.0) << pipeline;  // it did drill
+    EXPECT_TRUE(j.at("passive_at_hand").get<bool>()) << pipeline;
   }
 }
 

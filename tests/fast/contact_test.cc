@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -165,6 +166,63 @@ TEST(FastContact, AdversarialSetsEqualTheReference) {
   }
   std::printf("adversarial: worst |fast - reference| / bound = %.3f\n", worst);
   EXPECT_LE(worst, 1.0);
+}
+
+// The surface proxy's spring across the normal (add_anchored_spring_unchecked, issue #32), fast
+// against the reference on random sets: held fractions 0 to 1, dampers from 0 (all of K_t
+// implicit) to beyond the bound (nothing added, bit for bit in both), the sphere's centre off the
+// proxy origin. The terms are the same products summed in another order (two tangent rank-1
+// updates for the reference's J_o^T P J_o): within the round-off bound of the header, with the
+// added term's magnitude (K_imp T/2 (1 + |o|)^2) as its scale; and G stays symmetric negative
+// semidefinite (the spring integrated at its midpoint generates no energy).
+TEST(FastContact, AnchoredSpringEqualsTheReference) {
+  const unsigned seed = 32;
+  Rng rng(seed);
+  double worst = 0.0;
+  long added = 0, unchanged = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const Pose proxy = random_pose(rng, uni(rng, 0.0, std::numbers::pi));
+    const int n = 1 + static_cast<int>(rng() % 3);
+    std::vector<Contact> set;
+    for (int i = 0; i < n; ++i) {
+      const Vec3 r = Vec3(uni(rng, -1, 1), uni(rng, -1, 1), uni(rng, -1, 1)) * 0.01;
+      set.push_back(member(proxy, r, random_unit(rng), uni(rng, -2e-4, 5e-4),
+                           uni(rng, 1e3, 5e4), uni(rng, 0.0, 10.0), uni(rng, 0.0, 2.0)));
+    }
+    const AnchoredSpring spring{Vec3(uni(rng, -1, 1), uni(rng, -1, 1), uni(rng, -1, 1)) * 8e-3,
+                                trial % 5 == 0 ? 0.0 : uni(rng, 0.0, 1.0)};
+    const double b_lin = trial % 4 == 0 ? 0.0 : uni(rng, 0.0, 40.0);
+    const double b_ang = trial % 6 == 0 ? 0.0 : uni(rng, 0.0, 0.01);
+    const double T = std::pow(10.0, uni(rng, -4.0, -2.0));
+    for (Scheme scheme : {Scheme::kMidpoint, Scheme::kExplicit}) {
+      AffineWrench a = contact_wrench_unchecked(set, proxy, T, scheme);
+      AffineWrench b = fast::contact_wrench_unchecked(set, proxy, T, scheme);
+      const Mat6 a_before = a.G, b_before = b.G;
+      add_anchored_spring_unchecked(&a, set, proxy, T, scheme, spring, b_lin, b_ang);
+      fast::add_anchored_spring_unchecked(&b, set, proxy, T, scheme, spring, b_lin, b_ang);
+      EXPECT_EQ(a.f0, contact_wrench_unchecked(set, proxy, T, scheme).f0);  // f0 untouched
+      if (a.G == a_before) {
+        EXPECT_EQ(b.G, b_before);  // the same decision: nothing added in either
+        ++unchanged;
+      } else {
+        ++added;
+      }
+      const Scales sc = scales(set, proxy, T, scheme);
+      const double o = 1.0 + spring.center.norm();
+      const double k_sum = 0.5 * T * 5e4 * 2.0 * o * o;  // the added terms' magnitude, at most
+      const double bound = kC * kEps * 3.0 * (sc.G + k_sum);
+      worst = std::max(worst, (a.G - b.G).cwiseAbs().maxCoeff() / bound);
+      EXPECT_EQ(b.G, b.G.transpose());
+      EXPECT_LE(Eigen::SelfAdjointEigenSolver<Mat6>(b.G).eigenvalues().maxCoeff(),
+                kC * kEps * 6.0 * (sc.G + k_sum));
+    }
+  }
+  std::printf("seed %u: %ld wrenches with the anchored spring, %ld unchanged; worst |fast - "
+              "reference| / bound = %.3f\n",
+              seed, added, unchanged, worst);
+  EXPECT_LE(worst, 1.0);
+  EXPECT_GT(added, 500);
+  EXPECT_GT(unchanged, 1000);
 }
 
 // Physics: the tip of a tool (a point at body offset r) pressed delta into the half-space

@@ -20,6 +20,7 @@
 
 #include "reference/core/io.h"
 #include "reference/core/so3.h"
+#include "reference/pmi.h"
 #include "tests/support/contacts.h"
 
 namespace dentsim {
@@ -491,6 +492,123 @@ std::string error_of(F&& f) {
     return e.what();
   }
   return "(no InputError)";
+}
+
+// The surface-proxy contact (reference/tooth/sdf.h) is the spring K (g - c) to an anchor g; where
+// the anchor is held (h = 1) it is as stiff across its normal as along it, and contact_wrench
+// integrates only the part along n. reference/contact.h derives that the part left explicit is
+// stable iff K_e T/2 <= b (the implicit damping across n), whatever the mass. A proxy pushed 1 mm
+// into a held anchor by a constant force K delta_0 (the hand through the coupling), 0.1 mm off
+// to the side, the contact recomputed from g and c every tick, the proxy's own damping b the only
+// damper, at the stress run's K and T (docs/results/reliability.md: 26694 N/m, 2 ms), for
+// masses 100 times apart; E = 1/2 m v^2 + 1/2 K |g - c|^2 + K delta_0 z above its minimum:
+// - b = 0.9 K T/2 with the spring across n explicit: E grows (here 30-50 fold within 2000 ticks,
+//   until the side swing is as large as the push's depth and the geometry turns it; with a device
+//   pulling the proxy back, the cause of that run's explosion);
+// - with add_anchored_spring_unchecked (K_imp = K - 2b/T implicit): it never grows;
+// - b = 1.1 K T/2: add_anchored_spring_unchecked adds nothing (G bit for bit) and the explicit
+//   spring alone never lets E grow.
+TEST(Contact, AnchoredSpringIsExplicitOnlyWithinItsDampingBound) {
+  const double K = 26693.66, T = 2e-3, rho = 0.5e-3, delta0 = 1e-3;
+  const Vec3 g = Vec3::Zero();
+  const AnchoredSpring held{Vec3::Zero(), 1.0};
+  auto contact_of = [&](const ProxyState& s) {
+    const Vec3 n = (g - s.pose.x).normalized();
+    Contact c;
+    c.n = n;
+    c.x_o = g - rho * n;
+    c.r = s.pose.R.transpose() * (-rho * n);
+    c.depth = (g - s.pose.x).norm();
+    c.stiffness = K;
+    return c;
+  };
+  AffineWrench push;
+  push.f0 << 0.0, 0.0, -K * delta0, 0.0, 0.0, 0.0;
+  for (const double mass : {0.005, 0.05, 0.5}) {
+    ProxyParams p;
+    p.mass = mass;
+    p.inertia = Mat3::Identity() * 1e-5;
+    // Above the minimum -1/2 K delta_0^2 (at c = -delta_0 e_z, at rest).
+    auto energy = [&](const ProxyState& s) {
+      const Vec3 c = s.pose.x;
+      return 0.5 * p.mass * s.V.head<3>().squaredNorm() + 0.5 * K * (g - c).squaredNorm() +
+             K * delta0 * c.z() + 0.5 * K * delta0 * delta0;
+    };
+    for (const double b_ratio : {0.9, 1.1}) {
+      p.damping_lin = b_ratio * 0.5 * K * T;
+      for (const bool add : {false, true}) {
+        ProxyState s;
+        s.pose.x = Vec3(0.1e-3, 0.0, -delta0);
+        const double E0 = energy(s);
+        double E = E0, worst_rise = 0.0;
+        for (int k = 0; k < 2000 && E < 1e6 * E0; ++k) {
+          const Contact c = contact_of(s);
+          const std::span<const Contact> set(&c, 1);
+          AffineWrench F = contact_wrench_unchecked(set, s.pose, T, Scheme::kMidpoint);
+          const Mat6 G_before = F.G;
+          if (add) {
+            add_anchored_spring_unchecked(&F, set, s.pose, T, Scheme::kMidpoint, held,
+                                          p.damping_lin, 0.0);
+            if (b_ratio > 1.0) {
+              ASSERT_EQ(F.G, G_before);  // within the bound: nothing added
+            }
+          }
+          PmiSystem sys = pmi_inertia_system_unchecked(p, s, T);
+          sys.add(F);
+          sys.add(push);
+          Vec6 V_hat;
+          ASSERT_TRUE(pmi_try_solve(sys, &V_hat));
+          s = pmi_advance_unchecked(s, V_hat, T);
+          const double E1 = energy(s);
+          worst_rise = std::max(worst_rise, (E1 - E) / E0);
+          E = E1;
+        }
+        std::printf("m %.3f kg, b = %.1f K T/2, across n %s: E_end / E0 = %.3e, worst rise %.2e\n",
+                    mass, b_ratio, add ? "bounded" : "explicit", E / E0, worst_rise);
+        if (add || b_ratio > 1.0) {
+          EXPECT_LE(worst_rise, 1e-9) << mass << " " << b_ratio << " " << add;
+          EXPECT_LE(E, E0 * (1.0 + 1e-9)) << mass << " " << b_ratio << " " << add;
+        } else {
+          EXPECT_GT(E, 10.0 * E0) << mass;
+        }
+      }
+    }
+  }
+}
+
+// The anchored spring's damping b_t bounds the centre's mobility across n, and the split: a free
+// anchor (h = 0) or the explicit scheme adds nothing; a held one adds -(K - 2 b_t/T) T/2 P on the
+// translation when the centre is at the proxy origin.
+TEST(Contact, AnchoredSpringAddsOnlyTheExcessOverTheBound) {
+  EXPECT_EQ(anchored_spring_damping(Vec3::Zero(), 3.0, 0.0), 3.0);
+  EXPECT_EQ(anchored_spring_damping(Vec3(0, 0, 1e-3), 3.0, 0.0), 0.0);
+  EXPECT_EQ(anchored_spring_damping(Vec3::Zero(), 0.0, 1.0), 0.0);
+  EXPECT_NEAR(anchored_spring_damping(Vec3(0, 0, 2e-3), 3.0, 4e-6), 1.0 / (1.0 / 3.0 + 1.0), 1e-15);
+  Pose proxy;
+  Contact c;
+  c.n = Vec3(1.0, 2.0, 2.0) / 3.0;
+  c.r = -0.5e-3 * c.n;
+  c.x_o = c.r + 1e-4 * c.n;
+  c.stiffness = 12000.0;
+  c.damping = 5.0;
+  const double T = 1e-3, b = 2.0;
+  const std::span<const Contact> set(&c, 1);
+  const Mat3 P = Mat3::Identity() - c.n * c.n.transpose();
+  for (const double h : {0.0, 0.5, 1.0}) {
+    for (const Scheme scheme : {Scheme::kMidpoint, Scheme::kExplicit}) {
+      const AffineWrench F0 = contact_wrench_unchecked(set, proxy, T, scheme);
+      AffineWrench F = F0;
+      add_anchored_spring_unchecked(&F, set, proxy, T, scheme, AnchoredSpring{Vec3::Zero(), h},
+                                    b, 0.0);
+      if (h == 0.0 || scheme == Scheme::kExplicit) {
+        EXPECT_EQ(F.G, F0.G) << h;
+        continue;
+      }
+      const Mat3 want = -(0.5 * T * (h * 12000.0 - 2.0 * b / T)) * P;
+      EXPECT_LE(((F.G - F0.G).topLeftCorner<3, 3>() - want).cwiseAbs().maxCoeff(), 1e-12) << h;
+      EXPECT_EQ(F.f0, F0.f0);
+    }
+  }
 }
 
 TEST(Contact, BadInputThrowsNamingTheField) {

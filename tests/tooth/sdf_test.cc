@@ -196,6 +196,63 @@ TEST(SurfaceProxy, FlatFaceContactIsTheToolsDepthAndSlidesWithoutRipple) {
   }
 }
 
+// The anchor's held fraction h (reference/tooth/tooth_contacts.h, the stiffness the contact
+// has across its normal, reference/contact.h): on a flat face the anchor follows the tool across
+// n (h = 0: the force does not turn); in a concave corner (a floor and two walls: the admissible
+// set's corner is a point) it does not move at all (h = 1: the full K across n, as in a drilled
+// hole). The face model has no anchored spring.
+TEST(SurfaceProxy, AnchorIsFreeOnAFaceAndHeldInACorner) {
+  const VoxelTooth slab = make_tooth(64, [](const Vec3& p) { return p.z() < 3.2e-3; });
+  ToothContactProvider face(const_cast<VoxelTooth&>(slab), ToolTip{kRho, Vec3::Zero()}, kK, 0.0,
+                            nullptr, ContactModel::kSurfaceProxy);
+  ASSERT_NE(anchored_spring(&face), nullptr);
+  EXPECT_EQ(anchored_spring(&face), &face.anchored_spring());
+  std::vector<Contact> out;
+  out.reserve(kContactCapacity);
+  Pose pose;
+  double worst_face = 0.0;
+  for (int tick = 0; tick < 200; ++tick) {
+    pose.x = Vec3(1e-3 + tick * 0.01e-3, 3e-3 + 0.005e-3 * (tick % 3), 3.2e-3 + kRho -
+                  std::min(0.3e-3, tick * 0.05e-3));
+    ASSERT_TRUE(face.contacts(pose, out));
+    if (tick >= 10) {
+      ASSERT_EQ(out.size(), 1u);
+      worst_face = std::max(worst_face, face.anchored_spring().held);
+    }
+  }
+  EXPECT_LE(worst_face, 1e-6);
+
+  const VoxelTooth corner = make_tooth(64, [](const Vec3& p) {
+    return p.z() < 3.2e-3 || p.x() < 2.4e-3 || p.y() < 2.4e-3;
+  });
+  ToothContactProvider held(const_cast<VoxelTooth&>(corner), ToolTip{kRho, Vec3::Zero()}, kK,
+                            0.0, nullptr, ContactModel::kSurfaceProxy);
+  // Down the corner's diagonal from free space to 0.2 mm behind each of the three faces, then
+  // moved across n back and forth.
+  const Vec3 apex(2.8e-3, 2.8e-3, 3.6e-3);  // the corner of {phi >= rho}
+  const Vec3 diag = Vec3(1, 1, 1).normalized();
+  const Vec3 across = Vec3(1, -1, 0).normalized();
+  double least_held = 1.0;
+  for (int tick = 0; tick < 120; ++tick) {
+    const double along = std::max(-0.2e-3 * std::sqrt(3.0), 0.5e-3 - tick * 0.02e-3);
+    const double wiggle = tick >= 60 ? 0.02e-3 * ((tick % 2) ? 1.0 : -1.0) : 0.0;
+    pose.x = apex + along * diag + wiggle * across;
+    ASSERT_TRUE(held.contacts(pose, out));
+    if (tick >= 62) {
+      ASSERT_EQ(out.size(), 1u);
+      least_held = std::min(least_held, held.anchored_spring().held);
+    }
+  }
+  std::printf("anchor held fraction: face max %.3e, corner min %.6f\n", worst_face, least_held);
+  EXPECT_GE(least_held, 0.99);
+
+  ToothContactProvider faces(const_cast<VoxelTooth&>(slab), ToolTip{kRho, Vec3::Zero()}, kK, 0.0,
+                             nullptr, ContactModel::kFaces);
+  EXPECT_EQ(anchored_spring(&faces), nullptr);
+  NoContacts none;
+  EXPECT_EQ(anchored_spring(&none), nullptr);
+}
+
 TEST(SurfaceProxy, DrillingGoesThroughTheLayersInOrderAndOpensThePulp) {
   // A layered slab on 64^3 (h = 0.1 mm): enamel 2.6-3.2 mm, dentin 1.6-2.6 mm, pulp below.
   VoxelGrid g(64, Vec3::Zero(), kSide / 64);
