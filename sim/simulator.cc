@@ -74,8 +74,8 @@ Vec3 occlusal_anchor(const VoxelGrid& g) {
   return Vec3(c.x(), c.y(), top);
 }
 
-// Device penetrations below this (the Phantom's tip resolution, ~0.03 mm, PHANTOM.md) are
-// encoder noise and do not enter the stiffness fit.
+// Device penetrations below this (the Phantom's tip resolution, ~0.03 mm, docs/device_facts.md §3)
+// are encoder noise and do not enter the stiffness fit.
 constexpr double kMinDepthForStiffness = 3e-5;
 // The loop owner's velocity guard [rad/s] (phantom_safety_limits' value, device/safety_chain.h).
 constexpr double kSceneMaxJointSpeed = 20.0;
