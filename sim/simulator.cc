@@ -18,7 +18,6 @@
 #include "device/hdapi/hdapi_device.h"
 #include "device/phantom_device.h"
 #include "device/servo_pacer.h"
-#include "sim/session_record.h"
 #include "device/simulated_phantom.h"
 #include "fast/registry.h"
 #include "reference/core/io.h"
@@ -30,9 +29,10 @@
 #include "reference/tools.h"
 #include "reference/tooth/collision.h"
 #include "reference/tooth/drilling.h"
+#include "reference/tooth/tooth_contacts.h"
+#include "sim/session_record.h"
 #include "tooth_io/mesh.h"
 #include "tooth_io/procedural_molar.h"
-#include "reference/tooth/tooth_contacts.h"
 #include "tooth_io/tooth_field.h"
 #include "tooth_io/voxelize.h"
 
@@ -131,12 +131,10 @@ double SceneRig::tip_depth(const Pose& pose) {
   return d;
 }
 
-std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOptions& options) {
-  auto rig = std::make_unique<SceneRig>();
-  SceneRig& g = *rig;
-  g.tick = 1.0 / scene.tick_hz;
+namespace {
 
-  // Device: the model file drives both the simulated plant and the pipeline's model.
+// The device: the model file drives both the simulated plant and the pipeline's model.
+void load_device(const Scene& scene, SceneRig& g) {
   g.params = scene.device.model_file.empty() ? default_phantom_params()
                                              : load_phantom_params(scene.device.model_file);
   g.model = std::make_unique<PhantomModel>(g.params);
@@ -152,14 +150,19 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
     dcfg.jitter.half_width = 1e-6 * scene.device.jitter_us;
   }
   g.device = std::make_unique<SimulatedPhantom>(phantom_plant(g.params), dcfg, g.q_home);
+}
+
+DeviceBackend scene_backend(const Scene& scene, const SceneRigOptions& options) {
   const std::string backend_name = options.device.empty() ? scene.device.type : options.device;
   const std::optional<DeviceBackend> found = find_device_backend(backend_name);
   if (!found) {
     throw InputError("device '" + backend_name + "': expected " + device_backend_list());
   }
-  const DeviceBackend backend = *found;
+  return *found;
+}
 
-  // Tooth, placed so its occlusal anchor sits at home + anchor_offset.
+// The tooth, placed so its occlusal anchor sits at home + anchor_offset, and its field.
+void place_tooth(const Scene& scene, SceneRig& g) {
   VoxelGrid grid = build_tooth(scene.tooth);
   g.anchor = g.home.x + scene.tooth.anchor_offset;
   const Vec3 tooth_shift = g.anchor - occlusal_anchor(grid);
@@ -170,20 +173,23 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   g.measure_contacts.reserve(4096);
   g.k_tooth = scene.tooth.k_tooth;
   g.b_tooth = scene.tooth.b_tooth;
+  // The tooth's sampled field, built from its source (contact model "field"; tooth_io/
+  // tooth_field.h), which every implementation's tooth reads.
+  if (parse_contact_model(scene.tooth.contact_model) == ContactModel::kField) {
+    g.field = std::make_unique<SampledField>(
+        build_tooth_field(tooth_source(scene.tooth), g.tooth->grid(), tooth_shift,
+                          field_band_for_tip(g.tip.radius, g.tooth->grid().voxel_size)));
+  }
+}
+
+// The implementation's tooth on the placed tooth: its contacts and, if the tool drills, drilling.
+void make_pipeline_tooth(const Scene& scene, const SceneRigOptions& options,
+                         const Implementation& impl, SceneRig& g) {
   DrillParams drill;
   drill.bur_speed_rad_s = scene.tool.bur_speed_rpm * 2.0 * std::numbers::pi / 60.0;
   drill.cutting_coefficient = scene.tool.cutting_coefficient;
   const DrillParams* drilling = scene.tool.drills() ? &drill : nullptr;
   const ContactModel contact_model = parse_contact_model(scene.tooth.contact_model);
-  // The tooth's sampled field, built from its source (contact model "field"; tooth_io/
-  // tooth_field.h), which every implementation's tooth reads.
-  if (contact_model == ContactModel::kField) {
-    g.field = std::make_unique<SampledField>(build_tooth_field(
-        tooth_source(scene.tooth), g.tooth->grid(), tooth_shift,
-        field_band_for_tip(g.tip.radius, g.tooth->grid().voxel_size)));
-  }
-  // The implementation of the tick (fast/registry.h): its tooth and, below, its device model.
-  const Implementation& impl = implementation(options.pipeline);
   PipelineToothSetup tooth_setup;
   tooth_setup.tip = g.tip;
   tooth_setup.k_tooth = g.k_tooth;
@@ -194,8 +200,10 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   tooth_setup.field = g.field.get();
   g.pipeline_tooth = impl.tooth(*g.tooth, tooth_setup);
   g.contacts = &g.pipeline_tooth->provider();
+}
 
-  // Hand.
+// The scripted hand, its keyframes relative to the tooth's anchor.
+void script_hand(const Scene& scene, SceneRig& g) {
   std::vector<HandKeyframe> keys;
   for (const SceneHandKey& k : scene.script) {
     HandKeyframe hk;
@@ -206,7 +214,11 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   }
   g.hand = std::make_unique<ScriptedHand>(scene.hand, keys, g.home.R);
   g.device->set_hand(g.hand.get());
+}
 
+// The pipeline on the implementation's device model.
+void make_scene_pipeline(const Scene& scene, const SceneRigOptions& options,
+                         const Implementation& impl, SceneRig& g) {
   // The pipeline's device model: the model file's, plus the gripping hand's nominal mass at the
   // tip when the scene asks for it (reference/grasp_mass_model.h): always (a fixed mass), or
   // tick by tick as the grip detector decides (method.grip_detector; then the pipeline's model
@@ -250,6 +262,10 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   pc.skip_unneeded = options.skip_unneeded;
   if (options.configure_pipeline) options.configure_pipeline(pc);
   g.pipeline = make_pipeline(options.pipeline, belief, pc);
+}
+
+// The loop owner's safety chain.
+void make_safety_chain(DeviceBackend backend, SceneRig& g) {
   SafetyLimits limits;
   limits.tau_max = g.params.torque_limit_n_m;
   limits.qd_max = VecX::Constant(g.device->dof(), kSceneMaxJointSpeed);
@@ -269,8 +285,12 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   // after kMaxSaturationS (both backends; a built-in scene never saturates that long).
   limits.max_saturation_s = kMaxSaturationS;
   g.safety = std::make_unique<SafetyChain>(limits);
-  // The device the loop drives, started last: a device with its own clock (HDAPI's scheduler;
-  // the emulator's scripted hand starts at hdInitDevice) runs from here on.
+}
+
+// The device the loop drives, started last: a device with its own clock (HDAPI's scheduler;
+// the emulator's scripted hand starts at hdInitDevice) runs from here on.
+void connect_loop_device(const Scene& scene, const SceneRigOptions& options, DeviceBackend backend,
+                         SceneRig& g) {
   Device* loop_device = g.device.get();
   if (backend == DeviceBackend::kHdapi) {
     // The project's emulator simulates the plant and the hand of the scene named by
@@ -294,7 +314,11 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
     loop_device = g.faulty.get();
   }
   g.loop_device = loop_device;
-  g.loop = std::make_unique<ClosedLoop>(*loop_device, *g.pipeline, *g.contacts);
+}
+
+// The closed loop with its safety chain and virtual supervisor.
+void close_loop(const Scene& scene, SceneRig& g) {
+  g.loop = std::make_unique<ClosedLoop>(*g.loop_device, *g.pipeline, *g.contacts);
   g.loop->set_safety_chain(g.safety.get());
   SupervisorLimits supervision;
   supervision.tool_radius_m = g.tip.radius;
@@ -305,6 +329,25 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   supervision.max_tick_s = std::max(5.0 * g.tick, 2.0 / scene.method.observer_gain);
   g.supervisor = std::make_unique<VirtualSupervisor>(supervision);
   g.loop->set_supervisor(g.supervisor.get());
+}
+
+}  // namespace
+
+std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOptions& options) {
+  auto rig = std::make_unique<SceneRig>();
+  SceneRig& g = *rig;
+  g.tick = 1.0 / scene.tick_hz;
+  load_device(scene, g);
+  const DeviceBackend backend = scene_backend(scene, options);
+  place_tooth(scene, g);
+  // The implementation of the tick (fast/registry.h): its tooth and its device model.
+  const Implementation& impl = implementation(options.pipeline);
+  make_pipeline_tooth(scene, options, impl, g);
+  script_hand(scene, g);
+  make_scene_pipeline(scene, options, impl, g);
+  make_safety_chain(backend, g);
+  connect_loop_device(scene, options, backend, g);
+  close_loop(scene, g);
   return rig;
 }
 
