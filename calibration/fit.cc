@@ -118,72 +118,93 @@ std::vector<Vec6> shifted(const std::vector<Vec6>& x, double shift) {
 
 using RowMask = Eigen::Matrix<bool, 6, 1>;
 
-// FitOptions::fit_coulomb_smoothing: v_s (and with fit_coulomb_sign the smooth sign) per joint by
-// profile least squares. For a fixed law the model is linear in p, so each candidate is one
-// linear solve: the normal equations of the kept rows (A0: the regressor without its Coulomb
-// columns, scaled; the Coulomb column of joint j enters only joint j's rows) with the ridge of the
-// weak prior, the cost the residual sum of squares over the kept rows. Candidates: each smooth
-// sign times a log grid 0.001..1 rad/s (21 values) and the prior's v_s; joint j takes only its
-// own sign `(*sign)[j]` unless `fit_sign` (then either). Coordinate descent over the joints until
-// no joint changes (at most 4 passes), from the prior's v_s and `*sign`.
 using ColumnsFn = std::function<std::vector<Vec6>(const Vec6&, const std::array<CoulombSign, 6>&)>;
-Vec6 profile_coulomb_smoothing(const std::vector<Regressor>& A0, const std::vector<RowMask>& kept,
-                               const std::vector<int>& at_sample, const std::vector<Vec6>& tau,
-                               const CalibVec& s, const CalibVec& x0, double prior_weight,
-                               const Vec6& vs_prior, bool fit_sign,
-                               std::array<CoulombSign, 6>* sign, const ColumnsFn& columns,
-                               CoulombSmoothingProfile* profile) {
+
+// The candidate laws of profile_coulomb_smoothing: (v_s, smooth sign) pairs.
+struct CoulombCandidates {
+  std::vector<double> v_s;
+  std::vector<CoulombSign> sign;
+};
+
+CoulombCandidates coulomb_candidates(const Vec6& vs_prior, bool fit_sign,
+                                     const std::array<CoulombSign, 6>& sign) {
   std::vector<double> grid;
   for (int i = 0; i <= 20; ++i) grid.push_back(1e-3 * std::pow(10.0, 3.0 * i / 20.0));
   for (int j = 0; j < 6; ++j) grid.push_back(vs_prior(j));
   std::sort(grid.begin(), grid.end());
   grid.erase(std::unique(grid.begin(), grid.end()), grid.end());
-  std::vector<double> cand;
-  std::vector<CoulombSign> cand_sign;
+  CoulombCandidates cands;
   for (CoulombSign sh : {CoulombSign::kTanh, CoulombSign::kErf}) {
-    if (!fit_sign && std::find(sign->begin(), sign->end(), sh) == sign->end()) continue;
+    if (!fit_sign && std::find(sign.begin(), sign.end(), sh) == sign.end()) continue;
     for (double v : grid) {
-      cand.push_back(v);
-      cand_sign.push_back(sh);
+      cands.v_s.push_back(v);
+      cands.sign.push_back(sh);
     }
   }
-  const int nc = static_cast<int>(cand.size()), m = static_cast<int>(A0.size());
-  // col[c][i](j): the (scaled) Coulomb column of joint j at used sample i for candidate c.
-  std::vector<std::vector<Vec6>> col(nc, std::vector<Vec6>(m));
-  for (int c = 0; c < nc; ++c) {
-    std::array<CoulombSign, 6> same;
-    same.fill(cand_sign[c]);
-    const std::vector<Vec6> full = columns(Vec6::Constant(cand[c]), same);
-    for (int i = 0; i < m; ++i) {
-      for (int j = 0; j < 6; ++j) {
-        col[c][i](j) = kept[i](j) ? full[at_sample[i]](j) * s(kCoulomb + j) : 0.0;
-      }
-    }
-  }
+  return cands;
+}
+
+// The profile's least-squares problem: the normal equations of the rows without their Coulomb
+// columns (N0, r0, with the targets b), and per joint and candidate the Coulomb column's cross
+// terms with the other columns (u), with itself (c2) and with the targets (cb).
+struct CoulombProfileSystem {
   using Mat = Eigen::Matrix<double, kCalibParams, kCalibParams>;
+
+  // col[c][i](j): the (scaled) Coulomb column of joint j at used sample i for candidate c.
+  std::vector<std::vector<Vec6>> col;
   Mat N0 = Mat::Zero();
   CalibVec r0 = CalibVec::Zero();
-  std::vector<Vec6> b(m);
-  for (int i = 0; i < m; ++i) {
-    for (int j = 0; j < 6; ++j) b[i](j) = kept[i](j) ? tau[at_sample[i]](j) : 0.0;
-    N0.noalias() += A0[i].transpose() * A0[i];
-    r0.noalias() += A0[i].transpose() * b[i];
-  }
-  // Per joint and candidate: the cross terms of the Coulomb column with the other columns.
-  std::vector<std::vector<CalibVec>> u(6, std::vector<CalibVec>(nc, CalibVec::Zero()));
-  std::vector<std::vector<double>> c2(6, std::vector<double>(nc, 0.0)), cb = c2;
-  for (int j = 0; j < 6; ++j) {
+  std::vector<Vec6> b;
+  std::vector<std::vector<CalibVec>> u;
+  std::vector<std::vector<double>> c2, cb;
+
+  void candidate_columns(const CoulombCandidates& cands, const std::vector<RowMask>& kept,
+                         const std::vector<int>& at_sample, const CalibVec& s,
+                         const ColumnsFn& columns) {
+    const int nc = static_cast<int>(cands.v_s.size()), m = static_cast<int>(kept.size());
+    col.assign(nc, std::vector<Vec6>(m));
     for (int c = 0; c < nc; ++c) {
+      std::array<CoulombSign, 6> same;
+      same.fill(cands.sign[c]);
+      const std::vector<Vec6> full = columns(Vec6::Constant(cands.v_s[c]), same);
       for (int i = 0; i < m; ++i) {
-        const double v = col[c][i](j);
-        u[j][c].noalias() += v * A0[i].row(j).transpose();
-        c2[j][c] += v * v;
-        cb[j][c] += v * b[i](j);
+        for (int j = 0; j < 6; ++j) {
+          col[c][i](j) = kept[i](j) ? full[at_sample[i]](j) * s(kCoulomb + j) : 0.0;
+        }
       }
     }
   }
-  const double w2 = prior_weight * prior_weight;
-  const auto cost = [&](const std::array<int, 6>& ch) {
+
+  void normal_equations(const std::vector<Regressor>& A0, const std::vector<RowMask>& kept,
+                        const std::vector<int>& at_sample, const std::vector<Vec6>& tau) {
+    const int m = static_cast<int>(A0.size()), nc = static_cast<int>(col.size());
+    b.resize(m);
+    for (int i = 0; i < m; ++i) {
+      for (int j = 0; j < 6; ++j) b[i](j) = kept[i](j) ? tau[at_sample[i]](j) : 0.0;
+      N0.noalias() += A0[i].transpose() * A0[i];
+      r0.noalias() += A0[i].transpose() * b[i];
+    }
+    // Per joint and candidate: the cross terms of the Coulomb column with the other columns.
+    u.assign(6, std::vector<CalibVec>(nc, CalibVec::Zero()));
+    c2.assign(6, std::vector<double>(nc, 0.0));
+    cb = c2;
+    for (int j = 0; j < 6; ++j) {
+      for (int c = 0; c < nc; ++c) {
+        for (int i = 0; i < m; ++i) {
+          const double v = col[c][i](j);
+          u[j][c].noalias() += v * A0[i].row(j).transpose();
+          c2[j][c] += v * v;
+          cb[j][c] += v * b[i](j);
+        }
+      }
+    }
+  }
+
+  // The residual sum of squares with joint j on candidate ch[j], the prior's ridge included.
+  double cost(const std::array<int, 6>& ch, const std::vector<Regressor>& A0, const CalibVec& x0,
+              double prior_weight) const {
+    const double w2 = prior_weight * prior_weight;
+    const int m = static_cast<int>(A0.size());
     Mat N = N0;
     CalibVec r = r0;
     for (int j = 0; j < 6; ++j) {
@@ -203,7 +224,30 @@ Vec6 profile_coulomb_smoothing(const std::vector<Regressor>& A0, const std::vect
       rss += e.squaredNorm();
     }
     return rss;
-  };
+  }
+};
+
+// FitOptions::fit_coulomb_smoothing: v_s (and with fit_coulomb_sign the smooth sign) per joint by
+// profile least squares. For a fixed law the model is linear in p, so each candidate is one
+// linear solve: the normal equations of the kept rows (A0: the regressor without its Coulomb
+// columns, scaled; the Coulomb column of joint j enters only joint j's rows) with the ridge of the
+// weak prior, the cost the residual sum of squares over the kept rows. Candidates: each smooth
+// sign times a log grid 0.001..1 rad/s (21 values) and the prior's v_s; joint j takes only its
+// own sign `(*sign)[j]` unless `fit_sign` (then either). Coordinate descent over the joints until
+// no joint changes (at most 4 passes), from the prior's v_s and `*sign`.
+Vec6 profile_coulomb_smoothing(const std::vector<Regressor>& A0, const std::vector<RowMask>& kept,
+                               const std::vector<int>& at_sample, const std::vector<Vec6>& tau,
+                               const CalibVec& s, const CalibVec& x0, double prior_weight,
+                               const Vec6& vs_prior, bool fit_sign,
+                               std::array<CoulombSign, 6>* sign, const ColumnsFn& columns,
+                               CoulombSmoothingProfile* profile) {
+  const CoulombCandidates cands = coulomb_candidates(vs_prior, fit_sign, *sign);
+  const std::vector<double>& cand = cands.v_s;
+  const std::vector<CoulombSign>& cand_sign = cands.sign;
+  const int nc = static_cast<int>(cand.size());
+  CoulombProfileSystem sys;
+  sys.candidate_columns(cands, kept, at_sample, s, columns);
+  sys.normal_equations(A0, kept, at_sample, tau);
   std::array<int, 6> ch{};
   for (int j = 0; j < 6; ++j) {
     ch[j] = 0;
@@ -221,7 +265,7 @@ Vec6 profile_coulomb_smoothing(const std::vector<Regressor>& A0, const std::vect
       for (int c = 0; c < nc; ++c) {
         if (!fit_sign && cand_sign[c] != (*sign)[j]) continue;
         t[j] = c;
-        curve[j][c] = cost(t);
+        curve[j][c] = sys.cost(t, A0, x0, prior_weight);
         if (curve[j][c] < curve[j][best]) best = c;
       }
       changed = changed || best != ch[j];
