@@ -118,72 +118,93 @@ std::vector<Vec6> shifted(const std::vector<Vec6>& x, double shift) {
 
 using RowMask = Eigen::Matrix<bool, 6, 1>;
 
-// FitOptions::fit_coulomb_smoothing: v_s (and with fit_coulomb_sign the smooth sign) per joint by
-// profile least squares. For a fixed law the model is linear in p, so each candidate is one
-// linear solve: the normal equations of the kept rows (A0: the regressor without its Coulomb
-// columns, scaled; the Coulomb column of joint j enters only joint j's rows) with the ridge of the
-// weak prior, the cost the residual sum of squares over the kept rows. Candidates: each smooth
-// sign times a log grid 0.001..1 rad/s (21 values) and the prior's v_s; joint j takes only its
-// own sign `(*sign)[j]` unless `fit_sign` (then either). Coordinate descent over the joints until
-// no joint changes (at most 4 passes), from the prior's v_s and `*sign`.
 using ColumnsFn = std::function<std::vector<Vec6>(const Vec6&, const std::array<CoulombSign, 6>&)>;
-Vec6 profile_coulomb_smoothing(const std::vector<Regressor>& A0, const std::vector<RowMask>& kept,
-                               const std::vector<int>& at_sample, const std::vector<Vec6>& tau,
-                               const CalibVec& s, const CalibVec& x0, double prior_weight,
-                               const Vec6& vs_prior, bool fit_sign,
-                               std::array<CoulombSign, 6>* sign, const ColumnsFn& columns,
-                               CoulombSmoothingProfile* profile) {
+
+// The candidate laws of profile_coulomb_smoothing: (v_s, smooth sign) pairs.
+struct CoulombCandidates {
+  std::vector<double> v_s;
+  std::vector<CoulombSign> sign;
+};
+
+CoulombCandidates coulomb_candidates(const Vec6& vs_prior, bool fit_sign,
+                                     const std::array<CoulombSign, 6>& sign) {
   std::vector<double> grid;
   for (int i = 0; i <= 20; ++i) grid.push_back(1e-3 * std::pow(10.0, 3.0 * i / 20.0));
   for (int j = 0; j < 6; ++j) grid.push_back(vs_prior(j));
   std::sort(grid.begin(), grid.end());
   grid.erase(std::unique(grid.begin(), grid.end()), grid.end());
-  std::vector<double> cand;
-  std::vector<CoulombSign> cand_sign;
+  CoulombCandidates cands;
   for (CoulombSign sh : {CoulombSign::kTanh, CoulombSign::kErf}) {
-    if (!fit_sign && std::find(sign->begin(), sign->end(), sh) == sign->end()) continue;
+    if (!fit_sign && std::find(sign.begin(), sign.end(), sh) == sign.end()) continue;
     for (double v : grid) {
-      cand.push_back(v);
-      cand_sign.push_back(sh);
+      cands.v_s.push_back(v);
+      cands.sign.push_back(sh);
     }
   }
-  const int nc = static_cast<int>(cand.size()), m = static_cast<int>(A0.size());
-  // col[c][i](j): the (scaled) Coulomb column of joint j at used sample i for candidate c.
-  std::vector<std::vector<Vec6>> col(nc, std::vector<Vec6>(m));
-  for (int c = 0; c < nc; ++c) {
-    std::array<CoulombSign, 6> same;
-    same.fill(cand_sign[c]);
-    const std::vector<Vec6> full = columns(Vec6::Constant(cand[c]), same);
-    for (int i = 0; i < m; ++i) {
-      for (int j = 0; j < 6; ++j) {
-        col[c][i](j) = kept[i](j) ? full[at_sample[i]](j) * s(kCoulomb + j) : 0.0;
-      }
-    }
-  }
+  return cands;
+}
+
+// The profile's least-squares problem: the normal equations of the rows without their Coulomb
+// columns (N0, r0, with the targets b), and per joint and candidate the Coulomb column's cross
+// terms with the other columns (u), with itself (c2) and with the targets (cb).
+struct CoulombProfileSystem {
   using Mat = Eigen::Matrix<double, kCalibParams, kCalibParams>;
+
+  // col[c][i](j): the (scaled) Coulomb column of joint j at used sample i for candidate c.
+  std::vector<std::vector<Vec6>> col;
   Mat N0 = Mat::Zero();
   CalibVec r0 = CalibVec::Zero();
-  std::vector<Vec6> b(m);
-  for (int i = 0; i < m; ++i) {
-    for (int j = 0; j < 6; ++j) b[i](j) = kept[i](j) ? tau[at_sample[i]](j) : 0.0;
-    N0.noalias() += A0[i].transpose() * A0[i];
-    r0.noalias() += A0[i].transpose() * b[i];
-  }
-  // Per joint and candidate: the cross terms of the Coulomb column with the other columns.
-  std::vector<std::vector<CalibVec>> u(6, std::vector<CalibVec>(nc, CalibVec::Zero()));
-  std::vector<std::vector<double>> c2(6, std::vector<double>(nc, 0.0)), cb = c2;
-  for (int j = 0; j < 6; ++j) {
+  std::vector<Vec6> b;
+  std::vector<std::vector<CalibVec>> u;
+  std::vector<std::vector<double>> c2, cb;
+
+  void candidate_columns(const CoulombCandidates& cands, const std::vector<RowMask>& kept,
+                         const std::vector<int>& at_sample, const CalibVec& s,
+                         const ColumnsFn& columns) {
+    const int nc = static_cast<int>(cands.v_s.size()), m = static_cast<int>(kept.size());
+    col.assign(nc, std::vector<Vec6>(m));
     for (int c = 0; c < nc; ++c) {
+      std::array<CoulombSign, 6> same;
+      same.fill(cands.sign[c]);
+      const std::vector<Vec6> full = columns(Vec6::Constant(cands.v_s[c]), same);
       for (int i = 0; i < m; ++i) {
-        const double v = col[c][i](j);
-        u[j][c].noalias() += v * A0[i].row(j).transpose();
-        c2[j][c] += v * v;
-        cb[j][c] += v * b[i](j);
+        for (int j = 0; j < 6; ++j) {
+          col[c][i](j) = kept[i](j) ? full[at_sample[i]](j) * s(kCoulomb + j) : 0.0;
+        }
       }
     }
   }
-  const double w2 = prior_weight * prior_weight;
-  const auto cost = [&](const std::array<int, 6>& ch) {
+
+  void normal_equations(const std::vector<Regressor>& A0, const std::vector<RowMask>& kept,
+                        const std::vector<int>& at_sample, const std::vector<Vec6>& tau) {
+    const int m = static_cast<int>(A0.size()), nc = static_cast<int>(col.size());
+    b.resize(m);
+    for (int i = 0; i < m; ++i) {
+      for (int j = 0; j < 6; ++j) b[i](j) = kept[i](j) ? tau[at_sample[i]](j) : 0.0;
+      N0.noalias() += A0[i].transpose() * A0[i];
+      r0.noalias() += A0[i].transpose() * b[i];
+    }
+    // Per joint and candidate: the cross terms of the Coulomb column with the other columns.
+    u.assign(6, std::vector<CalibVec>(nc, CalibVec::Zero()));
+    c2.assign(6, std::vector<double>(nc, 0.0));
+    cb = c2;
+    for (int j = 0; j < 6; ++j) {
+      for (int c = 0; c < nc; ++c) {
+        for (int i = 0; i < m; ++i) {
+          const double v = col[c][i](j);
+          u[j][c].noalias() += v * A0[i].row(j).transpose();
+          c2[j][c] += v * v;
+          cb[j][c] += v * b[i](j);
+        }
+      }
+    }
+  }
+
+  // The residual sum of squares with joint j on candidate ch[j], the prior's ridge included.
+  double cost(const std::array<int, 6>& ch, const std::vector<Regressor>& A0, const CalibVec& x0,
+              double prior_weight) const {
+    const double w2 = prior_weight * prior_weight;
+    const int m = static_cast<int>(A0.size());
     Mat N = N0;
     CalibVec r = r0;
     for (int j = 0; j < 6; ++j) {
@@ -203,7 +224,30 @@ Vec6 profile_coulomb_smoothing(const std::vector<Regressor>& A0, const std::vect
       rss += e.squaredNorm();
     }
     return rss;
-  };
+  }
+};
+
+// FitOptions::fit_coulomb_smoothing: v_s (and with fit_coulomb_sign the smooth sign) per joint by
+// profile least squares. For a fixed law the model is linear in p, so each candidate is one
+// linear solve: the normal equations of the kept rows (A0: the regressor without its Coulomb
+// columns, scaled; the Coulomb column of joint j enters only joint j's rows) with the ridge of the
+// weak prior, the cost the residual sum of squares over the kept rows. Candidates: each smooth
+// sign times a log grid 0.001..1 rad/s (21 values) and the prior's v_s; joint j takes only its
+// own sign `(*sign)[j]` unless `fit_sign` (then either). Coordinate descent over the joints until
+// no joint changes (at most 4 passes), from the prior's v_s and `*sign`.
+Vec6 profile_coulomb_smoothing(const std::vector<Regressor>& A0, const std::vector<RowMask>& kept,
+                               const std::vector<int>& at_sample, const std::vector<Vec6>& tau,
+                               const CalibVec& s, const CalibVec& x0, double prior_weight,
+                               const Vec6& vs_prior, bool fit_sign,
+                               std::array<CoulombSign, 6>* sign, const ColumnsFn& columns,
+                               CoulombSmoothingProfile* profile) {
+  const CoulombCandidates cands = coulomb_candidates(vs_prior, fit_sign, *sign);
+  const std::vector<double>& cand = cands.v_s;
+  const std::vector<CoulombSign>& cand_sign = cands.sign;
+  const int nc = static_cast<int>(cand.size());
+  CoulombProfileSystem sys;
+  sys.candidate_columns(cands, kept, at_sample, s, columns);
+  sys.normal_equations(A0, kept, at_sample, tau);
   std::array<int, 6> ch{};
   for (int j = 0; j < 6; ++j) {
     ch[j] = 0;
@@ -221,7 +265,7 @@ Vec6 profile_coulomb_smoothing(const std::vector<Regressor>& A0, const std::vect
       for (int c = 0; c < nc; ++c) {
         if (!fit_sign && cand_sign[c] != (*sign)[j]) continue;
         t[j] = c;
-        curve[j][c] = cost(t);
+        curve[j][c] = sys.cost(t, A0, x0, prior_weight);
         if (curve[j][c] < curve[j][best]) best = c;
       }
       changed = changed || best != ch[j];
@@ -331,31 +375,28 @@ Regressor calib_regressor_by_columns(const PhantomParams& prior, const Vec6& q, 
 
 namespace {
 
-// fit_calibration, with each joint's smooth sign `*sign_override` instead of the options' (the
-// law term's refit). `*regressors`: Y of each used sample without its Coulomb columns, computed
-// here when empty, else reused (the refits use the log's samples as the fit does: the autodiff
-// regressor is most of a fit's time).
 FitResult fit_impl(const CalibrationLog& log, const PhantomParams& prior, const FitOptions& opt,
                    const std::array<CoulombSign, 6>* sign_override,
-                   std::vector<Regressor>* regressors) {
-  const int n = log.size();
-  if (n < 3) throw InputError("calibrate: log too short (fewer than 3 samples)");
-  const double dt = (log.t.back() - log.t.front()) / (n - 1);
-  std::vector<Vec6> qd = log.qd;
-  std::vector<Vec6> tau =
-      opt.torque_shift_samples != 0.0 ? shifted(log.tau, opt.torque_shift_samples) : log.tau;
-  const std::vector<Vec6> q =
-      opt.position_shift_samples != 0.0 ? shifted(log.q, opt.position_shift_samples) : log.q;
-  zero_phase_lowpass(qd, dt, opt.lowpass_hz, opt.lowpass_order);
-  zero_phase_lowpass(tau, dt, opt.lowpass_hz, opt.lowpass_order);
+                   std::vector<Regressor>* regressors);
+
+// The log as the fit sees it: shifted and low-passed signals, the smooth sign of each joint's
+// Coulomb law, and the stride between used samples.
+struct FitSignals {
+  FitSignals(const CalibrationLog& log_in, const FitOptions& opt_in) : log(log_in), opt(opt_in) {}
+
+  const CalibrationLog& log;
+  const FitOptions& opt;
+  int n = 0;
+  double dt = 0.0;
+  std::vector<Vec6> qd, tau, q;
+  std::array<CoulombSign, 6> sign{};
+  int stride = 1;
+
   // Parallel filtering of the Coulomb regressor column: the filter of tanh(v / v_s), not tanh of
   // the filtered velocity (they differ around every velocity reversal, and the difference would
   // be absorbed by the viscous damping); v the low-passed qd by default (its sign is right where
   // the logged qd's noise flips it, options.coulomb_from_filtered_velocity).
-  std::array<CoulombSign, 6> sign = prior.coulomb_sign;
-  if (opt.coulomb_sign) sign.fill(*opt.coulomb_sign);
-  if (sign_override != nullptr) sign = *sign_override;
-  const auto coulomb_columns = [&](const Vec6& vs, const std::array<CoulombSign, 6>& law) {
+  std::vector<Vec6> coulomb_columns(const Vec6& vs, const std::array<CoulombSign, 6>& law) const {
     std::vector<Vec6> col(n);
     for (int k = 0; k < n; ++k) {
       for (int j = 0; j < 6; ++j) {
@@ -365,44 +406,56 @@ FitResult fit_impl(const CalibrationLog& log, const PhantomParams& prior, const 
     }
     zero_phase_lowpass(col, dt, opt.lowpass_hz, opt.lowpass_order);
     return col;
-  };
-  const int stride = std::max(1, (n - 2) / std::max(1, opt.max_samples));  // before trimming
+  }
+};
 
-  const CalibVec p0 = pack_calib_params(prior);
-  CalibVec s;
+FitSignals prepare_signals(const CalibrationLog& log, const PhantomParams& prior,
+                           const FitOptions& opt, const std::array<CoulombSign, 6>* sign_override) {
+  FitSignals sig(log, opt);
+  const int n = log.size();
+  if (n < 3) throw InputError("calibrate: log too short (fewer than 3 samples)");
+  sig.n = n;
+  sig.dt = (log.t.back() - log.t.front()) / (n - 1);
+  sig.qd = log.qd;
+  sig.tau = opt.torque_shift_samples != 0.0 ? shifted(log.tau, opt.torque_shift_samples) : log.tau;
+  sig.q = opt.position_shift_samples != 0.0 ? shifted(log.q, opt.position_shift_samples) : log.q;
+  zero_phase_lowpass(sig.qd, sig.dt, opt.lowpass_hz, opt.lowpass_order);
+  zero_phase_lowpass(sig.tau, sig.dt, opt.lowpass_hz, opt.lowpass_order);
+  sig.sign = prior.coulomb_sign;
+  if (opt.coulomb_sign) sig.sign.fill(*opt.coulomb_sign);
+  if (sign_override != nullptr) sig.sign = *sign_override;
+  sig.stride = std::max(1, (n - 2) / std::max(1, opt.max_samples));  // before trimming
+  return sig;
+}
+
+// The prior's parameters p0 and the scale s of each (x = p / s is what Ceres solves for).
+struct FitScaling {
+  CalibVec p0, s;
+};
+
+FitScaling scale_by_prior(const PhantomParams& prior) {
+  FitScaling sc;
+  sc.p0 = pack_calib_params(prior);
   for (int i = 0; i < kCalibParams; ++i) {
-    if (p0(i) < 0.0) {
+    if (sc.p0(i) < 0.0) {
       throw InputError("calibrate: prior parameter " + calib_param_names()[i] +
                        " is negative: expected a physically consistent prior model");
     }
-    s(i) = p0(i) > 0.0 ? p0(i) : 1e-9;
+    sc.s(i) = sc.p0(i) > 0.0 ? sc.p0(i) : 1e-9;
   }
-  CalibVec x = p0.cwiseQuotient(s);
-  const CalibVec x0 = x;
+  return sc;
+}
 
-  FitResult res;
-  std::vector<Regressor> A;
-  std::vector<Vec6> b;
-  std::vector<Vec6> used_qd;  // the low-passed qd of the samples used (diagnostics)
-  // The filters' start and end transients: samples within one cut-off period of either end of
-  // the log are not used.
-  if (!(opt.exclude_slow_fraction >= 0.0 && opt.exclude_slow_fraction < 1.0)) {
-    throw InputError("calibrate: exclude_slow_fraction must be in [0, 1)");
-  }
-  const int trim = opt.lowpass_hz > 0.0
-                       ? static_cast<int>(std::min(n / 4.0, std::ceil(1.0 / (opt.lowpass_hz * dt))))
-                       : 0;
-  if (!(opt.min_speed_rad_s >= 0.0 && std::isfinite(opt.min_speed_rad_s))) {
-    throw InputError("calibrate: min_speed_rad_s must be a finite number >= 0");
-  }
-  // FitOptions::min_speed_rad_s, then exclude_slow_fraction of the rows left: per joint, the
-  // speed below which its rows are dropped.
+// FitOptions::min_speed_rad_s, then exclude_slow_fraction of the rows left: per joint, the
+// speed below which its rows are dropped. The filters' start and end transients: samples within
+// `trim` (one cut-off period) of either end of the log are not used.
+Vec6 slow_row_speeds(const FitSignals& sig, const FitOptions& opt, int trim) {
   Vec6 slow_below = Vec6::Constant(opt.min_speed_rad_s);
   if (opt.exclude_slow_fraction > 0.0) {
     for (int j = 0; j < 6; ++j) {
       std::vector<double> speeds;
-      for (int k = std::max(1, trim); k + 1 < n - trim; k += stride) {
-        if (std::abs(qd[k](j)) >= opt.min_speed_rad_s) speeds.push_back(std::abs(qd[k](j)));
+      for (int k = std::max(1, trim); k + 1 < sig.n - trim; k += sig.stride) {
+        if (std::abs(sig.qd[k](j)) >= opt.min_speed_rad_s) speeds.push_back(std::abs(sig.qd[k](j)));
       }
       if (speeds.empty()) continue;
       const std::size_t at = std::min(
@@ -411,16 +464,38 @@ FitResult fit_impl(const CalibrationLog& log, const PhantomParams& prior, const 
       slow_below(j) = speeds[at];
     }
   }
-  // The regressor without its Coulomb columns (they depend on v_s), the rows kept.
+  return slow_below;
+}
+
+// The used samples: each one's log index, its scaled regressor without its Coulomb columns (they
+// depend on v_s) and the rows kept.
+struct FitRows {
   std::vector<int> at_sample;
   std::vector<Regressor> A0;
-  std::vector<RowMask> kept_rows;
+  std::vector<RowMask> kept;
+};
+
+FitRows select_rows(const FitSignals& sig, const PhantomParams& prior, const CalibVec& s,
+                    const FitOptions& opt, std::vector<Regressor>* regressors) {
+  if (!(opt.exclude_slow_fraction >= 0.0 && opt.exclude_slow_fraction < 1.0)) {
+    throw InputError("calibrate: exclude_slow_fraction must be in [0, 1)");
+  }
+  const int n = sig.n;
+  const int trim =
+      opt.lowpass_hz > 0.0
+          ? static_cast<int>(std::min(n / 4.0, std::ceil(1.0 / (opt.lowpass_hz * sig.dt))))
+          : 0;
+  if (!(opt.min_speed_rad_s >= 0.0 && std::isfinite(opt.min_speed_rad_s))) {
+    throw InputError("calibrate: min_speed_rad_s must be a finite number >= 0");
+  }
+  const Vec6 slow_below = slow_row_speeds(sig, opt, trim);
+  FitRows rows;
   const bool reuse = !regressors->empty();
   std::size_t used = 0;
-  for (int k = std::max(1, trim); k + 1 < n - trim; k += stride, ++used) {
+  for (int k = std::max(1, trim); k + 1 < n - trim; k += sig.stride, ++used) {
     if (!reuse) {
-      const Vec6 qdd = (qd[k + 1] - qd[k - 1]) / (log.t[k + 1] - log.t[k - 1]);
-      regressors->push_back(calib_regressor(prior, q[k], qd[k], qdd));
+      const Vec6 qdd = (sig.qd[k + 1] - sig.qd[k - 1]) / (sig.log.t[k + 1] - sig.log.t[k - 1]);
+      regressors->push_back(calib_regressor(prior, sig.q[k], sig.qd[k], qdd));
       for (int j = 0; j < 6; ++j) regressors->back()(j, kCoulomb + j) = 0.0;
     } else if (used >= regressors->size()) {
       throw std::logic_error("fit_calibration: a refit used more samples than the fit");
@@ -428,45 +503,55 @@ FitResult fit_impl(const CalibrationLog& log, const PhantomParams& prior, const 
     Regressor Y = (*regressors)[used];
     RowMask keep;
     for (int j = 0; j < 6; ++j) {
-      keep(j) = !(std::abs(qd[k](j)) < slow_below(j));
+      keep(j) = !(std::abs(sig.qd[k](j)) < slow_below(j));
       if (!keep(j)) Y.row(j).setZero();  // a dropped row: no residual
     }
-    A0.push_back(Y * s.asDiagonal());
-    kept_rows.push_back(keep);
-    at_sample.push_back(k);
+    rows.A0.push_back(Y * s.asDiagonal());
+    rows.kept.push_back(keep);
+    rows.at_sample.push_back(k);
   }
-  // v_s per joint: the prior's, or chosen by profile least squares (FitOptions).
-  Vec6 vs = prior.coulomb_smoothing_rad_s;
-  if (opt.fit_coulomb_smoothing) {
-    vs = profile_coulomb_smoothing(A0, kept_rows, at_sample, tau, s, x0, opt.prior_weight, vs,
-                                   opt.fit_coulomb_sign && !sign_override, &sign, coulomb_columns,
-                                   &res.coulomb_smoothing_profile);
-  }
-  res.coulomb_smoothing_rad_s = vs;
-  res.coulomb_sign = sign;
-  const std::vector<Vec6> coulomb_col = coulomb_columns(vs, sign);
-  for (std::size_t i = 0; i < A0.size(); ++i) {
-    const int k = at_sample[i];
-    Regressor Ai = A0[i];
-    Vec6 tk = tau[k];
+  return rows;
+}
+
+// The fit's linear least-squares rows A_k x = b_k (Coulomb columns of the chosen law filled in,
+// dropped rows zero) and the low-passed qd of each used sample (diagnostics).
+struct FitSystem {
+  std::vector<Regressor> A;
+  std::vector<Vec6> b;
+  std::vector<Vec6> used_qd;
+};
+
+FitSystem stack_rows(const FitSignals& sig, FitRows& rows, const CalibVec& s, const Vec6& vs,
+                     FitResult& res) {
+  FitSystem sys;
+  const std::vector<Vec6> coulomb_col = sig.coulomb_columns(vs, sig.sign);
+  for (std::size_t i = 0; i < rows.A0.size(); ++i) {
+    const int k = rows.at_sample[i];
+    Regressor Ai = rows.A0[i];
+    Vec6 tk = sig.tau[k];
     for (int j = 0; j < 6; ++j) {
-      if (kept_rows[i](j)) {
+      if (rows.kept[i](j)) {
         Ai(j, kCoulomb + j) = coulomb_col[k](j) * s(kCoulomb + j);
       } else {
         tk(j) = 0.0;
       }
     }
-    A.push_back(Ai);
-    b.push_back(tk);
-    res.t.push_back(log.t[k]);
-    used_qd.push_back(qd[k]);
+    sys.A.push_back(Ai);
+    sys.b.push_back(tk);
+    res.t.push_back(sig.log.t[k]);
+    sys.used_qd.push_back(sig.qd[k]);
   }
-  A0.clear();
-  const int m = static_cast<int>(A.size());
+  rows.A0.clear();
+  return sys;
+}
 
-  ceres::Problem problem;
+// The torque residuals (Huber-robust if asked), the weak prior and the lower bounds, solved by
+// Ceres from x.
+void solve_fit(const FitSystem& sys, const FitScaling& sc, const CalibVec& x0,
+               const FitOptions& opt, ceres::Problem& problem, CalibVec& x, FitResult& res) {
+  const int m = static_cast<int>(sys.A.size());
   for (int k = 0; k < m; ++k) {
-    problem.AddResidualBlock(new TorqueResidual(A[k], b[k]),
+    problem.AddResidualBlock(new TorqueResidual(sys.A[k], sys.b[k]),
                              opt.huber_n_m > 0 ? new ceres::HuberLoss(opt.huber_n_m) : nullptr,
                              x.data());
   }
@@ -475,7 +560,7 @@ FitResult fit_impl(const CalibrationLog& log, const PhantomParams& prior, const 
   // moments, armature, damping and Coulomb friction are non-negative; the model file wants them
   // positive).
   for (int i = 0; i < kCalibParams; ++i) {
-    problem.SetParameterLowerBound(x.data(), i, p0(i) > 0.0 ? opt.min_fraction : 0.0);
+    problem.SetParameterLowerBound(x.data(), i, sc.p0(i) > 0.0 ? opt.min_fraction : 0.0);
   }
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::DENSE_QR;
@@ -489,42 +574,56 @@ FitResult fit_impl(const CalibrationLog& log, const PhantomParams& prior, const 
   res.converged = summary.termination_type == ceres::CONVERGENCE && summary.IsSolutionUsable();
   res.report = summary.BriefReport();
   res.iterations = static_cast<int>(summary.iterations.size());
+}
 
-  // Residuals and the stacked Jacobian at the solution.
-  Eigen::MatrixXd Js(6 * m, kCalibParams);
+// Residuals at the solution: per-sample measured and predicted torques, the RMS (overall and per
+// joint over the kept rows), the rows used. Returns the residual sum of squares.
+double fit_residuals(const FitSystem& sys, const std::vector<RowMask>& kept, const CalibVec& x,
+                     FitResult& res) {
+  const int m = static_cast<int>(sys.A.size());
   double rss = 0.0;
   for (int k = 0; k < m; ++k) {
-    Js.middleRows<6>(6 * k) = A[k];
-    const Vec6 pred = A[k] * x;
-    const Vec6 r = pred - b[k];
+    const Vec6 pred = sys.A[k] * x;
+    const Vec6 r = pred - sys.b[k];
     rss += r.squaredNorm();
     res.residual_rms_joint += r.cwiseAbs2();
-    res.rows_used += kept_rows[k].cast<int>();
-    res.tau_measured.push_back(b[k]);
+    res.rows_used += kept[k].cast<int>();
+    res.tau_measured.push_back(sys.b[k]);
     res.tau_predicted.push_back(pred);
     res.row_used.push_back({});
-    for (int j = 0; j < 6; ++j) res.row_used.back()[j] = kept_rows[k](j);
+    for (int j = 0; j < 6; ++j) res.row_used.back()[j] = kept[k](j);
   }
   res.samples = m;
   const int rows = std::max(1, res.rows_used.sum());
   res.residual_rms = std::sqrt(rss / rows);
   res.residual_rms_joint =
       res.residual_rms_joint.cwiseQuotient(res.rows_used.cwiseMax(1).cast<double>()).cwiseSqrt();
+  return rss;
+}
 
-  // Identifiability: near-null space of the column-normalised Jacobian.
-  CalibVec cn;
-  for (int i = 0; i < kCalibParams; ++i) cn(i) = Js.col(i).norm();
+// Identifiability: near-null space of the column-normalised stacked Jacobian. Sets the condition
+// number; returns the column norms `*cn` and the near-null basis.
+Eigen::MatrixXd near_null_space(const FitSystem& sys, const FitOptions& opt, CalibVec* cn,
+                                FitResult& res) {
+  const int m = static_cast<int>(sys.A.size());
+  Eigen::MatrixXd Js(6 * m, kCalibParams);
+  for (int k = 0; k < m; ++k) Js.middleRows<6>(6 * k) = sys.A[k];
+  for (int i = 0; i < kCalibParams; ++i) (*cn)(i) = Js.col(i).norm();
   Eigen::MatrixXd Jn = Js;
-  for (int i = 0; i < kCalibParams; ++i) Jn.col(i) /= cn(i) > 0 ? cn(i) : 1.0;
+  for (int i = 0; i < kCalibParams; ++i) Jn.col(i) /= (*cn)(i) > 0 ? (*cn)(i) : 1.0;
   Eigen::BDCSVD<Eigen::MatrixXd> svd(Jn, Eigen::ComputeThinV);
   const Eigen::VectorXd sv = svd.singularValues();
   const double smax = sv(0);
   int kept = 0;
   while (kept < sv.size() && sv(kept) >= opt.null_tol * smax) ++kept;
   res.condition_number = kept > 0 ? smax / sv(kept - 1) : 0.0;
-  const Eigen::MatrixXd Vnull = svd.matrixV().rightCols(kCalibParams - kept);
+  return svd.matrixV().rightCols(kCalibParams - kept);
+}
 
-  // Covariance of x (prior included, so the information matrix is regular).
+using CalibMat = Eigen::Matrix<double, kCalibParams, kCalibParams>;
+
+// Covariance of x (prior included, so the information matrix is regular); NaN where Ceres cannot.
+CalibMat solution_covariance(ceres::Problem& problem, CalibVec& x) {
   Eigen::Matrix<double, kCalibParams, kCalibParams, Eigen::RowMajor> cov;
   cov.setConstant(std::numeric_limits<double>::quiet_NaN());
   ceres::Covariance::Options co;
@@ -534,8 +633,14 @@ FitResult fit_impl(const CalibrationLog& log, const PhantomParams& prior, const 
   std::vector<std::pair<const double*, const double*>> blocks{{x.data(), x.data()}};
   if (covariance.Compute(blocks, &problem))
     covariance.GetCovarianceBlock(x.data(), x.data(), cov.data());
+  return cov;
+}
 
-  const CalibVec p = x.cwiseProduct(s);
+// The fitted model and one FitParameter per parameter (value, prior, structural identifiability).
+void fitted_parameters(const PhantomParams& prior, const FitScaling& sc, const CalibVec& x,
+                       const Vec6& vs, const std::array<CoulombSign, 6>& sign, const CalibVec& cn,
+                       const Eigen::MatrixXd& Vnull, const FitOptions& opt, FitResult& res) {
+  const CalibVec p = x.cwiseProduct(sc.s);
   res.fitted = unpack_calib_params(prior, p);
   res.fitted.coulomb_smoothing_rad_s = vs;
   res.fitted.coulomb_sign = sign;
@@ -543,20 +648,28 @@ FitResult fit_impl(const CalibrationLog& log, const PhantomParams& prior, const 
   for (int i = 0; i < kCalibParams; ++i) {
     FitParameter fp;
     fp.name = names[i];
-    fp.prior = p0(i);
+    fp.prior = sc.p0(i);
     fp.value = p(i);
     fp.identifiable = cn(i) > 0 && Vnull.row(i).norm() < opt.null_component;
     fp.structurally_identifiable = fp.identifiable;
     res.identifiable += fp.identifiable;
     res.params.push_back(fp);
   }
-  // Standard deviations. The textbook estimate C sigma^2 (C = (J^T J)^-1 from Ceres, sigma^2 =
-  // RSS / dof) assumes independent residuals; after the zero-phase low-pass, and with encoder
-  // quantisation (a slowly varying error), neighbouring samples' residuals are correlated and it
-  // is too small. Reported instead: the heteroscedasticity- and autocorrelation-consistent
-  // (Newey-West) sandwich C S C, S = sum_{|l| <= L} w_l sum_k g_k g_{k+l}^T with g_k = A_k^T r_k
-  // (the per-sample score) and Bartlett weights w_l = 1 - |l| / (L + 1); L covers three cut-off
-  // periods of the low-pass (in used samples) and at least the usual 4 (m/100)^(2/9).
+}
+
+// Standard deviations. The textbook estimate C sigma^2 (C = (J^T J)^-1 from Ceres, sigma^2 =
+// RSS / dof) assumes independent residuals; after the zero-phase low-pass, and with encoder
+// quantisation (a slowly varying error), neighbouring samples' residuals are correlated and it
+// is too small. Reported instead: the heteroscedasticity- and autocorrelation-consistent
+// (Newey-West) sandwich C S C, S = sum_{|l| <= L} w_l sum_k g_k g_{k+l}^T with g_k = A_k^T r_k
+// (the per-sample score) and Bartlett weights w_l = 1 - |l| / (L + 1); L covers three cut-off
+// periods of the low-pass (in used samples) and at least the usual 4 (m/100)^(2/9).
+void parameter_stds(const FitSystem& sys, const CalibVec& x, const CalibVec& s, const CalibMat& cov,
+                    double rss, double dt, const FitOptions& opt, FitResult& res) {
+  const int m = static_cast<int>(sys.A.size());
+  const std::vector<Regressor>& A = sys.A;
+  const std::vector<Vec6>& b = sys.b;
+  const int rows = std::max(1, res.rows_used.sum());
   const double dof = std::max(1, rows - res.identifiable);
   const double sigma2 = rss / dof;
   const double corr_s = opt.lowpass_hz > 0.0 ? 3.0 / opt.lowpass_hz : 0.0;
@@ -566,20 +679,18 @@ FitResult fit_impl(const CalibrationLog& log, const PhantomParams& prior, const 
                                static_cast<int>(std::floor(4.0 * std::pow(m / 100.0, 2.0 / 9.0)))));
   std::vector<CalibVec> g(m);
   for (int k = 0; k < m; ++k) g[k] = A[k].transpose() * (A[k] * x - b[k]);
-  Eigen::Matrix<double, kCalibParams, kCalibParams> S =
-      Eigen::Matrix<double, kCalibParams, kCalibParams>::Zero();
+  CalibMat S = CalibMat::Zero();
   for (int k = 0; k < m; ++k) S.noalias() += g[k] * g[k].transpose();
   for (int l = 1; l <= res.hac_lags; ++l) {
     const double w = 1.0 - static_cast<double>(l) / (res.hac_lags + 1);
-    Eigen::Matrix<double, kCalibParams, kCalibParams> Sl =
-        Eigen::Matrix<double, kCalibParams, kCalibParams>::Zero();
+    CalibMat Sl = CalibMat::Zero();
     for (int k = 0; k + l < m; ++k) Sl.noalias() += g[k] * g[k + l].transpose();
     S += w * (Sl + Sl.transpose());
   }
-  const Eigen::Matrix<double, kCalibParams, kCalibParams> C = cov;
+  const CalibMat C = cov;
   // Named steps, not one expression: GCC's -O1 (the sanitizer build) warns maybe-uninitialized
   // inside Eigen's product of a scaled product.
-  Eigen::Matrix<double, kCalibParams, kCalibParams> CS, cov_hac;
+  CalibMat CS, cov_hac;
   CS.noalias() = C * S;
   cov_hac.noalias() = CS * C;
   cov_hac *= rows / dof;
@@ -589,152 +700,179 @@ FitResult fit_impl(const CalibrationLog& log, const PhantomParams& prior, const 
     fp.std_statistical = s(i) * std::sqrt(std::max(0.0, cov_hac(i, i)));
     fp.std = fp.std_statistical;
   }
+}
 
-  // Residual diagnostics (ResidualDiagnostics), per joint over its kept rows: whiteness (the
-  // autocorrelation, its lag-1 value, Ljung-Box, the correlation length), the residual at low vs
-  // high speed, and the residual against the signed velocity.
-  {
-    ResidualDiagnostics& dg = res.diagnostics;
-    const int K = std::max(1, std::min(std::max(10, 2 * res.hac_lags), m / 4));
-    dg.autocorrelation_lags = K;
-    // chi^2_K 99 % point, Wilson-Hilferty: K (1 - 2 / (9K) + z sqrt(2 / (9K)))^3, z = 2.3263.
-    const double a = 2.0 / (9.0 * K);
-    dg.ljung_box_threshold = K * std::pow(1.0 - a + 2.3263478740408408 * std::sqrt(a), 3);
-    std::vector<double> e(m);
-    for (int j = 0; j < 6; ++j) {
-      int nj = 0;
-      double c0 = 0.0;
-      // (signed low-passed qd, residual) of the kept rows.
-      std::vector<std::pair<double, double>> vr;
-      for (int k = 0; k < m; ++k) {
-        e[k] = kept_rows[k](j) ? res.tau_predicted[k](j) - res.tau_measured[k](j) : 0.0;
-        if (!kept_rows[k](j)) continue;
-        ++nj;
-        c0 += e[k] * e[k];
-        vr.emplace_back(used_qd[k](j), e[k]);
-      }
-      std::vector<double>& rho = dg.autocorrelation[j];
-      rho.assign(K, 0.0);
-      dg.correlation_length[j] = K + 1;
-      double lb_sum = 0.0;
-      for (int l = 1; l <= K; ++l) {
-        double c = 0.0;
-        int pairs = 0;
-        for (int k = 0; k + l < m; ++k) {
-          if (!kept_rows[k](j) || !kept_rows[k + l](j)) continue;
-          c += e[k] * e[k + l];
-          ++pairs;
-        }
-        rho[l - 1] = pairs > 0 && c0 > 0.0 ? (c / pairs) / (c0 / nj) : 0.0;
-        if (nj > l) lb_sum += rho[l - 1] * rho[l - 1] / (nj - l);
-        if (dg.correlation_length[j] == K + 1 && nj > 0 &&
-            std::abs(rho[l - 1]) < 2.0 / std::sqrt(static_cast<double>(nj))) {
-          dg.correlation_length[j] = l;
-        }
-      }
-      dg.lag1_autocorrelation(j) = rho[0];
-      dg.ljung_box_q(j) = static_cast<double>(nj) * (nj + 2.0) * lb_sum;
-      dg.white[j] = dg.ljung_box_q(j) <= dg.ljung_box_threshold;
-      if (vr.empty()) continue;
-      // The slowest and the fastest quarter of |qd_j|.
-      std::vector<std::pair<double, double>> by_speed = vr;
-      for (auto& [v, r] : by_speed) v = std::abs(v);
-      std::sort(by_speed.begin(), by_speed.end());
-      const int mj = static_cast<int>(by_speed.size());
-      const int quarter = std::max(1, mj / 4);
-      double slow = 0.0, fast = 0.0;
-      for (int k = 0; k < quarter && k < mj; ++k) {
-        slow += by_speed[k].second * by_speed[k].second;
-        fast += by_speed[mj - 1 - k].second * by_speed[mj - 1 - k].second;
-      }
-      dg.rms_slow(j) = std::sqrt(slow / quarter);
-      dg.rms_fast(j) = std::sqrt(fast / quarter);
-      if (dg.rms_slow(j) > 2.0 * dg.rms_fast(j)) {
-        char buf[96];
-        std::snprintf(buf, sizeof buf, "joint %d: residual %.3g N m at low speed, %.3g at high",
-                      j + 1, dg.rms_slow(j), dg.rms_fast(j));
-        res.model_mismatch_reasons.emplace_back(buf);
-      }
-      // Against the signed velocity: 5 bins of equal count on each side of 0.
-      std::sort(vr.begin(), vr.end());
-      const std::size_t zero = static_cast<std::size_t>(
-          std::lower_bound(vr.begin(), vr.end(), std::make_pair(0.0, -HUGE_VAL)) - vr.begin());
-      ResidualDiagnostics::VelocityBins& vb = dg.residual_vs_velocity[j];
-      for (const auto& [first, last] : {std::pair{std::size_t{0}, zero}, {zero, vr.size()}}) {
-        const std::size_t n_side = last - first, nb = std::min<std::size_t>(5, n_side);
-        for (std::size_t bin = 0; bin < nb; ++bin) {
-          const std::size_t lo = first + n_side * bin / nb, hi = first + n_side * (bin + 1) / nb;
-          double sq = 0.0, se = 0.0, se2 = 0.0;
-          for (std::size_t i = lo; i < hi; ++i) {
-            sq += vr[i].first;
-            se += vr[i].second;
-            se2 += vr[i].second * vr[i].second;
-          }
-          const double cnt = static_cast<double>(hi - lo);
-          vb.qd.push_back(sq / cnt);
-          vb.mean.push_back(se / cnt);
-          vb.rms.push_back(std::sqrt(se2 / cnt));
-          vb.rows.push_back(static_cast<int>(hi - lo));
-        }
-      }
+// Whiteness of joint j's residual e over its kept rows: the autocorrelation, its lag-1 value,
+// Ljung-Box, the correlation length.
+void residual_whiteness(int j, const std::vector<double>& e, const std::vector<RowMask>& kept,
+                        int nj, double c0, ResidualDiagnostics& dg) {
+  const int m = static_cast<int>(e.size());
+  const int K = dg.autocorrelation_lags;
+  std::vector<double>& rho = dg.autocorrelation[j];
+  rho.assign(K, 0.0);
+  dg.correlation_length[j] = K + 1;
+  double lb_sum = 0.0;
+  for (int l = 1; l <= K; ++l) {
+    double c = 0.0;
+    int pairs = 0;
+    for (int k = 0; k + l < m; ++k) {
+      if (!kept[k](j) || !kept[k + l](j)) continue;
+      c += e[k] * e[k + l];
+      ++pairs;
+    }
+    rho[l - 1] = pairs > 0 && c0 > 0.0 ? (c / pairs) / (c0 / nj) : 0.0;
+    if (nj > l) lb_sum += rho[l - 1] * rho[l - 1] / (nj - l);
+    if (dg.correlation_length[j] == K + 1 && nj > 0 &&
+        std::abs(rho[l - 1]) < 2.0 / std::sqrt(static_cast<double>(nj))) {
+      dg.correlation_length[j] = l;
     }
   }
+  dg.lag1_autocorrelation(j) = rho[0];
+  dg.ljung_box_q(j) = static_cast<double>(nj) * (nj + 2.0) * lb_sum;
+  dg.white[j] = dg.ljung_box_q(j) <= dg.ljung_box_threshold;
+}
 
-  // The model-mismatch term (FitOptions::model_mismatch_term).
-  if (opt.model_mismatch_term) {
-    FitOptions reduced = opt;
-    reduced.exclude_slow_fraction = 0.25;
-    reduced.model_mismatch_term = false;
-    // v_s is chosen again on the reduced rows: how much the choice moves the parameters is part
-    // of what the rows near reversal say about the law.
-    const FitResult alt = fit_impl(log, prior, reduced, &res.coulomb_sign, regressors);
-    for (int i = 0; i < kCalibParams; ++i) {
-      FitParameter& fp = res.params[i];
-      const double d = alt.params[i].value - fp.value;
-      const double var_d =
-          std::max(0.0, alt.params[i].std_statistical * alt.params[i].std_statistical -
-                            fp.std_statistical * fp.std_statistical);
-      fp.std_model = std::sqrt(std::max(0.0, d * d - var_d));
-      fp.std = std::hypot(fp.std_statistical, fp.std_model);
-      const double z = var_d > 0.0 ? std::abs(d) / std::sqrt(var_d) : 0.0;
-      if (fp.identifiable && fp.std_statistical <= opt.max_rel_std * s(i) && z > 3.0) {
-        char buf[160];
-        std::snprintf(buf, sizeof buf,
-                      "%s: moves %.3g (%.1f std of the difference) without the slow rows",
-                      fp.name.c_str(), d, z);
-        res.model_mismatch_reasons.emplace_back(buf);
+// Joint j's residual in the slowest and the fastest quarter of |qd_j| (vr: (signed qd, residual)
+// of the kept rows); a slow residual over twice the fast one is a model-mismatch reason.
+void residual_by_speed(int j, const std::vector<std::pair<double, double>>& vr, FitResult& res) {
+  ResidualDiagnostics& dg = res.diagnostics;
+  std::vector<std::pair<double, double>> by_speed = vr;
+  for (auto& [v, r] : by_speed) v = std::abs(v);
+  std::sort(by_speed.begin(), by_speed.end());
+  const int mj = static_cast<int>(by_speed.size());
+  const int quarter = std::max(1, mj / 4);
+  double slow = 0.0, fast = 0.0;
+  for (int k = 0; k < quarter && k < mj; ++k) {
+    slow += by_speed[k].second * by_speed[k].second;
+    fast += by_speed[mj - 1 - k].second * by_speed[mj - 1 - k].second;
+  }
+  dg.rms_slow(j) = std::sqrt(slow / quarter);
+  dg.rms_fast(j) = std::sqrt(fast / quarter);
+  if (dg.rms_slow(j) > 2.0 * dg.rms_fast(j)) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "joint %d: residual %.3g N m at low speed, %.3g at high", j + 1,
+                  dg.rms_slow(j), dg.rms_fast(j));
+    res.model_mismatch_reasons.emplace_back(buf);
+  }
+}
+
+// Joint j's residual against the signed velocity: 5 bins of equal count on each side of 0.
+void residual_vs_velocity(std::vector<std::pair<double, double>>& vr,
+                          ResidualDiagnostics::VelocityBins& vb) {
+  std::sort(vr.begin(), vr.end());
+  const std::size_t zero = static_cast<std::size_t>(
+      std::lower_bound(vr.begin(), vr.end(), std::make_pair(0.0, -HUGE_VAL)) - vr.begin());
+  for (const auto& [first, last] : {std::pair{std::size_t{0}, zero}, {zero, vr.size()}}) {
+    const std::size_t n_side = last - first, nb = std::min<std::size_t>(5, n_side);
+    for (std::size_t bin = 0; bin < nb; ++bin) {
+      const std::size_t lo = first + n_side * bin / nb, hi = first + n_side * (bin + 1) / nb;
+      double sq = 0.0, se = 0.0, se2 = 0.0;
+      for (std::size_t i = lo; i < hi; ++i) {
+        sq += vr[i].first;
+        se += vr[i].second;
+        se2 += vr[i].second * vr[i].second;
       }
+      const double cnt = static_cast<double>(hi - lo);
+      vb.qd.push_back(sq / cnt);
+      vb.mean.push_back(se / cnt);
+      vb.rms.push_back(std::sqrt(se2 / cnt));
+      vb.rows.push_back(static_cast<int>(hi - lo));
     }
   }
-  // The law term (FitOptions::law_mismatch_term): the same rows, each joint's other smooth sign.
-  if (opt.model_mismatch_term && opt.law_mismatch_term) {
-    FitOptions other = opt;
-    other.model_mismatch_term = false;
-    std::array<CoulombSign, 6> flipped = res.coulomb_sign;
-    for (CoulombSign& c : flipped) {
-      c = c == CoulombSign::kTanh ? CoulombSign::kErf : CoulombSign::kTanh;
+}
+
+// Residual diagnostics (ResidualDiagnostics), per joint over its kept rows: whiteness (the
+// autocorrelation, its lag-1 value, Ljung-Box, the correlation length), the residual at low vs
+// high speed, and the residual against the signed velocity.
+void residual_diagnostics(const std::vector<RowMask>& kept, const std::vector<Vec6>& used_qd,
+                          FitResult& res) {
+  const int m = static_cast<int>(kept.size());
+  ResidualDiagnostics& dg = res.diagnostics;
+  const int K = std::max(1, std::min(std::max(10, 2 * res.hac_lags), m / 4));
+  dg.autocorrelation_lags = K;
+  // chi^2_K 99 % point, Wilson-Hilferty: K (1 - 2 / (9K) + z sqrt(2 / (9K)))^3, z = 2.3263.
+  const double a = 2.0 / (9.0 * K);
+  dg.ljung_box_threshold = K * std::pow(1.0 - a + 2.3263478740408408 * std::sqrt(a), 3);
+  std::vector<double> e(m);
+  for (int j = 0; j < 6; ++j) {
+    int nj = 0;
+    double c0 = 0.0;
+    // (signed low-passed qd, residual) of the kept rows.
+    std::vector<std::pair<double, double>> vr;
+    for (int k = 0; k < m; ++k) {
+      e[k] = kept[k](j) ? res.tau_predicted[k](j) - res.tau_measured[k](j) : 0.0;
+      if (!kept[k](j)) continue;
+      ++nj;
+      c0 += e[k] * e[k];
+      vr.emplace_back(used_qd[k](j), e[k]);
     }
-    const FitResult alt = fit_impl(log, prior, other, &flipped, regressors);
-    for (int i = 0; i < kCalibParams; ++i) {
-      FitParameter& fp = res.params[i];
-      const double d = alt.params[i].value - fp.value;
-      fp.std_law = std::abs(d);
-      fp.std =
-          std::sqrt(fp.std_statistical * fp.std_statistical + fp.std_model * fp.std_model + d * d);
-      if (fp.identifiable && fp.std_statistical <= opt.max_rel_std * s(i) &&
-          std::abs(d) > 3.0 * fp.std_statistical) {
-        char buf[160];
-        std::snprintf(buf, sizeof buf, "%s: moves %.3g (%.1f std) with the other smooth sign",
-                      fp.name.c_str(), d, std::abs(d) / fp.std_statistical);
-        res.model_mismatch_reasons.emplace_back(buf);
-      }
+    residual_whiteness(j, e, kept, nj, c0, dg);
+    if (vr.empty()) continue;
+    residual_by_speed(j, vr, res);
+    residual_vs_velocity(vr, dg.residual_vs_velocity[j]);
+  }
+}
+
+// The model-mismatch term (FitOptions::model_mismatch_term): the fit again without the slowest
+// quarter of the rows.
+void model_mismatch_term(const CalibrationLog& log, const PhantomParams& prior,
+                         const FitOptions& opt, const CalibVec& s,
+                         std::vector<Regressor>* regressors, FitResult& res) {
+  FitOptions reduced = opt;
+  reduced.exclude_slow_fraction = 0.25;
+  reduced.model_mismatch_term = false;
+  // v_s is chosen again on the reduced rows: how much the choice moves the parameters is part
+  // of what the rows near reversal say about the law.
+  const FitResult alt = fit_impl(log, prior, reduced, &res.coulomb_sign, regressors);
+  for (int i = 0; i < kCalibParams; ++i) {
+    FitParameter& fp = res.params[i];
+    const double d = alt.params[i].value - fp.value;
+    const double var_d =
+        std::max(0.0, alt.params[i].std_statistical * alt.params[i].std_statistical -
+                          fp.std_statistical * fp.std_statistical);
+    fp.std_model = std::sqrt(std::max(0.0, d * d - var_d));
+    fp.std = std::hypot(fp.std_statistical, fp.std_model);
+    const double z = var_d > 0.0 ? std::abs(d) / std::sqrt(var_d) : 0.0;
+    if (fp.identifiable && fp.std_statistical <= opt.max_rel_std * s(i) && z > 3.0) {
+      char buf[160];
+      std::snprintf(buf, sizeof buf,
+                    "%s: moves %.3g (%.1f std of the difference) without the slow rows",
+                    fp.name.c_str(), d, z);
+      res.model_mismatch_reasons.emplace_back(buf);
     }
   }
-  res.model_mismatch = !res.model_mismatch_reasons.empty();
+}
 
-  // Practically identifiable: the data pin it to better than max_rel_std of its prior (the
-  // statistical std: what the data say; the model terms say how far the law may move it, which
-  // the reported std carries and the bar checks against).
+// The law term (FitOptions::law_mismatch_term): the same rows, each joint's other smooth sign.
+void law_mismatch_term(const CalibrationLog& log, const PhantomParams& prior, const FitOptions& opt,
+                       const CalibVec& s, std::vector<Regressor>* regressors, FitResult& res) {
+  FitOptions other = opt;
+  other.model_mismatch_term = false;
+  std::array<CoulombSign, 6> flipped = res.coulomb_sign;
+  for (CoulombSign& c : flipped) {
+    c = c == CoulombSign::kTanh ? CoulombSign::kErf : CoulombSign::kTanh;
+  }
+  const FitResult alt = fit_impl(log, prior, other, &flipped, regressors);
+  for (int i = 0; i < kCalibParams; ++i) {
+    FitParameter& fp = res.params[i];
+    const double d = alt.params[i].value - fp.value;
+    fp.std_law = std::abs(d);
+    fp.std =
+        std::sqrt(fp.std_statistical * fp.std_statistical + fp.std_model * fp.std_model + d * d);
+    if (fp.identifiable && fp.std_statistical <= opt.max_rel_std * s(i) &&
+        std::abs(d) > 3.0 * fp.std_statistical) {
+      char buf[160];
+      std::snprintf(buf, sizeof buf, "%s: moves %.3g (%.1f std) with the other smooth sign",
+                    fp.name.c_str(), d, std::abs(d) / fp.std_statistical);
+      res.model_mismatch_reasons.emplace_back(buf);
+    }
+  }
+}
+
+// Practically identifiable: the data pin it to better than max_rel_std of its prior (the
+// statistical std: what the data say; the model terms say how far the law may move it, which
+// the reported std carries and the bar checks against).
+void practical_identifiability(const CalibVec& s, const FitOptions& opt, FitResult& res) {
   for (int i = 0; i < kCalibParams; ++i) {
     FitParameter& fp = res.params[i];
     if (fp.identifiable && !(fp.std_statistical <= opt.max_rel_std * s(i))) {
@@ -742,6 +880,52 @@ FitResult fit_impl(const CalibrationLog& log, const PhantomParams& prior, const 
       --res.identifiable;
     }
   }
+}
+
+// fit_calibration, with each joint's smooth sign `*sign_override` instead of the options' (the
+// law term's refit). `*regressors`: Y of each used sample without its Coulomb columns, computed
+// here when empty, else reused (the refits use the log's samples as the fit does: the autodiff
+// regressor is most of a fit's time).
+FitResult fit_impl(const CalibrationLog& log, const PhantomParams& prior, const FitOptions& opt,
+                   const std::array<CoulombSign, 6>* sign_override,
+                   std::vector<Regressor>* regressors) {
+  FitSignals sig = prepare_signals(log, prior, opt, sign_override);
+  const FitScaling sc = scale_by_prior(prior);
+  const CalibVec& s = sc.s;
+  CalibVec x = sc.p0.cwiseQuotient(s);
+  const CalibVec x0 = x;
+
+  FitResult res;
+  FitRows rows = select_rows(sig, prior, s, opt, regressors);
+  // v_s per joint: the prior's, or chosen by profile least squares (FitOptions).
+  Vec6 vs = prior.coulomb_smoothing_rad_s;
+  if (opt.fit_coulomb_smoothing) {
+    const ColumnsFn columns = [&sig](const Vec6& v, const std::array<CoulombSign, 6>& law) {
+      return sig.coulomb_columns(v, law);
+    };
+    vs = profile_coulomb_smoothing(rows.A0, rows.kept, rows.at_sample, sig.tau, s, x0,
+                                   opt.prior_weight, vs, opt.fit_coulomb_sign && !sign_override,
+                                   &sig.sign, columns, &res.coulomb_smoothing_profile);
+  }
+  res.coulomb_smoothing_rad_s = vs;
+  res.coulomb_sign = sig.sign;
+  const FitSystem sys = stack_rows(sig, rows, s, vs, res);
+
+  ceres::Problem problem;
+  solve_fit(sys, sc, x0, opt, problem, x, res);
+  const double rss = fit_residuals(sys, rows.kept, x, res);
+  CalibVec cn;
+  const Eigen::MatrixXd Vnull = near_null_space(sys, opt, &cn, res);
+  const CalibMat cov = solution_covariance(problem, x);
+  fitted_parameters(prior, sc, x, vs, sig.sign, cn, Vnull, opt, res);
+  parameter_stds(sys, x, s, cov, rss, sig.dt, opt, res);
+  residual_diagnostics(rows.kept, sys.used_qd, res);
+  if (opt.model_mismatch_term) model_mismatch_term(log, prior, opt, s, regressors, res);
+  if (opt.model_mismatch_term && opt.law_mismatch_term) {
+    law_mismatch_term(log, prior, opt, s, regressors, res);
+  }
+  res.model_mismatch = !res.model_mismatch_reasons.empty();
+  practical_identifiability(s, opt, res);
   return res;
 }
 

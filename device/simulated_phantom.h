@@ -96,7 +96,7 @@ struct SimulatedDeviceConfig {
   TickJitter jitter;
 };
 
-// Phantom Premium 1.5/6DoF defaults for the quantities above (PHANTOM.md).
+// Phantom Premium 1.5/6DoF defaults for the quantities above (docs/device_facts.md §3).
 VecX phantom_drive_ratios();  // (13.3, 11.2, 11.2, 1, 1, 1)
 VecX phantom_tau_max();       // (0.400, 0.350, 0.200, 0.188, 0.188, 0.048) N m
 

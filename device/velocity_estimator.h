@@ -1,5 +1,5 @@
 // Joint-velocity estimation from quantised encoder angles, as a haptic driver computes it
-// (OpenHaptics reports no joint velocity: PHANTOM.md "OpenHaptics HDAPI").
+// (OpenHaptics reports no joint velocity: docs/device_facts.md §5).
 //
 // Backward difference over the measured tick length T_k [s] (T_k may vary tick to tick):
 //     qd_raw,k = (q_k - q_k-1) / T_k                                                  [rad/s]

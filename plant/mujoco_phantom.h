@@ -1,6 +1,6 @@
 // The MuJoCo 2.2.2 model of the Phantom (plant/phantom_mjcf.h) loaded and wrapped: RAII
 // ownership of mjModel/mjData, and the reduction of tree quantities to the device coordinates
-// q = (q1..q6) through the constant map theta = G q (phantom_tree_map(), PHANTOM.md):
+// q = (q1..q6) through the constant map theta = G q (phantom_tree_map(), docs/device_facts.md §4):
 //     M_red = G^T M_tree G,  bias_red = G^T qfrc_bias,  J_red = J_tree G.
 // Used by the cross-check (validation/crosscheck_device.h) and by the simulated device (device/).
 // Units: SI; the tip twist is V = [v (world); w (body)] as everywhere in dentsim.

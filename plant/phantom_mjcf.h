@@ -4,7 +4,7 @@
 // The generator walks the same kinematic tree as the analytic model (phantom_tree<double>,
 // reference/phantom/phantom_model.h): body i at pos[i] with quat(rot0[i]) in its parent, a hinge
 // about axis[i], an explicit <inertial> (mass, CoM, diagonal inertia; no inertia from geoms).
-// The parallelogram is a real closed chain (PHANTOM.md "MuJoCo 2.2.2 — what works"): tree
+// The parallelogram is a real closed chain (docs/device_facts.md §4, MuJoCo 2.2.2): tree
 // base(q1) -> upper_arm(q2) -> forearm(elbow = q3 - q2) -> gimbal yaw/pitch/roll (q4..q6), and
 // base -> crank(q3) -> parallel_link(link_c = q2 - q3), closed by two linear equalities:
 //   <joint joint1="link_c" joint2="elbow" polycoef="0 -1 0 0 0"/>  (link_c = -elbow)

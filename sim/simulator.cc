@@ -18,7 +18,6 @@
 #include "device/hdapi/hdapi_device.h"
 #include "device/phantom_device.h"
 #include "device/servo_pacer.h"
-#include "sim/session_record.h"
 #include "device/simulated_phantom.h"
 #include "fast/registry.h"
 #include "reference/core/io.h"
@@ -30,9 +29,10 @@
 #include "reference/tools.h"
 #include "reference/tooth/collision.h"
 #include "reference/tooth/drilling.h"
+#include "reference/tooth/tooth_contacts.h"
+#include "sim/session_record.h"
 #include "tooth_io/mesh.h"
 #include "tooth_io/procedural_molar.h"
-#include "reference/tooth/tooth_contacts.h"
 #include "tooth_io/tooth_field.h"
 #include "tooth_io/voxelize.h"
 
@@ -74,8 +74,8 @@ Vec3 occlusal_anchor(const VoxelGrid& g) {
   return Vec3(c.x(), c.y(), top);
 }
 
-// Device penetrations below this (the Phantom's tip resolution, ~0.03 mm, PHANTOM.md) are
-// encoder noise and do not enter the stiffness fit.
+// Device penetrations below this (the Phantom's tip resolution, ~0.03 mm, docs/device_facts.md §3)
+// are encoder noise and do not enter the stiffness fit.
 constexpr double kMinDepthForStiffness = 3e-5;
 // The loop owner's velocity guard [rad/s] (phantom_safety_limits' value, device/safety_chain.h).
 constexpr double kSceneMaxJointSpeed = 20.0;
@@ -131,12 +131,10 @@ double SceneRig::tip_depth(const Pose& pose) {
   return d;
 }
 
-std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOptions& options) {
-  auto rig = std::make_unique<SceneRig>();
-  SceneRig& g = *rig;
-  g.tick = 1.0 / scene.tick_hz;
+namespace {
 
-  // Device: the model file drives both the simulated plant and the pipeline's model.
+// The device: the model file drives both the simulated plant and the pipeline's model.
+void load_device(const Scene& scene, SceneRig& g) {
   g.params = scene.device.model_file.empty() ? default_phantom_params()
                                              : load_phantom_params(scene.device.model_file);
   g.model = std::make_unique<PhantomModel>(g.params);
@@ -152,14 +150,19 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
     dcfg.jitter.half_width = 1e-6 * scene.device.jitter_us;
   }
   g.device = std::make_unique<SimulatedPhantom>(phantom_plant(g.params), dcfg, g.q_home);
+}
+
+DeviceBackend scene_backend(const Scene& scene, const SceneRigOptions& options) {
   const std::string backend_name = options.device.empty() ? scene.device.type : options.device;
   const std::optional<DeviceBackend> found = find_device_backend(backend_name);
   if (!found) {
     throw InputError("device '" + backend_name + "': expected " + device_backend_list());
   }
-  const DeviceBackend backend = *found;
+  return *found;
+}
 
-  // Tooth, placed so its occlusal anchor sits at home + anchor_offset.
+// The tooth, placed so its occlusal anchor sits at home + anchor_offset, and its field.
+void place_tooth(const Scene& scene, SceneRig& g) {
   VoxelGrid grid = build_tooth(scene.tooth);
   g.anchor = g.home.x + scene.tooth.anchor_offset;
   const Vec3 tooth_shift = g.anchor - occlusal_anchor(grid);
@@ -170,20 +173,23 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   g.measure_contacts.reserve(4096);
   g.k_tooth = scene.tooth.k_tooth;
   g.b_tooth = scene.tooth.b_tooth;
+  // The tooth's sampled field, built from its source (contact model "field"; tooth_io/
+  // tooth_field.h), which every implementation's tooth reads.
+  if (parse_contact_model(scene.tooth.contact_model) == ContactModel::kField) {
+    g.field = std::make_unique<SampledField>(
+        build_tooth_field(tooth_source(scene.tooth), g.tooth->grid(), tooth_shift,
+                          field_band_for_tip(g.tip.radius, g.tooth->grid().voxel_size)));
+  }
+}
+
+// The implementation's tooth on the placed tooth: its contacts and, if the tool drills, drilling.
+void make_pipeline_tooth(const Scene& scene, const SceneRigOptions& options,
+                         const Implementation& impl, SceneRig& g) {
   DrillParams drill;
   drill.bur_speed_rad_s = scene.tool.bur_speed_rpm * 2.0 * std::numbers::pi / 60.0;
   drill.cutting_coefficient = scene.tool.cutting_coefficient;
   const DrillParams* drilling = scene.tool.drills() ? &drill : nullptr;
   const ContactModel contact_model = parse_contact_model(scene.tooth.contact_model);
-  // The tooth's sampled field, built from its source (contact model "field"; tooth_io/
-  // tooth_field.h), which every implementation's tooth reads.
-  if (contact_model == ContactModel::kField) {
-    g.field = std::make_unique<SampledField>(build_tooth_field(
-        tooth_source(scene.tooth), g.tooth->grid(), tooth_shift,
-        field_band_for_tip(g.tip.radius, g.tooth->grid().voxel_size)));
-  }
-  // The implementation of the tick (fast/registry.h): its tooth and, below, its device model.
-  const Implementation& impl = implementation(options.pipeline);
   PipelineToothSetup tooth_setup;
   tooth_setup.tip = g.tip;
   tooth_setup.k_tooth = g.k_tooth;
@@ -194,8 +200,10 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   tooth_setup.field = g.field.get();
   g.pipeline_tooth = impl.tooth(*g.tooth, tooth_setup);
   g.contacts = &g.pipeline_tooth->provider();
+}
 
-  // Hand.
+// The scripted hand, its keyframes relative to the tooth's anchor.
+void script_hand(const Scene& scene, SceneRig& g) {
   std::vector<HandKeyframe> keys;
   for (const SceneHandKey& k : scene.script) {
     HandKeyframe hk;
@@ -206,7 +214,11 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   }
   g.hand = std::make_unique<ScriptedHand>(scene.hand, keys, g.home.R);
   g.device->set_hand(g.hand.get());
+}
 
+// The pipeline on the implementation's device model.
+void make_scene_pipeline(const Scene& scene, const SceneRigOptions& options,
+                         const Implementation& impl, SceneRig& g) {
   // The pipeline's device model: the model file's, plus the gripping hand's nominal mass at the
   // tip when the scene asks for it (reference/grasp_mass_model.h): always (a fixed mass), or
   // tick by tick as the grip detector decides (method.grip_detector; then the pipeline's model
@@ -252,6 +264,10 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   pc.skip_unneeded = options.skip_unneeded;
   if (options.configure_pipeline) options.configure_pipeline(pc);
   g.pipeline = make_pipeline(options.pipeline, belief, pc);
+}
+
+// The loop owner's safety chain.
+void make_safety_chain(DeviceBackend backend, SceneRig& g) {
   SafetyLimits limits;
   limits.tau_max = g.params.torque_limit_n_m;
   limits.qd_max = VecX::Constant(g.device->dof(), kSceneMaxJointSpeed);
@@ -271,8 +287,12 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   // after kMaxSaturationS (both backends; a built-in scene never saturates that long).
   limits.max_saturation_s = kMaxSaturationS;
   g.safety = std::make_unique<SafetyChain>(limits);
-  // The device the loop drives, started last: a device with its own clock (HDAPI's scheduler;
-  // the emulator's scripted hand starts at hdInitDevice) runs from here on.
+}
+
+// The device the loop drives, started last: a device with its own clock (HDAPI's scheduler;
+// the emulator's scripted hand starts at hdInitDevice) runs from here on.
+void connect_loop_device(const Scene& scene, const SceneRigOptions& options, DeviceBackend backend,
+                         SceneRig& g) {
   Device* loop_device = g.device.get();
   if (backend == DeviceBackend::kHdapi) {
     // The project's emulator simulates the plant and the hand of the scene named by
@@ -296,7 +316,11 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
     loop_device = g.faulty.get();
   }
   g.loop_device = loop_device;
-  g.loop = std::make_unique<ClosedLoop>(*loop_device, *g.pipeline, *g.contacts);
+}
+
+// The closed loop with its safety chain and virtual supervisor.
+void close_loop(const Scene& scene, SceneRig& g) {
+  g.loop = std::make_unique<ClosedLoop>(*g.loop_device, *g.pipeline, *g.contacts);
   g.loop->set_safety_chain(g.safety.get());
   SupervisorLimits supervision;
   supervision.tool_radius_m = g.tip.radius;
@@ -307,14 +331,33 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   supervision.max_tick_s = std::max(5.0 * g.tick, 2.0 / scene.method.observer_gain);
   g.supervisor = std::make_unique<VirtualSupervisor>(supervision);
   g.loop->set_supervisor(g.supervisor.get());
+}
+
+}  // namespace
+
+std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOptions& options) {
+  auto rig = std::make_unique<SceneRig>();
+  SceneRig& g = *rig;
+  g.tick = 1.0 / scene.tick_hz;
+  load_device(scene, g);
+  const DeviceBackend backend = scene_backend(scene, options);
+  place_tooth(scene, g);
+  // The implementation of the tick (fast/registry.h): its tooth and its device model.
+  const Implementation& impl = implementation(options.pipeline);
+  make_pipeline_tooth(scene, options, impl, g);
+  script_hand(scene, g);
+  make_scene_pipeline(scene, options, impl, g);
+  make_safety_chain(backend, g);
+  connect_loop_device(scene, options, backend, g);
+  close_loop(scene, g);
   return rig;
 }
 
-RunResult run_scene(const Scene& scene, const RunOptions& options) {
-  RunResult res;
-  res.scene = scene.name;
-  const double duration =
-      options.duration_override > 0.0 ? options.duration_override : scene.duration;
+namespace {
+
+// --hd-loop names a loop, and a loop inside the vendor's callback cannot be wrapped, viewed or
+// paced by the caller's loop.
+void check_loop_options(const Scene& scene, const RunOptions& options) {
   const std::string backend = options.device.empty() ? scene.device.type : options.device;
   if (options.hd_loop != "callback" && options.hd_loop != "caller") {
     throw InputError("--hd-loop '" + options.hd_loop + "': expected callback or caller");
@@ -330,6 +373,9 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
                        " the caller's loop: add --hd-loop caller");
     }
   }
+}
+
+SceneRigOptions scene_rig_options(const RunOptions& options) {
   SceneRigOptions rig_options;
   rig_options.pipeline = options.pipeline;
   rig_options.fault = options.fault;
@@ -337,67 +383,49 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   rig_options.skip_unneeded = options.skip_unneeded;
   rig_options.device = options.device;
   rig_options.hd_library = options.hd_library;
-  const std::unique_ptr<SceneRig> rig = build_scene_rig(scene, rig_options);
-  const double T = rig->tick;
+  return rig_options;
+}
+
+// What ran: the device model, the implementation, the backend and its loop.
+void describe_run(const Scene& scene, const RunOptions& options, const SceneRig& rig,
+                  RunResult& res) {
+  const bool truth = rig.backend == nullptr;
   res.device_model =
       scene.device.model_file.empty() ? "default Phantom Premium 1.5A" : scene.device.model_file;
-  res.pipeline = rig->pipeline->name();
+  res.pipeline = rig.pipeline->name();
   res.skip_unneeded = options.skip_unneeded;
-  res.tooth_before = rig->tooth_before;
-  SimulatedPhantom& device = *rig->device;  // the simulator's ground truth (unless a backend)
-  Device& driven = *rig->loop_device;       // what the loop drives
-  const bool truth = rig->backend == nullptr;
-  // With HDAPI the tick runs inside the vendor's scheduler callback (RunOptions::hd_loop).
-  const bool callback = !truth && options.hd_loop == "callback";
+  res.tooth_before = rig.tooth_before;
   if (!truth) res.hd_loop = options.hd_loop;
   res.device =
       device_backend_name(truth ? DeviceBackend::kSimulatedPhantom : DeviceBackend::kHdapi);
   res.has_ground_truth = truth;
-  ClosedLoop& loop = *rig->loop;
-  const Pipeline& pipeline = *rig->pipeline;
-  const ToothProviderBase& contacts = *rig->contacts;
+}
 
-  const long n_ticks = static_cast<long>(std::ceil(duration / T));
-  std::vector<double> stage_us[kStageCount + 2];
-  for (auto& v : stage_us) v.reserve(n_ticks);
-  res.series.reserve(n_ticks / std::max(1, options.log_every) + 1);
-  res.quiet_series.tick_s = T;
-  res.quiet_series.reserve(static_cast<std::size_t>(std::max(0L, n_ticks)) + 1);
-  res.tip_quantum_m = tip_encoder_quantum(*rig);
+// The recorder (RunOptions::record_path; null without one): its writer thread drains a
+// preallocated ring.
+std::unique_ptr<SessionWriter> make_session_recorder(const Scene& scene, const RunOptions& options,
+                                                     const RunResult& res, int dof, double duration,
+                                                     long n_ticks) {
+  if (options.record_path.empty()) return nullptr;
+  SessionHeader h;
+  h.dof = dof;
+  h.tick_rate_hz = scene.tick_hz;
+  const nlohmann::json context = {{"scene", nlohmann::json::parse(scene.text)},
+                                  {"scene_origin", scene.origin},
+                                  {"pipeline", res.pipeline},
+                                  {"duration_s", duration}};
+  h.context = context.dump();
+  const std::size_t capacity = static_cast<std::size_t>(std::min<long>(n_ticks + 2, 1L << 18));
+  return std::make_unique<SessionWriter>(options.record_path, h, capacity);
+}
 
-  double sum_f2 = 0.0, sum_fd = 0.0, sum_dd = 0.0, sum_obs2 = 0.0;
-  double hand_work = 0.0;
-  VecX q_true_prev = device.true_q();
-  const auto wall_start = std::chrono::steady_clock::now();
-  long next_progress = 0;
-  // The recorder (RunOptions::record_path): its writer thread drains a preallocated ring; the
-  // loop copies the tick's input sample into rec_sample (no allocation: same sizes) and pushes.
-  std::unique_ptr<SessionWriter> recorder;
-  DeviceSample rec_sample = loop.sample();
-  VecX rec_tau = VecX::Zero(rec_sample.q.size());
-  DeviceSample step_in = loop.sample();  // the direct loop's copy of a tick's input sample
-  TickRecord record;
-  if (!options.record_path.empty()) {
-    SessionHeader h;
-    h.dof = device.dof();
-    h.tick_rate_hz = scene.tick_hz;
-    const nlohmann::json context = {{"scene", nlohmann::json::parse(scene.text)},
-                                    {"scene_origin", scene.origin},
-                                    {"pipeline", res.pipeline},
-                                    {"duration_s", duration}};
-    h.context = context.dump();
-    const std::size_t capacity = static_cast<std::size_t>(std::min<long>(n_ticks + 2, 1L << 18));
-    recorder = std::make_unique<SessionWriter>(options.record_path, h, capacity);
-  }
-  loop.start();
-  if (loop.faulted()) {
-    res.faults.push_back(std::string(loop.fault_name()) +
-                         " at t = " + std::to_string(loop.fault_time()) + " s");
-  }
-  // --realtime: absolute deadlines, overruns counted and skipped (device/servo_pacer.h).
+// --realtime: absolute deadlines, overruns counted and skipped (device/servo_pacer.h).
+struct RealtimePacing {
   std::unique_ptr<ServoPacer> pacer;
   bool fifo = false, locked = false;
-  if (options.realtime) {
+
+  void start(const RunOptions& options, double T) {
+    if (!options.realtime) return;
     pacer = std::make_unique<ServoPacer>(T);
     std::string warning;
     if (options.realtime_priority) {
@@ -407,25 +435,37 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     pacer->set_privileges(fifo, locked, warning);
     pacer->start();
   }
-  // A device with its own clock (hdapi) runs until its clock has covered the duration (its ticks
-  // need not be the nominal ones); the simulated device for the nominal number of ticks.
-  const double t_begin = loop.sample().t;
-  const long max_ticks = truth ? n_ticks : 4 * n_ticks + 16;
-  double t_end = t_begin;  // the device clock at the end of the last tick consumed
+  void finish(RunResult& res) {
+    if (!pacer) return;
+    release_realtime(fifo, locked);
+    res.realtime = pacer->stats();
+  }
+};
 
-  // The measurements of one tick, whichever thread ran it (the direct loop below, or the vendor's
-  // scheduler callback: device/callback_loop.h). False ends the run.
-  auto consume = [&](const TickRecord& rec, double device_us) -> bool {
-    const long k = rec.k;
-    const double t = rec.t;
-    if (recorder) {
-      rec_sample.q = rec.q.head(rec_sample.q.size());
-      rec_sample.qd = rec.qd.head(rec_sample.qd.size());
-      rec_sample.t = rec.t;
-      rec_tau = rec.tau_pipeline.head(rec_tau.size());
-      recorder->push(static_cast<std::uint64_t>(k), rec_sample, rec_tau,
-                     static_cast<std::uint32_t>(rec.contacts));
-    }
+// The measurements of a scene run, tick by tick, whichever thread ran the tick (run_direct's loop,
+// or the vendor's scheduler callback: device/callback_loop.h), and the session recorder's feed.
+struct RunMeasurements {
+  RunMeasurements(const Scene& scene_in, const RunOptions& options_in, SceneRig& rig_in,
+                  RunResult& res_in, long n_ticks_in)
+      : scene(scene_in),
+        options(options_in),
+        rig(rig_in),
+        res(res_in),
+        n_ticks(n_ticks_in),
+        truth(rig_in.backend == nullptr) {
+    for (auto& v : stage_us) v.reserve(n_ticks);
+    res.series.reserve(n_ticks / std::max(1, options.log_every) + 1);
+    res.quiet_series.tick_s = rig.tick;
+    res.quiet_series.reserve(static_cast<std::size_t>(std::max(0L, n_ticks)) + 1);
+    res.tip_quantum_m = tip_encoder_quantum(rig);
+    // The loop copies the tick's input sample into rec_sample (no allocation: same sizes).
+    rec_sample = rig.loop->sample();
+    rec_tau = VecX::Zero(rec_sample.q.size());
+  }
+
+  // One tick's measurements; false ends the run.
+  bool consume(const TickRecord& rec, double device_us) {
+    if (recorder) record(rec);
     res.virtual_energy_generated_j = rec.energy_virtual_j;
     if (rec.faulted) {
       // The loop latched a fault and commanded zero torque: end the run here; the report and the
@@ -435,6 +475,24 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       return false;
     }
     res.hand_work_min_j = std::min(res.hand_work_min_j, hand_work);
+    const long tick_ns = time_stages(rec, device_us);
+    const Vec3 f_hand = measure(rec);
+    if (rec.k % std::max(1, options.log_every) == 0) keep_sample(rec, f_hand);
+    if (options.observer != nullptr) show(rec, tick_ns);
+    return keep_running(rec);
+  }
+
+  void record(const TickRecord& rec) {
+    rec_sample.q = rec.q.head(rec_sample.q.size());
+    rec_sample.qd = rec.qd.head(rec_sample.qd.size());
+    rec_sample.t = rec.t;
+    rec_tau = rec.tau_pipeline.head(rec_tau.size());
+    recorder->push(static_cast<std::uint64_t>(rec.k), rec_sample, rec_tau,
+                   static_cast<std::uint32_t>(rec.contacts));
+  }
+
+  // The stages' times, the tick's and the device simulation's [us]; returns the tick's [ns].
+  long time_stages(const TickRecord& rec, double device_us) {
     long tick_ns = 0;
     for (int s = 0; s < kStageCount; ++s) {
       stage_us[s].push_back(1e-3 * rec.stage_ns[s]);
@@ -442,8 +500,12 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     }
     stage_us[kStageCount].push_back(1e-3 * tick_ns);
     stage_us[kStageCount + 1].push_back(device_us);
+    return tick_ns;
+  }
 
-    // Measurements.
+  // Forces, penetrations, the stiffness fit's sums, the quiet series, the observer's error;
+  // returns the true hand force (zero without ground truth).
+  Vec3 measure(const TickRecord& rec) {
     const double f_contact = rec.f_contact.norm();
     const double f_device = rec.f_device.norm();
     const double d_dev = rec.device_depth;
@@ -457,177 +519,229 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       sum_fd += f_device * d_dev;
       sum_dd += d_dev * d_dev;
     }
-    const Vec3 f_hand = truth ? Vec3(device.hand_wrench().head<3>()) : Vec3::Zero();
-    {
-      QuietSeries& qs = res.quiet_series;
-      qs.t.push_back(t);
-      qs.contacts.push_back(rec.contacts);
-      qs.contact_force_n.push_back(f_contact);
-      qs.device_force_n.push_back(f_device);
-      qs.device_penetration_m.push_back(d_dev);
-      qs.tip_x_m.push_back(rec.device.x.x());
-      qs.tip_y_m.push_back(rec.device.x.y());
-      qs.tip_z_m.push_back(rec.device.x.z());
-      qs.energy_j.push_back(rec.energy_virtual_j);
-    }
+    const Vec3 f_hand = truth ? Vec3(rig.device->hand_wrench().head<3>()) : Vec3::Zero();
+    QuietSeries& qs = res.quiet_series;
+    qs.t.push_back(rec.t);
+    qs.contacts.push_back(rec.contacts);
+    qs.contact_force_n.push_back(f_contact);
+    qs.device_force_n.push_back(f_device);
+    qs.device_penetration_m.push_back(d_dev);
+    qs.tip_x_m.push_back(rec.device.x.x());
+    qs.tip_y_m.push_back(rec.device.x.y());
+    qs.tip_z_m.push_back(rec.device.x.z());
+    qs.energy_j.push_back(rec.energy_virtual_j);
     sum_obs2 += (rec.f_observer - f_hand).squaredNorm();
     ++res.ticks;
-    if (k % std::max(1, options.log_every) == 0) {
-      RunSample smp;
-      smp.t = t;
-      smp.contact_force_n = f_contact;
-      smp.device_force_n = f_device;
-      smp.device_force = rec.f_device;
-      smp.penetration_m = rec.max_depth;
-      smp.device_penetration_m = d_dev;
-      smp.proxy_x = rec.proxy.x;
-      smp.device_x = rec.device.x;
-      smp.proxy_rotvec = log_so3(rec.proxy.R);
-      smp.device_rotvec = log_so3(rec.device.R);
-      smp.hand_force_n = f_hand;
-      smp.observer_force_n = rec.f_observer;
-      smp.contacts = rec.contacts;
-      smp.energy_virtual_j = rec.energy_virtual_j;
-      smp.hand_work_j = hand_work;
-      for (const SceneHandKey& key : scene.script) {
-        if (key.t <= t) smp.phase = key.phase;
-      }
-      res.series.push_back(std::move(smp));
+    return f_hand;
+  }
+
+  // One sample of the report's time series.
+  void keep_sample(const TickRecord& rec, const Vec3& f_hand) {
+    RunSample smp;
+    smp.t = rec.t;
+    smp.contact_force_n = rec.f_contact.norm();
+    smp.device_force_n = rec.f_device.norm();
+    smp.device_force = rec.f_device;
+    smp.penetration_m = rec.max_depth;
+    smp.device_penetration_m = rec.device_depth;
+    smp.proxy_x = rec.proxy.x;
+    smp.device_x = rec.device.x;
+    smp.proxy_rotvec = log_so3(rec.proxy.R);
+    smp.device_rotvec = log_so3(rec.device.R);
+    smp.hand_force_n = f_hand;
+    smp.observer_force_n = rec.f_observer;
+    smp.contacts = rec.contacts;
+    smp.energy_virtual_j = rec.energy_virtual_j;
+    smp.hand_work_j = hand_work;
+    for (const SceneHandKey& key : scene.script) {
+      if (key.t <= rec.t) smp.phase = key.phase;
     }
-    if (options.observer != nullptr) {
-      TickSnapshotView view;
-      view.tick = k;
-      view.t = t;
-      view.device = rec.device;
-      view.proxy = rec.proxy;
-      view.tool_radius_m = rig->tip.radius;
-      view.contact_force_n = rec.f_contact;
-      view.device_force_n = rec.f_device;
-      view.contacts = rec.contacts;
-      view.max_depth_m = rec.max_depth;
-      view.tick_us = 1e-3 * tick_ns;
-      for (int m = 1; m < kMaterialCount && contacts.drills(); ++m) {
-        view.removed_volume_mm3[m] = contacts.drill_state().removed_volume_m3(m) * 1e9;
-      }
-      view.faults = driven.faults();
-      view.tooth = &rig->tooth_grid();
-      view.touched_voxels = contacts.last_removed();
-      options.observer->on_tick(view);
+    res.series.push_back(std::move(smp));
+  }
+
+  // The tick as the live view sees it (RunOptions::observer).
+  void show(const TickRecord& rec, long tick_ns) {
+    const ToothProviderBase& contacts = *rig.contacts;
+    TickSnapshotView view;
+    view.tick = rec.k;
+    view.t = rec.t;
+    view.device = rec.device;
+    view.proxy = rec.proxy;
+    view.tool_radius_m = rig.tip.radius;
+    view.contact_force_n = rec.f_contact;
+    view.device_force_n = rec.f_device;
+    view.contacts = rec.contacts;
+    view.max_depth_m = rec.max_depth;
+    view.tick_us = 1e-3 * tick_ns;
+    for (int m = 1; m < kMaterialCount && contacts.drills(); ++m) {
+      view.removed_volume_mm3[m] = contacts.drill_state().removed_volume_m3(m) * 1e9;
     }
+    view.faults = rig.loop_device->faults();
+    view.tooth = &rig.tooth_grid();
+    view.touched_voxels = contacts.last_removed();
+    options.observer->on_tick(view);
+  }
+
+  // A device fault or a stop request ends the run after this tick; progress is reported.
+  bool keep_running(const TickRecord& rec) {
+    const Device& driven = *rig.loop_device;
     if (driven.faults() != kFaultNone) {
-      res.faults.push_back(fault_string(driven.faults()) + " at t = " + std::to_string(t) + " s");
+      res.faults.push_back(fault_string(driven.faults()) + " at t = " + std::to_string(rec.t) +
+                           " s");
       return false;
     }
     if (options.stop != nullptr && options.stop->load(std::memory_order_relaxed)) {
       res.stopped = true;  // at a tick boundary: this tick is measured, the next one never runs
       return false;
     }
-    if (options.progress && k >= next_progress) {
-      options.progress(static_cast<double>(k) / n_ticks);
-      next_progress = k + std::max(1L, n_ticks / 100);
+    if (options.progress && rec.k >= next_progress) {
+      options.progress(static_cast<double>(rec.k) / n_ticks);
+      next_progress = rec.k + std::max(1L, n_ticks / 100);
     }
     return true;
-  };
+  }
 
-  if (callback) {
-    // The tick inside the vendor's scheduler callback (device/callback_loop.h); this thread
-    // consumes the records until the device's clock has covered the duration.
-    HdapiDevice& hd = static_cast<HdapiDevice&>(*rig->backend);
-    auto depth = [](void* ctx, const Pose& pose) {
-      return static_cast<SceneRig*>(ctx)->tip_depth(pose);
-    };
-    CallbackServo servo(hd, loop, pipeline, depth, rig.get(),
-                        static_cast<std::size_t>(std::min<long>(max_ticks + 16, 1L << 16)));
-    servo.start();
-    TickRecord rec;
-    bool running = true;
-    while (running) {
-      if (servo.pop(rec)) {
-        if (rec.t - t_begin >= duration - 0.5 * T) {
-          t_end = rec.t;
-          break;
-        }
-        running = consume(rec, 0.0);
+  // The run's totals: RMS force, rendered stiffness, hand work, observer error, stage timing.
+  void summarise() {
+    res.rms_contact_force_n = res.contact_ticks > 0 ? std::sqrt(sum_f2 / res.contact_ticks) : 0.0;
+    res.rendered_stiffness_n_per_m = sum_dd > 0.0 ? sum_fd / sum_dd : 0.0;
+    res.hand_work_j = hand_work;
+    res.observer_rms_error_n = res.ticks > 0 ? std::sqrt(sum_obs2 / res.ticks) : 0.0;
+    for (int s = 0; s < kStageCount; ++s) {
+      res.timing.emplace_back(tick_stage_name(s), stats_of(stage_us[s]));
+    }
+    res.timing.emplace_back("tick", stats_of(stage_us[kStageCount]));
+    res.timing.emplace_back("device_simulation", stats_of(stage_us[kStageCount + 1]));
+  }
+
+  const Scene& scene;
+  const RunOptions& options;
+  SceneRig& rig;
+  RunResult& res;
+  const long n_ticks;
+  const bool truth;  // the simulator's ground truth (no backend)
+  std::vector<double> stage_us[kStageCount + 2];
+  double sum_f2 = 0.0, sum_fd = 0.0, sum_dd = 0.0, sum_obs2 = 0.0;
+  double hand_work = 0.0;
+  long next_progress = 0;
+  std::unique_ptr<SessionWriter> recorder;
+  DeviceSample rec_sample;
+  VecX rec_tau;
+};
+
+// Where the run's ticks go: from t_begin (the device clock at start) for the duration, at most
+// max_ticks of them.
+struct RunSpan {
+  double t_begin = 0.0;
+  double duration = 0.0;
+  long max_ticks = 0;
+};
+
+// The tick inside the vendor's scheduler callback (device/callback_loop.h); this thread consumes
+// the records until the device's clock has covered the duration. Returns the device clock at the
+// end of the last tick consumed.
+double run_in_callback(SceneRig& rig, RunMeasurements& m, const RunSpan& span) {
+  const double T = rig.tick;
+  RunResult& res = m.res;
+  HdapiDevice& hd = static_cast<HdapiDevice&>(*rig.backend);
+  auto depth = [](void* ctx, const Pose& pose) {
+    return static_cast<SceneRig*>(ctx)->tip_depth(pose);
+  };
+  CallbackServo servo(hd, *rig.loop, *rig.pipeline, depth, &rig,
+                      static_cast<std::size_t>(std::min<long>(span.max_ticks + 16, 1L << 16)));
+  servo.start();
+  double t_end = span.t_begin;
+  TickRecord rec;
+  bool running = true;
+  while (running) {
+    if (servo.pop(rec)) {
+      if (rec.t - span.t_begin >= span.duration - 0.5 * T) {
         t_end = rec.t;
-        if (rec.k + 1 >= max_ticks) break;
-        continue;
-      }
-      if (hd.servo_done() || !hd.wait_ticks(1)) {
-        // The scheduler stopped calling us (the backend latched scheduler_stopped and disabled
-        // force output): what is left in the ring is still measured.
-        while (running && servo.pop(rec)) running = consume(rec, 0.0);
-        if (running) {
-          res.faults.push_back(fault_string(driven.faults() | kFaultSchedulerStopped) +
-                               " at t = " + std::to_string(t_end) + " s");
-        }
         break;
       }
+      running = m.consume(rec, 0.0);
+      t_end = rec.t;
+      if (rec.k + 1 >= span.max_ticks) break;
+      continue;
     }
-    servo.request_stop();
-    hd.wait_ticks(2);  // the callback has returned DONE with zero torque (or the scheduler is gone)
-    res.callback_dropped_ticks = servo.dropped();
-  } else {
-    for (long k = 0; !loop.faulted() && k < max_ticks; ++k) {
-      if (!truth && loop.sample().t - t_begin >= duration - 0.5 * T) break;
-      if (pacer) pacer->wait_next();
-      const auto t0 = std::chrono::steady_clock::now();
-      if (truth) q_true_prev = device.true_q();
-      const DeviceSample& in = loop.sample();
-      step_in.q = in.q;  // the tick's input (same sizes: no allocation)
-      step_in.qd = in.qd;
-      step_in.t = in.t;
-      const TickResult& r = loop.step();
-      if (pacer) pacer->tick_done();
-      const double step_us = 1e-3 * std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                        std::chrono::steady_clock::now() - t0)
-                                        .count();
-      // Hand port: the hand's joint torques (averaged over the tick) times the true joint motion.
-      if (truth) hand_work += device.hand_joint_torque().dot(device.true_q() - q_true_prev);
-      // The servo tick is what a real loop computes: the pipeline's stages and drilling. The
-      // simulated device's physics (MuJoCo substeps, hand) runs inside loop.step too and is
-      // reported apart, as "device_simulation". The device tip's own penetration (rendered
-      // stiffness) is measured outside the tick.
-      long tick_ns = 0;
-      for (int s = 0; s < kStageCount; ++s) tick_ns += r.stage_ns[s];
-      const double d_dev = loop.faulted() ? 0.0 : rig->tip_depth(r.device);
-      fill_tick_record(k, step_in, r, loop, pipeline, d_dev, record);
-      t_end = loop.sample().t;
-      if (!consume(record, step_us - 1e-3 * tick_ns)) break;
+    if (hd.servo_done() || !hd.wait_ticks(1)) {
+      // The scheduler stopped calling us (the backend latched scheduler_stopped and disabled
+      // force output): what is left in the ring is still measured.
+      while (running && servo.pop(rec)) running = m.consume(rec, 0.0);
+      if (running) {
+        res.faults.push_back(fault_string(rig.loop_device->faults() | kFaultSchedulerStopped) +
+                             " at t = " + std::to_string(t_end) + " s");
+      }
+      break;
     }
   }
-  if (options.progress) options.progress(1.0);
-  if (pacer) {
-    release_realtime(fifo, locked);
-    res.realtime = pacer->stats();
-  }
-  if (recorder) {
-    recorder->stop();  // drains every pushed tick, the faulting one included
-    res.recorded_ticks = static_cast<long>(recorder->written());
-    res.record_dropped_ticks = static_cast<long>(recorder->dropped());
-  }
+  servo.request_stop();
+  hd.wait_ticks(2);  // the callback has returned DONE with zero torque (or the scheduler is gone)
+  res.callback_dropped_ticks = servo.dropped();
+  return t_end;
+}
 
-  res.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  res.simulated_s = truth ? res.ticks * T : t_end - t_begin;
-  res.rms_contact_force_n = res.contact_ticks > 0 ? std::sqrt(sum_f2 / res.contact_ticks) : 0.0;
-  res.rendered_stiffness_n_per_m = sum_dd > 0.0 ? sum_fd / sum_dd : 0.0;
-  if (!callback) res.virtual_energy_generated_j = loop.energy_virtual_j();
-  res.hand_work_j = hand_work;
-  res.observer_rms_error_n = res.ticks > 0 ? std::sqrt(sum_obs2 / res.ticks) : 0.0;
+// The caller's loop: a device with its own clock (hdapi) runs until its clock has covered the
+// duration, the simulated device for the nominal number of ticks. Returns the device clock at the
+// end of the last tick consumed.
+double run_direct(SceneRig& rig, RunMeasurements& m, const RunSpan& span, RealtimePacing& pacing) {
+  const double T = rig.tick;
+  const bool truth = m.truth;
+  SimulatedPhantom& device = *rig.device;
+  ClosedLoop& loop = *rig.loop;
+  ServoPacer* pacer = pacing.pacer.get();
+  VecX q_true_prev = device.true_q();
+  DeviceSample step_in = loop.sample();  // the direct loop's copy of a tick's input sample
+  TickRecord record;
+  double t_end = span.t_begin;
+  for (long k = 0; !loop.faulted() && k < span.max_ticks; ++k) {
+    if (!truth && loop.sample().t - span.t_begin >= span.duration - 0.5 * T) break;
+    if (pacer) pacer->wait_next();
+    const auto t0 = std::chrono::steady_clock::now();
+    if (truth) q_true_prev = device.true_q();
+    const DeviceSample& in = loop.sample();
+    step_in.q = in.q;  // the tick's input (same sizes: no allocation)
+    step_in.qd = in.qd;
+    step_in.t = in.t;
+    const TickResult& r = loop.step();
+    if (pacer) pacer->tick_done();
+    const double step_us = 1e-3 * std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                      std::chrono::steady_clock::now() - t0)
+                                      .count();
+    // Hand port: the hand's joint torques (averaged over the tick) times the true joint motion.
+    if (truth) m.hand_work += device.hand_joint_torque().dot(device.true_q() - q_true_prev);
+    // The servo tick is what a real loop computes: the pipeline's stages and drilling. The
+    // simulated device's physics (MuJoCo substeps, hand) runs inside loop.step too and is
+    // reported apart, as "device_simulation". The device tip's own penetration (rendered
+    // stiffness) is measured outside the tick.
+    long tick_ns = 0;
+    for (int s = 0; s < kStageCount; ++s) tick_ns += r.stage_ns[s];
+    const double d_dev = loop.faulted() ? 0.0 : rig.tip_depth(r.device);
+    fill_tick_record(k, step_in, r, loop, *rig.pipeline, d_dev, record);
+    t_end = loop.sample().t;
+    if (!m.consume(record, step_us - 1e-3 * tick_ns)) break;
+  }
+  return t_end;
+}
+
+// The tooth after the run: removed volumes, pulp exposure, the drilling log, the voxels.
+void report_tooth(const SceneRig& rig, RunResult& res) {
+  const ToothProviderBase& contacts = *rig.contacts;
   for (int m = 1; m < kMaterialCount; ++m) {
     res.removed_volume_mm3[m] =
         contacts.drills() ? contacts.drill_state().removed_volume_m3(m) * 1e9 : 0.0;
     res.removed_volume_total_mm3 += res.removed_volume_mm3[m];
   }
-  res.tick_s = T;
-  if (contacts.pulp_exposed_tick() > 0) res.pulp_exposed_at_s = contacts.pulp_exposed_tick() * T;
-  res.drill_log = contacts.drill_log();
-  for (int s = 0; s < kStageCount; ++s) {
-    res.timing.emplace_back(tick_stage_name(s), stats_of(stage_us[s]));
+  if (contacts.pulp_exposed_tick() > 0) {
+    res.pulp_exposed_at_s = contacts.pulp_exposed_tick() * rig.tick;
   }
-  res.timing.emplace_back("tick", stats_of(stage_us[kStageCount]));
-  res.timing.emplace_back("device_simulation", stats_of(stage_us[kStageCount + 1]));
-  res.tooth_after = rig->tooth_grid();
-  const VirtualSupervisor& sup = *rig->supervisor;
+  res.drill_log = contacts.drill_log();
+  res.tooth_after = rig.tooth_grid();
+}
+
+// The supervisor's totals; its reason appended to a fault it raised.
+void report_supervisor(const SceneRig& rig, RunResult& res) {
+  const VirtualSupervisor& sup = *rig.supervisor;
   res.virtual_contact_work_j = sup.contact_work_j();
   res.late_ticks = sup.late_ticks();
   res.max_tick_s = sup.max_tick_s();
@@ -635,8 +749,61 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       res.faults.front().rfind(supervisor_fault_name(sup.fault()), 0) == 0) {
     res.faults.front() += " (" + sup.describe() + ")";
   }
+}
+
+}  // namespace
+
+RunResult run_scene(const Scene& scene, const RunOptions& options) {
+  RunResult res;
+  res.scene = scene.name;
+  const double duration =
+      options.duration_override > 0.0 ? options.duration_override : scene.duration;
+  check_loop_options(scene, options);
+  const std::unique_ptr<SceneRig> rig = build_scene_rig(scene, scene_rig_options(options));
+  const double T = rig->tick;
+  describe_run(scene, options, *rig, res);
+  const bool truth = rig->backend == nullptr;
+  // With HDAPI the tick runs inside the vendor's scheduler callback (RunOptions::hd_loop).
+  const bool callback = !truth && options.hd_loop == "callback";
+  ClosedLoop& loop = *rig->loop;
+
+  const long n_ticks = static_cast<long>(std::ceil(duration / T));
+  RunMeasurements measurements(scene, options, *rig, res, n_ticks);
+  const auto wall_start = std::chrono::steady_clock::now();
+  measurements.recorder =
+      make_session_recorder(scene, options, res, rig->device->dof(), duration, n_ticks);
+  loop.start();
+  if (loop.faulted()) {
+    res.faults.push_back(std::string(loop.fault_name()) +
+                         " at t = " + std::to_string(loop.fault_time()) + " s");
+  }
+  RealtimePacing pacing;
+  pacing.start(options, T);
+  // A device with its own clock (hdapi) runs until its clock has covered the duration (its ticks
+  // need not be the nominal ones); the simulated device for the nominal number of ticks.
+  RunSpan span;
+  span.t_begin = loop.sample().t;
+  span.duration = duration;
+  span.max_ticks = truth ? n_ticks : 4 * n_ticks + 16;
+  const double t_end = callback ? run_in_callback(*rig, measurements, span)
+                                : run_direct(*rig, measurements, span, pacing);
+  if (options.progress) options.progress(1.0);
+  pacing.finish(res);
+  if (measurements.recorder) {
+    measurements.recorder->stop();  // drains every pushed tick, the faulting one included
+    res.recorded_ticks = static_cast<long>(measurements.recorder->written());
+    res.record_dropped_ticks = static_cast<long>(measurements.recorder->dropped());
+  }
+
+  res.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  res.simulated_s = truth ? res.ticks * T : t_end - span.t_begin;
+  measurements.summarise();
+  if (!callback) res.virtual_energy_generated_j = loop.energy_virtual_j();
+  res.tick_s = T;
+  report_tooth(*rig, res);
+  report_supervisor(*rig, res);
   const bool faulted = callback ? !res.faults.empty() : loop.faulted();
-  res.torque_after_fault_n_m = faulted ? driven.applied_torque().norm() : 0.0;
+  res.torque_after_fault_n_m = faulted ? rig->loop_device->applied_torque().norm() : 0.0;
   return res;
 }
 

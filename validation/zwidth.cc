@@ -154,9 +154,7 @@ class PhantomRig : public Rig {
     dev_ = std::make_unique<SimulatedPhantom>(phantom_plant(truth_), cfg, VecX(sc.phantom_q0));
   }
   Device& device() override { return *dev_; }
-  const SixDofDeviceModel& model() const override {
-    return *model_;
-  }
+  const SixDofDeviceModel& model() const override { return *model_; }
   void set_hand(const ScriptedHand* hand) override { dev_->set_hand(hand); }
   Pose true_tip() const override { return dev_->tip_pose(); }
 
@@ -266,29 +264,33 @@ double ls_slope(const std::vector<double>& x, const std::vector<double>& y) {
 double testbed_tip_damping(const ZwidthScenario& sc) { return tip_properties(sc).damping; }
 double testbed_tip_quantum(const ZwidthScenario& sc) { return tip_properties(sc).quantum; }
 
-ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& gains,
-                          const ZwidthScenario& sc, double approach_speed, ZwidthTrace* trace) {
+namespace {
+
+void check_zwidth_inputs(const ZwidthGains& gains, const ZwidthScenario& sc) {
   if (!(sc.hold_s > sc.settle_s + 2.0 * sc.window_s) || !(sc.window_s > 0.0)) {
     throw InputError("zwidth scenario: hold_s must exceed settle_s + 2 window_s");
   }
   if (!(gains.k_vc > 0.0) || !(gains.k_tooth > 0.0) || gains.b_vc < 0.0) {
     throw InputError("zwidth gains: expected k_vc > 0, k_tooth > 0, b_vc >= 0");
   }
-  const TipProperties tp = tip_properties(sc);
-  std::unique_ptr<Rig> rig = make_rig(sc);
-  Device& dev = rig->device();
+}
 
-  // The wall below the start tip: surface approach_gap below the tip sphere.
-  const Pose tip0 = rig->true_tip();
-  const double rho = sc.tip_radius_m;
-  const double z_s = tip0.x.z() - rho - sc.approach_gap_m;
-  VoxelTooth slab = enamel_slab(tip0.x, z_s, sc.voxel_size_m);
-  ToothContactProvider wall(slab, ToolTip{rho, Vec3::Zero()}, gains.k_tooth, sc.b_tooth);
-
-  // The operator.
+// The operator's hand: its impedance, its keyframes from the start tip tip0 toward the wall's
+// surface z_s, and the approach speed (tap: approach_speed, grip and release: the scenario's).
+struct ZwidthOperatorScript {
+  HandImpedance z;
   std::vector<HandKeyframe> frames;
-  HandImpedance z = sc.hand;
-  const double speed = op == ZwidthOperator::kTap ? approach_speed : sc.grip_speed_m_s;
+  double speed = 0.0;
+};
+
+ZwidthOperatorScript operator_script(ZwidthOperator op, const ZwidthScenario& sc, const Pose& tip0,
+                                     double z_s, double approach_speed) {
+  const double rho = sc.tip_radius_m;
+  ZwidthOperatorScript script;
+  HandImpedance& z = script.z;
+  z = sc.hand;
+  script.speed = op == ZwidthOperator::kTap ? approach_speed : sc.grip_speed_m_s;
+  const double speed = script.speed;
   if (op == ZwidthOperator::kForce) {
     z = HandImpedance{0, 0, 0, 0, 0, 0};
     HandKeyframe a, b;
@@ -297,7 +299,7 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
     b.t = sc.force_ramp_s;
     b.x_ref = tip0.x;
     b.wrench_ff(2) = -sc.push_force_n;
-    frames = {a, b};
+    script.frames = {a, b};
   } else {
     if (!(speed > 0.0) || !(z.k_lin > 0.0)) {
       throw InputError("zwidth operator " + std::string(operator_name(op)) +
@@ -309,26 +311,33 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
     a.x_ref = tip0.x;
     b.t = (tip0.x.z() - z_target) / speed;
     b.x_ref = Vec3(tip0.x.x(), tip0.x.y(), z_target);
-    frames = {a, b};
+    script.frames = {a, b};
   }
-  const ScriptedHand hand(z, frames, tip0.R);
-  rig->set_hand(&hand);
+  return script;
+}
 
-  // What the pipeline believes about the device: the rig's model, plus (grasp_mass_scale > 0)
-  // the nominal mass of the hand gripping the tool (reference/grasp_mass_model.h). The `force`
-  // operator has no hand mass, so a fixed mass is not added there.
-  // With the grip detector the model's hand is there under `force` too (starting "gripped"):
-  // the detector has to find that no hand is on the tool.
+// What the pipeline believes about the device: the rig's model, plus (grasp_mass_scale > 0)
+// the nominal mass of the hand gripping the tool (reference/grasp_mass_model.h). The `force`
+// operator has no hand mass, so a fixed mass is not added there.
+// With the grip detector the model's hand is there under `force` too (starting "gripped"):
+// the detector has to find that no hand is on the tool. Null: no hand mass.
+std::unique_ptr<GraspMassModel> zwidth_grasp_model(const ZwidthScenario& sc, const Rig& rig,
+                                                   const HandImpedance& z) {
   std::unique_ptr<GraspMassModel> grasp;
   if (sc.grasp_mass_scale > 0.0 && (z.mass > 0.0 || sc.grip_detector)) {
-    grasp = std::make_unique<GraspMassModel>(rig->model(), sc.grasp_mass_scale * sc.hand.mass,
+    grasp = std::make_unique<GraspMassModel>(rig.model(), sc.grasp_mass_scale * sc.hand.mass,
                                              sc.grasp_mass_scale * sc.hand.inertia);
   }
-  const bool detect = grasp && sc.grip_detector;
-  // With the detector the pipeline's model is the device alone; the detector picks the mass.
-  const SixDofDeviceModel& model = grasp && !detect ? *grasp : rig->model();
+  return grasp;
+}
 
-  // The pipeline.
+// The pipeline on `model` (what it believes), with the method's and the scenario's settings.
+std::unique_ptr<Pipeline> zwidth_pipeline(Method method, const ZwidthGains& gains,
+                                          const ZwidthScenario& sc, Rig& rig,
+                                          const GraspMassModel* grasp,
+                                          const SixDofDeviceModel& model) {
+  Device& dev = rig.device();
+  const bool detect = grasp && sc.grip_detector;
   PipelineConfig pc;
   pc.method = method;
   pc.proxy = sc.proxy;
@@ -338,7 +347,7 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
   pc.coupling = CouplingGains{gains.k_vc, sc.k_vc_ang, gains.b_vc, sc.b_vc_ang};
   if (sc.pipeline_saturation) pc.torque_limit = dev.limits().tau_max;
   if (detect) {
-    pc.grasp_model = grasp.get();
+    pc.grasp_model = grasp;
     pc.grip_detector = sc.grip_detector_params;
   }
   DeviceSample s0 = dev.make_sample();
@@ -348,98 +357,77 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
     if (sc.observer_input_matched) pc.observer_input = matched_observer_input(dev.capabilities());
     // The locked inertia is floored on the heaviest model the pipeline may use (with the
     // detector: the gripped one), so the desired dynamics do not change when it switches.
-    const SixDofDeviceModel& heaviest = grasp ? *grasp : rig->model();
+    const SixDofDeviceModel& heaviest =
+        grasp ? static_cast<const SixDofDeviceModel&>(*grasp) : rig.model();
     const Mat6 J1 = heaviest.twist_to_joint(s0.q);
     const Mat6 M1 = J1.transpose() * heaviest.mass_matrix(s0.q) * J1;  // (2.2)
-    pc.tool = tool_preset(sc.tool, M1 + sc.proxy.M());              // floor M_L at the start
+    pc.tool = tool_preset(sc.tool, M1 + sc.proxy.M());                 // floor M_L at the start
   }
-  const std::unique_ptr<Pipeline> pipeline_ptr = make_pipeline(sc.pipeline, model, pc);
-  Pipeline& pipeline = *pipeline_ptr;
-  ClosedLoop loop(dev, pipeline, wall);
-  loop.start();
+  return make_pipeline(sc.pipeline, model, pc);
+}
 
-  ZwidthRun run;
-  run.approach_speed_m_s = op == ZwidthOperator::kTap ? approach_speed : 0.0;
-  run.amplitude_bound_m = sc.amplitude_bound_quanta * tp.quantum;
-  const int n = dev.dof();
-  const VecX quantum = dev.capabilities().encoder_quantum;
-  VecX tau_max = VecX::Zero(n), tau_var = VecX::Zero(n), tau_prev = VecX::Zero(n);
+// One run's measurements tick by tick: torque bookkeeping for the energy tolerance, the contact
+// phase (penetration, forces, the quiet signals, the tail means), the grip detector, the trace.
+struct ZwidthMeter {
+  ZwidthMeter(ZwidthOperator op_in, const ZwidthScenario& sc_in, Rig& rig_in, ZwidthRun& run_in,
+              ZwidthTrace* trace_in)
+      : op(op_in), sc(sc_in), rig(rig_in), run(run_in), trace(trace_in) {
+    n = rig.device().dof();
+    tau_max = VecX::Zero(n);
+    tau_var = VecX::Zero(n);
+    tau_prev = VecX::Zero(n);
+    qs.tick_s = sc.tick;
+  }
 
-  double t_first = -1.0;
-  bool released = false;
-  double t_released = -1.0;
-  int last_grip = -1;
-  long n_grip_ticks = 0, n_grip_agree = 0, n_on = 0, n_off = 0;
-  const double cap = 2.0 + sc.hold_s + (tip0.x.z() - z_s) / std::max(speed, 1e-3);
-  std::vector<double> ts, ps;  // penetration after first contact + settle
-  // The quiet measures' signals, from first contact + quiet.settle_s (sim/quiet_measures.h).
-  QuietSeries qs;
-  qs.tick_s = sc.tick;
-  double sum_f = 0, sum_p = 0;
-  long n_tail = 0;
-  DeviceSample prev = loop.sample();
-  for (;;) {
-    const TickResult& r = loop.step();
-    const DeviceSample& s = loop.sample();
-    const double t = s.t;
-    const Pose tip = rig->true_tip();
-    if (!tip.x.allFinite() || !pipeline.proxy().pose.x.allFinite() || !r.tau.allFinite()) {
-      run.finite = false;
-      break;
-    }
-    run.faults |= dev.faults();
-    if (run.faults != kFaultNone) break;
-    run.saturated = run.saturated || r.saturated;
-    const VecX& tau = dev.applied_torque();
+  // The largest torque and the total variation per joint (ZwidthRun::energy_tol_j).
+  void record_torque(const VecX& tau) {
     for (int i = 0; i < n; ++i) {
       tau_max(i) = std::max(tau_max(i), std::abs(tau(i)));
       tau_var(i) += std::abs(tau(i) - tau_prev(i));
     }
     tau_prev = tau;
-    const Mat6 J1 = model.twist_to_joint(prev.q);
-    // The force fed back: the motors' wrench T1 = J1^T tau along the wall normal n = +z.
-    const double force = std::max(0.0, Vec6(J1.transpose() * tau)(2));
-    const double p = rho - (tip.x.z() - z_s);
-    const double E = loop.energy_virtual_j();
-    if (rho - (pipeline.proxy().pose.x.z() - z_s) >= 2.0 * rho) run.proxy_tunnelled = true;
-    run.energy_max_j = std::max(run.energy_max_j, E);
-    if (t_first < 0.0 && !r.contacts.empty()) t_first = t;
-    if (t_first >= 0.0) {
-      run.contact = true;
-      run.max_force_n = std::max(run.max_force_n, force);
-      run.max_penetration_m = std::max(run.max_penetration_m, p);
-      if (t >= t_first + sc.settle_s) {
-        ts.push_back(t);
-        ps.push_back(p);
-      }
-      if (t >= t_first + sc.quiet.settle_s) {
-        qs.t.push_back(t);
-        qs.contacts.push_back(static_cast<int>(r.contacts.size()));
-        qs.contact_force_n.push_back(r.F_contact.head<3>().norm());
-        qs.device_force_n.push_back(force);
-        qs.device_penetration_m.push_back(std::max(0.0, p));
-        qs.tip_z_m.push_back(p);
-        qs.energy_j.push_back(E);
-      }
-      if (t >= t_first + sc.hold_s - 1.0) {
-        sum_f += force;
-        sum_p += p;
-        ++n_tail;
-      }
-      if (r.grip_state >= 0) {
-        ++n_grip_ticks;
-        const bool hand_on = op != ZwidthOperator::kForce && !released;
-        if ((r.grip_state == 1) == hand_on) ++n_grip_agree;
-        if (released && r.grip_state == 0 && run.release_detected_after_s < 0.0) {
-          run.release_detected_after_s = t - t_released;
-        }
-      }
-      if (op == ZwidthOperator::kRelease && !released && t >= t_first + sc.release_after_s) {
-        rig->set_hand(nullptr);
-        released = true;
-        t_released = t;
+  }
+
+  // A tick from first contact on: force, penetration p, energy E at time t.
+  void in_contact(const TickResult& r, double t, double force, double p, double E) {
+    run.contact = true;
+    run.max_force_n = std::max(run.max_force_n, force);
+    run.max_penetration_m = std::max(run.max_penetration_m, p);
+    if (t >= t_first + sc.settle_s) {
+      ts.push_back(t);
+      ps.push_back(p);
+    }
+    if (t >= t_first + sc.quiet.settle_s) {
+      qs.t.push_back(t);
+      qs.contacts.push_back(static_cast<int>(r.contacts.size()));
+      qs.contact_force_n.push_back(r.F_contact.head<3>().norm());
+      qs.device_force_n.push_back(force);
+      qs.device_penetration_m.push_back(std::max(0.0, p));
+      qs.tip_z_m.push_back(p);
+      qs.energy_j.push_back(E);
+    }
+    if (t >= t_first + sc.hold_s - 1.0) {
+      sum_f += force;
+      sum_p += p;
+      ++n_tail;
+    }
+    if (r.grip_state >= 0) {
+      ++n_grip_ticks;
+      const bool hand_on = op != ZwidthOperator::kForce && !released;
+      if ((r.grip_state == 1) == hand_on) ++n_grip_agree;
+      if (released && r.grip_state == 0 && run.release_detected_after_s < 0.0) {
+        run.release_detected_after_s = t - t_released;
       }
     }
+    if (op == ZwidthOperator::kRelease && !released && t >= t_first + sc.release_after_s) {
+      rig.set_hand(nullptr);
+      released = true;
+      t_released = t;
+    }
+  }
+
+  // The grip detector's switches and the range of its statistic with the hand on and off.
+  void grip_statistics(const TickResult& r) {
     if (r.grip_state >= 0 && last_grip >= 0 && r.grip_state != last_grip) ++run.grip_switches;
     if (r.grip_state >= 0 && !released) {
       const bool first = n_on++ == 0;
@@ -448,35 +436,88 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
       run.grip_statistic_min_on =
           first ? r.grip_statistic : std::min(run.grip_statistic_min_on, r.grip_statistic);
     } else if (r.grip_state >= 0) {
-      run.grip_statistic_max_off = n_off++ == 0
-                                       ? r.grip_statistic
-                                       : std::max(run.grip_statistic_max_off, r.grip_statistic);
+      run.grip_statistic_max_off =
+          n_off++ == 0 ? r.grip_statistic : std::max(run.grip_statistic_max_off, r.grip_statistic);
     }
     last_grip = r.grip_state;
-    if (trace) {
-      trace->t.push_back(t);
-      trace->penetration_m.push_back(p);
-      trace->force_n.push_back(force);
-      trace->energy_j.push_back(E);
-      trace->grip_state.push_back(r.grip_state);
-      trace->grip_statistic.push_back(r.grip_statistic);
+  }
+
+  void trace_tick(const TickResult& r, double t, double force, double p, double E) {
+    if (!trace) return;
+    trace->t.push_back(t);
+    trace->penetration_m.push_back(p);
+    trace->force_n.push_back(force);
+    trace->energy_j.push_back(E);
+    trace->grip_state.push_back(r.grip_state);
+    trace->grip_statistic.push_back(r.grip_statistic);
+  }
+
+  const ZwidthOperator op;
+  const ZwidthScenario& sc;
+  Rig& rig;
+  ZwidthRun& run;
+  ZwidthTrace* trace;
+  int n = 0;  // the device's degrees of freedom
+  VecX tau_max, tau_var, tau_prev;
+  double t_first = -1.0;
+  bool released = false;
+  double t_released = -1.0;
+  int last_grip = -1;
+  long n_grip_ticks = 0, n_grip_agree = 0, n_on = 0, n_off = 0;
+  std::vector<double> ts, ps;  // penetration after first contact + settle
+  // The quiet measures' signals, from first contact + quiet.settle_s (sim/quiet_measures.h).
+  QuietSeries qs;
+  double sum_f = 0, sum_p = 0;
+  long n_tail = 0;
+};
+
+// The closed loop against the wall (surface z_s) until the hold after first contact is over, a
+// fault, a non-finite state, or the time cap.
+void run_zwidth_ticks(ClosedLoop& loop, const Pipeline& pipeline, const SixDofDeviceModel& model,
+                      double z_s, double cap, ZwidthMeter& meter) {
+  const ZwidthScenario& sc = meter.sc;
+  ZwidthRun& run = meter.run;
+  Device& dev = meter.rig.device();
+  const double rho = sc.tip_radius_m;
+  DeviceSample prev = loop.sample();
+  for (;;) {
+    const TickResult& r = loop.step();
+    const DeviceSample& s = loop.sample();
+    const double t = s.t;
+    const Pose tip = meter.rig.true_tip();
+    if (!tip.x.allFinite() || !pipeline.proxy().pose.x.allFinite() || !r.tau.allFinite()) {
+      run.finite = false;
+      break;
     }
+    run.faults |= dev.faults();
+    if (run.faults != kFaultNone) break;
+    run.saturated = run.saturated || r.saturated;
+    const VecX& tau = dev.applied_torque();
+    meter.record_torque(tau);
+    const Mat6 J1 = model.twist_to_joint(prev.q);
+    // The force fed back: the motors' wrench T1 = J1^T tau along the wall normal n = +z.
+    const double force = std::max(0.0, Vec6(J1.transpose() * tau)(2));
+    const double p = rho - (tip.x.z() - z_s);
+    const double E = loop.energy_virtual_j();
+    if (rho - (pipeline.proxy().pose.x.z() - z_s) >= 2.0 * rho) run.proxy_tunnelled = true;
+    run.energy_max_j = std::max(run.energy_max_j, E);
+    if (meter.t_first < 0.0 && !r.contacts.empty()) meter.t_first = t;
+    if (meter.t_first >= 0.0) meter.in_contact(r, t, force, p, E);
+    meter.grip_statistics(r);
+    meter.trace_tick(r, t, force, p, E);
     prev = s;
-    if (t_first >= 0.0 && t >= t_first + sc.hold_s) break;
+    if (meter.t_first >= 0.0 && t >= meter.t_first + sc.hold_s) break;
     if (t >= cap) break;
   }
-  rig->set_hand(nullptr);
-  run.energy_final_j = loop.energy_virtual_j();
-  run.energy_tol_j = 1e-9;
-  for (int i = 0; i < n; ++i) run.energy_tol_j += quantum(i) * (2.0 * tau_max(i) + tau_var(i));
-  run.contact_time_s = t_first >= 0.0 ? loop.sample().t - t_first : 0.0;
-  if (n_grip_ticks > 0) run.grip_agreement = double(n_grip_agree) / double(n_grip_ticks);
-  if (run.max_penetration_m > 0.0) {
-    run.z_width_n_per_m = run.max_force_n / run.max_penetration_m;
-  }
-  if (n_tail > 0 && sum_p > 0.0) run.static_stiffness_n_per_m = sum_f / sum_p;
+}
 
-  // Envelope: peak-to-peak per window, growth rate of ln(A + Delta_n).
+// Envelope: peak-to-peak per full window of the penetration after first contact + settle, and the
+// growth rate of ln(A + Delta_n) (a least-squares slope over the windows). Returns the number of
+// full windows.
+std::size_t penetration_envelope(const ZwidthMeter& meter, double quantum, ZwidthRun& run) {
+  const ZwidthScenario& sc = meter.sc;
+  const std::vector<double>& ts = meter.ts;
+  const std::vector<double>& ps = meter.ps;
   std::vector<double> wc, wl;
   if (!ts.empty()) {
     std::size_t i = 0;
@@ -491,7 +532,7 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
       }
       if (ts[j - 1] - w0 >= 0.9 * sc.window_s - 1e-12) {  // full windows only
         wc.push_back(w0 + 0.5 * sc.window_s);
-        wl.push_back(std::log(hi - lo + tp.quantum + 1e-12));
+        wl.push_back(std::log(hi - lo + quantum + 1e-12));
         run.last_amplitude_m = hi - lo;
       }
       i = j;
@@ -499,17 +540,86 @@ ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& g
   }
   run.growth_rate_per_s = ls_slope(wc, wl);
   run.growth_limit_per_s = std::log(2.0) / (sc.hold_s - sc.settle_s);
+  return wc.size();
+}
+
+// After the loop: energy tolerance, contact time, grip agreement, Z-width, static stiffness.
+void zwidth_totals(const ClosedLoop& loop, const ZwidthMeter& meter, const VecX& quantum,
+                   ZwidthRun& run) {
+  run.energy_final_j = loop.energy_virtual_j();
+  run.energy_tol_j = 1e-9;
+  for (int i = 0; i < meter.n; ++i) {
+    run.energy_tol_j += quantum(i) * (2.0 * meter.tau_max(i) + meter.tau_var(i));
+  }
+  run.contact_time_s = meter.t_first >= 0.0 ? loop.sample().t - meter.t_first : 0.0;
+  if (meter.n_grip_ticks > 0) {
+    run.grip_agreement = double(meter.n_grip_agree) / double(meter.n_grip_ticks);
+  }
+  if (run.max_penetration_m > 0.0) {
+    run.z_width_n_per_m = run.max_force_n / run.max_penetration_m;
+  }
+  if (meter.n_tail > 0 && meter.sum_p > 0.0) {
+    run.static_stiffness_n_per_m = meter.sum_f / meter.sum_p;
+  }
+}
+
+// The verdicts: stable, passive, quiet.
+void zwidth_verdicts(const ZwidthScenario& sc, const ZwidthMeter& meter, std::size_t windows,
+                     double quantum, ZwidthRun& run) {
   // Held by the wall: >= hold of contact and the proxy never fell through the slab. The device's
   // own depth is not a criterion: a soft coupling (small K_vc) lets the device sink F / K_vc below
   // a proxy the wall holds, which is a low rendered stiffness, not an instability.
   const bool held = run.contact && run.contact_time_s >= sc.hold_s - 2.0 * sc.tick &&
-                    wc.size() >= 2 && !run.proxy_tunnelled;
+                    windows >= 2 && !run.proxy_tunnelled;
   run.stable = run.finite && run.faults == kFaultNone && held &&
                run.growth_rate_per_s <= run.growth_limit_per_s &&
                run.last_amplitude_m <= run.amplitude_bound_m;
   run.passive = run.finite && run.faults == kFaultNone && run.energy_max_j <= run.energy_tol_j;
-  run.quiet_measures = zwidth_quiet_measures(qs, sc.quiet, tp.quantum);
+  run.quiet_measures = zwidth_quiet_measures(meter.qs, sc.quiet, quantum);
   run.quiet = run.finite && run.faults == kFaultNone && run.contact && run.quiet_measures.quiet;
+}
+
+}  // namespace
+
+ZwidthRun run_zwidth_once(Method method, ZwidthOperator op, const ZwidthGains& gains,
+                          const ZwidthScenario& sc, double approach_speed, ZwidthTrace* trace) {
+  check_zwidth_inputs(gains, sc);
+  const TipProperties tp = tip_properties(sc);
+  std::unique_ptr<Rig> rig = make_rig(sc);
+  Device& dev = rig->device();
+
+  // The wall below the start tip: surface approach_gap below the tip sphere.
+  const Pose tip0 = rig->true_tip();
+  const double rho = sc.tip_radius_m;
+  const double z_s = tip0.x.z() - rho - sc.approach_gap_m;
+  VoxelTooth slab = enamel_slab(tip0.x, z_s, sc.voxel_size_m);
+  ToothContactProvider wall(slab, ToolTip{rho, Vec3::Zero()}, gains.k_tooth, sc.b_tooth);
+
+  const ZwidthOperatorScript script = operator_script(op, sc, tip0, z_s, approach_speed);
+  const ScriptedHand hand(script.z, script.frames, tip0.R);
+  rig->set_hand(&hand);
+
+  const std::unique_ptr<GraspMassModel> grasp = zwidth_grasp_model(sc, *rig, script.z);
+  const bool detect = grasp && sc.grip_detector;
+  // With the detector the pipeline's model is the device alone; the detector picks the mass.
+  const SixDofDeviceModel& model = grasp && !detect ? *grasp : rig->model();
+  const std::unique_ptr<Pipeline> pipeline_ptr =
+      zwidth_pipeline(method, gains, sc, *rig, grasp.get(), model);
+  Pipeline& pipeline = *pipeline_ptr;
+  ClosedLoop loop(dev, pipeline, wall);
+  loop.start();
+
+  ZwidthRun run;
+  run.approach_speed_m_s = op == ZwidthOperator::kTap ? approach_speed : 0.0;
+  run.amplitude_bound_m = sc.amplitude_bound_quanta * tp.quantum;
+  const VecX quantum = dev.capabilities().encoder_quantum;
+  ZwidthMeter meter(op, sc, *rig, run, trace);
+  const double cap = 2.0 + sc.hold_s + (tip0.x.z() - z_s) / std::max(script.speed, 1e-3);
+  run_zwidth_ticks(loop, pipeline, model, z_s, cap, meter);
+  rig->set_hand(nullptr);
+  zwidth_totals(loop, meter, quantum, run);
+  const std::size_t windows = penetration_envelope(meter, tp.quantum, run);
+  zwidth_verdicts(sc, meter, windows, tp.quantum, run);
   return run;
 }
 

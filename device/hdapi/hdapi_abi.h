@@ -1,5 +1,5 @@
 // The subset of the OpenHaptics HDAPI C ABI that dentsim uses (issue #15), declared here from the
-// facts in PHANTOM.md "OpenHaptics HDAPI" (vendor headers hd.h, hdDefines.h, hdDevice.h,
+// facts of docs/device_facts.md §5 (vendor headers hd.h, hdDefines.h, hdDevice.h,
 // hdScheduler.h of OpenHaptics 3.0/3.3 for Linux), so that the build never needs the SDK.
 //
 // ABI: plain C on x86-64 Linux (LP64). The vendor headers mark entry points stdcall under

@@ -2,7 +2,7 @@
 // HDAPI library, loaded at run time (hdapi_library.h), or through any library exporting the same
 // C symbols with the documented behaviour (the project's emulator, libdentsim_hd_emulator.so).
 //
-// Start-up (PHANTOM.md "OpenHaptics HDAPI"): hdInitDevice(HD_DEFAULT_DEVICE), retried with the
+// Start-up (docs/device_facts.md §5): hdInitDevice(HD_DEFAULT_DEVICE), retried with the
 // name "Default PHANToM" (some installs need it) -> HD error and handle checked ->
 // hdMakeCurrentDevice -> device queries (model, serial, DoF, update rate, nominal limits) ->
 // hdEnable(HD_FORCE_OUTPUT) -> hdScheduleAsynchronous(servo callback, HD_MAX_SCHEDULER_PRIORITY)

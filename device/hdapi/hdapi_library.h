@@ -1,4 +1,4 @@
-// Run-time loading of the OpenHaptics HDAPI library (issue #15; PHANTOM.md "OpenHaptics HDAPI").
+// Run-time loading of the OpenHaptics HDAPI library (issue #15; docs/device_facts.md §5).
 //
 // Where the library comes from, first match wins:
 //   1. an explicit path (`--hd-library PATH`),

@@ -4,12 +4,13 @@
 //
 // Coordinates. q = (q1..q6) [rad] as the device reports them: q1 base yaw, q2 absolute elevation
 // of the upper arm `be`, q3 absolute angle of the forearm `a` (OpenHaptics convention,
-// PHANTOM.md), q4..q6 gimbal yaw, pitch, roll. The mechanism is computed as a kinematic tree of
-// 8 bodies (base, be, a, df, c, yaw, pitch, roll) with tree coordinates theta = G q, G the
-// constant 8x6 map of phantom_tree_map(): the elbow angle theta_2 = q3 - q2 and the parallel-link
-// angle theta_4 = q2 - q3 close the parallelogram, so the closed chain is exact in q (PHANTOM.md:
-// M_red = G^T M_tree G). The same tree (body placements, axes, inertias) generates the MJCF
-// (plant/phantom_mjcf.h), so the two models agree to round-off by construction.
+// docs/device_facts.md §1), q4..q6 gimbal yaw, pitch, roll. The mechanism is computed as a
+// kinematic tree of 8 bodies (base, be, a, df, c, yaw, pitch, roll) with tree coordinates
+// theta = G q, G the constant 8x6 map of phantom_tree_map(): the elbow angle theta_2 = q3 - q2 and
+// the parallel-link angle theta_4 = q2 - q3 close the parallelogram, so the closed chain is exact
+// in q (docs/device_facts.md §4: M_red = G^T M_tree G). The same tree (body placements, axes,
+// inertias) generates the MJCF (plant/phantom_mjcf.h), so the two models agree to round-off by
+// construction.
 //
 // Dynamics (device_model.h, thesis (2.1)):
 //     M(q) qdd + C(q, qd) qd + g(q) + tau_f(qd) = tau + f_h
@@ -55,7 +56,7 @@ const char* phantom_tree_body_name(int body);  // "base", "upper_arm", ... (mode
 // Tree joint carrying device joint j (0-based): (0, 1, 3, 5, 6, 7).
 int phantom_actuated_tree_joint(int device_joint);
 
-// G: theta = G q (constant), PHANTOM.md "M_red = G^T M G".
+// G: theta = G q (constant), docs/device_facts.md §4 "M_red = G^T M G".
 Eigen::Matrix<double, kPhantomTreeDof, 6> phantom_tree_map();
 
 // The tree: body i hangs from parent[i] (-1 = world) at pos[i] (parent frame) with fixed

@@ -84,7 +84,7 @@ std::string vec_str(const Eigen::VectorXd& v) { return vec(v); }
 PhantomParams default_phantom_params() {
   PhantomParams p;
   p.name = "Phantom Premium 1.5A/6DoF: Cavusoglu 2002 arm, PHANTOM.md drive train, nominal gimbal";
-  // Cavusoglu, Feygin & Tendick 2002 (PHANTOM.md "Arm parameters").
+  // Cavusoglu, Feygin & Tendick 2002 (docs/device_facts.md §2).
   p.l1_m = 0.215;
   p.l2_m = 0.170;
   p.l3_m = 0.0325;
@@ -94,15 +94,15 @@ PhantomParams default_phantom_params() {
   // be: published moments are about the shoulder: (11.09, 10.06, 0.591)e-4. Parallel-axis shift
   // by m l5^2 = 0.2359 * 0.0368^2 gives CoM moments (7.895, 6.865, 0.591)e-4, which break
   // Ixx <= Iyy + Izz; Ixx is set to 7.45e-4 and the excess 0.44534784e-4 moves into the q2
-  // armature (it only ever turns with q2). PHANTOM.md, docs/phantom.md.
+  // armature (it only ever turns with q2). docs/device_facts.md §2, docs/phantom.md §2.
   p.upper_arm = {0.2359, Vec3(0, 0, -0.0368), Vec3(0.000745, 0.000686534784, 0.0000591)};
   p.forearm = {0.0202, Vec3(0, 0.085, 0), Vec3(0.00004864, 0.0000001843, 0.00004864)};
   // df: about the shoulder (7.11, 0.629, 6.246)e-4, shifted by m l6^2 = 0.1906 * 0.0527^2 on x, z:
   // CoM (1.81648526, 0.629, 0.95248526)e-4; Ixx set to 1.58e-4, excess 0.23648526e-4 -> q3.
   p.crank = {0.1906, Vec3(0, -0.0527, 0), Vec3(0.000158, 0.0000629, 0.000095248526)};
   p.parallel_link = {0.0249, Vec3(0, 0, 0.1075), Vec3(0.0000959, 0.0000959, 0.00000051)};
-  // Gimbal: not published (PHANTOM.md); nominal values of a light yoke, ring and stylus, to be
-  // identified by calibration/.
+  // Gimbal: not published (docs/device_facts.md §1); nominal values of a light yoke, ring and
+  // stylus, to be identified by calibration/.
   p.gimbal_yaw = {0.015, Vec3(0, 0.005, -0.01), Vec3(3.0e-6, 2.0e-6, 2.0e-6)};
   p.gimbal_pitch = {0.012, Vec3::Zero(), Vec3(1.5e-6, 1.5e-6, 1.0e-6)};
   p.gimbal_roll = {0.035, Vec3(0, 0, -0.02), Vec3(5.0e-6, 5.0e-6, 1.0e-6)};
@@ -112,8 +112,8 @@ PhantomParams default_phantom_params() {
   p.pitch_axis = Vec3::UnitX();
   p.roll_axis = Vec3::UnitZ();
   p.tip_offset_m = Vec3(0, 0, -0.04);
-  // Reflected rotor inertia (PHANTOM.md: 1.8e-4, 1.3e-4, 1.3e-4) + the link excess above; the
-  // gimbal motors' values are nominal.
+  // Reflected rotor inertia (docs/device_facts.md §3: 1.8e-4, 1.3e-4, 1.3e-4) + the link excess
+  // above; the gimbal motors' values are nominal.
   p.armature_kg_m2 << 0.00018, 0.000174534784, 0.000153648526, 2.0e-6, 2.0e-6, 5.0e-7;
   // Not published: nominal, fitted by calibration/. Coulomb from the vendor's 0.04 N backdrive
   // friction (unverified) times ~0.2 m.
@@ -123,11 +123,11 @@ PhantomParams default_phantom_params() {
   // Box inside which J1 is regular (no stretched elbow, tip off the yaw axis, no gimbal lock).
   p.q_min_rad << -0.9, -0.2, -0.4, -2.4, -1.0, -2.6;
   p.q_max_rad << 0.9, 0.9, 1.0, 2.4, 1.0, 2.6;
-  // OpenHaptics' joint-torque example clamps (PHANTOM.md).
+  // OpenHaptics' joint-torque example clamps (docs/device_facts.md §3).
   p.torque_limit_n_m << 0.4, 0.35, 0.2, 0.188, 0.188, 0.048;
-  // 1024 CPR x4 times the capstan ratios (13.3, 11.2, 11.2) (PHANTOM.md, drive train and
-  // sensing); gimbal 4096: assumed, no published resolution of the Premium 1.5/6DoF gimbal
-  // encoders was found (docs/simulated_device.md, issue #29).
+  // 1024 CPR x4 times the capstan ratios (13.3, 11.2, 11.2) (docs/device_facts.md §3,
+  // drive train and sensing); gimbal 4096: assumed, no published resolution of the Premium 1.5/6DoF
+  // gimbal encoders was found (docs/simulated_device.md, issue #29).
   p.encoder_counts_per_rev << 54476.8, 45875.2, 45875.2, 4096, 4096, 4096;
   p.gravity_on = true;
   p.gravity_m_s2 = 9.81;

@@ -5,7 +5,7 @@
 // 3-axis gimbal (geometry and inertia: not published, nominal values, identified by
 // calibration/), the tool-tip offset, and per device joint j = 1..6: rotor inertia (armature)
 // [kg m^2], viscous damping [N m s/rad], Coulomb friction [N m], joint limits [rad], torque limits
-// [N m] and encoder counts per joint revolution. Sources of every default: /work/shared/PHANTOM.md
+// [N m] and encoder counts per joint revolution. Sources of every default: docs/device_facts.md
 // and docs/phantom.md.
 //
 // Frames (docs/phantom.md has a figure-in-words):
@@ -93,7 +93,8 @@ struct PhantomParams {
   bool operator==(const PhantomParams&) const = default;
 };
 
-// The published Premium 1.5A set (Cavusoglu 2002 arm, PHANTOM.md drive train, nominal gimbal).
+// The published Premium 1.5A set (Cavusoglu 2002 arm, drive train of docs/device_facts.md §3,
+// nominal gimbal).
 PhantomParams default_phantom_params();
 // The shipped model file: phantom_params_to_text(default_phantom_params()).
 std::string default_phantom_model_file();

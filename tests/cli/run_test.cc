@@ -61,7 +61,8 @@ nlohmann::json run_scene(const std::string& scene, double duration) {
   return nlohmann::json::parse(in);
 }
 
-// The Phantom's peak force (PHANTOM.md: 8.5 N) bounds every force the device can feed back.
+// The Phantom's peak force (docs/device_facts.md §3: 8.5 N) bounds every force the device can feed
+// back.
 constexpr double kDeviceMaxForceN = 8.5;
 
 void check_common(const nlohmann::json& r) {

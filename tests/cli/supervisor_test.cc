@@ -24,7 +24,7 @@ using dentsim::testing::run_dentsim;
 
 const std::string kData = std::string(DENTSIM_SOURCE_DIR) + "/tests/validation/data/";
 
-// The Phantom's peak force (PHANTOM.md) and the supervisor's default bound, 4 x it.
+// The Phantom's peak force (docs/device_facts.md §3) and the supervisor's default bound, 4 x it.
 constexpr double kForceBoundN = 4.0 * 8.5;
 
 // Every number in `j` is finite and nothing is null, except the keys a report leaves null by

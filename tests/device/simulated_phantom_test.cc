@@ -45,7 +45,7 @@ TEST(SimulatedPhantom, EncoderQuantumIsTwoPiOverFourTimes1024TimesRatio) {
   for (int i = 0; i < 6; ++i) {
     EXPECT_DOUBLE_EQ(d[i], 2.0 * std::numbers::pi / (4.0 * 1024.0 * phantom_drive_ratios()[i]));
   }
-  // PHANTOM.md: "joint resolution about 1.4e-4 rad" for the arm joints.
+  // docs/device_facts.md §3: "about 1.4e-4 rad per count" for the arm joints.
   EXPECT_NEAR(d[1], 1.37e-4, 0.01e-4);
   std::printf("quantum: q1 %.6e  q2,q3 %.6e  gimbal %.6e rad\n", d[0], d[1], d[3]);
 }

@@ -1,6 +1,6 @@
 // Tests of the analytic Phantom model (reference/phantom/phantom_model.h): the published closed
-// form (Cavusoglu 2002, PHANTOM.md), Lagrangian identities by finite differences, kinematics,
-// and the ceres::Jet instantiation. Tolerance policy: docs/phantom.md.
+// form (Cavusoglu 2002, docs/device_facts.md §2), Lagrangian identities by finite differences,
+// kinematics, and the ceres::Jet instantiation. Tolerance policy: docs/phantom.md.
 #include "reference/phantom/phantom_model.h"
 
 #include <ceres/jet.h>
@@ -30,7 +30,7 @@ double rel_err(const MatX& a, const MatX& b) {
   return (a - b).cwiseAbs().maxCoeff() / b.cwiseAbs().maxCoeff();
 }
 
-// ---- Cavusoglu 2002 closed form with the published numbers (PHANTOM.md) -------------------------
+// ---- Cavusoglu 2002 closed form with the published numbers (docs/device_facts.md §2) ---------
 struct Published {
   double l1 = 0.215, l2 = 0.170, l3 = 0.0325, l5 = -0.0368, l6 = 0.0527, g = 9.81;
   double ma = 0.0202, mc = 0.0249, mbe = 0.2359, mdf = 0.1906;
@@ -101,7 +101,7 @@ TEST(PhantomModel, ArmMatchesCavusogluClosedForm) {
 }
 
 // C qd equals the Christoffel velocity terms of the closed-form M, including the corrected
-// C(3,2) = -1/2 l1 (l2 ma + l3 mc) cos(q2 - q3) q2dot (PHANTOM.md's sign note).
+// C(3,2) = -1/2 l1 (l2 ma + l3 mc) cos(q2 - q3) q2dot (docs/device_facts.md §2's sign note).
 TEST(PhantomModel, ArmBiasMatchesChristoffelOfClosedForm) {
   const Published pub;
   const PhantomModelD model(arm_only_tree());
@@ -232,8 +232,8 @@ TEST(PhantomModel, DefaultWorkspaceIsFreeOfSingularities) {
   EXPECT_GT(smin, 0.01);
 }
 
-// Known pose: at q = 0 the gimbal centre is at (l1, 0, -l2) (PHANTOM.md fk) and the arm fk
-// x = c1 (l1 c2 + l2 s3), y = s1 (...), z = l1 s2 - l2 c3 holds everywhere.
+// Known pose: at q = 0 the gimbal centre is at (l1, 0, -l2) (docs/device_facts.md §1) and the arm
+// fk x = c1 (l1 c2 + l2 s3), y = s1 (...), z = l1 s2 - l2 c3 holds everywhere.
 TEST(PhantomModel, ArmForwardKinematicsMatchesPublished) {
   PhantomParams p = default_phantom_params();
   p.tip_offset_m.setZero();

@@ -26,7 +26,7 @@ TEST(PhantomParams, DefaultFileRoundTripsExactly) {
   const PhantomParams back = parse_phantom_params(text, "default");
   EXPECT_TRUE(back == p);
   EXPECT_EQ(phantom_params_to_text(back), text);
-  // Published values survive (PHANTOM.md): l1, l2, l3 and the forearm mass.
+  // Published values survive (docs/device_facts.md §2): l1, l2, l3 and the forearm mass.
   EXPECT_EQ(back.l1_m, 0.215);
   EXPECT_EQ(back.l2_m, 0.170);
   EXPECT_EQ(back.l3_m, 0.0325);

@@ -1,6 +1,6 @@
 // libdentsim_hd_emulator.so: an emulator of the OpenHaptics HDAPI library (issue #15) for tests
 // and for dentsim users without a device. It exports the C entry points of hdapi_abi.h with the
-// documented behaviour (PHANTOM.md "OpenHaptics HDAPI") and runs the MuJoCo-simulated Phantom
+// documented behaviour (docs/device_facts.md §5) and runs the MuJoCo-simulated Phantom
 // Premium 1.5/6DoF (device/phantom_device.h, default model file, started at rest at the middle of
 // the joint ranges) behind its own 1 kHz scheduler thread.
 //
@@ -93,7 +93,8 @@ struct Callback {
   bool done = false;
 };
 
-// Nominal limits reported (PHANTOM.md: CHAI3D's figures, vendor sheet, OpenHaptics' clamps).
+// Nominal limits reported (docs/device_facts.md §3: CHAI3D's figures, vendor sheet, OpenHaptics'
+// clamps).
 constexpr double kMaxForceN = 8.5, kMaxContinuousForceN = 1.4, kMaxStiffnessNPerMm = 3.5;
 constexpr std::array<double, 3> kGimbalContinuousMnm = {188, 188, 48};
 constexpr std::array<double, 6> kPeakMnm = {1720, 1440, 1440, 188, 188, 48};
