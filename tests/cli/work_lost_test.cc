@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include "reference/core/io.h"
@@ -176,6 +177,31 @@ TEST(Verdicts, ChecksPrintTheirBoundsAndExitOneOnFail) {
   EXPECT_EQ(device.status, 1) << device.output;  // the trajectory did not move: compared nothing
   EXPECT_THAT(device.output, HasSubstr("trajectory range (the device moved)"));
   EXPECT_THAT(device.output, HasSubstr("crosscheck device: FAIL"));
+}
+
+// The help says what the parser does: `bench --out` is required unless --list (and bench without
+// it is refused, exit 2, naming it); `run --help` names every built-in scene `run --list` lists.
+TEST(Help, SaysWhatTheParserRequires) {
+  const auto bench_help = run_dentsim("bench --help");
+  EXPECT_EQ(bench_help.status, 0);
+  EXPECT_THAT(bench_help.output, HasSubstr("REQUIRED unless --list"));
+  const auto bench = run_dentsim("bench --duration 0.01");
+  EXPECT_EQ(bench.status, 2) << bench.output;
+  EXPECT_THAT(bench.output, HasSubstr("--out"));
+  EXPECT_EQ(run_dentsim("bench --list").status, 0);
+
+  const auto list = run_dentsim("run --list");
+  ASSERT_EQ(list.status, 0);
+  const auto run_help = run_dentsim("run --help");
+  std::istringstream lines(list.output);
+  int scenes = 0;
+  for (std::string line; std::getline(lines, line);) {
+    const std::string name = line.substr(0, line.find(' '));
+    if (name.empty()) continue;
+    ++scenes;
+    EXPECT_THAT(run_help.output, HasSubstr(name)) << "run --help does not name " << name;
+  }
+  EXPECT_GE(scenes, 3);
 }
 
 }  // namespace
