@@ -162,6 +162,40 @@ TEST(WorkLost, InterruptedContactSweepWritesPartialJson) {
   EXPECT_LT(last["runs"].get<long>(), 400 * 3);
 }
 
+// Ctrl-C during `dentsim crosscheck fast`: no configuration starts after it; what ran is written
+// to --json marked partial, exit 130.
+TEST(WorkLost, InterruptedFastCrosscheckWritesPartialJson) {
+  const fs::path d = fresh_temp_dir("dentsim_work_lost_fast");
+  const fs::path json = d / "f.json";
+  const Signalled r = run_and_signal(
+      {"crosscheck", "fast", "--stage-ticks", "3000", "--duration", "1", "--json", json.string()},
+      "crosscheck fast:", SIGINT);
+  EXPECT_EQ(r.status, 130) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("dentsim: interrupted: crosscheck fast stopped by SIGINT"));
+  const nlohmann::json j = read_json_file(json);
+  ASSERT_TRUE(j.is_object()) << r.output;
+  EXPECT_EQ(j["partial"], true);
+  EXPECT_THAT(j["partial_reason"].get<std::string>(), HasSubstr("before"));
+}
+
+// SIGTERM during `dentsim calibrate`'s fit: it ends at once, one line saying nothing was written,
+// exit 143, the outputs as they were.
+TEST(WorkLost, TerminatedCalibrateSaysNothingWasWritten) {
+  const fs::path d = fresh_temp_dir("dentsim_work_lost_calibrate");
+  const std::string log = (d / "log.csv").string();
+  ASSERT_EQ(run_dentsim("excite -o " + log + " --duration 6 --design-iterations 0").status, 0);
+  const std::string model = (d / "m.json").string();
+  std::ofstream(model) << "keep\n";
+  const Signalled r = run_and_signal(
+      {"calibrate", log, "--json", (d / "f.json").string(), "-o", model}, "calibrate: fitting",
+      SIGTERM);
+  EXPECT_EQ(r.status, 143) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("dentsim: interrupted: calibrate: the fit of " + log +
+                                  " was not finished; nothing written"));
+  EXPECT_FALSE(fs::exists(d / "f.json"));
+  EXPECT_EQ(dentsim::read_file(model), "keep\n");
+}
+
 // A check that compared nothing fails: `crosscheck octree` with no voxel to find (every query
 // empty) — and a check that compared something passes, printing each bound.
 TEST(Verdicts, ChecksPrintTheirBoundsAndExitOneOnFail) {
