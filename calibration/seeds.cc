@@ -92,7 +92,15 @@ SeedRun run_seed(const PhantomParams& base, std::uint64_t seed, const SeedRunOpt
   ep.seed = seed;
   ExcitationDesign design = design_excitation(p, q0, ep, o.design_iterations);
   SimulatedPhantom dev(phantom_plant(p), phantom_device_config(p), phantom_home_q(p));
-  run.log = run_excitation(dev, p, design.excitation, o.duration_s);
+  ExcitationOutcome ran = run_excitation_until_stop(dev, p, design.excitation, o.duration_s,
+                                                    TrackingParams{}, {}, o.stop_request);
+  if (ran.interrupted) {
+    throw SeedInterrupted("calibrate-seeds: seed " + std::to_string(seed) + ": excitation " +
+                          ran.stop_reason);
+  }
+  // As run_excitation: a device fault is an error of the seed.
+  if (!ran.complete) throw InputError("excite: " + ran.stop_reason);
+  run.log = std::move(ran.log);
   run.log.comments.push_back(" device: " + p.name);
   run.log.comments.push_back(" excitation: seed " + std::to_string(seed) +
                              ", regressor condition number " +

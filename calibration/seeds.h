@@ -24,8 +24,10 @@
 // No MPI here: the CLI spreads the seeds over ranks (cli/mpi_sweep.h).
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -71,6 +73,10 @@ struct SeedRunOptions {
   double min_speed = 0.2;           // calibrate --min-speed [rad/s]
   std::string coulomb_smoothing = "fit";  // calibrate --coulomb-smoothing
   std::string coulomb_sign = "prior";     // calibrate --coulomb-sign
+  // Optional stop request (the CLI's SIGINT / SIGTERM flag, cli/interrupt.h): once set, the
+  // excitation in progress stops at its next tick and run_seed throws SeedInterrupted (the seed
+  // has no result; the fit, once started, runs to its end).
+  const std::atomic<bool>* stop_request = nullptr;
 };
 
 // One fitted parameter against the truth (fields as in `dentsim calibrate --truth`'s JSON; the
@@ -114,8 +120,13 @@ struct SeedRun {
   PhantomParams truth, fitted;
   CalibrationLog log;
 };
+// Thrown by run_seed when options.stop_request stopped the seed's excitation.
+struct SeedInterrupted : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
 // Steps 1-4 above for `seed`, base model `base`. Throws InputError on bad options (a log too short
-// for the low-pass), std::runtime_error when the fit ends non-finite.
+// for the low-pass), std::runtime_error when the fit ends non-finite, SeedInterrupted on a stop
+// request.
 SeedRun run_seed(const PhantomParams& base, std::uint64_t seed, const SeedRunOptions& options);
 
 struct SeedSummary {

@@ -124,7 +124,7 @@ void setup_bench(CLI::App& app) {
       "force and removed-volume error against the finest reference run; a Pareto plot");
   sub->add_option("--json", o->json, "Write the numbers to FILE (variants, reference_variant)");
   sub->add_option("--out", o->out,
-                  "REQUIRED (but with --list): write DIR/pareto.png and DIR/time_vs_error.md");
+                  "REQUIRED unless --list: write DIR/pareto.png and DIR/time_vs_error.md");
   sub->add_option("--scene", o->config.scene, "Built-in scene or scene file")
       ->capture_default_str();
   sub->add_option("--duration", o->config.duration_s,

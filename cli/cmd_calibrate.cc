@@ -27,11 +27,13 @@
 #include "calibration/excitation.h"
 #include "calibration/fit.h"
 #include "calibration/log.h"
+#include "cli/interrupt.h"
 #include "cli/plot.h"
 #include "cli/registry.h"
 #include "device/fault_injection.h"
 #include "device/hdapi/hdapi_device.h"
 #include "device/phantom_device.h"
+#include "device/safety_chain.h"
 #include "device/simulated_phantom.h"
 #include "reference/core/io.h"
 #include "reference/phantom/phantom_model.h"
@@ -103,6 +105,25 @@ class ExciteSignals {
   struct sigaction old_int_ {}, old_term_ {};
 };
 
+// The guarded run's hard speed stop, from the device's velocity limit (issue #33): at half the
+// velocity the Phantom's safety chain trips at (phantom_safety_limits: qd_max 20 rad/s per joint,
+// where the hardware reports HD_EXCEEDED_MAX_VELOCITY; docs/hardware.md §5), as a multiple of the
+// excitation's own speed limit (2 rad/s): 0.5 x 20 / 2 = 5, i.e. 10 rad/s. The factor 2 covers
+// the guard's lag: it acts on |qd| low-passed at 20 Hz (time constant 8 ms), so a speed still
+// rising when the stop fires overshoots the filtered value; the stop, zero torque, must come
+// before the chain's own fault. The excitation never comes near it on a device it tracks (the
+// emulator: <= 4.2 rad/s on the gimbal, low-passed, at load average 10 without catch-up; the
+// 3 x 2 = 6 rad/s of the library's default stop was crossed only through the emulator's
+// catch-up of skipped scheduler ticks with the torque held, docs/hardware.md §7).
+double velocity_stop_from_device_limit(const Excitation& exc, const PhantomParams& p) {
+  const SafetyLimits limits = phantom_safety_limits(p.q_min_rad, p.q_max_rad);
+  double stop = std::numeric_limits<double>::infinity();
+  for (int j = 0; j < 6; ++j) {
+    stop = std::min(stop, 0.5 * limits.qd_max(j) / exc.params().qd_max_rad_s(j));
+  }
+  return stop;
+}
+
 // What a guarded run (run_guarded_excitation) did, for the log's comments.
 void add_guard_comments(const ExcitationOutcome& r, std::vector<std::string>* comments) {
   char buf[400];
@@ -150,11 +171,11 @@ void setup_excite(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "excite",
       "Run a safe excitation trajectory (Fourier series within the joint, velocity and torque\n"
-      "limits, designed for a low regressor condition number) under joint-space PD tracking on the "
-      "simulated Phantom and log t, q, qd\n"
-      "(driver estimate) and the applied torque to a CSV calibration log. A device fault, a guard\n"
-      "or SIGINT stops it cleanly: the log up to the stop is written, marked incomplete, and the\n"
-      "exit status is 3 (fault or guard) or 130 (interrupted)");
+      "limits, designed for a low regressor condition number) under joint-space PD tracking on\n"
+      "the simulated Phantom or a real one (--device hdapi, guarded) and log t, q, qd (driver\n"
+      "estimate) and the applied torque to a CSV calibration log. A device fault, a guard, SIGINT\n"
+      "or SIGTERM stops it cleanly: the log up to the stop is written, marked incomplete, and the\n"
+      "exit status is 3 (fault or guard) or 130 / 143 (interrupted)");
   sub->add_option("--device", opt->device,
                   "device model file of the simulated Phantom (default: built-in Premium 1.5A),\n"
                   "or 'hdapi': a Phantom through OpenHaptics (or the project's emulator), run as\n"
@@ -168,7 +189,7 @@ void setup_excite(CLI::App& app) {
                   "built-in Premium 1.5A); with a simulated --device, runs the guarded procedure\n"
                   "of a new device on it (the device's own model is then not used)");
   sub->add_option("-o,--output", opt->out, "calibration log to write (CSV)")->required();
-  sub->add_option("--duration", opt->duration, "length of the run [s] (default 30)");
+  sub->add_option("--duration", opt->duration, "length of the excitation [s], 1..3600 (default 30)");
   sub->add_option("--seed", opt->seed, "seed of the Fourier coefficients, 0..2^64-1 (default 1)")
       ->check(CLI::NonNegativeNumber);
   sub->add_option("--design-iterations", opt->design_iterations,
@@ -211,11 +232,8 @@ void setup_excite(CLI::App& app) {
       ExcitationOutcome r;
       {
         ExciteSignals signals;
-        // Through the HDAPI read/write/advance loop (every one or two scheduler ticks) the gimbal's
-        // low-passed speed peaked near 9 rad/s on the emulator: the stop at 5 x the excitation's
-        // 2 rad/s, half the safety chain's 20 rad/s.
         GuardedExcitationParams gp;
-        gp.velocity_stop = 5.0;
+        gp.velocity_stop = velocity_stop_from_device_limit(exc, p);
         r = run_guarded_excitation(d, p, exc, opt->duration, gp, TrackingParams{}, &g_excite_stop);
       }
       r.log.comments.push_back(" device: hdapi (" + dev.info().library + ", model " +
@@ -255,8 +273,10 @@ void setup_excite(CLI::App& app) {
     ExcitationOutcome r;
     {
       ExciteSignals signals;
-      r = guarded ? run_guarded_excitation(d, prior, exc, opt->duration, GuardedExcitationParams{},
-                                           TrackingParams{}, &g_excite_stop)
+      GuardedExcitationParams gp;  // the new-device procedure, as on a device through HDAPI
+      gp.velocity_stop = velocity_stop_from_device_limit(exc, prior);
+      r = guarded ? run_guarded_excitation(d, prior, exc, opt->duration, gp, TrackingParams{},
+                                           &g_excite_stop)
                   : run_excitation_until_stop(d, p, exc, opt->duration, TrackingParams{}, exact,
                                               &g_excite_stop);
     }
@@ -433,7 +453,16 @@ void setup_calibrate(CLI::App& app) {
         opt->prior.empty() ? default_phantom_params() : load_phantom_params(opt->prior);
     std::optional<PhantomParams> truth;
     if (!opt->truth.empty()) truth = load_phantom_params(opt->truth);
-    const CalibrateOutcome c = calibrate_log(log, opt->log, prior, opt->fit);
+    // The fit cannot stop part way and has nothing partial to keep: Ctrl-C / SIGTERM end it at
+    // once, saying so; nothing is written (the outputs are written atomically after the fit).
+    const CalibrateOutcome c = [&] {
+      const QuitOnSignal quit("calibrate: the fit of " + opt->log +
+                              " was not finished; nothing written (" + opt->json + ", " +
+                              opt->out + " as they were)");
+      std::fprintf(stderr, "calibrate: fitting %s (%d samples logged; Ceres, seconds to a minute)\n",
+                   opt->log.c_str(), log.size());
+      return calibrate_log(log, opt->log, prior, opt->fit);
+    }();
     const FitResult& r = c.fit;
     if (!c.finite()) {
       throw std::runtime_error("calibrate: the fit of " + opt->log +

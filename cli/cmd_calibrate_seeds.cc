@@ -12,7 +12,8 @@
 // line per seed, from the rank that ran it) on stderr; on stdout a per-seed table and the summary
 // row of issue #17's bar. --out DIR keeps per seed DIR/seedS/{truth.json, log.csv, fit.json,
 // model.json} (written by the rank that ran the seed: on a cluster DIR must be shared).
-// Exit status 1 (after writing everything) if a fit did not converge, as `calibrate`.
+// Exit status 1 (after writing everything) if a fit did not converge, as `calibrate`. Ctrl-C /
+// SIGTERM: the seeds done so far go to --json marked "partial", exit 130 / 143.
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -25,6 +26,7 @@
 #include <vector>
 
 #include "calibration/seeds.h"
+#include "cli/interrupt.h"
 #include "cli/mpi_sweep.h"
 #include "cli/registry.h"
 #include "device/phantom_device.h"
@@ -193,40 +195,7 @@ void setup_calibrate_seeds(CLI::App& app) {
                        "the whole log)");
     }
 
-    const auto start = std::chrono::steady_clock::now();
-    const SweepWorld& world = sweep_world();
-    const std::vector<nlohmann::json> gathered = sweep(
-        opt->count,
-        [&](int i) {
-          const std::uint64_t seed = opt->first + static_cast<std::uint64_t>(i);
-          std::fprintf(
-              stderr, "calibrate-seeds: seed %llu: excite %.0f s, fit...%s\n",
-              static_cast<unsigned long long>(seed), opt->run.duration_s,
-              world.size > 1 ? (" (rank " + std::to_string(world.rank) + ")").c_str() : "");
-          const SeedRun run = run_seed(base, seed, opt->run);
-          if (!opt->out.empty()) write_seed_files(opt->out, run);
-          const SeedResult& r = run.result;
-          std::fprintf(stderr,
-                       "calibrate-seeds: seed %llu: %d identifiable, M(q) error %s, outside 5 %% "
-                       "and 3 std: %s\n",
-                       static_cast<unsigned long long>(seed), r.checked(),
-                       percent(r.fitted.mass_matrix).c_str(), outside_text(r).c_str());
-          return seed_result_to_json(r);
-        },
-        [&](int done, int n) {
-          std::fprintf(
-              stderr, "calibrate-seeds: %d of %d seeds done here, %.0f s elapsed\n", done, n,
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-        });
-    if (!writes_outputs()) return;
-
-    std::vector<SeedResult> results;
-    nlohmann::json seeds = nlohmann::json::array();
-    for (const nlohmann::json& j : gathered) {
-      results.push_back(seed_result_from_json(j));
-      seeds.push_back(j);
-    }
-    const SeedSummary s = summarize(results);
+    // The report's header (what ran), the same in a complete and in an interrupted report.
     nlohmann::json j;
     j["command"] = "calibrate-seeds";
     j["device"] = opt->device.empty() ? "builtin" : opt->device;
@@ -246,6 +215,61 @@ void setup_calibrate_seeds(CLI::App& app) {
         {"lowpass_hz", opt->run.lowpass_hz},
         {"max_samples", opt->run.max_samples},
         {"max_iterations", opt->run.max_iterations}};
+
+    // Ctrl-C / SIGTERM (cli/interrupt.h): the seed in progress stops in its excitation (a fit
+    // already started runs to its end), no new seed starts, the seeds done so far go to --json
+    // marked partial (their "seeds" entries, the summary over them and "completed_jobs"), exit
+    // 130 / 143. Their --out files are written as each seed ends.
+    const StopOnSignal stop;
+    StoppableJobs jobs(stop);
+    opt->run.stop_request = &stop.flag();
+    const auto start = std::chrono::steady_clock::now();
+    const SweepWorld& world = sweep_world();
+    std::vector<nlohmann::json> done_here;  // this rank's finished seeds (the jobs run in order)
+    std::vector<nlohmann::json> gathered;
+    try {
+      gathered = sweep(
+        opt->count,
+        jobs.wrap("seeds", [&](int i) -> nlohmann::json {
+          const std::uint64_t seed = opt->first + static_cast<std::uint64_t>(i);
+          std::fprintf(
+              stderr, "calibrate-seeds: seed %llu: excite %.0f s, fit...%s\n",
+              static_cast<unsigned long long>(seed), opt->run.duration_s,
+              world.size > 1 ? (" (rank " + std::to_string(world.rank) + ")").c_str() : "");
+          const SeedRun run = run_seed(base, seed, opt->run);
+          if (!opt->out.empty()) write_seed_files(opt->out, run);
+          const SeedResult& r = run.result;
+          std::fprintf(stderr,
+                       "calibrate-seeds: seed %llu: %d identifiable, M(q) error %s, outside 5 %% "
+                       "and 3 std: %s\n",
+                       static_cast<unsigned long long>(seed), r.checked(),
+                       percent(r.fitted.mass_matrix).c_str(), outside_text(r).c_str());
+          done_here.push_back(seed_result_to_json(r));
+          return done_here.back();
+        }),
+        [&](int done, int n) {
+          std::fprintf(
+              stderr, "calibrate-seeds: %d of %d seeds done here, %.0f s elapsed\n", done, n,
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+        });
+    } catch (const std::exception&) {
+      if (!stop.requested()) throw;
+      // What it has: the seeds this rank finished, as a complete report would list them.
+      std::vector<SeedResult> finished;
+      for (const nlohmann::json& e : done_here) finished.push_back(seed_result_from_json(e));
+      j["seeds"] = done_here;
+      j["summary"] = seed_summary_to_json(summarize(finished));
+      throw jobs.stopped("calibrate-seeds", opt->json, writes_outputs(), j);
+    }
+    if (!writes_outputs()) return;
+
+    std::vector<SeedResult> results;
+    nlohmann::json seeds = nlohmann::json::array();
+    for (const nlohmann::json& e : gathered) {
+      results.push_back(seed_result_from_json(e));
+      seeds.push_back(e);
+    }
+    const SeedSummary s = summarize(results);
     j["seeds"] = seeds;
     j["summary"] = seed_summary_to_json(s);
     write_json(opt->json, j);

@@ -7,13 +7,15 @@
 // (docs/derivations/sdf_contact.md §2); exit status 1 on FAIL. The faces model is printed for
 // comparison (it pops through by design), and the sliding ripple against the aim of 5 %
 // RMS is reported, not judged: docs/results/contact_sweep.md measures it above the aim for both
-// models (a deliberate choice: the aim needs a sub-voxel surface).
+// models (a deliberate choice: the aim needs a sub-voxel surface). Ctrl-C / SIGTERM: the rows so
+// far (the resolution in progress marked partial) are printed and written, exit 130 / 143.
 #include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <stdexcept>
 #include <string>
 
+#include "cli/interrupt.h"
 #include "cli/outputs.h"
 #include "cli/registry.h"
 #include "cli/verdict.h"
@@ -53,7 +55,17 @@ void setup_crosscheck_contact(CLI::App& app) {
   sub->callback([opt] {
     check_outputs({{"--json", opt->json}});
     opt->check.tip_radius_m = 1e-3 * opt->tip_radius_mm;
+    // Ctrl-C / SIGTERM (cli/interrupt.h): the sweep stops before its next probe; the rows so far
+    // are printed, judged and written to --json marked partial, exit 130 / 143.
+    const StopOnSignal stop;
+    opt->check.stop_request = &stop.flag();
+    std::fprintf(stderr,
+                 "crosscheck contact: %zu resolution(s) x %zu model(s), %d probes x %zu forces "
+                 "each (minutes at 256^3 and 512^3; Ctrl-C writes the rows so far)\n",
+                 opt->check.resolutions.size(), opt->check.models.size(), opt->check.probes,
+                 opt->check.forces_n.size());
     const ContactCrosscheckResult r = crosscheck_contact(opt->check);
+    opt->check.stop_request = nullptr;
     constexpr double kRippleAim = 0.05;  // the aim (#16), reported only
     for (const ContactSweepRow& row : r.rows) {
       std::printf(
@@ -62,7 +74,9 @@ void setup_crosscheck_contact(CLI::App& app) {
           "sliding_ripple_rms=%.4f (RMS force error / push force; aim %.2f: %s)\n",
           row.model.c_str(), row.resolution, 1e3 * row.voxel_size_m, row.probes, row.runs,
           row.pop_throughs, row.max_penetration_over_radius, row.sliding_ripple_rms, kRippleAim,
-          row.sliding_ripple_rms <= kRippleAim ? "met" : "not met, reported only");
+          row.partial                             ? "not measured: interrupted"
+          : row.sliding_ripple_rms <= kRippleAim ? "met"
+                                                 : "not met, reported only");
     }
     std::printf("verdict (the default model, sdf):\n");
     Verdict v("crosscheck contact");
@@ -81,6 +95,18 @@ void setup_crosscheck_contact(CLI::App& app) {
     j["verdict"] = v.ok() ? "PASS" : "FAIL";
     j["failed_checks"] = v.failed();
     j["sliding_ripple_aim"] = kRippleAim;
+    if (r.stopped) {
+      const std::string why = "stopped by " + stop.signal_name() + " at " + r.stopped_at;
+      j["partial"] = true;
+      j["partial_reason"] = why;
+      if (!opt->json.empty()) write_json(opt->json, j);
+      throw Interrupted("crosscheck contact " + why + " (the checks above are over the runs so "
+                            "far)" +
+                            (opt->json.empty() ? std::string("; no --json given, nothing written")
+                                               : "; partial results in " + opt->json +
+                                                     " (\"partial\": true)"),
+                        stop.exit_status());
+    }
     if (!opt->json.empty()) write_json(opt->json, j);
     v.finish();
   });

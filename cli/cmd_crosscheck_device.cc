@@ -31,12 +31,18 @@ void setup_crosscheck_device(CLI::App& app) {
   CLI::App* sub = cc->add_subcommand(
       "device",
       "Analytic Phantom model vs MuJoCo 2.2.2: M, C qd, g, tip pose and Jacobian on\n"
-      "random states within the joint limits, and a 1 s trajectory under random torques");
+      "random states within the joint limits, and a trajectory under random torques (--duration);\n"
+      "PASS / FAIL against the stated bounds, exit 1 on FAIL");
   sub->add_option("--model", o->model, "device model file (default: built-in Premium 1.5A)");
   sub->add_option("--json", o->json, "write the error report as JSON to FILE");
-  sub->add_option("--samples", o->samples, "random states (>= 1)")->check(CLI::Range(1, 100000000));
-  sub->add_option("--seed", o->seed, "random seed, 0..2^64-1")->check(CLI::NonNegativeNumber);
+  sub->add_option("--samples", o->samples, "random states (>= 1)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000000));
+  sub->add_option("--seed", o->seed, "random seed, 0..2^64-1")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   sub->add_option("--duration", o->duration_s, "trajectory length [s] (> 0)")
+      ->capture_default_str()
       ->check(CLI::Range(1e-6, 1e6));
   sub->callback([o] {
     check_outputs({{"--json", o->json}}, {}, {{"--model", o->model}});

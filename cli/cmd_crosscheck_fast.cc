@@ -2,7 +2,7 @@
 // configuration (method, grip detector, contact model, scene) and in closed loop on the built-in
 // scenes (validation/crosscheck_fast.h). Prints and writes (--json) per row `max_rel` (`stages`:
 // the worst configuration; `configs`: each), per scene `max_force_diff_n` and `ticks`; exit status
-// 1 when a bound is broken.
+// 1 when a bound is broken. Ctrl-C / SIGTERM: what ran is written marked partial, exit 130 / 143.
 #include <algorithm>
 #include <cstdio>
 #include <memory>
@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/interrupt.h"
 #include "cli/outputs.h"
 #include "cli/registry.h"
 #include "cli/verdict.h"
@@ -45,7 +46,17 @@ void run(const Options& o) {
     throw InputError("--configs '" + o.configs + "': expected matrix or cover");
   }
   for (const std::string& s : o.stage_scenes) load_scene(s);  // names a bad scene before running
+  // Ctrl-C / SIGTERM (cli/interrupt.h): no new configuration or scene starts; what ran is
+  // printed, judged and written to --json marked partial, exit 130 / 143.
+  const StopOnSignal stop;
+  check.stop_request = &stop.flag();
+  std::fprintf(stderr,
+               "crosscheck fast: %zu configuration(s) x %ld ticks stage by stage, then %zu "
+               "scene(s) x %g s closed loop (Ctrl-C writes what ran)\n",
+               check.stage_configs.size(), check.stage_ticks, check.scenes.size(),
+               check.scene_duration_s);
   const FastCrosscheckResult r = crosscheck_fast(check);
+  check.stop_request = nullptr;
   // Per configuration one line (every row's max_rel); per row the worst configuration.
   nlohmann::json stages = nlohmann::json::object();
   nlohmann::json configs = nlohmann::json::object();
@@ -183,21 +194,31 @@ void run(const Options& o) {
   }
   v.require("adversarial states, loops (every other bound)", r.ok,
             r.ok ? "all held" : std::to_string(r.failures.size()) + " failed");
-  if (!o.json.empty()) {
-    write_json(o.json, {{"stages", stages},
-                        {"configs", configs},
-                        {"shared_stages", shared},
-                        {"stage_ticks", check.stage_ticks},
-                        {"scenes", scenes},
-                        {"adversarial", adversarial},
-                        {"contact_members_per_material", materials},
-                        {"max_rel_bound", o.check.max_rel_bound},
-                        {"ok", r.ok && v.ok()},
-                        {"verdict", v.ok() && r.ok ? "PASS" : "FAIL"},
-                        {"failed_checks", v.failed()},
-                        {"failures", r.failures}});
-  }
+  nlohmann::json j = {{"stages", stages},
+                      {"configs", configs},
+                      {"shared_stages", shared},
+                      {"stage_ticks", check.stage_ticks},
+                      {"scenes", scenes},
+                      {"adversarial", adversarial},
+                      {"contact_members_per_material", materials},
+                      {"max_rel_bound", o.check.max_rel_bound},
+                      {"ok", r.ok && v.ok()},
+                      {"verdict", v.ok() && r.ok ? "PASS" : "FAIL"},
+                      {"failed_checks", v.failed()},
+                      {"failures", r.failures}};
   for (const std::string& f : r.failures) std::printf("  failure: %s\n", f.c_str());
+  if (r.stopped) {
+    const std::string why = "stopped by " + stop.signal_name() + " before " + r.stopped_at;
+    j["partial"] = true;
+    j["partial_reason"] = why;
+    if (!o.json.empty()) write_json(o.json, j);
+    throw Interrupted("crosscheck fast " + why + " (the checks above are over what ran)" +
+                          (o.json.empty() ? std::string("; no --json given, nothing written")
+                                          : "; partial results in " + o.json +
+                                                " (\"partial\": true)"),
+                      stop.exit_status());
+  }
+  if (!o.json.empty()) write_json(o.json, j);
   v.finish();
 }
 

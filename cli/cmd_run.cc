@@ -279,9 +279,11 @@ void write_run_outputs(const RunCliOptions& o, const Scene& scene, const RunResu
 
 void run(const RunCliOptions& o) {
   if (o.list) {
+    int width = 0;  // the names in one column
+    for (const std::string& n : builtin_scene_names()) width = std::max(width, static_cast<int>(n.size()));
     for (const std::string& n : builtin_scene_names()) {
       const Scene s = load_scene(n);
-      std::printf("%-8s %s\n", n.c_str(), s.description.c_str());
+      std::printf("%-*s %s\n", width, n.c_str(), s.description.c_str());
     }
     return;
   }

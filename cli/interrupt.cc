@@ -1,6 +1,10 @@
 #include "cli/interrupt.h"
 
+#include <unistd.h>
+
+#include <algorithm>
 #include <csignal>
+#include <cstring>
 
 #include "cli/registry.h"
 
@@ -20,7 +24,35 @@ void on_stop_signal(int sig) {
   g_stop.store(true, std::memory_order_relaxed);
 }
 
+// QuitOnSignal's line, composed before the handler is installed.
+char g_quit_line[512];
+std::size_t g_quit_len = 0;
+struct sigaction g_quit_old_int {
+}, g_quit_old_term{};
+
+void on_quit_signal(int sig) {
+  // Async-signal-safe: write(2) and _exit(2) only.
+  if (::write(STDERR_FILENO, g_quit_line, g_quit_len) < 0) _exit(128 + sig);
+  _exit(128 + sig);
+}
+
 }  // namespace
+
+QuitOnSignal::QuitOnSignal(const std::string& message) {
+  const std::string line = "dentsim: interrupted: " + message + "\n";
+  g_quit_len = std::min(line.size(), sizeof g_quit_line);
+  std::memcpy(g_quit_line, line.data(), g_quit_len);
+  struct sigaction sa {};
+  sa.sa_handler = on_quit_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, &g_quit_old_int);
+  sigaction(SIGTERM, &sa, &g_quit_old_term);
+}
+
+QuitOnSignal::~QuitOnSignal() {
+  sigaction(SIGINT, &g_quit_old_int, nullptr);
+  sigaction(SIGTERM, &g_quit_old_term, nullptr);
+}
 
 StopOnSignal::StopOnSignal() {
   g_stop.store(false);

@@ -4,7 +4,10 @@
 // job of a sweep), stops there, writes everything it has (marked partial, with the reason) and
 // throws Interrupted, which main turns into one line and exit status 128 + the signal (130 for
 // Ctrl-C, 143 for SIGTERM). A second signal ends the process at once (the handler is reset after
-// the first). Commands that do not hold a StopOnSignal keep the default behaviour.
+// the first). Holders: run, zwidth, bench, calibrate-seeds, crosscheck contact, crosscheck fast
+// (excite has its own: the run's clean stop, calibration/excitation.h); calibrate holds a
+// QuitOnSignal (below). The other commands take seconds, write only at their end and keep the
+// default behaviour.
 #pragma once
 
 #include <atomic>
@@ -32,6 +35,18 @@ class StopOnSignal {
   std::string signal_name() const;
   // The exit status for the signal: 128 + signal.
   int exit_status() const { return 128 + signal(); }
+};
+
+// For a command whose work cannot stop part way (a Ceres fit: `calibrate`) and has nothing
+// partial to keep: while held, SIGINT / SIGTERM print "dentsim: interrupted: MESSAGE" and end the
+// process at once with 128 + the signal (only write(2) and _exit(2) in the handler). Outputs are
+// written atomically at the end, so an interrupted command leaves them as they were.
+class QuitOnSignal {
+ public:
+  explicit QuitOnSignal(const std::string& message);  // one holder at a time
+  ~QuitOnSignal();                                     // restores the previous handlers
+  QuitOnSignal(const QuitOnSignal&) = delete;
+  QuitOnSignal& operator=(const QuitOnSignal&) = delete;
 };
 
 // Thrown once the partial outputs are written; main prints "dentsim: interrupted: WHAT" and exits

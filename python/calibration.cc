@@ -29,6 +29,8 @@ py::dict log_dict(const CalibrationLog& log) {
   d["qd"] = rows_of(log.qd);
   d["tau"] = rows_of(log.tau);
   d["comments"] = log.comments;
+  // The reason of a log marked incomplete ("# incomplete: REASON"), None for a complete log.
+  d["incomplete"] = log.incomplete.empty() ? py::object(py::none()) : py::str(log.incomplete);
   return d;
 }
 
@@ -45,6 +47,7 @@ CalibrateOptionNames argument_names() {
   n.min_speed = "calibrate: min_speed";
   n.coulomb_smoothing = "calibrate: coulomb_smoothing";
   n.coulomb_sign = "calibrate: coulomb_sign";
+  n.allow_incomplete = "allow_incomplete=True";
   return n;
 }
 
@@ -53,7 +56,8 @@ py::dict calibrate(const py::handle& log_arg, const py::object& prior_arg, doubl
                    const py::object& velocity_lag, double torque_shift,
                    const std::string& coulomb_velocity, bool model_mismatch_term,
                    double min_speed, const std::string& coulomb_smoothing,
-                   const std::string& coulomb_sign, bool law_mismatch_term) {
+                   const std::string& coulomb_sign, bool law_mismatch_term,
+                   bool allow_incomplete) {
   const std::string path = path_arg(log_arg, "calibrate: log");
   const CalibrateOptionNames names = argument_names();
   CalibrateOptions o;
@@ -68,6 +72,7 @@ py::dict calibrate(const py::handle& log_arg, const py::object& prior_arg, doubl
   o.coulomb_smoothing = coulomb_smoothing;
   o.coulomb_sign = coulomb_sign;
   o.law_mismatch_term = law_mismatch_term;
+  o.allow_incomplete = allow_incomplete;
   // 'auto' or a number of ticks, as the command's text (17 significant digits read back exactly).
   if (py::isinstance<py::str>(velocity_lag)) {
     o.velocity_lag = velocity_lag.cast<std::string>();
@@ -112,7 +117,8 @@ void bind_calibration(py::module_& m) {
       },
       py::arg("path"),
       "Read a calibration log (`dentsim excite -o LOG`; calibration/log.h): a dict of t (n,) [s], "
-      "q, qd, tau (n, 6) [rad, rad/s, N m] and the comment lines. A bad log raises "
+      "q, qd, tau (n, 6) [rad, rad/s, N m], the comment lines and \"incomplete\" (the reason of a log "
+      "marked incomplete by `excite`, None for a complete one). A bad log raises "
       "dentsim.InputError naming the file, the line and the problem.");
   m.def("calibrate", &calibrate, py::arg("log"), py::arg("prior") = py::none(),
         py::arg("lowpass_hz") = 10.0, py::arg("lowpass_order") = 2, py::arg("max_samples") = 3000,
@@ -120,14 +126,17 @@ void bind_calibration(py::module_& m) {
         py::arg("torque_shift") = 0.0, py::arg("coulomb_velocity") = "filtered",
         py::arg("model_mismatch_term") = true, py::arg("min_speed") = 0.2,
         py::arg("coulomb_smoothing") = "fit", py::arg("coulomb_sign") = "prior",
-        py::arg("law_mismatch_term") = true,
+        py::arg("law_mismatch_term") = true, py::arg("allow_incomplete") = false,
         R"(Fit the device's inertial and friction parameters to a calibration log (Ceres), as
 `dentsim calibrate LOG --json FILE -o MODEL` with the same options and defaults:
 prior (model file; None: the shipped default), lowpass_hz, lowpass_order, max_samples,
 max_iterations, velocity_lag ('auto' or ticks), torque_shift, coulomb_velocity ('filtered' or
 'raw'), model_mismatch_term (False: --no-model-mismatch), min_speed [rad/s] (--min-speed),
 coulomb_smoothing ('fit' or 'prior'), coulomb_sign ('erf', 'tanh', 'fit' or 'prior'),
-law_mismatch_term (False: --no-law-mismatch).
+law_mismatch_term (False: --no-law-mismatch), allow_incomplete (True: --allow-incomplete, fit a
+log marked incomplete, an excitation stopped by a device fault, a guard or an interruption;
+refused by default with dentsim.InputError naming the log and the reason, as the command; the
+report's "log_incomplete" then says why).
 
 Returns the CLI's JSON report as a dict (converged, residual_rms_n_m, condition_number,
 parameters [name, prior, value, std, ..., identifiable], ...) plus "fitted_model" (the fitted

@@ -15,6 +15,9 @@ gains change, regenerate with
 and commit the documents. `--check` (the ctest `docs_tables`, label `docs`) fails when a document
 disagrees with what the script makes now, printing the difference. The runs are the built-in
 scenes at their full duration on the default (fast) pipeline: deterministic, a few seconds each.
+`--check` also fails on any other table in docs/ with figures and no `<!-- figures: WHERE -->`
+line naming its source (docs/README.md "Tables of figures"); `--check --sources-only` checks
+only that, without running dentsim.
 """
 
 import argparse
@@ -138,6 +141,51 @@ TABLES = [
 ]
 
 
+# Every other table in docs/ says where its figures come from: a comment line
+#
+#     <!-- figures: WHERE -->
+#
+# between the table and the heading or table before it, WHERE being the command that regenerates
+# it (run by hand: benchmarks, sweeps and other long runs are not re-run in CI, docs/README.md
+# "Tables of figures"), the test that measures or asserts them, or `none` for a table of
+# definitions, parameters or sources (nothing measured). `--check` fails on a table with a digit
+# in its body and neither that comment nor doc_tables markers (a new table must say it).
+FIGURES = "<!-- figures:"
+
+
+def unsourced_tables(root):
+    """[(path, line, header)] of the tables in docs/ whose figures have no stated source."""
+    found = []
+    for folder, _, files in sorted(os.walk(os.path.join(root, "docs"))):
+        for name in sorted(files):
+            if not name.endswith(".md"):
+                continue
+            path = os.path.join(folder, name)
+            with open(path) as f:
+                lines = f.read().splitlines()
+            i = 0
+            while i < len(lines):
+                if not lines[i].startswith("|"):
+                    i += 1
+                    continue
+                j = i
+                while j < len(lines) and lines[j].startswith("|"):
+                    j += 1
+                body = "".join(lines[i + 2:j])
+                sourced = False
+                for k in range(i - 1, -1, -1):  # back to the heading or table before it
+                    above = lines[k]
+                    if above.startswith(FIGURES) or above.startswith("<!-- BEGIN doc_tables"):
+                        sourced = True
+                        break
+                    if above.startswith("#") or above.startswith("|"):
+                        break
+                if any(c.isdigit() for c in body) and not sourced:
+                    found.append((os.path.relpath(path, root), i + 1, lines[i][:80]))
+                i = j
+    return found
+
+
 def begin(name):
     return "<!-- BEGIN doc_tables %s: written by scripts/doc_tables.py, do not edit by hand -->" % name
 
@@ -164,7 +212,16 @@ def main():
     ap.add_argument("--dentsim", default=os.path.join(ROOT, "build/release/cli/dentsim"),
                     help="the dentsim binary (default: build/release/cli/dentsim)")
     ap.add_argument("--only", help="only this table name")
+    ap.add_argument("--sources-only", action="store_true",
+                    help="only check that every table of figures states its source (no runs)")
     a = ap.parse_args()
+    unsourced = unsourced_tables(ROOT) if a.check else []
+    for path, line, header in unsourced:
+        print("doc_tables: %s:%d: a table of figures without a '%s WHERE -->' line above it "
+              "(the command or test that makes it, or 'none'): %s" % (path, line, FIGURES, header),
+              file=sys.stderr)
+    if a.sources_only:
+        return 1 if unsourced else 0
     docs = {}
     with tempfile.TemporaryDirectory(prefix="dentsim_doc_tables_") as tmp:
         for path, name, make in TABLES:
@@ -190,7 +247,9 @@ def main():
             differ = True
             sys.stdout.writelines(difflib.unified_diff(
                 old.splitlines(True), text.splitlines(True), path, path + " (now)"))
-    if differ:
+    if differ or unsourced:
+        if not differ:
+            return 1
         print("doc_tables: the tables above are stale; regenerate with scripts/doc_tables.py "
               "--write (after building dentsim) and commit", file=sys.stderr)
         return 1

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
+#include <string>
 #include <map>
 #include <memory>
 #include <numbers>
@@ -246,8 +248,22 @@ ContactCrosscheckResult crosscheck_contact(const ContactCrosscheckOptions& o) {
       const std::vector<Probe> probes = draw_probes(tooth, per_tooth, o.tip_radius_m, rng);
       for (std::size_t m = 0; m < models.size(); ++m) {
         ContactSweepRow& row = rows[m];
-        row.probes += static_cast<long>(probes.size());
         for (const Probe& probe : probes) {
+          if (o.stop_request != nullptr && o.stop_request->load(std::memory_order_relaxed)) {
+            // What it has: the resolutions done are in result.rows; this one's probes so far
+            // follow, marked partial (no ripple).
+            for (ContactSweepRow& done : rows) {
+              done.partial = true;
+              done.voxel_size_m = h_molar;
+              done.sliding_ripple_rms = std::numeric_limits<double>::quiet_NaN();
+              result.rows.push_back(done);
+            }
+            result.stopped = true;
+            result.stopped_at = "n=" + std::to_string(res) + ", tooth " + std::to_string(t + 1) +
+                                " of " + std::to_string(teeth);
+            return result;
+          }
+          ++row.probes;
           for (std::size_t fi = 0; fi < o.forces_n.size(); ++fi) {
             const ProbeOutcome out =
                 run_probe(tooth, swept.field.get(), models[m], probe, o.forces_n[fi], o);
@@ -298,7 +314,9 @@ nlohmann::json crosscheck_contact_json(const ContactCrosscheckResult& r) {
     for (std::size_t i = 0; i < o.forces_n.size(); ++i) {
       per_force.push_back({{"force_n", o.forces_n[i]},
                            {"pop_throughs", row.pop_throughs_per_force[i]},
-                           {"sliding_ripple_rms", row.ripple_per_force[i]}});
+                           {"sliding_ripple_rms", i < row.ripple_per_force.size()
+                                                      ? nlohmann::json(row.ripple_per_force[i])
+                                                      : nlohmann::json(nullptr)}});
     }
     rows.push_back({{"model", row.model},
                     {"resolution", row.resolution},
@@ -308,8 +326,10 @@ nlohmann::json crosscheck_contact_json(const ContactCrosscheckResult& r) {
                     {"pop_throughs", row.pop_throughs},
                     {"max_penetration_over_radius", row.max_penetration_over_radius},
                     {"max_penetration_over_voxel", row.max_penetration_over_voxel},
-                    {"sliding_ripple_rms", row.sliding_ripple_rms},
+                    {"sliding_ripple_rms", row.partial ? nlohmann::json(nullptr)
+                                                       : nlohmann::json(row.sliding_ripple_rms)},
                     {"per_force", per_force}});
+    if (row.partial) rows.back()["partial"] = true;
   }
   return {{"teeth", r.teeth},
           {"resolutions", o.resolutions},

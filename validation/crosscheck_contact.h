@@ -26,6 +26,7 @@
 // force). `sliding_ripple_rms` is the largest over the forces.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -45,6 +46,9 @@ struct ContactCrosscheckOptions {
   int settle_ticks = 150;
   int slide_ticks = 150;
   std::uint64_t seed = 1;
+  // Optional stop request (the CLI's SIGINT / SIGTERM flag, cli/interrupt.h), checked before each
+  // probe: once set, the sweep returns what it has (ContactCrosscheckResult::stopped).
+  const std::atomic<bool>* stop_request = nullptr;
 };
 
 struct ContactSweepRow {
@@ -59,12 +63,19 @@ struct ContactSweepRow {
   std::vector<double> ripple_per_force;     // parallel to forces_n
   double sliding_ripple_rms = 0.0;          // max of ripple_per_force
   std::vector<long> pop_throughs_per_force;
+  // The resolution the stop request interrupted: the probes run so far, no sliding ripple
+  // (ripple_per_force empty, sliding_ripple_rms NaN; null in the JSON).
+  bool partial = false;
 };
 
 struct ContactCrosscheckResult {
   ContactCrosscheckOptions options;
   std::vector<std::string> teeth;  // names of the teeth swept
   std::vector<ContactSweepRow> rows;
+  // The stop request ended the sweep early: the rows of the resolutions done, then those of the
+  // one in progress marked partial; `stopped_at` says where ("n=256, tooth 2 of 3").
+  bool stopped = false;
+  std::string stopped_at;
 };
 
 // Throws InputError naming the option (resolution not a power of two in 16..512, unknown model,

@@ -498,8 +498,20 @@ FastCrosscheckResult crosscheck_fast(const FastCrosscheckOptions& options) {
                             "runs the reference's own code: on the same input a row would compare "
                             "a function with itself; its outputs are compared in the chain row"});
     }
-    for (const StageConfig& c : options.stage_configs) check_config(c, impl, options, &res);
-    for (const std::string& name : options.scenes) check_scene(name, impl, options, &res);
+    const auto stop = [&](const std::string& next) {
+      if (options.stop_request == nullptr || !options.stop_request->load()) return false;
+      res.stopped = true;
+      res.stopped_at = std::string(impl.table->implementation) + " " + next;
+      return true;
+    };
+    for (const StageConfig& c : options.stage_configs) {
+      if (stop("configuration " + c.name())) return res;
+      check_config(c, impl, options, &res);
+    }
+    for (const std::string& name : options.scenes) {
+      if (stop("scene " + name)) return res;
+      check_scene(name, impl, options, &res);
+    }
   }
   return res;
 }

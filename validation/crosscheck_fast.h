@@ -59,6 +59,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <string>
 #include <vector>
 
@@ -115,6 +116,10 @@ struct FastCrosscheckOptions {
   bool adversarial = true;  // also the adversarial states (above)
   // The implementations checked (empty: registered_implementations()).
   std::vector<CheckedImplementation> implementations;
+  // Optional stop request (the CLI's SIGINT / SIGTERM flag, cli/interrupt.h), checked before each
+  // configuration and scene: once set, crosscheck_fast returns what it has
+  // (FastCrosscheckResult::stopped).
+  const std::atomic<bool>* stop_request = nullptr;
 };
 
 struct StageCrosscheck {
@@ -169,6 +174,9 @@ struct FastCrosscheckResult {
   std::array<long, 8> contact_members_per_material{};
   bool ok = true;  // every row within max_rel_bound, no count mismatch, closed loop bounded
   std::vector<std::string> failures;
+  // The stop request ended it early: the configurations and scenes before `stopped_at` ran.
+  bool stopped = false;
+  std::string stopped_at;
 };
 
 FastCrosscheckResult crosscheck_fast(const FastCrosscheckOptions& options);

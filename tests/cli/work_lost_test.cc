@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include "reference/core/io.h"
@@ -112,6 +113,89 @@ TEST(WorkLost, InterruptedZwidthWritesPartialJson) {
   EXPECT_LT(j["completed_jobs"].size(), j["grid_runs"].get<std::size_t>());
 }
 
+// SIGTERM during `dentsim calibrate-seeds`, as seed 2 starts: its excitation stops, no seed
+// after it starts, seed 1 goes to --json (its entry, the summary over it) marked partial, exit
+// 143; seed 1's --out files are there, seed 2's not.
+TEST(WorkLost, InterruptedCalibrateSeedsWritesPartialJson) {
+  const fs::path d = fresh_temp_dir("dentsim_work_lost_seeds");
+  const fs::path json = d / "s.json";
+  const Signalled r = run_and_signal(
+      {"calibrate-seeds", "--count", "3", "--duration", "2", "--design-iterations", "0",
+       "--max-samples", "300", "--json", json.string(), "--out", (d / "seeds").string()},
+      "calibrate-seeds: seed 2: excite", SIGTERM);
+  EXPECT_EQ(r.status, 143) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("dentsim: interrupted: calibrate-seeds stopped by SIGTERM"));
+  const nlohmann::json j = read_json_file(json);
+  ASSERT_TRUE(j.is_object()) << r.output;
+  EXPECT_EQ(j["partial"], true);
+  EXPECT_THAT(j["partial_reason"].get<std::string>(), HasSubstr("SIGTERM"));
+  EXPECT_EQ(j["command"], "calibrate-seeds");
+  ASSERT_EQ(j["seeds"].size(), 1u) << j.dump();
+  EXPECT_EQ(j["seeds"][0]["seed"], 1);
+  EXPECT_EQ(j["completed_jobs"].size(), 1u);
+  EXPECT_EQ(j["summary"]["fits"], 1);
+  EXPECT_TRUE(fs::exists(d / "seeds" / "seed1" / "fit.json"));
+  EXPECT_FALSE(fs::exists(d / "seeds" / "seed2"));
+  EXPECT_THAT(r.output, ::testing::Not(HasSubstr("seed 3: excite")));
+}
+
+// Ctrl-C during `dentsim crosscheck contact` (a sweep of minutes at 256^3 and 512^3): it stops
+// before its next probe, writes the rows so far (the resolution in progress marked partial, its
+// sliding ripple not measured: null) to --json marked partial, exit 130.
+TEST(WorkLost, InterruptedContactSweepWritesPartialJson) {
+  const fs::path d = fresh_temp_dir("dentsim_work_lost_contact");
+  const fs::path json = d / "c.json";
+  const Signalled r = run_and_signal({"crosscheck", "contact", "--resolutions", "64", "128",
+                                      "--models", "sdf", "--probes", "400", "--data-dir", "",
+                                      "--json", json.string()},
+                                     "crosscheck contact:", SIGINT);
+  EXPECT_EQ(r.status, 130) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("dentsim: interrupted: crosscheck contact stopped by SIGINT"));
+  const nlohmann::json j = read_json_file(json);
+  ASSERT_TRUE(j.is_object()) << r.output;
+  EXPECT_EQ(j["partial"], true);
+  EXPECT_THAT(j["partial_reason"].get<std::string>(), HasSubstr("SIGINT"));
+  ASSERT_FALSE(j["rows"].empty()) << j.dump();
+  const nlohmann::json& last = j["rows"].back();
+  EXPECT_EQ(last["partial"], true);
+  EXPECT_TRUE(last["sliding_ripple_rms"].is_null());
+  EXPECT_LT(last["runs"].get<long>(), 400 * 3);
+}
+
+// Ctrl-C during `dentsim crosscheck fast`: no configuration starts after it; what ran is written
+// to --json marked partial, exit 130.
+TEST(WorkLost, InterruptedFastCrosscheckWritesPartialJson) {
+  const fs::path d = fresh_temp_dir("dentsim_work_lost_fast");
+  const fs::path json = d / "f.json";
+  const Signalled r = run_and_signal(
+      {"crosscheck", "fast", "--stage-ticks", "3000", "--duration", "1", "--json", json.string()},
+      "crosscheck fast:", SIGINT);
+  EXPECT_EQ(r.status, 130) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("dentsim: interrupted: crosscheck fast stopped by SIGINT"));
+  const nlohmann::json j = read_json_file(json);
+  ASSERT_TRUE(j.is_object()) << r.output;
+  EXPECT_EQ(j["partial"], true);
+  EXPECT_THAT(j["partial_reason"].get<std::string>(), HasSubstr("before"));
+}
+
+// SIGTERM during `dentsim calibrate`'s fit: it ends at once, one line saying nothing was written,
+// exit 143, the outputs as they were.
+TEST(WorkLost, TerminatedCalibrateSaysNothingWasWritten) {
+  const fs::path d = fresh_temp_dir("dentsim_work_lost_calibrate");
+  const std::string log = (d / "log.csv").string();
+  ASSERT_EQ(run_dentsim("excite -o " + log + " --duration 6 --design-iterations 0").status, 0);
+  const std::string model = (d / "m.json").string();
+  std::ofstream(model) << "keep\n";
+  const Signalled r = run_and_signal(
+      {"calibrate", log, "--json", (d / "f.json").string(), "-o", model}, "calibrate: fitting",
+      SIGTERM);
+  EXPECT_EQ(r.status, 143) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("dentsim: interrupted: calibrate: the fit of " + log +
+                                  " was not finished; nothing written"));
+  EXPECT_FALSE(fs::exists(d / "f.json"));
+  EXPECT_EQ(dentsim::read_file(model), "keep\n");
+}
+
 // A check that compared nothing fails: `crosscheck octree` with no voxel to find (every query
 // empty) — and a check that compared something passes, printing each bound.
 TEST(Verdicts, ChecksPrintTheirBoundsAndExitOneOnFail) {
@@ -127,6 +211,31 @@ TEST(Verdicts, ChecksPrintTheirBoundsAndExitOneOnFail) {
   EXPECT_EQ(device.status, 1) << device.output;  // the trajectory did not move: compared nothing
   EXPECT_THAT(device.output, HasSubstr("trajectory range (the device moved)"));
   EXPECT_THAT(device.output, HasSubstr("crosscheck device: FAIL"));
+}
+
+// The help says what the parser does: `bench --out` is required unless --list (and bench without
+// it is refused, exit 2, naming it); `run --help` names every built-in scene `run --list` lists.
+TEST(Help, SaysWhatTheParserRequires) {
+  const auto bench_help = run_dentsim("bench --help");
+  EXPECT_EQ(bench_help.status, 0);
+  EXPECT_THAT(bench_help.output, HasSubstr("REQUIRED unless --list"));
+  const auto bench = run_dentsim("bench --duration 0.01");
+  EXPECT_EQ(bench.status, 2) << bench.output;
+  EXPECT_THAT(bench.output, HasSubstr("--out"));
+  EXPECT_EQ(run_dentsim("bench --list").status, 0);
+
+  const auto list = run_dentsim("run --list");
+  ASSERT_EQ(list.status, 0);
+  const auto run_help = run_dentsim("run --help");
+  std::istringstream lines(list.output);
+  int scenes = 0;
+  for (std::string line; std::getline(lines, line);) {
+    const std::string name = line.substr(0, line.find(' '));
+    if (name.empty()) continue;
+    ++scenes;
+    EXPECT_THAT(run_help.output, HasSubstr(name)) << "run --help does not name " << name;
+  }
+  EXPECT_GE(scenes, 3);
 }
 
 }  // namespace

@@ -85,3 +85,35 @@ def test_bad_logs_and_options_raise_the_commands_message(cli, tmp_path, excite_l
         dentsim.calibrate(excite_log, lowpass_hz=900.0)
     with pytest.raises(dentsim.InputError, match=r"velocity_lag"):
         dentsim.calibrate(excite_log, velocity_lag="soon")
+
+
+def test_incomplete_log_is_refused_unless_allowed_as_the_command(cli, tmp_path):
+    """A log an excitation stopped early (here a device lost at 1.5 s of a 2 s run) is refused
+    with the command's message, and with allow_incomplete=True fitted to exactly the report of
+    `dentsim calibrate --allow-incomplete` (issue #33)."""
+    cut = tmp_path / "cut.csv"
+    r = cli("excite", "-o", cut, "--duration", 2, "--design-iterations", 0,
+            "--inject-fault", "device-loss@1.5", check=False)
+    assert r.returncode == 3, (r.stdout, r.stderr)
+    log = dentsim.read_calibration_log(cut)
+    assert log["incomplete"] and "device" in log["incomplete"]
+    assert 0 < len(log["t"]) < 2001  # the log up to the stop
+    with pytest.raises(dentsim.InputError) as e:
+        dentsim.calibrate(cut, **FIT)
+    message = str(e.value)
+    assert message.startswith(f"{cut}: the log is marked incomplete ({log['incomplete']})")
+    assert message.endswith("refused unless allow_incomplete=True is given")
+    cli.error("calibrate", cut, "--json", tmp_path / "j.json", "-o", tmp_path / "m.json")
+    assert not (tmp_path / "j.json").exists()
+
+    cli("calibrate", cut, "--json", tmp_path / "fit.json", "-o", tmp_path / "model.json",
+        "--max-samples", FIT["max_samples"], "--allow-incomplete")
+    expected = json.loads((tmp_path / "fit.json").read_text())
+    assert expected["log_incomplete"] == log["incomplete"]
+    fit = dentsim.calibrate(cut, allow_incomplete=True, **FIT)
+    for key in expected:
+        assert fit[key] == expected[key], key
+
+
+def test_a_complete_log_reads_as_complete(excite_log):
+    assert dentsim.read_calibration_log(excite_log)["incomplete"] is None
