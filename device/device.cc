@@ -122,11 +122,14 @@ std::uint32_t condition_command(const VecX& tau_cmd, const DeviceLimits& limits,
 }
 
 std::uint32_t check_sample(const VecX& q_prev, double t_prev, const VecX& q, double t,
-                           const DeviceLimits& limits) {
+                           const DeviceLimits& limits, double nominal_period) {
   std::uint32_t faults = kFaultNone;
   if (!(t > t_prev)) faults |= kFaultNonMonotonicTime;
+  const double periods =
+      nominal_period > 0.0 && t > t_prev ? std::max(1.0, (t - t_prev) / nominal_period) : 1.0;
+  const double max_step = limits.max_joint_step * periods;
   for (Eigen::Index i = 0; i < q.size(); ++i) {
-    if (!(std::abs(q[i] - q_prev[i]) <= limits.max_joint_step)) faults |= kFaultEncoderJump;
+    if (!(std::abs(q[i] - q_prev[i]) <= max_step)) faults |= kFaultEncoderJump;
   }
   return faults;
 }

@@ -137,7 +137,10 @@ std::uint32_t condition_command(const VecX& tau_cmd, const DeviceLimits& limits,
                                 VecX& tau_out);
 
 // Faults visible in a new sample given the previous one: non-monotonic time and encoder jumps.
+// With nominal_period > 0 the encoder step allowed is max_joint_step per nominal period elapsed
+// (at least one): a late sample (a callback the scheduler ran late, the arm moving meanwhile) may
+// have moved by that many steps (issue #33).
 std::uint32_t check_sample(const VecX& q_prev, double t_prev, const VecX& q, double t,
-                           const DeviceLimits& limits);
+                           const DeviceLimits& limits, double nominal_period = 0.0);
 
 }  // namespace dentsim

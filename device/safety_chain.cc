@@ -111,9 +111,12 @@ std::uint32_t SafetyChain::apply(const DeviceSample& s, const VecX& tau_cmd, dou
   }
   // 4. guards on the sample and the device's signals.
   if (had_prev && limits_.monotonic_time && !(s.t > t_last)) f |= kFaultNonMonotonicTime;
+  // The encoder step is credible per nominal period: a late sample (a callback the scheduler ran
+  // late, the arm moving meanwhile) may have moved by as many steps as periods elapsed.
+  const double max_step = limits_.max_joint_step * std::max(1.0, T / limits_.nominal_period);
   for (Eigen::Index i = 0; i < n; ++i) {
     if (had_prev && limits_.max_joint_step > 0.0 &&
-        !(std::abs(s.q[i] - q_prev_[i]) <= limits_.max_joint_step)) {
+        !(std::abs(s.q[i] - q_prev_[i]) <= max_step)) {
       f |= kFaultEncoderJump;
     }
     q_prev_[i] = s.q[i];

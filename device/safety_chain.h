@@ -7,7 +7,8 @@
 //                          the nominal period on the first tick; tau_prev the last output)
 //   3. saturation          tau_i = clamp(tau_i, -tau_max,i, tau_max,i)
 //   4. guards              t_k <= t_k-1 (monotonic_time)              -> non_monotonic_time
-//                          |q_k,i - q_k-1,i| > max_joint_step         -> encoder_jump
+//                          |q_k,i - q_k-1,i| > max_joint_step x max(1, (t_k - t_k-1) / T_nom)
+//                                                                     -> encoder_jump
 //                          |qd_i| > qd_max,i                          -> velocity_limit
 //                          q_i outside [q_min,i, q_max,i]             -> workspace_limit
 //                          watchdog: last tick's execution time > budget -> watchdog
@@ -46,7 +47,9 @@ struct SafetyLimits {
   // The sample's own guards: a clock that does not advance (a frozen or backwards device clock,
   // the same sample repeated) and an encoder that jumps (a lost frame, a cable fault).
   bool monotonic_time = false;  // t_k <= t_k-1 is a fault
-  double max_joint_step = 0.0;  // [rad] |q_k - q_k-1| beyond it on any joint (0: no guard)
+  // [rad] |q_k - q_k-1| beyond it on any joint, per nominal period elapsed (a late sample may have
+  // moved by that many steps); 0: no guard
+  double max_joint_step = 0.0;
 };
 
 // Defaults for the Phantom Premium 1.5/6DoF: tau_max = phantom_tau_max(), rate 200 tau_max per s

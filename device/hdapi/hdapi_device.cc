@@ -240,7 +240,7 @@ HDCallbackCode HdapiDevice::tick() {
     vel_.reset(s_.q, t, VecX::Zero(6));
     first_tick_ = false;
   } else {
-    f |= check_sample(q_prev_, s_.t, s_.q, t, limits_);
+    f |= check_sample(q_prev_, s_.t, s_.q, t, limits_, caps_.nominal_period);
     s_.qd = vel_.update(s_.q, t);
   }
   s_.t = t;

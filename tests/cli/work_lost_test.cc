@@ -98,6 +98,21 @@ TEST(WorkLost, TerminatedRunExits143WithPartialOutputs) {
   EXPECT_EQ(read_json_file(out / "report.json")["partial"], true) << r.output;
 }
 
+// The --json of a command stopped by `sig`: exit 128 + sig, the line "dentsim: interrupted:
+// COMMAND stopped by SIGNAL", "partial": true with a reason naming the signal (null when the file
+// is missing: the caller's ASSERT on is_object() then fails).
+nlohmann::json partial_json(const Signalled& r, const std::string& command, int sig,
+                            const fs::path& json) {
+  const std::string name = sig == SIGINT ? "SIGINT" : "SIGTERM";
+  EXPECT_EQ(r.status, 128 + sig) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("dentsim: interrupted: " + command + " stopped by " + name));
+  const nlohmann::json j = read_json_file(json);
+  if (!j.is_object()) return j;
+  EXPECT_EQ(j["partial"], true);
+  EXPECT_THAT(j["partial_reason"].get<std::string>(), HasSubstr(name));
+  return j;
+}
+
 // Ctrl-C during `dentsim zwidth`: no new job starts, the jobs done go to --json marked partial.
 TEST(WorkLost, InterruptedZwidthWritesPartialJson) {
   const fs::path d = fresh_temp_dir("dentsim_work_lost_zwidth");
@@ -105,11 +120,8 @@ TEST(WorkLost, InterruptedZwidthWritesPartialJson) {
   const Signalled r = run_and_signal({"zwidth", "--quick", "--threads", "1", "--methods",
                                       "explicit", "--operators", "force", "--json", json.string()},
                                      "dentsim zwidth:", SIGINT);
-  EXPECT_EQ(r.status, 130) << r.output;
-  const nlohmann::json j = read_json_file(json);
+  const nlohmann::json j = partial_json(r, "zwidth", SIGINT, json);
   ASSERT_TRUE(j.is_object()) << r.output;
-  EXPECT_EQ(j["partial"], true);
-  EXPECT_THAT(j["partial_reason"].get<std::string>(), HasSubstr("SIGINT"));
   EXPECT_LT(j["completed_jobs"].size(), j["grid_runs"].get<std::size_t>());
 }
 
@@ -123,12 +135,8 @@ TEST(WorkLost, InterruptedCalibrateSeedsWritesPartialJson) {
       {"calibrate-seeds", "--count", "3", "--duration", "2", "--design-iterations", "0",
        "--max-samples", "300", "--json", json.string(), "--out", (d / "seeds").string()},
       "calibrate-seeds: seed 2: excite", SIGTERM);
-  EXPECT_EQ(r.status, 143) << r.output;
-  EXPECT_THAT(r.output, HasSubstr("dentsim: interrupted: calibrate-seeds stopped by SIGTERM"));
-  const nlohmann::json j = read_json_file(json);
+  const nlohmann::json j = partial_json(r, "calibrate-seeds", SIGTERM, json);
   ASSERT_TRUE(j.is_object()) << r.output;
-  EXPECT_EQ(j["partial"], true);
-  EXPECT_THAT(j["partial_reason"].get<std::string>(), HasSubstr("SIGTERM"));
   EXPECT_EQ(j["command"], "calibrate-seeds");
   ASSERT_EQ(j["seeds"].size(), 1u) << j.dump();
   EXPECT_EQ(j["seeds"][0]["seed"], 1);
@@ -149,12 +157,8 @@ TEST(WorkLost, InterruptedContactSweepWritesPartialJson) {
                                       "--models", "sdf", "--probes", "400", "--data-dir", "",
                                       "--json", json.string()},
                                      "crosscheck contact:", SIGINT);
-  EXPECT_EQ(r.status, 130) << r.output;
-  EXPECT_THAT(r.output, HasSubstr("dentsim: interrupted: crosscheck contact stopped by SIGINT"));
-  const nlohmann::json j = read_json_file(json);
+  const nlohmann::json j = partial_json(r, "crosscheck contact", SIGINT, json);
   ASSERT_TRUE(j.is_object()) << r.output;
-  EXPECT_EQ(j["partial"], true);
-  EXPECT_THAT(j["partial_reason"].get<std::string>(), HasSubstr("SIGINT"));
   ASSERT_FALSE(j["rows"].empty()) << j.dump();
   const nlohmann::json& last = j["rows"].back();
   EXPECT_EQ(last["partial"], true);
@@ -170,11 +174,8 @@ TEST(WorkLost, InterruptedFastCrosscheckWritesPartialJson) {
   const Signalled r = run_and_signal(
       {"crosscheck", "fast", "--stage-ticks", "3000", "--duration", "1", "--json", json.string()},
       "crosscheck fast:", SIGINT);
-  EXPECT_EQ(r.status, 130) << r.output;
-  EXPECT_THAT(r.output, HasSubstr("dentsim: interrupted: crosscheck fast stopped by SIGINT"));
-  const nlohmann::json j = read_json_file(json);
+  const nlohmann::json j = partial_json(r, "crosscheck fast", SIGINT, json);
   ASSERT_TRUE(j.is_object()) << r.output;
-  EXPECT_EQ(j["partial"], true);
   EXPECT_THAT(j["partial_reason"].get<std::string>(), HasSubstr("before"));
 }
 

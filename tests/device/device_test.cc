@@ -67,6 +67,11 @@ TEST(DeviceSampleCheck, TimeMustIncreaseAndEncodersMustNotJump) {
   const VecX q2 = q0 + Eigen::Vector3d(0.0, 0.0, -0.1001);
   EXPECT_EQ(check_sample(q0, 1.0, q2, 1.001, l), kFaultEncoderJump);
   EXPECT_EQ(check_sample(q0, 1.0, q2, 1.0, l), kFaultEncoderJump | kFaultNonMonotonicTime);
+  // With the nominal period (the HDAPI backend): a sample 3 periods late may move 3 steps.
+  const VecX q3 = q0 + Eigen::Vector3d(0.0, 0.0, -0.25);
+  EXPECT_EQ(check_sample(q0, 1.0, q3, 1.003, l, 1e-3), kFaultNone);
+  EXPECT_EQ(check_sample(q0, 1.0, q3, 1.002, l, 1e-3), kFaultEncoderJump);
+  EXPECT_EQ(check_sample(q0, 1.0, q2, 1.0005, l, 1e-3), kFaultEncoderJump);  // at least 1 period
 }
 
 TEST(DeviceFaults, NamesAreStable) {
