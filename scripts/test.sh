@@ -32,7 +32,8 @@ for f in "${flavours[@]}"; do
   # The sanitizer pass runs the tests that need it: every suite of our own code's memory, except
   # - the calibration suites and the `calibrate` / `calibrate-seeds` commands' tests (and their
   #   interrupted runs in WorkLost): Debian ships Ceres only as a static library built without
-  #   ASan, its Eigen instantiations collide with ours at link time (a bad-free inside ceres::Covariance's dense SVD), and their run time is Ceres's;
+  #   ASan, its Eigen instantiations collide with ours at link time (a bad-free inside
+  #   ceres::Covariance's dense SVD), and their run time is Ceres's;
   # - the validation suites (label validation): long numeric sweeps (Z-width, MuJoCo agreement,
   #   time against error) of the code the unit and command-line suites already run under the
   #   sanitizers (the zwidth, crosscheck and bench commands);
