@@ -83,7 +83,7 @@ std::string vec_str(const Eigen::VectorXd& v) { return vec(v); }
 
 PhantomParams default_phantom_params() {
   PhantomParams p;
-  p.name = "Phantom Premium 1.5A/6DoF: Cavusoglu 2002 arm, PHANTOM.md drive train, nominal gimbal";
+  p.name = "Phantom Premium 1.5A/6DoF: Cavusoglu 2002 arm, device_facts.md drive train, nominal gimbal";
   // Cavusoglu, Feygin & Tendick 2002 (docs/device_facts.md §2).
   p.l1_m = 0.215;
   p.l2_m = 0.170;
