@@ -1,17 +1,24 @@
 #!/usr/bin/env python3
-"""Pins the reports of the built-in scenes, bit for bit (issue #31: a renovation changes no result).
+"""Pins the reports of the built-in scenes and of `dentsim zwidth`, bit for bit (issue #31: a
+renovation changes no result).
 
-  report_pins.py write DENTSIM PINS   runs every pinned case twice and writes PINS: every numeric
-                                      leaf of report.json that both runs agree on (timings, which
-                                      a busy machine changes, drop out and are listed), and a
-                                      SHA-256 per column of timeseries.csv
-  report_pins.py check DENTSIM PINS   runs every case once and fails on any pinned value or column
-                                      that is not identical (new keys and columns are allowed)
+  report_pins.py write DENTSIM PINS [CASE ...]
+        runs every pinned case (or only the CASEs named; the others keep their pins) twice and
+        writes PINS: every leaf of report.json (of the zwidth JSON) that both runs agree on
+        (timings, which a busy machine changes, drop out and are listed), and a SHA-256 per
+        column of timeseries.csv. The full `zwidth --quick` grid (360 runs, ~6 min on two idle
+        cores) runs once: its JSON holds no timing.
+  report_pins.py check DENTSIM PINS
+        runs every case once and fails on any pinned value or column that is not identical (new
+        keys and columns are allowed). The `zwidth --quick` case runs only with DENTSIM_STRESS=full
+        (the stress suites' long form); its short form, every method under every operator at one
+        grid point, runs always.
 
 A change that is meant to change results regenerates the pins with `write` in the same commit and
 says why in its message."""
 import hashlib
 import json
+import os
 import pathlib
 import subprocess
 import sys
@@ -25,6 +32,13 @@ CASES = [
     ("probe-groove", ["probe-groove"]),
     ("drill", ["drill"]),
     ("drill-reference", ["drill", "--pipeline", "reference"]),
+]
+# `dentsim zwidth` cases: (name, arguments, long form only).
+ZWIDTH_CASES = [
+    ("zwidth-slice", ["--methods", "explicit", "pmi", "pmi-pd", "--operators", "force", "grip",
+                      "tap", "release", "--k-vc", "800", "--b-vc", "2", "--k-tooth", "3000",
+                      "--threads", "2"], False),
+    ("zwidth-quick", ["--quick", "--threads", "2"], True),
 ]
 
 
@@ -65,18 +79,54 @@ def run(dentsim, args):
         return flatten(report, "", {}), columns(out / "timeseries.csv")
 
 
-def write(dentsim, pins):
+def zwidth(dentsim, args):
+    with tempfile.TemporaryDirectory() as d:
+        out = pathlib.Path(d) / "zwidth.json"
+        r = subprocess.run([dentsim, "zwidth", *args, "--json", str(out)], capture_output=True,
+                           text=True)
+        if r.returncode != 0:
+            raise SystemExit(f"report_pins: dentsim zwidth {' '.join(args)} exited {r.returncode}:\n"
+                             f"{r.stderr}")
+        return flatten(json.loads(out.read_text()), "", {}), {}
+
+
+def all_cases():
+    """(name, args, kind, long form only) of every case."""
+    return ([(n, a, "run", False) for n, a in CASES] +
+            [(n, a, "zwidth", full) for n, a, full in ZWIDTH_CASES])
+
+
+def run_case(dentsim, kind, args):
+    return run(dentsim, args) if kind == "run" else zwidth(dentsim, args)
+
+
+def write(dentsim, pins, only):
+    names = [c[0] for c in all_cases()]
+    unknown = [n for n in only if n not in names]
+    if unknown:
+        raise SystemExit(f"report_pins: unknown case {unknown[0]!r} (cases: {', '.join(names)})")
+    path = pathlib.Path(pins)
+    old = json.loads(path.read_text())["cases"] if only and path.exists() else {}
     doc = {"_what": "scripts/report_pins.py write: report.json leaves and timeseries.csv column "
-                    "hashes of the built-in scenes (tests/sim: ReportPins)", "cases": {}}
-    for name, args in CASES:
-        print(f"report_pins: {name} (twice)", file=sys.stderr, flush=True)
-        (a, ca), (b, cb) = run(dentsim, args), run(dentsim, args)
+                    "hashes of the built-in scenes, and the leaves of `dentsim zwidth`'s JSON "
+                    "(tests/sim: ReportPins)", "cases": {}}
+    for name, args, kind, full in all_cases():
+        if only and name not in only:
+            if name in old:
+                doc["cases"][name] = old[name]
+            continue
+        twice = not full
+        print(f"report_pins: {name} ({'twice' if twice else 'once'})", file=sys.stderr, flush=True)
+        a, ca = run_case(dentsim, kind, args)
+        b, cb = run_case(dentsim, kind, args) if twice else (a, ca)
         keep = {k: v for k, v in a.items()
-                if b.get(k) == v and not k.startswith(MACHINE_DEPENDENT)}
+                if b.get(k) == v and not k.split(".")[-1].startswith(MACHINE_DEPENDENT)
+                and not k.startswith(MACHINE_DEPENDENT)}
         dropped = sorted(k for k in a if k not in keep)
-        doc["cases"][name] = {"args": args, "report": keep, "report_unpinned": dropped,
+        doc["cases"][name] = {"args": args, "kind": kind, "long_form_only": full, "report": keep,
+                              "report_unpinned": dropped,
                               "timeseries_sha256": {k: v for k, v in ca.items() if cb.get(k) == v}}
-    pathlib.Path(pins).write_text(json.dumps(doc, indent=1, sort_keys=True) + "\n")
+    path.write_text(json.dumps(doc, indent=1, sort_keys=True) + "\n")
     print(f"report_pins: wrote {pins}", file=sys.stderr)
 
 
@@ -84,8 +134,12 @@ def check(dentsim, pins):
     doc = json.loads(pathlib.Path(pins).read_text())
     bad = 0
     checked = 0
+    full = os.environ.get("DENTSIM_STRESS") == "full"
     for name, case in doc["cases"].items():
-        report, cols = run(dentsim, case["args"])
+        if case.get("long_form_only") and not full:
+            print(f"report_pins: {name}: long form, runs with DENTSIM_STRESS=full")
+            continue
+        report, cols = run_case(dentsim, case.get("kind", "run"), case["args"])
         for k, v in case["report"].items():
             checked += 1
             if report.get(k, "<missing>") != v:
@@ -99,14 +153,15 @@ def check(dentsim, pins):
                 bad += 1
                 if bad <= 40:
                     print(f"report_pins: {name}: timeseries.csv column {k} differs")
-    print(f"report_pins: {checked} pinned values in {len(doc['cases'])} runs, {bad} differ")
+    print(f"report_pins: {checked} pinned values in {len(doc['cases'])} cases, {bad} differ")
     return 1 if bad else 0
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 4 or sys.argv[1] not in ("write", "check"):
+    if len(sys.argv) < 4 or sys.argv[1] not in ("write", "check") or \
+            (sys.argv[1] == "check" and len(sys.argv) != 4):
         raise SystemExit(__doc__)
     if sys.argv[1] == "write":
-        write(sys.argv[2], sys.argv[3])
+        write(sys.argv[2], sys.argv[3], sys.argv[4:])
         sys.exit(0)
     sys.exit(check(sys.argv[2], sys.argv[3]))
