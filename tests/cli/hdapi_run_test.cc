@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "tests/support/cli.h"
+#include "tests/support/scoped_env.h"
 
 namespace {
 
@@ -259,8 +260,19 @@ TEST(HdapiRun, DroppedCallbackEndsInSchedulerStoppedWithForceOutputDisabled) {
 // while the excitation was designed flung the arm). A fault stops the run with exit 3, one line
 // naming the fault, and the log up to the stop, marked incomplete (here tick 300: during the hold,
 // whatever the machine's load, so no sample).
+// The emulator runs without its catch-up (DENTSIM_HD_EMU_CATCH_UP=0: a tick the loaded scheduler
+// skips does not advance the simulated arm). With it, on a loaded machine (issue #32; load average
+// ~6: 4 of 20 runs of this test or of the command) the excitation's near-limit torque held over a
+// stalled scheduler, or its tracking PD stepped at 4 ms instead of 1 ms, flung a light gimbal
+// joint into a guard (`encoder_jump` at 0.97 s; the excitation's velocity guard, joint 5 at
+// 15 rad/s): the guards did their job, but whether they fire follows the machine's load. Without
+// the catch-up the arm moves only in the ticks that ran, so what the test checks (the backend
+// carries the excitation, the log is complete, the arm is excited) does not depend on the load:
+// 7 command runs and 3 runs of this test passed at the same load. The catch-up itself is checked
+// by the drill test above.
 TEST(HdapiRun, ExcitationRunsThroughTheBackendAndStopsOnAFault) {
   const fs::path d = fresh("excite");
+  const dentsim::testing::ScopedEnv no_catch_up("DENTSIM_HD_EMU_CATCH_UP", "0");
   for (const bool gravity : {true, false}) {
     const std::string log = (d / (gravity ? "excite.csv" : "no_gravity.csv")).string();
     if (!gravity) ::setenv("DENTSIM_HD_EMU_GRAVITY", "0", 1);

@@ -18,6 +18,7 @@
 
 #include "sim/simulator.h"
 #include "tests/support/cli.h"
+#include "tests/support/scoped_env.h"
 #include "tests/view/picture_check.h"
 #include "view/view.h"
 
@@ -103,30 +104,7 @@ class Xvfb {
   int display_ = -1;
 };
 
-// Sets an environment variable for the scope and restores what was there (or its absence).
-class ScopedEnv {
- public:
-  ScopedEnv(const char* name, const std::string& value) : name_(name) {
-    const char* old = std::getenv(name);
-    had_ = old != nullptr;
-    if (had_) old_ = old;
-    setenv(name, value.c_str(), 1);
-  }
-  ~ScopedEnv() {
-    if (had_) {
-      setenv(name_, old_.c_str(), 1);
-    } else {
-      unsetenv(name_);
-    }
-  }
-  ScopedEnv(const ScopedEnv&) = delete;
-  ScopedEnv& operator=(const ScopedEnv&) = delete;
-
- private:
-  const char* name_;
-  bool had_ = false;
-  std::string old_;
-};
+using dentsim::testing::ScopedEnv;
 
 // The DISPLAY of `server`, for the scope.
 ScopedEnv display_of(const Xvfb& server) {
