@@ -268,8 +268,9 @@ void print_summary(const ZwidthExperimentResult& r) {
     for (std::size_t k = 0; k < ops.size(); ++k) {
       const double z = ex->sweeps[k].quiet_z_width_n_per_m();
       std::printf(" %s %s", operator_name(ops[k]),
-                  quiet_ratio(z > 0.0 ? pd->sweeps[k].quiet_z_width_n_per_m() / z
-                                      : std::nan(""))
+                  quiet_ratio(z > 0.0 && pd->sweeps[k].quiet_z_width_n_per_m() > 0.0
+                                  ? pd->sweeps[k].quiet_z_width_n_per_m() / z
+                                  : std::nan(""))
                       .c_str());
     }
   }

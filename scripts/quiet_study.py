@@ -30,9 +30,9 @@ Two jobs, both small and dependency-light (python3 + numpy):
   quiet_study.py gains DENTSIM OUT [--scenes NAME ...] [--k N/M ...] [--kalman 0 1]
       the built-in scenes' gains (docs/derivations/quiet_stiffness.md section 7): runs each
       built-in scene (`DENTSIM run NAME --show`) with tooth.k_tooth_n_per_m = K and
-      method.encoder_kalman on/off for every candidate, measures each run as `measure` does, and
-      picks per scene by one rule (RULE below), the same for every scene. Prints one JSON line per
-      run and one per scene with the pick.
+      method.encoder_kalman on/off for every candidate, measures each run from its report.json
+      (the run report's quiet measures, sim/quiet_measures.h: the issue's measures), and picks per scene by one rule (RULE below), the same for every scene. Prints one JSON line per
+      run and one per scene with the pick. --reuse: measure OUT/TAG/report.json where present.
 
 RULE (`gains`): a candidate is quiet when both ripples <= 5 %, contact on every tick of the
 window, no loss, free RMS <= 0.03 N and no fault (issue #29's targets). The pick is the stiffest
@@ -199,6 +199,35 @@ def pick(cands):
     return min(cands, key=lambda m: (len(failed_criteria(m)), m.get("losses", 1 << 30), worst(m), -m["k"]))
 
 
+def report_measures(rep):
+    """RULE's measures from a run's report.json (the product's, sim/quiet_measures.h): over the
+    scene's steady phases (from first contact + 0.3 s to the phase's last key) the worst ripple of
+    the contact force and of the device force, the smallest contact fraction, the losses summed,
+    the static stiffness (mean device force / mean device penetration, the first phase), and the
+    free-space force the hand feels while moving."""
+    q = rep["quiet"]
+    ph = q["phases"]
+    nan = float("nan")
+
+    def worst(key):
+        vals = [p[key] if p[key] is not None else nan for p in ph]
+        return max(vals) if vals and all(v == v for v in vals) else nan
+    return {
+        "fault": bool(rep.get("faults")) or not ph,
+        "ripple_contact": worst("ripple_contact_force"),
+        "ripple_device": worst("ripple_device_force"),
+        "contact_fraction": min(p["contact_fraction"] for p in ph) if ph else 0.0,
+        "losses": sum(p["contact_losses"] for p in ph),
+        "k_static_n_per_m": ph[0]["static_stiffness_n_per_m"] if ph else nan,
+        "free_rms_n": q["free_space"]["moving_force_rms_n"],
+        "still_pulses": q["free_space"]["still_pulses"],
+        "energy_virtual_j": rep["virtual_energy_generated_j"],
+        "rendered_stiffness_n_per_m": rep["rendered_stiffness_n_per_m"],
+        "hand_work_min_j": rep["hand_work_min_j"],
+        "passive_at_hand": rep["passive_at_hand"],
+    }
+
+
 def gains(args):
     import os
     import subprocess
@@ -217,18 +246,17 @@ def gains(args):
                 with open(path, "w") as fh:
                     json.dump(doc, fh, indent=1)
                 run_dir = os.path.join(args.out, tag)
-                res = subprocess.run([args.dentsim, "run", path, "--out", run_dir],
-                                     capture_output=True, text=True)
+                rc = 0
+                if not (args.reuse and os.path.exists(os.path.join(run_dir, "report.json"))):
+                    rc = subprocess.run([args.dentsim, "run", path, "--out", run_dir],
+                                        capture_output=True, text=True).returncode
                 m = {"scene": name, "k": k, "kalman": bool(kal)}
                 try:
                     with open(os.path.join(run_dir, "report.json")) as fh:
                         rep = json.load(fh)
-                    m["fault"] = bool(rep.get("faults")) or res.returncode != 0
-                    m["rendered_stiffness_n_per_m"] = rep.get("rendered_stiffness_n_per_m")
-                    m["passive_at_hand"] = rep.get("passive_at_hand")
-                    ns = argparse.Namespace(dir=run_dir, t_from=None, t_to=None, json=True)
-                    m.update(measure_dict(ns))
-                except (OSError, ValueError, SystemExit, IndexError, KeyError) as e:
+                    m.update(report_measures(rep))
+                    m["fault"] = m["fault"] or rc != 0
+                except (OSError, ValueError, IndexError, KeyError, TypeError) as e:
                     m["fault"] = True
                     m["error"] = str(e)
                 cands.append(m)
@@ -264,6 +292,7 @@ def main():
     ga.add_argument("--scenes", nargs="+", default=["probe", "probe-groove", "drill"])
     ga.add_argument("--k", nargs="+", type=float, default=[3000.0, 4500.0, 6000.0, 12000.0])
     ga.add_argument("--kalman", nargs="+", type=int, default=[0, 1])
+    ga.add_argument("--reuse", action="store_true", help="measure OUT/TAG/report.json if present")
     a = p.parse_args()
     if a.cmd == "scene":
         scene(a)
