@@ -47,6 +47,8 @@ struct ZwidthOptions {
   bool observer_unmatched = false;
   double grasp_mass = 0.0;
   bool grip_detector = false;
+  bool encoder_kalman = false;    // --encoder-kalman: method.encoder_kalman on every run
+  bool lag_compensation = false;  // --lag-compensation: method.lag_compensation on every run
   std::vector<double> tap_speeds;
   double proxy_damping = -1.0;  // < 0: the rule b_2 = k_vc T / 2
   std::string device_model;     // --device MODEL ("" = the default model)
@@ -266,8 +268,9 @@ void print_summary(const ZwidthExperimentResult& r) {
     for (std::size_t k = 0; k < ops.size(); ++k) {
       const double z = ex->sweeps[k].quiet_z_width_n_per_m();
       std::printf(" %s %s", operator_name(ops[k]),
-                  quiet_ratio(z > 0.0 ? pd->sweeps[k].quiet_z_width_n_per_m() / z
-                                      : std::nan(""))
+                  quiet_ratio(z > 0.0 && pd->sweeps[k].quiet_z_width_n_per_m() > 0.0
+                                  ? pd->sweeps[k].quiet_z_width_n_per_m() / z
+                                  : std::nan(""))
                       .c_str());
     }
   }
@@ -340,6 +343,8 @@ void run_zwidth(const ZwidthOptions& o) {
     throw InputError("--grip-detector: needs --grasp-mass > 0 (the mass it switches)");
   }
   sc.grip_detector = o.grip_detector;
+  sc.encoder_kalman = o.encoder_kalman;
+  sc.lag_compensation = o.lag_compensation;
   if (o.proxy_damping >= 0.0) {
     if (!std::isfinite(o.proxy_damping))
       throw InputError("--proxy-damping: expected a finite value");
@@ -485,6 +490,12 @@ void setup_zwidth(CLI::App& app) {
   sub->add_flag("--grip-detector", o->grip_detector,
                 "With --grasp-mass: judge tick by tick whether the hand is on the tool and use "
                 "its mass only then (reference/grip_detector.h)");
+  sub->add_flag("--encoder-kalman", o->encoder_kalman,
+                "Every run with the method block's encoder Kalman filter (method.encoder_kalman: "
+                "a sub-count estimate of the device state, reference/encoder_kalman.h)");
+  sub->add_flag("--lag-compensation", o->lag_compensation,
+                "Every run with the method block's loop-lag compensation "
+                "(method.lag_compensation, reference/lag_compensation.h)");
   sub->add_option("--proxy-damping", o->proxy_damping,
                   "A fixed proxy damping b_2 [N s/m] for every method instead of the rule "
                   "b_2 = K_vc T / 2");

@@ -26,6 +26,19 @@ Two jobs, both small and dependency-light (python3 + numpy):
                          window, while the hand moves (0.2 s to the first contact) [N]
       These are this study's own measures; the run report's (device/quiet_measures.h) are the
       product's.
+
+  quiet_study.py gains DENTSIM OUT [--scenes NAME ...] [--k N/M ...] [--kalman 0 1]
+      the built-in scenes' gains (docs/derivations/quiet_stiffness.md section 7): runs each
+      built-in scene (`DENTSIM run NAME --show`) with tooth.k_tooth_n_per_m = K and
+      method.encoder_kalman on/off for every candidate, measures each run from its report.json
+      (the run report's quiet measures, sim/quiet_measures.h: the issue's measures), and picks per scene by one rule (RULE below), the same for every scene. Prints one JSON line per
+      run and one per scene with the pick. --reuse: measure OUT/TAG/report.json where present.
+
+RULE (`gains`): a candidate is quiet when both ripples <= 5 %, contact on every tick of the
+window, no loss, free RMS <= 0.03 N and no fault (issue #29's targets). The pick is the stiffest
+quiet candidate; when none is quiet, the candidate that fails the fewest of those five criteria,
+then has the fewest losses, then the smallest worst ripple (contact or device), ties to the
+stiffer. Among equal K the same order decides between the filter on and off.
 """
 import argparse
 import csv
@@ -110,6 +123,15 @@ def ripple(x, n_avg):
 
 
 def measure(args):
+    out = measure_dict(args)
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(" ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
+                       for k, v in out.items() if k != "window_s"))
+
+
+def measure_dict(args):
     s = read_series(args.dir + "/timeseries.csv")
     t = s["t_s"]
     dt = float(np.median(np.diff(t)))
@@ -141,11 +163,108 @@ def measure(args):
         "energy_virtual_j": float(s["energy_virtual_j"][-1]),
         "hand_work_min_j": float(np.min(s["hand_work_j"])),
     }
-    if args.json:
-        print(json.dumps(out))
-    else:
-        print(" ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
-                       for k, v in out.items() if k != "window_s"))
+    return out
+
+
+QUIET_RIPPLE = 0.05
+QUIET_FREE_RMS_N = 0.03
+
+
+def failed_criteria(m):
+    """The quiet criteria of RULE a measured run fails (a faulted run fails them all)."""
+    if m.get("fault"):
+        return ["fault"]
+    bad = []
+    for key in ("ripple_contact", "ripple_device"):
+        if not (m[key] <= QUIET_RIPPLE):  # nan fails
+            bad.append(key)
+    if not (m["contact_fraction"] >= 1.0):
+        bad.append("contact_fraction")
+    if m["losses"] > 0:
+        bad.append("losses")
+    if not (m["free_rms_n"] <= QUIET_FREE_RMS_N):
+        bad.append("free_rms")
+    return bad
+
+
+def pick(cands):
+    """RULE: the stiffest quiet candidate, else the one failing the fewest criteria, then the
+    fewest losses, then the smallest worst ripple, ties to the stiffer."""
+    def worst(m):
+        r = max(m.get("ripple_contact", float("nan")), m.get("ripple_device", float("nan")))
+        return r if r == r else float("inf")
+    quiet = [m for m in cands if not failed_criteria(m)]
+    if quiet:
+        return max(quiet, key=lambda m: (m["k"], -worst(m)))
+    return min(cands, key=lambda m: (len(failed_criteria(m)), m.get("losses", 1 << 30), worst(m), -m["k"]))
+
+
+def report_measures(rep):
+    """RULE's measures from a run's report.json (the product's, sim/quiet_measures.h): over the
+    scene's steady phases (from first contact + 0.3 s to the phase's last key) the worst ripple of
+    the contact force and of the device force, the smallest contact fraction, the losses summed,
+    the static stiffness (mean device force / mean device penetration, the first phase), and the
+    free-space force the hand feels while moving."""
+    q = rep["quiet"]
+    ph = q["phases"]
+    nan = float("nan")
+
+    def worst(key):
+        vals = [p[key] if p[key] is not None else nan for p in ph]
+        return max(vals) if vals and all(v == v for v in vals) else nan
+    return {
+        "fault": bool(rep.get("faults")) or not ph,
+        "ripple_contact": worst("ripple_contact_force"),
+        "ripple_device": worst("ripple_device_force"),
+        "contact_fraction": min(p["contact_fraction"] for p in ph) if ph else 0.0,
+        "losses": sum(p["contact_losses"] for p in ph),
+        "k_static_n_per_m": ph[0]["static_stiffness_n_per_m"] if ph else nan,
+        "free_rms_n": q["free_space"]["moving_force_rms_n"],
+        "still_pulses": q["free_space"]["still_pulses"],
+        "energy_virtual_j": rep["virtual_energy_generated_j"],
+        "rendered_stiffness_n_per_m": rep["rendered_stiffness_n_per_m"],
+        "hand_work_min_j": rep["hand_work_min_j"],
+        "passive_at_hand": rep["passive_at_hand"],
+    }
+
+
+def gains(args):
+    import os
+    import subprocess
+    os.makedirs(args.out, exist_ok=True)
+    for name in args.scenes:
+        base = json.loads(subprocess.run([args.dentsim, "run", name, "--show"], check=True,
+                                         capture_output=True, text=True).stdout)
+        cands = []
+        for k in args.k:
+            for kal in args.kalman:
+                doc = json.loads(json.dumps(base))
+                doc["tooth"]["k_tooth_n_per_m"] = k
+                doc["method"]["encoder_kalman"] = bool(kal)
+                tag = f"{name}-k{int(k)}-kal{int(kal)}"
+                path = os.path.join(args.out, tag + ".json")
+                with open(path, "w") as fh:
+                    json.dump(doc, fh, indent=1)
+                run_dir = os.path.join(args.out, tag)
+                rc = 0
+                if not (args.reuse and os.path.exists(os.path.join(run_dir, "report.json"))):
+                    rc = subprocess.run([args.dentsim, "run", path, "--out", run_dir],
+                                        capture_output=True, text=True).returncode
+                m = {"scene": name, "k": k, "kalman": bool(kal)}
+                try:
+                    with open(os.path.join(run_dir, "report.json")) as fh:
+                        rep = json.load(fh)
+                    m.update(report_measures(rep))
+                    m["fault"] = m["fault"] or rc != 0
+                except (OSError, ValueError, IndexError, KeyError, TypeError) as e:
+                    m["fault"] = True
+                    m["error"] = str(e)
+                cands.append(m)
+                print(json.dumps(m), flush=True)
+        best = pick(cands)
+        print(json.dumps({"scene": name, "pick": {"k": best["k"], "kalman": best["kalman"]},
+                          "quiet": not failed_criteria(best),
+                          "fails": failed_criteria(best)}), flush=True)
 
 
 def main():
@@ -167,11 +286,20 @@ def main():
     me.add_argument("--from", dest="t_from", type=float)
     me.add_argument("--to", dest="t_to", type=float)
     me.add_argument("--json", action="store_true")
+    ga = sub.add_parser("gains")
+    ga.add_argument("dentsim")
+    ga.add_argument("out")
+    ga.add_argument("--scenes", nargs="+", default=["probe", "probe-groove", "drill"])
+    ga.add_argument("--k", nargs="+", type=float, default=[3000.0, 4500.0, 6000.0, 12000.0])
+    ga.add_argument("--kalman", nargs="+", type=int, default=[0, 1])
+    ga.add_argument("--reuse", action="store_true", help="measure OUT/TAG/report.json if present")
     a = p.parse_args()
     if a.cmd == "scene":
         scene(a)
     elif a.cmd == "patch":
         patch(a)
+    elif a.cmd == "gains":
+        gains(a)
     else:
         measure(a)
 

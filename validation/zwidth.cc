@@ -350,6 +350,11 @@ std::unique_ptr<Pipeline> zwidth_pipeline(Method method, const ZwidthGains& gain
     pc.grasp_model = grasp;
     pc.grip_detector = sc.grip_detector_params;
   }
+  // As sim/simulator.cc sets them from a scene's method block.
+  pc.encoder_kalman = sc.encoder_kalman;
+  pc.encoder_quantum = dev.capabilities().encoder_quantum;
+  pc.lag_compensation = sc.lag_compensation;
+  pc.velocity_estimate = matched_observer_input(dev.capabilities());
   DeviceSample s0 = dev.make_sample();
   dev.read(s0);
   if (method == Method::kPmiPd) {

@@ -129,6 +129,12 @@ struct ZwidthScenario {
   // (reference/grip_detector.h) and use the hand's mass only while it is; false = always.
   bool grip_detector = false;
   GripDetectorParams grip_detector_params;
+  // The method block's remedies of issue #29 (sim/scene.h MethodSpec), for every run of the grid:
+  // the encoder Kalman filter's sub-count estimate of the device state (reference/
+  // encoder_kalman.h, with the device's encoder quanta) and the loop-lag compensation (reference/
+  // lag_compensation.h, with the driver's velocity estimate). Off, as in a scene.
+  bool encoder_kalman = false;
+  bool lag_compensation = false;
   // true: the pipeline scales tau uniformly into the torque limits (direction kept, reference/
   // tick.h); false: the device clips each joint (the command chain, as OpenHaptics does).
   bool pipeline_saturation = true;

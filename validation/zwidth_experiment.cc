@@ -544,6 +544,8 @@ nlohmann::json zwidth_experiment_json(const ZwidthExperimentResult& r) {
   out["observer_input_matched"] = sc.observer_input_matched;
   out["grasp_mass_scale"] = sc.grasp_mass_scale;
   out["grip_detector"] = sc.grip_detector;
+  out["encoder_kalman"] = sc.encoder_kalman;
+  out["lag_compensation"] = sc.lag_compensation;
   out["proxy_damping_rule"] = sc.proxy_damping_rule;
   out["proxy_damping_n_s_per_m"] = sc.proxy.damping_lin;
   out["tip_radius_m"] = sc.tip_radius_m;

@@ -42,6 +42,8 @@ TEST(ZwidthCli, JsonCarriesTheContractKeys) {
   EXPECT_EQ(j["observer_gain_per_s"].get<double>(), 200.0);
   EXPECT_TRUE(j["observer_input_matched"].get<bool>());
   EXPECT_FALSE(j["grip_detector"].get<bool>());
+  EXPECT_FALSE(j["encoder_kalman"].get<bool>());  // the method block's switches, off by default
+  EXPECT_FALSE(j["lag_compensation"].get<bool>());
   const auto& run0 = j["methods"]["pmi"]["operators"]["force"]["points"][0]["runs"][0];
   EXPECT_EQ(run0["grip_switches"].get<int>(), 0);
   EXPECT_EQ(run0["release_detected_after_s"].get<double>(), -1.0);  // no detector
@@ -51,6 +53,33 @@ TEST(ZwidthCli, JsonCarriesTheContractKeys) {
   // the series value PMI can reach, K_vc K_tooth / (K_vc + K_tooth) = 1548 N/m.
   EXPECT_GT(j["methods"]["pmi-pd"]["z_width_n_per_m"].get<double>(), 1548.0);
   EXPECT_EQ(j["methods"]["pmi-pd"]["gains"]["k_tooth_n_per_m"].get<double>(), 3000.0);
+  fs::remove_all(dir);
+}
+
+// --encoder-kalman / --lag-compensation (issue #29): the method block's switches on every run,
+// recorded in the JSON; they change the run (the filter's sub-count estimate feeds the coupling:
+// PMI + PD's static stiffness and ripple differ from the same point without them).
+TEST(ZwidthCli, RemedySwitchesReachEveryRunAndAreRecorded) {
+  const fs::path dir = testing::fresh_temp_dir("dentsim_zwidth_remedies");
+  const std::string grid =
+      "zwidth --testbed axis --methods pmi-pd --operators force --k-vc 3200 --b-vc 2 "
+      "--k-tooth 3000 --threads 1 --json ";
+  const auto off = run_dentsim(grid + (dir / "off.json").string());
+  ASSERT_EQ(off.status, 0) << off.output;
+  const auto on = run_dentsim(grid + (dir / "on.json").string() +
+                              " --encoder-kalman --lag-compensation");
+  ASSERT_EQ(on.status, 0) << on.output;
+  std::ifstream fo(dir / "off.json"), fn(dir / "on.json");
+  const nlohmann::json a = nlohmann::json::parse(fo), b = nlohmann::json::parse(fn);
+  EXPECT_FALSE(a["encoder_kalman"].get<bool>());
+  EXPECT_TRUE(b["encoder_kalman"].get<bool>());
+  EXPECT_TRUE(b["lag_compensation"].get<bool>());
+  const auto& ra = a["methods"]["pmi-pd"]["operators"]["force"]["points"][0]["runs"][0];
+  const auto& rb = b["methods"]["pmi-pd"]["operators"]["force"]["points"][0]["runs"][0];
+  EXPECT_NE(ra["ripple_device_force"].get<double>(), rb["ripple_device_force"].get<double>());
+  const auto bad = run_dentsim("zwidth --testbed axis --encoder-kalman=maybe");
+  EXPECT_EQ(bad.status, 2) << bad.output;
+  EXPECT_NE(bad.output.find("--encoder-kalman"), std::string::npos) << bad.output;
   fs::remove_all(dir);
 }
 

@@ -76,6 +76,7 @@ TEST(LagCompensation, TheLagIsTheEstimatorsExactLagOnConstantAcceleration) {
 TEST(LagCompensation, TheRigDescribesTheDriversEstimate) {
   Scene scene = load_scene("probe");
   scene.method.lag_compensation = true;
+  scene.method.encoder_kalman = false;  // the driver's estimate (the built-ins have the filter on)
   const std::unique_ptr<SceneRig> rig = build_scene_rig(scene, SceneRigOptions{});
   const auto& staged = dynamic_cast<const StagedPipeline&>(*rig->pipeline);
   EXPECT_TRUE(staged.model().lag_compensation);

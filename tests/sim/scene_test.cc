@@ -28,7 +28,8 @@ TEST(Scene, BuiltinScenesParse) {
   EXPECT_EQ(load_scene("drill").method.method, Method::kPmiPd);
   EXPECT_DOUBLE_EQ(load_scene("drill").tool.bur_radius, 0.5e-3);
   // Every built-in: the surface proxy, PMI + PD with the hand's mass and the grip detector at the
-  // Z-width headline's gains (docs/results/zwidth.md: K_vc 1200, b_vc 4, K_tooth 12000).
+  // Z-width headline's coupling (docs/results/zwidth.md: K_vc 1200, b_vc 4), and K_tooth 3000 with
+  // the encoder Kalman filter, the quiet pick of docs/derivations/quiet_stiffness.md section 7.
   for (const std::string& name : builtin_scene_names()) {
     const Scene s = load_scene(name);
     EXPECT_EQ(s.tooth.contact_model, "sdf") << name;
@@ -37,7 +38,8 @@ TEST(Scene, BuiltinScenesParse) {
     EXPECT_DOUBLE_EQ(s.method.grasp_mass_scale, 1.0) << name;
     EXPECT_DOUBLE_EQ(s.method.coupling.k_lin, 1200.0) << name;
     EXPECT_DOUBLE_EQ(s.method.coupling.b_lin, 4.0) << name;
-    EXPECT_DOUBLE_EQ(s.tooth.k_tooth, 12000.0) << name;
+    EXPECT_DOUBLE_EQ(s.tooth.k_tooth, 3000.0) << name;
+    EXPECT_TRUE(s.method.encoder_kalman) << name;
   }
   // A scene without the key gets the default model.
   std::string text = builtin_scene_text("probe");
@@ -70,7 +72,7 @@ TEST(Scene, BadFieldsAreNamed) {
             std::string::npos);
   EXPECT_NE(error_of("\"name\": \"pmi-pd\"", "\"name\": \"rk4\"").find("method.name"),
             std::string::npos);
-  EXPECT_NE(error_of("\"k_tooth_n_per_m\": 12000", "\"k_toth_n_per_m\": 12000")
+  EXPECT_NE(error_of("\"k_tooth_n_per_m\": 3000", "\"k_toth_n_per_m\": 3000")
                 .find("tooth.k_toth_n_per_m: unknown field"),
             std::string::npos);
   EXPECT_NE(error_of("\"dentsim_scene\": 1", "\"dentsim_scene\": 7").find("dentsim_scene"),
@@ -120,7 +122,7 @@ TEST(Scene, OutOfRangeValuesAreRejectedWithTheField) {
   EXPECT_EQ(error_of("\"k_vc_n_per_m\": 1200", "\"k_vc_n_per_m\": 1200, \"k_vc_n_per_m\": 70"),
             "bad.json: method.k_vc_n_per_m: key given twice in one object (JSON would silently "
             "keep the last)");
-  EXPECT_THAT(error_of("\"k_tooth_n_per_m\": 12000", "\"k_tooth_n_per_m\": 1e200"),
+  EXPECT_THAT(error_of("\"k_tooth_n_per_m\": 3000", "\"k_tooth_n_per_m\": 1e200"),
               ::testing::HasSubstr("bad.json: tooth.k_tooth_n_per_m: must be at most 1e+07"));
   EXPECT_THAT(error_of("\"offset_mm\": [0, 0, 6]", "\"offset_mm\": [0, 0, 1e300]"),
               ::testing::HasSubstr("bad.json: hand.script[0].offset_mm: must be at most 1000"));
