@@ -239,6 +239,31 @@ TEST(SaturationPassive, ASaturatedPressKeepsTheProxyOutsideAndTheHandPortPassive
   EXPECT_GE(on.hand_work_min_j, -1e-6);
 }
 
+// Across the central groove at 1 N (the probe-groove built-in, its hand's press patched), the
+// saturated contact transients turn the hand port active without the shape control (energy flows
+// into the hand: W_h min -2.3 mJ); with it the hand port stays passive (W_h >= -1 uJ) and the
+// contact force's peak drops.
+TEST(SaturationPassive, TheHandPortStaysPassiveAcrossTheGroove) {
+  auto run = [](bool on) {
+    Scene s = load_scene("probe-groove");
+    s.method.saturation_passive = on;
+    for (SceneHandKey& k : s.script) {
+      if (k.phase == "probe") k.force = Vec3(0.0, 0.0, -1.0);
+    }
+    RunOptions o;
+    o.pipeline = "fast";
+    return run_scene(s, o);
+  };
+  const RunResult on = run(true), off = run(false);
+  std::printf("groove 1 N: W_h min %.2e J (on) / %.2e J (off); contact max %.2f / %.2f N\n",
+              on.hand_work_min_j, off.hand_work_min_j, on.max_contact_force_n,
+              off.max_contact_force_n);
+  EXPECT_LT(off.hand_work_min_j, -1e-4);  // the failure it fixes
+  EXPECT_GE(on.hand_work_min_j, -1e-6);
+  EXPECT_LT(on.max_contact_force_n, off.max_contact_force_n);
+  EXPECT_TRUE(on.faults.empty());
+}
+
 // Until a command saturates, every tick is bitwise the same on and off: on the built-in probe
 // (whose contact transients saturate a few ticks), every torque up to and including the first
 // saturated tick's.
@@ -275,24 +300,16 @@ TEST(SaturationPassive, UnsaturatedTicksAreBitwiseUnchanged) {
 // Stage by stage on a saturated press across the central groove (the probe-groove scene at 3 N):
 // the fast pipeline equals the reference with the shape control on, within the crosscheck's bound.
 TEST(SaturationPassive, FastPipelineEqualsTheReferenceOnASaturatedPress) {
-  FastCrosscheckOptions o;
-  o.stage_configs.clear();
+  std::vector<StageConfig> configs;
   for (const char* cm : {"sdf", "faces"}) {
     StageConfig c;
     c.scene = "probe-groove";
     c.contact_model = cm;
     c.press_n = 3.0;
     c.saturation_passive = true;
-    o.stage_configs.push_back(c);
+    configs.push_back(c);
   }
-  o.stage_ticks = 2500;
-  o.adversarial = false;
-  o.scenes.clear();
-  const FastCrosscheckResult r = crosscheck_fast(o);
-  for (const std::string& f : r.failures) ADD_FAILURE() << f;
-  EXPECT_TRUE(r.ok);
-  ASSERT_FALSE(r.stages.empty());
-  for (const StageCrosscheck& s : r.stages) testing::expect_stage_row_agrees(o, s);
+  testing::expect_stage_configs_agree(configs, 2500);
   // The configuration does saturate, and the shape control engages in it.
   Scene scene = load_scene("probe-groove");
   scene.method.saturation_passive = true;
