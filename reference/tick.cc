@@ -17,6 +17,7 @@
 #include "reference/lag_compensation.h"
 #include "reference/observer.h"
 #include "reference/pmi.h"
+#include "reference/saturation_passive.h"
 
 namespace dentsim {
 
@@ -127,6 +128,8 @@ PipelineModel make_pipeline_model(const SixDofDeviceModel& device, const Pipelin
     // low-pass lag (reference/encoder_kalman.h).
     m.velocity_estimate = config.encoder_kalman ? ObserverInput{} : config.velocity_estimate;
   }
+  // Without limits nothing saturates: the shape control has nothing to do.
+  m.saturation_passive = config.saturation_passive && m.saturate;
   m.skip_unneeded = config.skip_unneeded;
   if (!m.skip_unneeded && config.method != Method::kPmiPd) {
     // The decomposition runs (and is discarded) with skips off: it needs M_d factorised.
@@ -182,6 +185,37 @@ void encoder_kalman_step(const PipelineModel& m, PipelineData& d) {
   }
   d.q = d.enc.q;
   d.qd = d.enc.qd;
+}
+
+// The saturation-passive shape control's cap (reference/saturation_passive.h), engaged: the
+// coupling's linear spring (d.coupling, r.T1_vc) limited to the force the device delivers along it.
+void cap_coupling_to_device(const PipelineModel& m, PipelineData& d) {
+  TickResult& r = d.r;
+  const Vec3 e = d.proxy.pose.x - r.device.x;
+  const double stretch = e.norm();
+  if (!(stretch > 0.0)) return;
+  const Vec6 tau_gravity = m.compensate_gravity ? d.dev.g : Vec6::Zero();
+  const double cap =
+      deliverable_force(d.dev.J_t, m.torque_limit, tau_gravity, e / stretch, kSaturationHeadroom);
+  r.coupling_force_cap = cap;
+  d.coupling_capped =
+      cap_coupling_spring(m.coupling.k_lin, r.device.x, d.proxy.pose.x, cap, &d.coupling, &r.T1_vc);
+}
+
+// The saturation-passive shape control's state after this tick's command (unsaturated `tau`, the
+// decomposition's feed-forward at its full scale): engages on a saturated command; sigma the
+// largest feed-forward scale the limits allow, raised at most T / kShapeSigmaRecoveryS a tick;
+// released once sigma is back at 1 and the cap does not bind.
+void update_shape_control(const PipelineModel& m, PipelineData& d, const Vec6& tau) {
+  TickResult& r = d.r;
+  if (!d.shape_engaged && !r.saturated) return;
+  Vec6 b = Vec6::Zero();
+  if (m.method == Method::kPmiPd) b.noalias() = d.dev.J_t.transpose() * d.pd_T1.at(r.V_hat);
+  const Vec6 a = tau - d.shape_sigma * b;  // the command without the feed-forward
+  const double feasible = feasible_feedforward_scale(a, b, m.torque_limit, kSaturationHeadroom);
+  d.shape_sigma = std::min(feasible, d.shape_sigma + d.T / kShapeSigmaRecoveryS);
+  d.shape_engaged = d.shape_sigma < 1.0 || d.coupling_capped || r.saturated;
+  if (!d.shape_engaged) d.shape_sigma = 1.0;
 }
 
 }  // namespace
@@ -279,6 +313,16 @@ TickStatus assemble_given_contact(const PipelineModel& m, PipelineData& d) {
   d.coupling = coupling_proxy_wrench_unchecked(m.coupling, r.device, r.V1, d.proxy, d.T, m.scheme);
   // Device-side coupling (4.3)-(4.4): uses the proxy at k and V_hat_2,k-1.
   r.T1_vc = coupling_device_wrench_unchecked(m.coupling, r.device, r.V1, d.proxy, d.T, m.scheme);
+  // Saturation-passive shape control (reference/saturation_passive.h): engaged only after a
+  // saturated command; otherwise nothing below is touched.
+  const bool shaped = m.saturation_passive && d.shape_engaged;
+  r.shape_sigma = 1.0;
+  r.coupling_force_cap = 0.0;
+  d.coupling_capped = false;
+  if (shaped) {
+    cap_coupling_to_device(m, d);
+    r.shape_sigma = d.shape_sigma;
+  }
   if (m.method == Method::kPmiPd) {
     // The device inertia in maximal coordinates (2.2) under the hypothesis in force.
     Mat6 M_joint = d.dev.M;
@@ -298,7 +342,16 @@ TickStatus assemble_given_contact(const PipelineModel& m, PipelineData& d) {
     d.sys = pmi_inertia_system_unchecked(m.proxy, d.proxy, d.T);
     d.sys.add(d.coupling);
     d.sys.add(d.contact);
-    if (m.method == Method::kPmiPd) d.sys.add(d.pd_T2);
+    if (m.method == Method::kPmiPd) {
+      if (shaped) {
+        AffineWrench T2 = d.pd_T2;  // the proxy's share scaled by sigma with the device's
+        T2.f0 *= d.shape_sigma;
+        T2.G *= d.shape_sigma;
+        d.sys.add(T2);
+      } else {
+        d.sys.add(d.pd_T2);
+      }
+    }
   }
   return TickStatus::kOk;
 }
@@ -343,6 +396,7 @@ TickStatus solve_with(const PipelineModel& m, PipelineData& d,
   r.F_coupling = d.coupling.at(r.V_hat);
   r.F_contact = d.contact.at(r.V_hat) + friction_wrench;
   r.T1_pd = m.method == Method::kPmiPd ? d.pd_T1.at(r.V_hat) : Vec6::Zero();
+  if (m.saturation_passive && d.shape_engaged) r.T1_pd *= d.shape_sigma;  // (saturation_passive.h)
   d.proxy = pmi_advance_unchecked(d.proxy, r.V_hat, d.T);
   return TickStatus::kOk;
 }
@@ -360,6 +414,7 @@ TickStatus command(const PipelineModel& m, PipelineData& d) {
     tau += tau_gravity;
   }
   r.saturated = false;
+  const Vec6 tau_unsaturated = tau;
   if (m.saturate) {
     double scale = 1.0;
     for (int i = 0; i < 6; ++i) {
@@ -376,6 +431,7 @@ TickStatus command(const PipelineModel& m, PipelineData& d) {
       !d.proxy.V.allFinite()) {
     return TickStatus::kNonFiniteOutput;
   }
+  if (m.saturation_passive) update_shape_control(m, d, tau_unsaturated);
   r.tau = tau;
   r.tau_gravity = tau_gravity;
   d.tau_prev = tau;
@@ -396,6 +452,9 @@ TickStatus reset(const PipelineModel& m, PipelineData& d) {
   d.proxy = ProxyState{};
   d.proxy.pose = d.dev.pose;
   d.tau_prev.setZero();
+  d.shape_sigma = 1.0;
+  d.shape_engaged = false;
+  d.coupling_capped = false;
   if (m.observe) {
     const Vec6 beta = d.dev.CTqd - d.dev.g - d.dev.tau_f;
     const Vec6 Mqd = d.dev.M * d.qd;

@@ -65,6 +65,12 @@ struct PipelineConfig {
   // its low-pass cut-off): device/device.h matched_observer_input of the device's capabilities.
   bool lag_compensation = false;
   ObserverInput velocity_estimate;
+  // Shape control passive under actuator saturation (reference/saturation_passive.h; issue #29):
+  // after a tick whose command saturated, the decomposition's feed-forward is scaled by what the
+  // device delivered and the coupling's linear spring is capped at the force the device can
+  // deliver along it. Needs torque_limit; changes nothing while the command does not saturate.
+  // Off by default (as the scene key method.saturation_passive).
+  bool saturation_passive = false;
 };
 
 // Validates `config` against `device` and builds the constant model of the tick. Throws

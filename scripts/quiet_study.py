@@ -13,6 +13,7 @@ Two jobs, both small and dependency-light (python3 + numpy):
   quiet_study.py patch KEY=VALUE ... < scene.json > variant.json
       sets dotted keys of a scene (VALUE is JSON), e.g.
       `dentsim run probe --show | quiet_study.py patch method.encoder_kalman=true`
+      (a list element by its index: hand.script.2.force_n='[0, 0, -3]')
 
   quiet_study.py measure DIR [--from S] [--to S] [--json]
       reads DIR/timeseries.csv of `dentsim run SCENE --out DIR` and prints the quiet measures
@@ -92,8 +93,9 @@ def patch(args):
         node = doc
         parts = key.split(".")
         for p in parts[:-1]:
-            node = node[p]
-        node[parts[-1]] = json.loads(value)
+            node = node[int(p)] if isinstance(node, list) else node[p]
+        last = parts[-1]
+        node[int(last) if isinstance(node, list) else last] = json.loads(value)
     json.dump(doc, sys.stdout, indent=1)
     sys.stdout.write("\n")
 
@@ -120,6 +122,16 @@ def ripple(x, n_avg):
     core = x[half:half + len(avg)]
     mean = np.mean(core)
     return float(np.sqrt(np.mean((core - avg) ** 2)) / mean) if mean > 0 else float("nan")
+
+
+def report_faults(d):
+    try:
+        with open(d + "/report.json") as fh:
+            rep = json.load(fh)
+    except (OSError, ValueError):
+        return []
+    f = rep.get("faults", [])
+    return [x if isinstance(x, str) else json.dumps(x) for x in f] if isinstance(f, list) else [str(f)]
 
 
 def measure(args):
@@ -162,6 +174,11 @@ def measure_dict(args):
         "free_rms_n": float(np.sqrt(np.mean(s["device_force_n"][free] ** 2))) if free.any() else float("nan"),
         "energy_virtual_j": float(s["energy_virtual_j"][-1]),
         "hand_work_min_j": float(np.min(s["hand_work_j"])),
+        # over the whole run (saturation, issue #29 section 6): the proxy's deepest penetration,
+        # the largest contact force, and whether the run ended in a fault (report.json)
+        "proxy_depth_max_m": float(np.max(s["penetration_m"])),
+        "contact_force_max_n": float(np.max(s["contact_force_n"])),
+        "faults": ",".join(report_faults(args.dir)) or "none",
     }
     return out
 

@@ -353,7 +353,7 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
       m, "method",
       {"name", "k_vc_n_per_m", "b_vc_n_s_per_m", "k_vc_ang_n_m_per_rad", "b_vc_ang_n_m_s_per_rad",
        "observer_gain_per_s", "friction_mu", "grasp_mass_scale", "grip_detector",
-       "encoder_kalman", "lag_compensation"});
+       "encoder_kalman", "lag_compensation", "saturation_passive"});
   const std::string mname = rd.string(m, "method", "name");
   try {
     s.method.method = parse_method(mname);
@@ -387,6 +387,7 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   }
   s.method.encoder_kalman = rd.boolean(m, "method", "encoder_kalman", false);
   s.method.lag_compensation = rd.boolean(m, "method", "lag_compensation", false);
+  s.method.saturation_passive = rd.boolean(m, "method", "saturation_passive", false);
   s.method.friction.mu = rd.number(m, "method", "friction_mu", 0.0);
   rd.non_negative("method.friction_mu", s.method.friction.mu);
   rd.at_most("method.friction_mu", s.method.friction.mu, kMaxFrictionMu, "a friction coefficient");

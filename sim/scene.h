@@ -72,6 +72,11 @@ struct SceneMethod {
   // Remedy of issue #29 for the stiff contact mode: the coupling and D_d see the device velocity
   // advanced over the loop's known lags with the device model (reference/lag_compensation.h).
   bool lag_compensation = false;
+  // Issue #29: after a command the motors could not deliver, the virtual side sees only what the
+  // device can deliver (reference/saturation_passive.h). Changes nothing while nothing saturates.
+  // Off by default: the built-in scenes saturate for a few ticks, and on changes what follows
+  // (docs/derivations/quiet_stiffness.md section 6).
+  bool saturation_passive = false;
   FrictionParams friction;
   ProxyParams proxy;
 };

@@ -260,6 +260,7 @@ void make_scene_pipeline(const Scene& scene, const SceneRigOptions& options,
   pc.encoder_kalman = scene.method.encoder_kalman;
   pc.encoder_quantum = g.device->capabilities().encoder_quantum;
   pc.lag_compensation = scene.method.lag_compensation;
+  pc.saturation_passive = scene.method.saturation_passive;
   pc.velocity_estimate = matched_observer_input(g.device->capabilities());
   pc.skip_unneeded = options.skip_unneeded;
   if (options.configure_pipeline) options.configure_pipeline(pc);

@@ -169,6 +169,12 @@ Scene config_scene(const StageConfig& c) {
   scene.method.grip_detector = c.grip_detector;
   scene.tooth.contact_model = c.contact_model;
   scene.method.lag_compensation = c.lag_compensation;
+  scene.method.saturation_passive = c.saturation_passive;
+  if (c.press_n > 0.0) {
+    for (SceneHandKey& k : scene.script) {
+      if (k.force.norm() > 0.0) k.force = Vec3(0.0, 0.0, -c.press_n);
+    }
+  }
   return scene;
 }
 
@@ -433,7 +439,8 @@ void check_scene(const std::string& name, const CheckedImplementation& impl,
 
 std::string StageConfig::name() const {
   return scene + "/" + contact_model + "/" + method_name(method) + (grip_detector ? "+grip" : "") +
-         (lag_compensation ? "+lag" : "");
+         (lag_compensation ? "+lag" : "") + (saturation_passive ? "+satpass" : "") +
+         (press_n > 0.0 ? "+press" + std::to_string(press_n).substr(0, 4) + "N" : "");
 }
 
 namespace {

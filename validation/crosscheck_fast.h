@@ -78,6 +78,13 @@ struct StageConfig {
   std::string contact_model = "faces";  // "sdf" or "faces"
   // Issue #29's loop-lag compensation (scene key method.lag_compensation; "+lag" in the name).
   bool lag_compensation = false;
+  // Issue #29's saturation-passive shape control (scene key method.saturation_passive; "+satpass"
+  // in the name).
+  bool saturation_passive = false;
+  // > 0: the hand's feed-forward force in the scene's script keys replaced by this press [N]
+  // straight down (-z), on every key that pushes ("+pressN" in the name): a press beyond the
+  // device's force, which saturates the command.
+  double press_n = 0.0;
   // "drill/faces/pmi-pd+grip": scene/contact model/method, "+grip" with the detector.
   std::string name() const;
 };

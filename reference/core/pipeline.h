@@ -121,6 +121,9 @@ struct PipelineModel {
   // plus the zero-order hold's half tick, a the device model's acceleration.
   bool lag_compensation = false;
   ObserverInput velocity_estimate;
+  // Shape control passive under actuator saturation (reference/saturation_passive.h; issue #29):
+  // set only together with `saturate`.
+  bool saturation_passive = false;
   // Skip what the scene does not need (fast/ only; fast/README.md "Skips"): the observer without
   // a gain, the grip detector without a hand mass, the decomposition unless the method uses it,
   // friction when off, contact work on an empty set, drilling unless the tool drills, the tooth's
@@ -185,6 +188,11 @@ struct TickResult {
   VecX tau = VecX::Zero(6);          // joint torques sent to the device (saturated)
   VecX tau_gravity = VecX::Zero(6);  // the gravity-compensation part of tau (zero when off)
   bool saturated = false;
+  // Saturation-passive shape control (reference/saturation_passive.h): the feed-forward's scale
+  // sigma this tick used (1 = untouched) and the cap on the coupling's linear spring force [N]
+  // (0 = no cap this tick).
+  double shape_sigma = 1.0;
+  double coupling_force_cap = 0.0;
   Vec6 V_hat = Vec6::Zero();       // proxy velocity the forces were evaluated at
   Vec6 F_contact = Vec6::Zero();   // contact + friction wrench on the proxy at V_hat
   Vec6 F_coupling = Vec6::Zero();  // coupling wrench on the proxy at V_hat
@@ -221,6 +229,13 @@ struct PipelineData {
   Vec6 tau_prev = Vec6::Zero();  // torque applied over the tick that just ended
   double t_prev = 0.0;
   bool have_prev = false;
+
+  // assemble / command: the saturation-passive shape control's state (PipelineModel::
+  // saturation_passive): the feed-forward scale sigma in [0, 1], lowered by each saturated
+  // command, and whether the coupling's force cap bound in this tick's assemble.
+  double shape_sigma = 1.0;
+  bool shape_engaged = false;  // a command saturated and the device is not yet back inside
+  bool coupling_capped = false;
 
   // assemble / solve
   ProxyState proxy;

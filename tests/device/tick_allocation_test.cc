@@ -81,5 +81,40 @@ TEST(TickAllocation, DrillSceneTicksAllocateNothingForEveryImplementationAndMeth
   }
 }
 
+// Issue #29's saturation-passive shape control (method.saturation_passive), on and engaged:
+// the groove scene pressed at 3 N, beyond the Phantom's continuous force, on every implementation.
+TEST(TickAllocation, SaturatedPressTicksAllocateNothingWithTheShapeControlEngaged) {
+  constexpr long kTicks = 3000;
+  for (const StageTable* table : stage_tables()) {
+    SCOPED_TRACE(table->implementation);
+    Scene scene = load_scene("probe-groove");
+    scene.method.saturation_passive = true;
+    for (SceneHandKey& k : scene.script) {
+      if (k.force.norm() > 0.0) k.force = Vec3(0.0, 0.0, -3.0);
+    }
+    SceneRigOptions options;
+    options.pipeline = table->implementation;
+    const std::unique_ptr<SceneRig> rig = build_scene_rig(scene, options);
+    ClosedLoop& loop = *rig->loop;
+    loop.start();
+    long engaged = 0, saturated = 0, allocs = 0;
+    {
+      testing::AllocationScope scope;
+      for (long k = 0; k < kTicks; ++k) {
+        const TickResult& r = loop.step();
+        if (r.shape_sigma < 1.0 || r.coupling_force_cap > 0.0) ++engaged;
+        if (r.saturated) ++saturated;
+      }
+      allocs = scope.count();
+    }
+    std::printf("%s / saturated groove press: %ld ticks, %ld saturated, %ld engaged, %ld "
+                "allocations\n",
+                table->implementation, kTicks, saturated, engaged, allocs);
+    EXPECT_EQ(allocs, 0);
+    EXPECT_GT(saturated, 0);
+    EXPECT_GT(engaged, 10);
+  }
+}
+
 }  // namespace
 }  // namespace dentsim
