@@ -81,5 +81,39 @@ TEST(TickAllocation, DrillSceneTicksAllocateNothingForEveryImplementationAndMeth
   }
 }
 
+// The field contact model drilling (issue #30: the drill stage edits the tooth's field from its
+// spare bricks): the drill scene with "contact_model": "field", for every implementation (fast/
+// runs the reference provider on the field), pmi-pd, 10^4 ticks in contact and drilling.
+TEST(TickAllocation, FieldModelDrillTicksAllocateNothingForEveryImplementation) {
+  constexpr long kTicks = 10000;
+  for (const StageTable* table : stage_tables()) {
+    SCOPED_TRACE(table->implementation);
+    Scene scene = load_scene("drill");
+    scene.tooth.contact_model = "field";
+    SceneRigOptions options;
+    options.pipeline = table->implementation;
+    const std::unique_ptr<SceneRig> rig = build_scene_rig(scene, options);
+    ClosedLoop& loop = *rig->loop;
+    loop.start();
+    ASSERT_FALSE(loop.faulted());
+    long contact_ticks = 0, removed = 0, allocs = 0;
+    {
+      testing::AllocationScope scope;
+      for (long k = 0; k < kTicks; ++k) {
+        const TickResult& r = loop.step();
+        if (!r.contacts.empty()) ++contact_ticks;
+        removed += r.removed_voxels;
+      }
+      allocs = scope.count();
+    }
+    std::printf("%s / field: %ld ticks, %ld in contact, %ld voxels drilled, %ld allocations\n",
+                table->implementation, kTicks, contact_ticks, removed, allocs);
+    EXPECT_FALSE(loop.faulted()) << loop.fault_name();
+    EXPECT_EQ(allocs, 0);
+    EXPECT_GT(contact_ticks, kTicks / 10);
+    EXPECT_GT(removed, 0);
+  }
+}
+
 }  // namespace
 }  // namespace dentsim
