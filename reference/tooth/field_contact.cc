@@ -48,7 +48,7 @@ bool edit_field_for_removed_voxels(SampledField* field, const VoxelTooth& tooth,
   const double c_out = field->outside_clamp();
   const float out_f = static_cast<float>(c_out);
   const int m = field->samples_per_axis(), pad = field->padding();
-  const int reach = static_cast<int>(std::ceil(c_out / h + 1.5));
+  const int reach = static_cast<int>(std::ceil(c_out / h + 1.0));
   const double slack = 1e-6 * h;  // float rounding of the stored values
   bool complete = true;
   // The box of the changed samples: the cell bound is measured once all of the tick's removed
@@ -61,21 +61,21 @@ bool edit_field_for_removed_voxels(SampledField* field, const VoxelTooth& tooth,
     for (int dz = -reach; dz <= reach; ++dz) {
       const int sz = s0[2] + dz;
       if (sz < 0 || sz >= m) continue;
-      const double ez = std::max(std::abs(dz) - 1.5, 0.0);
+      const double ez = std::max(std::abs(dz) - 1.0, 0.0);
       for (int dy = -reach; dy <= reach; ++dy) {
         const int sy = s0[1] + dy;
         if (sy < 0 || sy >= m) continue;
-        const double ey = std::max(std::abs(dy) - 1.5, 0.0);
+        const double ey = std::max(std::abs(dy) - 1.0, 0.0);
         for (int dx = -reach; dx <= reach; ++dx) {
           const int sx = s0[0] + dx;
           if (sx < 0 || sx >= m) continue;
           ++stats->samples_scanned;
           const float old = field->at(sx, sy, sz);
           if (old >= out_f) continue;  // at the outside clamp: a max cannot raise it
-          const double ex = std::max(std::abs(dx) - 1.5, 0.0);
-          // Distance from s to the removed voxel's cube grown by h (its 3^3 block: the source's
-          // sub-voxel slivers in the empty cubes next to it went with it): beyond |v(s)| the
-          // block did not hold s's nearest surface point.
+          const double ex = std::max(std::abs(dx) - 1.0, 0.0);
+          // Distance from s to the removed voxel's cube grown by h / 2 (the source's sub-voxel
+          // slivers in the empty cubes next to it went with it): beyond |v(s)| that did not
+          // hold s's nearest surface point.
           const double to_cube = h * std::sqrt(ex * ex + ey * ey + ez * ez);
           if (to_cube > std::abs(static_cast<double>(old)) + slack) continue;
           ++stats->samples_queried;

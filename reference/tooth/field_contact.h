@@ -54,13 +54,15 @@ struct FieldEditStats {
 
 // Drilling edits the field (docs/derivations/field_contact.md §5): `removed` are the flat indices
 // of voxels of `tooth` that drilling just removed (drill_tick; the octree already without them).
-// For each, every sample s with |s - p_v|_inf <= R = ceil(c_out / h + 1/2) samples (p_v the
-// voxel's centre) whose value v(s) < c_out and whose distance to the voxel's cube is <= |v(s)|
-// (the cube held s's nearest surface, so the removal may change v(s)) is set to
+// For each, every sample s with |s - p_v|_inf <= R = ceil(c_out / h + 1) samples (p_v the
+// voxel's centre) whose value v(s) < c_out and whose distance to the voxel's cube grown by h / 2
+// is <= |v(s)| (the cube, or the source's sub-voxel sliver next to it, held s's nearest surface,
+// so the removal may change v(s)) is set to
 //     v(s) <- max(v(s), clamp(d_vox(s), -c_in, c_out)),
 // d_vox the exact signed distance to the remaining solid voxels (`sd`: signed_distance or its
 // fast twin, reach c_out). The field's Lipschitz constant is then raised to the cell bound of the
-// cells around the changed samples, so it bounds the edited field (§2, §5). Values only rise, so
+// cells around the changed samples (once all of `removed` is done), so it bounds the edited
+// field (§2, §5). Values only rise, so
 // the proxy's admissible set only grows. Bounded: (2R + 1)^3 sample reads and at most as many
 // queries per removed voxel. Never allocates (new bricks come from the field's spare room,
 // SampledField::reserve_spare_bricks) or throws; returns false if a raise found no spare brick

@@ -68,6 +68,7 @@ ToothContactProvider::ToothContactProvider(VoxelTooth& tooth, ToolTip tip, doubl
       // bricks again, at least 256 (0.5 MB).
       field->reserve_spare_bricks(std::max<std::size_t>(256, field->brick_count() / 2));
       edited_field_ = field;
+      edit_queue_.reserve(kFieldEditQueue);
     }
     field_ = std::make_unique<FieldSolid>(tooth, *field);
   }
@@ -83,6 +84,20 @@ bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out
   }
   drill_contacts_.clear();
   drill_voxels_.clear();
+  if (edit_head_ < edit_queue_.size()) {  // the field follows the last ticks' cuts (bounded)
+    const std::size_t count = std::min(kFieldEditsPerTick, edit_queue_.size() - edit_head_);
+    if (!edit_field_for_removed_voxels(
+            edited_field_, tooth_,
+            std::span<const std::size_t>(edit_queue_.data() + edit_head_, count), sd_,
+            &field_edits_)) {
+      ++field_edit_shortfalls_;
+    }
+    edit_head_ += count;
+    if (edit_head_ == edit_queue_.size()) {
+      edit_queue_.clear();
+      edit_head_ = 0;
+    }
+  }
   const Vec3 c = proxy.x + proxy.R * tip_.offset_body;
   const Vec3& g =
       model_ == ContactModel::kField ? surface_.update(*field_, c) : surface_.update(tooth_, c);
@@ -153,9 +168,14 @@ int ToothContactProvider::drill(std::span<const Contact> contacts, double T) {
                          &drill_state_, &removed_);
     drill_contacts_.clear();
     drill_voxels_.clear();
-    if (edited_field_ != nullptr && removed > 0 &&
-        !edit_field_for_removed_voxels(edited_field_, tooth_, removed_, sd_, &field_edits_)) {
-      ++field_edit_shortfalls_;
+    if (edited_field_ != nullptr) {  // queued for the next contacts() calls
+      for (const std::size_t v : removed_) {
+        if (edit_queue_.size() < edit_queue_.capacity()) {
+          edit_queue_.push_back(v);
+        } else {
+          ++field_edit_shortfalls_;  // never grow in the tick: that voxel stays in the field
+        }
+      }
     }
   } else {
     if (!can_drill(contacts)) return 0;

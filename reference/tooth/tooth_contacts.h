@@ -130,11 +130,18 @@ class ToothContactProvider : public ToothProviderBase {
   // A flat face: g follows c, h = 0; a held anchor (a drilled hole, a corner): h = 1; a concave
   // face of radius r_A at depth delta: delta / (r_A + delta).
   const AnchoredSpring& anchored_spring() const { return anchored_; }
-  // kField with drilling: what the field's edits did so far, and the drill ticks whose edit was
-  // incomplete for want of a spare brick (0 in a healthy run; the field then keeps material the
-  // voxels lost, on the safe side: no tunnelling, a surface where the hole is).
+  // kField with drilling: drill() queues the voxels it removed, and each contacts() call first
+  // subtracts at most kFieldEditsPerTick of the queued ones from the field
+  // (edit_field_for_removed_voxels), so a tick's edit cost is bounded whatever the tick removed;
+  // the field lags the voxels by the queue (on the safe side: material the voxels lost, never a
+  // tunnel). What the edits did so far, the queued voxels, and the edits that were incomplete
+  // for want of a spare brick or a queue slot (0 in a healthy run; the field then keeps material
+  // the voxels lost).
   const FieldEditStats& field_edits() const { return field_edits_; }
+  std::size_t field_edits_pending() const { return edit_queue_.size() - edit_head_; }
   long field_edit_shortfalls() const { return field_edit_shortfalls_; }
+  static constexpr std::size_t kFieldEditsPerTick = 1;
+  static constexpr std::size_t kFieldEditQueue = 8192;
 
  private:
   void measure_anchor(const Vec3& c, const Vec3& g, bool in_contact);
@@ -146,6 +153,8 @@ class ToothContactProvider : public ToothProviderBase {
   SignedDistanceFn sd_;
   std::unique_ptr<FieldSolid> field_;  // kField
   SampledField* edited_field_ = nullptr;  // kField with drilling: the field drill() edits
+  std::vector<std::size_t> edit_queue_;   // removed voxels not yet subtracted from [edit_head_]
+  std::size_t edit_head_ = 0;
   FieldEditStats field_edits_;
   long field_edit_shortfalls_ = 0;
   std::vector<Contact> drill_contacts_;  // kSurfaceProxy: the drilled voxels' force shares

@@ -26,6 +26,23 @@ struct Variant {
   bool lag_compensation = false;
 };
 
+// Steps the loop `ticks` times inside an allocation scope; counts the ticks in contact, the
+// voxels drilled and the allocations.
+struct Counted {
+  long contact_ticks = 0, removed = 0, allocs = 0;
+};
+Counted step_counting(ClosedLoop& loop, long ticks) {
+  Counted c;
+  testing::AllocationScope scope;
+  for (long k = 0; k < ticks; ++k) {
+    const TickResult& r = loop.step();
+    if (!r.contacts.empty()) ++c.contact_ticks;
+    c.removed += r.removed_voxels;
+  }
+  c.allocs = scope.count();
+  return c;
+}
+
 TEST(TickAllocation, DrillSceneTicksAllocateNothingForEveryImplementationAndMethod) {
   const Variant variants[] = {{"explicit", Method::kExplicitVc, false},
                               {"pmi", Method::kPmiVc, false},
@@ -53,16 +70,7 @@ TEST(TickAllocation, DrillSceneTicksAllocateNothingForEveryImplementationAndMeth
       ClosedLoop& loop = *rig->loop;
       loop.start();
       ASSERT_FALSE(loop.faulted());
-      long contact_ticks = 0, removed = 0, allocs = 0;
-      {
-        testing::AllocationScope scope;
-        for (long k = 0; k < kTicks; ++k) {
-          const TickResult& r = loop.step();
-          if (!r.contacts.empty()) ++contact_ticks;
-          removed += r.removed_voxels;
-        }
-        allocs = scope.count();
-      }
+      const auto [contact_ticks, removed, allocs] = step_counting(loop, kTicks);
       std::printf("%s / %s: %ld ticks, %ld in contact, %ld voxels drilled, %ld allocations\n",
                   table->implementation, v.name, kTicks, contact_ticks, removed, allocs);
       if (scene_stability_problems(scene).empty()) {
@@ -96,16 +104,7 @@ TEST(TickAllocation, FieldModelDrillTicksAllocateNothingForEveryImplementation) 
     ClosedLoop& loop = *rig->loop;
     loop.start();
     ASSERT_FALSE(loop.faulted());
-    long contact_ticks = 0, removed = 0, allocs = 0;
-    {
-      testing::AllocationScope scope;
-      for (long k = 0; k < kTicks; ++k) {
-        const TickResult& r = loop.step();
-        if (!r.contacts.empty()) ++contact_ticks;
-        removed += r.removed_voxels;
-      }
-      allocs = scope.count();
-    }
+    const auto [contact_ticks, removed, allocs] = step_counting(loop, kTicks);
     std::printf("%s / field: %ld ticks, %ld in contact, %ld voxels drilled, %ld allocations\n",
                 table->implementation, kTicks, contact_ticks, removed, allocs);
     EXPECT_FALSE(loop.faulted()) << loop.fault_name();
