@@ -321,11 +321,6 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   rd.non_negative("tool.cutting_coefficient", s.tool.cutting_coefficient);
   rd.at_most("tool.cutting_coefficient", s.tool.cutting_coefficient, kMaxCuttingCoefficient,
              "tangential over normal force");
-  if (s.tooth.contact_model == "field" && s.tool.drills()) {
-    rd.fail("tooth.contact_model",
-            "\"field\" does not drill yet (the field does not follow the cut): set "
-            "tool.bur_speed_rpm to 0 or use \"sdf\"");
-  }
 
   // Device.
   const auto& dv = rd.object(doc, "", "device");

@@ -119,7 +119,7 @@ struct ProbeOutcome {
   double max_penetration = 0.0;  // [m]
 };
 
-ProbeOutcome run_probe(VoxelTooth& tooth, const SampledField* field, ContactModel model,
+ProbeOutcome run_probe(VoxelTooth& tooth, SampledField* field, ContactModel model,
                        const Probe& probe, double force, const ContactCrosscheckOptions& o) {
   const double rho = o.tip_radius_m;
   ToothContactProvider provider(tooth, ToolTip{rho, Vec3::Zero()}, o.k_tooth, 0.0, nullptr, model,
@@ -166,7 +166,7 @@ VoxelTooth make_sphere(double h, Vec3* centre) {
   return VoxelTooth(std::move(g));
 }
 
-double sliding_ripple(VoxelTooth& sphere, const SampledField* field, const Vec3& centre,
+double sliding_ripple(VoxelTooth& sphere, SampledField* field, const Vec3& centre,
                       ContactModel model, double force, const ContactCrosscheckOptions& o) {
   const double rho = o.tip_radius_m;
   ToothContactProvider provider(sphere, ToolTip{rho, Vec3::Zero()}, o.k_tooth, 0.0, nullptr, model,

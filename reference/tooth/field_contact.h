@@ -12,9 +12,12 @@
 // starts inside the tooth goes there.
 //
 // Materials stay per voxel: the contact's material is the solid voxel nearest to g (as "sdf").
-// Drilling does not edit the field yet: the provider refuses "field" with drilling on
-// (tooth_contacts.h), and the scene loader refuses the combination with a message.
+// Drilling: the provider (tooth_contacts.h) removes voxels by the sdf model's rule (drilling.h),
+// then edit_field_for_removed_voxels subtracts them from the field (below).
 #pragma once
+
+#include <cstddef>
+#include <span>
 
 #include "reference/tooth/sampled_field.h"
 #include "reference/tooth/sdf.h"
@@ -40,5 +43,32 @@ class FieldSolid {
   const SampledField& field_;
 };
 
+// What edit_field_for_removed_voxels did (summed over calls).
+struct FieldEditStats {
+  long voxels = 0;            // removed voxels subtracted
+  long samples_scanned = 0;   // samples read (the box of each removed voxel)
+  long samples_queried = 0;   // exact voxel-distance queries (samples the removal may change)
+  long samples_raised = 0;    // samples whose value rose
+  long samples_lost = 0;      // raises refused for want of a spare brick (field then conservative)
+};
+
+// Drilling edits the field (docs/derivations/field_contact.md §5): `removed` are the flat indices
+// of voxels of `tooth` that drilling just removed (drill_tick; the octree already without them).
+// For each, every sample s with |s - p_v|_inf <= R = ceil(c_out / h + 1) samples (p_v the
+// voxel's centre) whose value v(s) < c_out and whose distance to the voxel's cube grown by h / 2
+// is <= |v(s)| (the cube, or the source's sub-voxel sliver next to it, held s's nearest surface,
+// so the removal may change v(s)) is set to
+//     v(s) <- max(v(s), clamp(d_vox(s), -c_in, c_out)),
+// d_vox the exact signed distance to the remaining solid voxels (`sd`: signed_distance or its
+// fast twin, reach c_out). The field's Lipschitz constant is then raised to the cell bound of the
+// cells around the changed samples (once all of `removed` is done), so it bounds the edited
+// field (§2, §5). Values only rise, so
+// the proxy's admissible set only grows. Bounded: (2R + 1)^3 sample reads and at most as many
+// queries per removed voxel. Never allocates (new bricks come from the field's spare room,
+// SampledField::reserve_spare_bricks) or throws; returns false if a raise found no spare brick
+// (that sample keeps its value: the field then lags the voxels there, on the safe side).
+bool edit_field_for_removed_voxels(SampledField* field, const VoxelTooth& tooth,
+                                   std::span<const std::size_t> removed, SignedDistanceFn sd,
+                                   FieldEditStats* stats);
 
 }  // namespace dentsim

@@ -58,6 +58,59 @@ float SampledField::at(int sx, int sy, int sz) const {
   return id == kAllOutside ? static_cast<float>(c_out_) : static_cast<float>(-c_in_);
 }
 
+void SampledField::reserve_spare_bricks(std::size_t spare) {
+  bricks_.reserve(bricks_.size() + spare * static_cast<std::size_t>(kBrickSamples));
+}
+
+bool SampledField::raise(int sx, int sy, int sz, double value) {
+  const float v = static_cast<float>(std::clamp(value, -c_in_, c_out_));
+  const std::size_t sl = slot(sx / kFieldBrick, sy / kFieldBrick, sz / kFieldBrick);
+  std::int32_t id = index_[sl];
+  if (id < 0) {
+    const float fill = id == kAllOutside ? static_cast<float>(c_out_) : static_cast<float>(-c_in_);
+    if (!(v > fill)) return true;  // nothing to raise
+    if (bricks_.size() + kBrickSamples > bricks_.capacity()) return false;  // no spare brick
+    id = static_cast<std::int32_t>(bricks_.size() / kBrickSamples);
+    bricks_.insert(bricks_.end(), static_cast<std::size_t>(kBrickSamples), fill);  // in capacity
+    index_[sl] = id;
+  }
+  const int lx = sx % kFieldBrick, ly = sy % kFieldBrick, lz = sz % kFieldBrick;
+  float& stored = bricks_[static_cast<std::size_t>(id) * kBrickSamples +
+                          static_cast<std::size_t>(lx + kFieldBrick * (ly + kFieldBrick * lz))];
+  stored = std::max(stored, v);
+  return true;
+}
+
+double SampledField::cell_lipschitz(int x, int y, int z) const {
+  double c[8];
+  for (int d = 0; d < 8; ++d) c[d] = at(x + (d & 1), y + ((d >> 1) & 1), z + (d >> 2));
+  double mx = 0.0, my = 0.0, mz = 0.0;
+  for (int e = 0; e < 4; ++e) {
+    const int ix = 2 * e;                   // corners with x = 0: 0, 2, 4, 6
+    const int iy = (e & 1) + 4 * (e >> 1);  // y = 0: 0, 1, 4, 5
+    const int iz = e;                       // z = 0: 0, 1, 2, 3
+    mx = std::max(mx, std::abs(c[ix + 1] - c[ix]));
+    my = std::max(my, std::abs(c[iy + 2] - c[iy]));
+    mz = std::max(mz, std::abs(c[iz + 4] - c[iz]));
+  }
+  return std::sqrt(mx * mx + my * my + mz * mz) / h_;
+}
+
+void SampledField::include_cells(const int lo[3], const int hi[3]) {
+  int a[3], b[3];
+  for (int k = 0; k < 3; ++k) {
+    a[k] = std::max(0, lo[k] - 1);
+    b[k] = std::min(m_ - 2, hi[k]);
+  }
+  double l = lipschitz_;
+  for (int z = a[2]; z <= b[2]; ++z) {
+    for (int y = a[1]; y <= b[1]; ++y) {
+      for (int x = a[0]; x <= b[0]; ++x) l = std::max(l, cell_lipschitz(x, y, z));
+    }
+  }
+  lipschitz_ = l;
+}
+
 namespace {
 
 // The cell holding x: lower corner s (in [0, m - 2]) and the local coordinates t in [0, 1]^3.
@@ -294,7 +347,7 @@ SampledField build_sampled_field(const VoxelGrid& grid, const TriangleMesh& surf
 
   // Lipschitz constant: the cell bound over every cell touching a stored brick (other cells have
   // 8 equal corners).
-  double l2 = 0.0;
+  double l = 0.0;
   for (int bz = 0; bz < f.nb_; ++bz) {
     for (int by = 0; by < f.nb_; ++by) {
       for (int bx = 0; bx < f.nb_; ++bx) {
@@ -306,26 +359,13 @@ SampledField build_sampled_field(const VoxelGrid& grid, const TriangleMesh& surf
                            std::min(m - 2, bz * kFieldBrick + kFieldBrick - 1)};
         for (int z = lo[2]; z <= hi[2]; ++z) {
           for (int y = lo[1]; y <= hi[1]; ++y) {
-            for (int x = lo[0]; x <= hi[0]; ++x) {
-              double c[8];
-              for (int d = 0; d < 8; ++d) c[d] = f.at(x + (d & 1), y + ((d >> 1) & 1), z + (d >> 2));
-              double mx = 0.0, my = 0.0, mz = 0.0;
-              for (int e = 0; e < 4; ++e) {
-                const int ix = 2 * e;                      // corners with x = 0: 0, 2, 4, 6
-                const int iy = (e & 1) + 4 * (e >> 1);     // y = 0: 0, 1, 4, 5
-                const int iz = e;                          // z = 0: 0, 1, 2, 3
-                mx = std::max(mx, std::abs(c[ix + 1] - c[ix]));
-                my = std::max(my, std::abs(c[iy + 2] - c[iy]));
-                mz = std::max(mz, std::abs(c[iz + 4] - c[iz]));
-              }
-              l2 = std::max(l2, mx * mx + my * my + mz * mz);
-            }
+            for (int x = lo[0]; x <= hi[0]; ++x) l = std::max(l, f.cell_lipschitz(x, y, z));
           }
         }
       }
     }
   }
-  f.lipschitz_ = std::max(std::sqrt(l2) / h, 1e-6);
+  f.lipschitz_ = std::max(l, 1e-6);
   return f;
 }
 

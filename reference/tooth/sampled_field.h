@@ -112,6 +112,24 @@ class SampledField {
   static constexpr std::int32_t kAllOutside = -1;
   static constexpr std::int32_t kAllInside = -2;
 
+  // Editing (drilling, reference/tooth/field_contact.h edit_field_for_removed_voxels; docs/
+  // derivations/field_contact.md §5). Outside the tick: reserve room for `spare` more bricks
+  // (allocates once). In the tick: raise() and include_cells() neither allocate nor throw.
+  void reserve_spare_bricks(std::size_t spare);
+  // Bricks that raise() may still allocate without growing the storage.
+  std::size_t spare_bricks() const {
+    return (bricks_.capacity() - bricks_.size()) / static_cast<std::size_t>(kBrickSamples);
+  }
+  // v(s) <- max(v(s), value) (value clamped to [-c_in, c_out]); a slot without a brick takes one
+  // from the spare room, filled with its clamp value. Returns false, changing nothing, when it
+  // needs a brick and none is spare. s must be in [0, samples_per_axis())^3.
+  bool raise(int sx, int sy, int sz, double value);
+  // Raises lipschitz() to the cell bound of every cell with a corner in the sample box
+  // [lo, hi] (so that it bounds the field again after raise(); header comment).
+  void include_cells(const int lo[3], const int hi[3]);
+  // The cell bound L_cell of the cell with lower corner (x, y, z), each in [0, m - 2].
+  double cell_lipschitz(int x, int y, int z) const;
+
  private:
   friend SampledField build_sampled_field(const VoxelGrid&, const TriangleMesh&, const FieldBand&);
 

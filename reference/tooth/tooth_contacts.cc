@@ -55,7 +55,7 @@ std::size_t ToothProviderBase::begin_query(std::vector<Contact>& out) {
 ToothContactProvider::ToothContactProvider(VoxelTooth& tooth, ToolTip tip, double k_tooth,
                                            double b_tooth, const DrillParams* drill,
                                            ContactModel model, SignedDistanceFn sd,
-                                           const SampledField* field)
+                                           SampledField* field)
     : ToothProviderBase(tooth.grid(), tip, k_tooth, b_tooth, drill),
       tooth_(tooth),
       model_(model),
@@ -64,9 +64,11 @@ ToothContactProvider::ToothContactProvider(VoxelTooth& tooth, ToolTip tip, doubl
   if (model_ == ContactModel::kField) {
     if (field == nullptr) throw InputError("contact model \"field\": no field of the tooth given");
     if (drill != nullptr) {
-      throw InputError(
-          "contact model \"field\" does not drill yet (the field does not follow the cut): "
-          "use \"sdf\" with a drilling tool");
+      // Room for the bricks the cut opens below the band (field_contact.md §5): half the band's
+      // bricks again, at least 256 (0.5 MB).
+      field->reserve_spare_bricks(std::max<std::size_t>(256, field->brick_count() / 2));
+      edited_field_ = field;
+      edit_queue_.reserve(kFieldEditQueue);
     }
     field_ = std::make_unique<FieldSolid>(tooth, *field);
   }
@@ -82,6 +84,20 @@ bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out
   }
   drill_contacts_.clear();
   drill_voxels_.clear();
+  if (edit_head_ < edit_queue_.size()) {  // the field follows the last ticks' cuts (bounded)
+    const std::size_t count = std::min(kFieldEditsPerTick, edit_queue_.size() - edit_head_);
+    if (!edit_field_for_removed_voxels(
+            edited_field_, tooth_,
+            std::span<const std::size_t>(edit_queue_.data() + edit_head_, count), sd_,
+            &field_edits_)) {
+      ++field_edit_shortfalls_;
+    }
+    edit_head_ += count;
+    if (edit_head_ == edit_queue_.size()) {
+      edit_queue_.clear();
+      edit_head_ = 0;
+    }
+  }
   const Vec3 c = proxy.x + proxy.R * tip_.offset_body;
   const Vec3& g =
       model_ == ContactModel::kField ? surface_.update(*field_, c) : surface_.update(tooth_, c);
@@ -145,13 +161,22 @@ int ToothContactProvider::drill(std::span<const Contact> contacts, double T) {
   const bool pulp_before = drill_state_.pulp_exposed;
   int removed = 0;
   std::uint8_t material = kEmpty;  // the material under the bur: the heaviest cut share's
-  if (model_ == ContactModel::kSurfaceProxy) {
+  if (model_ != ContactModel::kFaces) {  // the surface proxy on the voxels or on the field
     if (drill_contacts_.empty()) return 0;
     material = heaviest_material(drill_contacts_);
     removed = drill_tick(drill_contacts_, drill_voxels_, tip_, drill_params_, T, &tooth_,
                          &drill_state_, &removed_);
     drill_contacts_.clear();
     drill_voxels_.clear();
+    if (edited_field_ != nullptr) {  // queued for the next contacts() calls
+      for (const std::size_t v : removed_) {
+        if (edit_queue_.size() < edit_queue_.capacity()) {
+          edit_queue_.push_back(v);
+        } else {
+          ++field_edit_shortfalls_;  // never grow in the tick: that voxel stays in the field
+        }
+      }
+    }
   } else {
     if (!can_drill(contacts)) return 0;
     material = heaviest_material(contacts);

@@ -107,12 +107,13 @@ class ToothContactProvider : public ToothProviderBase {
   // surface proxy (kSurfaceProxy): the reference's, or the fast pipeline's twin
   // (fast::signed_distance, fast/tooth/sdf.h). kField: the surface proxy on `field` (the tooth's
   // sampled field, reference/tooth/field_contact.h; it must outlive the provider); InputError if
-  // it is missing or drilling is on (the field does not follow the cut yet).
+  // it is missing. With drilling on, the voxels are cut as for kSurfaceProxy and the field follows
+  // them (edit_field_for_removed_voxels; the constructor reserves the field's spare bricks).
   ToothContactProvider(VoxelTooth& tooth, ToolTip tip, double k_tooth, double b_tooth,
                        const DrillParams* drill = nullptr,
                        ContactModel model = ContactModel::kFaces,
                        SignedDistanceFn sd = &signed_distance,
-                       const SampledField* field = nullptr);
+                       SampledField* field = nullptr);
 
   bool contacts(const Pose& proxy, std::vector<Contact>& out) override;
   int drill(std::span<const Contact> contacts, double T) override;
@@ -129,6 +130,18 @@ class ToothContactProvider : public ToothProviderBase {
   // A flat face: g follows c, h = 0; a held anchor (a drilled hole, a corner): h = 1; a concave
   // face of radius r_A at depth delta: delta / (r_A + delta).
   const AnchoredSpring& anchored_spring() const { return anchored_; }
+  // kField with drilling: drill() queues the voxels it removed, and each contacts() call first
+  // subtracts at most kFieldEditsPerTick of the queued ones from the field
+  // (edit_field_for_removed_voxels), so a tick's edit cost is bounded whatever the tick removed;
+  // the field lags the voxels by the queue (on the safe side: material the voxels lost, never a
+  // tunnel). What the edits did so far, the queued voxels, and the edits that were incomplete
+  // for want of a spare brick or a queue slot (0 in a healthy run; the field then keeps material
+  // the voxels lost).
+  const FieldEditStats& field_edits() const { return field_edits_; }
+  std::size_t field_edits_pending() const { return edit_queue_.size() - edit_head_; }
+  long field_edit_shortfalls() const { return field_edit_shortfalls_; }
+  static constexpr std::size_t kFieldEditsPerTick = 1;
+  static constexpr std::size_t kFieldEditQueue = 8192;
 
  private:
   void measure_anchor(const Vec3& c, const Vec3& g, bool in_contact);
@@ -139,6 +152,11 @@ class ToothContactProvider : public ToothProviderBase {
   SurfaceProxy surface_;
   SignedDistanceFn sd_;
   std::unique_ptr<FieldSolid> field_;  // kField
+  SampledField* edited_field_ = nullptr;  // kField with drilling: the field drill() edits
+  std::vector<std::size_t> edit_queue_;   // removed voxels not yet subtracted from [edit_head_]
+  std::size_t edit_head_ = 0;
+  FieldEditStats field_edits_;
+  long field_edit_shortfalls_ = 0;
   std::vector<Contact> drill_contacts_;  // kSurfaceProxy: the drilled voxels' force shares
   std::vector<std::size_t> drill_voxels_;
   AnchoredSpring anchored_;   // the held fraction of the last contacts() call
@@ -170,8 +188,9 @@ struct PipelineToothSetup {
   const DrillParams* drilling = nullptr;
   ContactModel contact_model = ContactModel::kSurfaceProxy;
   bool skip_unneeded = true;
-  // The tooth's sampled field (contact model "field"; must outlive the tooth), else null.
-  const SampledField* field = nullptr;
+  // The tooth's sampled field (contact model "field"; must outlive the tooth; drilling edits it),
+  // else null.
+  SampledField* field = nullptr;
 };
 
 // The reference's tooth: ToothContactProvider over `tooth` (which must outlive it) with the

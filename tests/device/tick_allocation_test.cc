@@ -1,9 +1,9 @@
 // The servo tick allocates nothing (docs/design.md "The tick as Model/Data stages"; issue "The tick
 // as an engine"): every implementation in the registry (fast/registry.h), every method, with and
 // without the grip detector (and with issue #29's encoder Kalman filter and loop-lag
-// compensation), over 10^4 ticks of the drill scene in contact and drilling, counted with a global
-// operator new hook around the loop owner's step (read -> tick -> write -> advance on the
-// simulated Phantom).
+// compensation, and the field contact model), over 10^4 ticks of the drill scene in contact and
+// drilling, counted with a global operator new hook around the loop owner's step (read -> tick ->
+// write -> advance on the simulated Phantom).
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -24,6 +24,9 @@ struct Variant {
   bool grip_detector;
   bool encoder_kalman = false;
   bool lag_compensation = false;
+  // tooth.contact_model; "field" drills by editing the tooth's field from its spare bricks (issue
+  // #30; fast/ runs the reference provider on the field).
+  const char* contact_model = "sdf";
 };
 
 TEST(TickAllocation, DrillSceneTicksAllocateNothingForEveryImplementationAndMethod) {
@@ -34,7 +37,9 @@ TEST(TickAllocation, DrillSceneTicksAllocateNothingForEveryImplementationAndMeth
                               {"pmi-pd + grip detector + encoder kalman", Method::kPmiPd, true,
                                true},
                               {"pmi-pd + grip detector + lag compensation", Method::kPmiPd, true,
-                               false, true}};
+                               false, true},
+                              {"pmi-pd, field model", Method::kPmiPd, false, false, false,
+                               "field"}};
   constexpr long kTicks = 10000;
   for (const StageTable* table : stage_tables()) {
     for (const Variant& v : variants) {
@@ -47,6 +52,7 @@ TEST(TickAllocation, DrillSceneTicksAllocateNothingForEveryImplementationAndMeth
       }
       scene.method.encoder_kalman = v.encoder_kalman;
       scene.method.lag_compensation = v.lag_compensation;
+      scene.tooth.contact_model = v.contact_model;
       SceneRigOptions options;
       options.pipeline = table->implementation;
       const std::unique_ptr<SceneRig> rig = build_scene_rig(scene, options);

@@ -91,10 +91,9 @@ TEST(Scene, BadFieldsAreNamed) {
   EXPECT_EQ(error_of("\"contact_model\": \"sdf\"", "\"contact_model\": \"voxels\""),
             "bad.json: tooth.contact_model: expected \"sdf\" (the default), \"faces\" or "
             "\"field\" (got \"voxels\")");
-  // The field model does not drill yet: refused with the drill scene's spinning bur.
-  EXPECT_NE(error_of("\"contact_model\": \"sdf\"", "\"contact_model\": \"field\"")
-                .find("tooth.contact_model: \"field\" does not drill yet"),
-            std::string::npos);
+  // The field model drills (issue #30): the drill scene's spinning bur is accepted with it.
+  EXPECT_EQ(error_of("\"contact_model\": \"sdf\"", "\"contact_model\": \"field\""),
+            "(no error)");
   EXPECT_NE(error_of("\"grasp_mass_scale\": 1.0", "\"grasp_mass_scale\": 0")
                 .find("method.grip_detector: needs name \"pmi-pd\" and grasp_mass_scale > 0"),
             std::string::npos);

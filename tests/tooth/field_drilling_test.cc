@@ -1,0 +1,245 @@
+// Drilling on the field model (reference/tooth/field_contact.h edit_field_for_removed_voxels;
+// docs/derivations/field_contact.md §5): a bur drills a sphere along a scripted path (down, then
+// sideways) with the provider's own removal rule; then the edited field agrees with the field
+// rebuilt from scratch on the drilled voxels (the source sphere minus the removed cubes,
+// triangulated and sampled anew) at every sample, its Lipschitz constant still bounds it, a probe
+// pressed into the hole stops on the hole's floor (no phantom surface where voxels were removed),
+// and the drill ticks allocate nothing.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <vector>
+
+#include "reference/tooth/collision.h"
+#include "reference/tooth/field_contact.h"
+#include "reference/tooth/tooth_contacts.h"
+#include "tests/support/alloc_counter.h"
+
+namespace dentsim {
+namespace {
+
+constexpr double kSide = 8e-3;     // grid edge [m]
+constexpr int kN = 64;             // h = 0.125 mm
+constexpr double kR = 2.5e-3;      // sphere radius [m]
+constexpr double kRho = 0.4e-3;    // bur radius [m]
+constexpr double kK = 3000.0;      // K_tooth [N/m]
+constexpr double kT = 1e-3;        // tick [s]
+constexpr int kDown = 900, kSideways = 600;  // ticks of each leg of the path
+
+const Vec3 kCentre(4.03e-3, 3.97e-3, 3.61e-3);
+
+bool in_sphere(const Vec3& p) { return (p - kCentre).norm() < kR; }
+
+VoxelGrid sphere_grid() {
+  VoxelGrid g(kN, Vec3::Zero(), kSide / kN);
+  for (int k = 0; k < kN; ++k) {
+    for (int j = 0; j < kN; ++j) {
+      for (int i = 0; i < kN; ++i) {
+        if (in_sphere(g.center(i, j, k))) g.set(i, j, k, kEnamel);
+      }
+    }
+  }
+  return g;
+}
+
+// The top of the sphere and the bur's path: from 0.2 mm above contact straight down 1.1 mm, then
+// 0.6 mm along x at that depth.
+const Vec3 kTop = kCentre + Vec3(0, 0, kR);
+Vec3 path(int tick) {
+  const Vec3 start = kTop + Vec3(0, 0, kRho + 0.2e-3);
+  if (tick < kDown) return start - Vec3(0, 0, 1.1e-3 * tick / kDown);
+  return start - Vec3(0, 0, 1.1e-3) + Vec3(0.6e-3 * (tick - kDown) / kSideways, 0, 0);
+}
+
+struct Drilled {
+  VoxelGrid original;
+  VoxelTooth tooth;
+  SampledField field;
+  double lipschitz_before = 0.0;
+  long removed = 0;
+  long allocations = 0;
+  long shortfalls = 0;
+  FieldEditStats edits;
+};
+
+// The sphere drilled along the path by the field model's provider (its removal rule: the sdf
+// model's, drilling.h), the drill ticks counted for allocations.
+const Drilled& drilled() {
+  static const Drilled* d = [] {
+    auto* out = new Drilled{sphere_grid(), VoxelTooth(sphere_grid()), SampledField(), 0.0, 0, 0, 0,
+                            FieldEditStats{}};
+    out->field = build_sampled_field(out->original, triangulate_implicit(out->original, in_sphere),
+                                     field_band_for_tip(kRho, out->original.voxel_size));
+    out->lipschitz_before = out->field.lipschitz();
+    const DrillParams drill;  // 300 000 rpm, mu_c 0.5
+    ToothContactProvider provider(out->tooth, ToolTip{kRho, Vec3::Zero()}, kK, 0.0, &drill,
+                                  ContactModel::kField, &signed_distance, &out->field);
+    std::vector<Contact> contacts;
+    contacts.reserve(kContactCapacity);
+    Pose pose;
+    {
+      testing::AllocationScope scope;
+      for (int tick = 0; tick < kDown + kSideways; ++tick) {
+        pose.x = path(tick);
+        provider.contacts(pose, contacts);
+        out->removed += provider.drill(contacts, kT);
+      }
+      // Away from the tooth until the field has followed every cut (kFieldEditsPerTick a tick).
+      pose.x = kTop + Vec3(0, 0, 3e-3);
+      while (provider.field_edits_pending() > 0) provider.contacts(pose, contacts);
+      out->allocations = scope.count();
+    }
+    out->shortfalls = provider.field_edit_shortfalls();
+    out->edits = provider.field_edits();
+    return out;
+  }();
+  return *d;
+}
+
+// The field rebuilt from scratch on the drilled voxels: the sphere minus the removed voxels'
+// cubes, triangulated (marching tetrahedra, bisection on that solid) and sampled anew.
+SampledField rebuilt(const Drilled& d) {
+  const VoxelGrid& now = d.tooth.grid();
+  const double h = now.voxel_size;
+  const auto inside = [&](const Vec3& p) {
+    if (!in_sphere(p)) return false;
+    const int i = static_cast<int>(std::floor(p.x() / h)), j = static_cast<int>(std::floor(p.y() / h)),
+              k = static_cast<int>(std::floor(p.z() / h));
+    return !(d.original.solid(i, j, k) && !now.solid(i, j, k));  // not in a removed cube
+  };
+  return build_sampled_field(now, triangulate_implicit(now, inside), field_band_for_tip(kRho, h));
+}
+
+TEST(FieldDrilling, DrillsWithoutAllocatingAndEditsLocally) {
+  const Drilled& d = drilled();
+  const FieldEditStats& e = d.edits;
+  std::printf("removed %ld voxels; per removed voxel: %.0f samples scanned, %.1f queried, %.1f "
+              "raised; %ld allocations, %ld shortfalls\n",
+              d.removed, double(e.samples_scanned) / e.voxels, double(e.samples_queried) / e.voxels,
+              double(e.samples_raised) / e.voxels, d.allocations, d.shortfalls);
+  EXPECT_GT(d.removed, 100);  // the path drills (the numbers below mean something)
+  EXPECT_EQ(e.voxels, d.removed);
+  EXPECT_EQ(d.allocations, 0);
+  EXPECT_EQ(d.shortfalls, 0);
+  // The bound of field_contact.md §5: (2R + 1)^3 samples scanned per removed voxel, R =
+  // ceil(c_out / h + 3/2), and at most as many queried.
+  const double h = d.original.voxel_size;
+  const int reach = static_cast<int>(std::ceil(d.field.outside_clamp() / h + 1.0));
+  EXPECT_LE(e.samples_scanned, e.voxels * (2 * reach + 1) * (2 * reach + 1) * (2 * reach + 1));
+  EXPECT_LE(e.samples_queried, e.samples_scanned);
+  // Every removed voxel's centre is outside the edited field; every solid one inside or on it.
+  const int pad = d.field.padding();
+  for (int k = 0; k < kN; ++k) {
+    for (int j = 0; j < kN; ++j) {
+      for (int i = 0; i < kN; ++i) {
+        const float v = d.field.at(i + pad, j + pad, k + pad);
+        if (d.original.solid(i, j, k) && !d.tooth.grid().solid(i, j, k)) {
+          ASSERT_GE(v, 0.5 * h - 1e-9) << i << " " << j << " " << k;
+        } else if (d.tooth.grid().solid(i, j, k)) {
+          ASSERT_LE(v, 0.0f) << i << " " << j << " " << k;
+        }
+      }
+    }
+  }
+}
+
+// At every sample of the lattice the edited field is within sqrt(3)/2 h of the field rebuilt from
+// scratch on the drilled voxels (field_contact.md §5: the edit's voxel staircase against the
+// rebuild's marching tetrahedra through the same cube faces, at most half a voxel's diagonal
+// apart).
+TEST(FieldDrilling, EditedFieldAgreesWithTheFieldRebuiltOnTheDrilledVoxels) {
+  const Drilled& d = drilled();
+  const SampledField fresh = rebuilt(d);
+  ASSERT_EQ(fresh.samples_per_axis(), d.field.samples_per_axis());
+  const int m = d.field.samples_per_axis();
+  const double h = d.original.voxel_size;
+  double worst = 0.0, worst_near = 0.0;
+  long band = 0;
+  for (int z = 0; z < m; ++z) {
+    for (int y = 0; y < m; ++y) {
+      for (int x = 0; x < m; ++x) {
+        const double a = d.field.at(x, y, z), b = fresh.at(x, y, z);
+        if (a == b) continue;
+        ++band;
+        worst = std::max(worst, std::abs(a - b));
+        // Where the proxy of a bur of radius rho reads the field: phi < rho + h.
+        if (std::min(a, b) < kRho + h) worst_near = std::max(worst_near, std::abs(a - b));
+      }
+    }
+  }
+  std::printf("edited vs rebuilt: %ld samples differ, max |difference| %.4f h (where phi < rho + h: "
+              "%.4f h)\n",
+              band, worst / h, worst_near / h);
+  EXPECT_LE(worst, 0.5 * std::sqrt(3.0) * h);
+}
+
+// The field's Lipschitz constant bounds the edited field: over every cell (brute force) and
+// between random point pairs around the hole (field_contact.md §2, §5).
+TEST(FieldDrilling, LipschitzBoundHoldsAfterTheEdits) {
+  const Drilled& d = drilled();
+  const int m = d.field.samples_per_axis();
+  double cells = 0.0;
+  for (int z = 0; z + 1 < m; ++z) {
+    for (int y = 0; y + 1 < m; ++y) {
+      for (int x = 0; x + 1 < m; ++x) cells = std::max(cells, d.field.cell_lipschitz(x, y, z));
+    }
+  }
+  const double L = d.field.lipschitz();
+  std::printf("Lipschitz: before drilling %.4f, after %.4f, brute force over all cells %.4f\n",
+              d.lipschitz_before, L, cells);
+  EXPECT_LE(cells, L);
+  // Once every queued edit is done the samples are the max of exact distances on both sides,
+  // so the cell bound is sqrt(3) at most (§5); lipschitz() keeps the largest bound measured,
+  // including the transients while the queue lagged a tick's cut (it only shortens the sweep).
+  EXPECT_LE(cells, std::sqrt(3.0) + 1e-6);
+  EXPECT_LE(L, 2.0 * std::sqrt(3.0));
+  std::mt19937_64 rng(35);
+  std::uniform_real_distribution<double> u(-1.2e-3, 1.2e-3);
+  const Vec3 hole = kTop - Vec3(-0.3e-3, 0, 0.6e-3);
+  for (int trial = 0; trial < 20000; ++trial) {
+    const Vec3 x = hole + Vec3(u(rng), u(rng), u(rng));
+    const Vec3 y = x + 0.1 * Vec3(u(rng), u(rng), u(rng));
+    ASSERT_LE(std::abs(d.field.value(x) - d.field.value(y)), L * (x - y).norm() + 1e-12);
+  }
+}
+
+// A probe (radius 0.25 mm, no drilling) pressed down the hole's axis at 1 N stops on the hole's
+// floor, the drilled voxels' surface, not on removed material: its rendered centre is within
+// rho + h of the remaining voxels and deeper than the original surface.
+TEST(FieldDrilling, AProbeInTheFreshHoleTouchesItsFloor) {
+  const Drilled& d = drilled();
+  const double rho = 0.25e-3, h = d.original.voxel_size;
+  SampledField field = d.field;
+  VoxelTooth tooth(d.tooth.grid());
+  ToothContactProvider probe(tooth, ToolTip{rho, Vec3::Zero()}, kK, 0.0, nullptr,
+                             ContactModel::kField, &signed_distance, &field);
+  std::vector<Contact> contacts;
+  contacts.reserve(kContactCapacity);
+  Pose pose;
+  // Down the axis of the first leg, from above the surface to 1 N of spring below the floor.
+  const Vec3 start = kTop + Vec3(0, 0, rho + 0.3e-3);
+  Vec3 g = start;
+  double force = 0.0;
+  for (int tick = 0; tick <= 3000 && force < 1.0; ++tick) {
+    pose.x = start - Vec3(0, 0, 2.0e-3 * tick / 3000);
+    probe.contacts(pose, contacts);
+    force = blended_contact_force(contacts).norm();
+    g = probe.surface_proxy().g();
+  }
+  const double to_voxels = signed_distance(tooth, g, 1e-3).phi;
+  std::printf("probe in the hole: held at 1 N at %.3f mm below the original top, %.4f mm from "
+              "the drilled voxels (rho %.2f mm)\n",
+              1e3 * (kTop.z() - (g.z() - rho)), 1e3 * to_voxels, 1e3 * rho);
+  ASSERT_GE(force, 1.0);
+  // Touches the drilled voxels (not held off them by removed material) ...
+  EXPECT_LE(to_voxels, rho + 0.5 * h);
+  EXPECT_GE(to_voxels, rho - probe.surface_proxy().skin() - 0.5 * h);
+  // ... deep in the hole: the bur's first leg went 0.9 mm below the top.
+  EXPECT_LT(g.z() - rho, kTop.z() - 0.5e-3);
+}
+
+}  // namespace
+}  // namespace dentsim
