@@ -39,8 +39,9 @@
 // (tests/reference/saturation_passive_test.cc).
 //
 // Why it changes nothing unsaturated: the state engages only on a command that saturated; until
-// then no term is touched (bitwise). The built-in scenes' contact transients do saturate a few
-// ticks, so the switch (method.saturation_passive) is off by default to keep their pinned runs.
+// then no term is touched (bitwise). A scene's switch (method.saturation_passive) is on by default;
+// the built-in scenes at their quiet gains never saturate, so their runs are the same on and off.
+// PipelineConfig's own default stays off (the library's callers choose).
 //
 // Allocation-free and throw-free (6x6 fixed-size algebra only).
 #pragma once

@@ -382,7 +382,7 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   }
   s.method.encoder_kalman = rd.boolean(m, "method", "encoder_kalman", false);
   s.method.lag_compensation = rd.boolean(m, "method", "lag_compensation", false);
-  s.method.saturation_passive = rd.boolean(m, "method", "saturation_passive", false);
+  s.method.saturation_passive = rd.boolean(m, "method", "saturation_passive", true);
   s.method.friction.mu = rd.number(m, "method", "friction_mu", 0.0);
   rd.non_negative("method.friction_mu", s.method.friction.mu);
   rd.at_most("method.friction_mu", s.method.friction.mu, kMaxFrictionMu, "a friction coefficient");

@@ -74,9 +74,9 @@ struct SceneMethod {
   bool lag_compensation = false;
   // Issue #29: after a command the motors could not deliver, the virtual side sees only what the
   // device can deliver (reference/saturation_passive.h). Changes nothing while nothing saturates.
-  // Off by default: the built-in scenes saturate for a few ticks, and on changes what follows
-  // (docs/derivations/quiet_stiffness.md section 6).
-  bool saturation_passive = false;
+  // On by default (a safety property): the built-in scenes at their quiet gains never saturate,
+  // so their runs are bitwise the same on and off (docs/derivations/quiet_stiffness.md section 6).
+  bool saturation_passive = true;
   FrictionParams friction;
   ProxyParams proxy;
 };
