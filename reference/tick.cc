@@ -128,8 +128,12 @@ PipelineModel make_pipeline_model(const SixDofDeviceModel& device, const Pipelin
     // low-pass lag (reference/encoder_kalman.h).
     m.velocity_estimate = config.encoder_kalman ? ObserverInput{} : config.velocity_estimate;
   }
-  // Without limits nothing saturates: the shape control has nothing to do.
-  m.saturation_passive = config.saturation_passive && m.saturate;
+  // Without limits nothing saturates: the shape control has nothing to do. Nor under explicit
+  // Euler: it has no feed-forward, and its coupling is integrated explicitly, where capping the
+  // spring does not make the step passive (its stability is the load-time check's and the
+  // supervisor's); the control is for PMI's implicit step (pmi, pmi-pd).
+  m.saturation_passive =
+      config.saturation_passive && m.saturate && config.method != Method::kExplicitVc;
   m.skip_unneeded = config.skip_unneeded;
   if (!m.skip_unneeded && config.method != Method::kPmiPd) {
     // The decomposition runs (and is discarded) with skips off: it needs M_d factorised.
