@@ -102,6 +102,7 @@ void QuietSeries::reserve(std::size_t n) {
   tip_y_m.reserve(n);
   tip_z_m.reserve(n);
   energy_j.reserve(n);
+  observer_error_n.reserve(n);
 }
 
 bool phase_is_quiet(const QuietPhase& p, const QuietBounds& b) {
@@ -193,6 +194,9 @@ QuietReport quiet_report(const QuietSeries& s, const std::vector<QuietScriptKey>
       p.mean_penetration_m = mean(dp);
       p.static_stiffness_n_per_m = static_stiffness(fd, dp);
       p.motor_energy_j = rise(slice(s.energy_j, i0, i1));
+      if (s.observer_error_n.size() == s.t.size()) {
+        p.observer_rms_error_n = rms(slice(s.observer_error_n, i0, i1));
+      }
     }
     p.quiet = phase_is_quiet(p, b);
     rep.phases.push_back(std::move(p));
@@ -204,7 +208,8 @@ QuietReport quiet_report(const QuietSeries& s, const std::vector<QuietScriptKey>
   std::vector<long> in_contact(s.t.size() + 1, 0);  // prefix count of contact ticks
   for (std::size_t k = 0; k < s.t.size(); ++k)
     in_contact[k + 1] = in_contact[k] + (s.contacts[k] > 0);
-  std::vector<double> moving_f, still_f;
+  std::vector<double> moving_f, still_f, moving_obs, still_obs;
+  const bool observer_measured = !s.t.empty() && s.observer_error_n.size() == s.t.size();
   QuietFreeSpace& fs = rep.free_space;
   double still_since = -1.0;  // when the reference last stopped (-1: moving)
   std::size_t still_run_begin = 0;
@@ -233,9 +238,13 @@ QuietReport quiet_report(const QuietSeries& s, const std::vector<QuietScriptKey>
     const std::size_t lo = k >= static_cast<std::size_t>(h) ? k - h : 0;
     const std::size_t hi = std::min(n, k + h + 1);
     const bool free = in_contact[hi] == in_contact[lo];
-    if (moving && free) moving_f.push_back(s.device_force_n[k]);
+    if (moving && free) {
+      moving_f.push_back(s.device_force_n[k]);
+      if (observer_measured) moving_obs.push_back(s.observer_error_n[k]);
+    }
     if (still && free) {
       still_f.push_back(s.device_force_n[k]);
+      if (observer_measured) still_obs.push_back(s.observer_error_n[k]);
       if (!in_still_run) {
         in_still_run = true;
         still_run_begin = k;
@@ -249,6 +258,8 @@ QuietReport quiet_report(const QuietSeries& s, const std::vector<QuietScriptKey>
   fs.still_ticks = static_cast<long>(still_f.size());
   fs.moving_force_rms_n = rms(moving_f);
   fs.still_force_rms_n = rms(still_f);
+  if (!moving_obs.empty()) fs.moving_observer_rms_error_n = rms(moving_obs);
+  if (!still_obs.empty()) fs.still_observer_rms_error_n = rms(still_obs);
   fs.still_pulses = count_above(still_f, b.pulse_threshold_n);
   fs.still_s = static_cast<double>(still_f.size()) * s.tick_s;
   fs.still_pulse_rate_per_s =

@@ -88,6 +88,9 @@ struct QuietSeries {
   std::vector<double> device_penetration_m;  // the device tip's own penetration
   std::vector<double> tip_x_m, tip_y_m, tip_z_m;  // device tip position (world)
   std::vector<double> energy_j;                   // E_v, the energy the motors put in so far
+  // |f_hat - f_hand|: the human-force observer's error against the hand's true force (issue #29's
+  // observer target). Empty when the device has no ground truth (a real device): not measured.
+  std::vector<double> observer_error_n;
   void reserve(std::size_t n);
 };
 
@@ -114,6 +117,7 @@ struct QuietPhase {
   double mean_contact_force_n = 0.0, mean_device_force_n = 0.0, mean_penetration_m = 0.0;
   std::optional<double> static_stiffness_n_per_m;  // mean device force / mean device penetration
   double motor_energy_j = 0.0;                     // rise of E_v over the steady ticks
+  std::optional<double> observer_rms_error_n;      // RMS of observer_error_n over the steady ticks
   bool quiet = false;
 };
 
@@ -125,6 +129,8 @@ struct QuietFreeSpace {
   double still_pulse_rate_per_s = 0.0;
   double still_motor_energy_j = 0.0;  // sum of the rises of E_v over still stretches
   double still_s = 0.0;               // still_ticks * tick
+  // RMS of observer_error_n over the moving / still free-space ticks (when measured).
+  std::optional<double> moving_observer_rms_error_n, still_observer_rms_error_n;
 };
 
 struct QuietReport {

@@ -130,6 +130,7 @@ nlohmann::json quiet_report_json(const QuietReport& q) {
     put(ph, "ripple_contact_force", p.ripple_contact_force);
     put(ph, "ripple_device_force", p.ripple_device_force);
     put(ph, "static_stiffness_n_per_m", p.static_stiffness_n_per_m);
+    put(ph, "observer_rms_error_n", p.observer_rms_error_n);
     phases.push_back(ph);
   }
   j["phases"] = phases;
@@ -143,6 +144,8 @@ nlohmann::json quiet_report_json(const QuietReport& q) {
       {"still_pulse_rate_per_s", f.still_pulse_rate_per_s},
       {"still_motor_energy_j", f.still_motor_energy_j}};
   if (f.still_s > 0.0) j["free_space"]["still_motor_power_w"] = f.still_motor_energy_j / f.still_s;
+  put(j["free_space"], "moving_observer_rms_error_n", f.moving_observer_rms_error_n);
+  put(j["free_space"], "still_observer_rms_error_n", f.still_observer_rms_error_n);
   // No steady press or slide phase: no verdict (the key is left out).
   if (q.quiet) j["quiet"] = *q.quiet;
   return j;

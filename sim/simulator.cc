@@ -531,6 +531,7 @@ struct RunMeasurements {
     qs.tip_y_m.push_back(rec.device.x.y());
     qs.tip_z_m.push_back(rec.device.x.z());
     qs.energy_j.push_back(rec.energy_virtual_j);
+    if (truth) qs.observer_error_n.push_back((rec.f_observer - f_hand).norm());
     sum_obs2 += (rec.f_observer - f_hand).squaredNorm();
     ++res.ticks;
     return f_hand;

@@ -150,6 +150,33 @@ TEST(QuietMeasures, ReportCutsTheScriptIntoPressAndFreeSpace) {
   EXPECT_NEAR(fs.still_motor_energy_j, 1e-3 * 1023.0 / 1024.0, 1e-15);
   EXPECT_EQ(fs.moving_ticks, 1024 + (3584 - 3328 - 2));
   EXPECT_NEAR(fs.moving_force_rms_n, 0.05, 1e-15);
+  // No ground truth (a real device): the observer's error is not measured, so not reported.
+  EXPECT_FALSE(p.observer_rms_error_n.has_value());
+  EXPECT_FALSE(fs.moving_observer_rms_error_n.has_value());
+  EXPECT_FALSE(fs.still_observer_rms_error_n.has_value());
+
+  // The observer's error, measured over the same ticks as the forces: 0.02 N in the press (one
+  // 0.5 N tick at t = 2.0), 0.03 N while moving, 0.04 N while still, 9 N elsewhere (the press's
+  // settling and the retract's first ticks), which no measure may see.
+  {
+    QuietSeries o = s;
+    for (int k = 0; k < n; ++k) {
+      const double t = o.t[k];
+      double e = 9.0;
+      if (t >= 1.5 && t < 3.0) e = k == 2048 ? 0.5 : 0.02;
+      if (t < 1.0 || (t >= 3.25 + 2 * s.tick_s && t < 3.5)) e = 0.03;
+      if (t >= 4.0) e = 0.04;
+      o.observer_error_n.push_back(e);
+    }
+    const QuietReport ro = quiet_report(o, script, b, 3e-5);
+    ASSERT_TRUE(ro.phases[0].observer_rms_error_n.has_value());
+    EXPECT_NEAR(*ro.phases[0].observer_rms_error_n,
+                std::sqrt((1535 * 0.02 * 0.02 + 0.25) / 1536.0), 1e-15);
+    ASSERT_TRUE(ro.free_space.moving_observer_rms_error_n.has_value());
+    EXPECT_NEAR(*ro.free_space.moving_observer_rms_error_n, 0.03, 1e-15);
+    ASSERT_TRUE(ro.free_space.still_observer_rms_error_n.has_value());
+    EXPECT_NEAR(*ro.free_space.still_observer_rms_error_n, 0.04, 1e-15);
+  }
 
   // Without the drop-out the press is quiet.
   s.contacts[2560] = 1;
