@@ -58,6 +58,7 @@ void render(const RenderCliOptions& o) {
     vo.elevation_deg = o.elevation;
     vo.zoom = o.zoom;
     vo.method = method_name(scene.method.method);
+    vo.field = rig->field.get();
     write_png(o.png, view::render_offscreen(rig->tooth_before, nullptr, vo));
     std::printf("render: scene %s at t = 0 s (before the first tick, %s pipeline): wrote %s\n",
                 scene.name.c_str(), o.pipeline.c_str(), o.png.c_str());
@@ -90,6 +91,7 @@ void render(const RenderCliOptions& o) {
   vo.zoom = o.zoom;
   vo.focus_tool = o.focus_tool;
   vo.method = method_name(scene.method.method);
+  vo.field = r.field_after.get();
   write_png(o.png, view::render_offscreen(tooth, &tick, vo, median, p99));
   std::printf(
       "render: scene %s at t = %.3f s (%ld ticks, %s pipeline, removed %.4f mm^3): wrote %s\n",

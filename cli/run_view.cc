@@ -72,8 +72,10 @@ void write_tooth_pictures(const RunResult& r, const std::string& dir) {
   std::string why;
   if (view::headless_available(&why)) {
     try {
-      write_png(dir + "/tooth_before.png", view::render_tooth_panels(r.tooth_before));
-      write_png(dir + "/tooth_after.png", view::render_tooth_panels(r.tooth_after));
+      write_png(dir + "/tooth_before.png",
+                view::render_tooth_panels(r.tooth_before, 512, 55.0f, r.field_before.get()));
+      write_png(dir + "/tooth_after.png",
+                view::render_tooth_panels(r.tooth_after, 512, 55.0f, r.field_after.get()));
       return;
     } catch (const InputError& e) {
       why = e.what();

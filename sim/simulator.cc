@@ -396,6 +396,7 @@ void describe_run(const Scene& scene, const RunOptions& options, const SceneRig&
   res.pipeline = rig.pipeline->name();
   res.skip_unneeded = options.skip_unneeded;
   res.tooth_before = rig.tooth_before;
+  if (rig.field) res.field_before = std::make_shared<const SampledField>(*rig.field);
   if (!truth) res.hd_loop = options.hd_loop;
   res.device =
       device_backend_name(truth ? DeviceBackend::kSimulatedPhantom : DeviceBackend::kHdapi);
@@ -739,6 +740,12 @@ void report_tooth(const SceneRig& rig, RunResult& res) {
   }
   res.drill_log = contacts.drill_log();
   res.tooth_after = rig.tooth_grid();
+  if (rig.field) {
+    // Undrilled, the field is the one the run started with.
+    res.field_after = res.drill_log.empty() && res.field_before
+                          ? res.field_before
+                          : std::make_shared<const SampledField>(*rig.field);
+  }
 }
 
 // The supervisor's totals; its reason appended to a fault it raised.

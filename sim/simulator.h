@@ -142,6 +142,9 @@ struct RunResult {
   std::string hd_loop;                  // hdapi: "callback" or "caller" (empty for a simulated run)
   long callback_dropped_ticks = 0;      // hdapi callback loop: records the full ring dropped
   VoxelGrid tooth_before, tooth_after;  // for pictures
+  // The tooth's sampled field before the first tick and after the last (contact model "field",
+  // as drilling edited it); null for the other models. For pictures (view/pictures.h).
+  std::shared_ptr<const SampledField> field_before, field_after;
   std::string device_model;             // which device model file
   std::string pipeline;                 // the tick's implementation that ran
   bool skip_unneeded = true;            // RunOptions::skip_unneeded

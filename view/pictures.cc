@@ -4,8 +4,10 @@
 
 namespace dentsim::view {
 
-RgbImage render_tooth_panels(const VoxelGrid& tooth, int panel_size, float elevation_deg) {
+RgbImage render_tooth_panels(const VoxelGrid& tooth, int panel_size, float elevation_deg,
+                             const SampledField* field) {
   ViewOptions o;
+  o.field = field;
   o.width = o.height = panel_size;
   o.overlay = false;
   o.tool = false;

@@ -10,7 +10,8 @@
 
 namespace dentsim::view {
 
+// `field`: the tooth's sampled field (contact model "field"), meshed instead of the voxels.
 RgbImage render_tooth_panels(const VoxelGrid& tooth, int panel_size = 512,
-                             float elevation_deg = 55.0f);
+                             float elevation_deg = 55.0f, const SampledField* field = nullptr);
 
 }  // namespace dentsim::view

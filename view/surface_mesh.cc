@@ -9,14 +9,27 @@
 namespace dentsim::view {
 namespace {
 
-constexpr float kIso = 0.5f;
 constexpr int kW1[3] = {1, 2, 1};
 
 }  // namespace
 
 SurfaceMesher::SurfaceMesher(const VoxelGrid& grid, int block_size, CutAway cut)
-    : grid_(grid), block_size_(block_size), cut_(cut) {
+    : SurfaceMesher(grid, nullptr, block_size, cut) {}
+
+SurfaceMesher::SurfaceMesher(const VoxelGrid& grid, const SampledField* field, int block_size,
+                             CutAway cut)
+    : grid_(grid), block_size_(block_size), cut_(cut), field_(field) {
   if (block_size < 4) throw std::invalid_argument("SurfaceMesher: block size must be >= 4");
+  if (field_ != nullptr) {
+    if (field_->padding() < 1 || field_->samples_per_axis() < grid.n + 2 * field_->padding() ||
+        std::abs(field_->voxel_size() - grid.voxel_size) > 1e-12 * grid.voxel_size) {
+      throw std::invalid_argument("SurfaceMesher: the field is not the grid's");
+    }
+    iso_ = 0.0f;
+    // edit_field_for_removed_voxels' radius R = ceil(c_out / h + 1) samples, plus the dual
+    // cells' reach.
+    halo_ = static_cast<int>(std::ceil(field_->outside_clamp() / grid.voxel_size + 1.0)) + 2;
+  }
   nb_ = (grid.n + block_size - 1) / block_size;
   blocks_.resize(static_cast<std::size_t>(nb_) * nb_ * nb_);
   for (int b = 0; b < static_cast<int>(blocks_.size()); ++b) mesh_block(b);
@@ -43,9 +56,9 @@ std::vector<int> SurfaceMesher::blocks_touched_by(int i, int j, int k) const {
   const int v[3] = {i, j, k};
   int lo[3], hi[3];
   for (int a = 0; a < 3; ++a) {
-    lo[a] = std::max(0, (v[a] - kHalo) / block_size_);
-    if (v[a] - kHalo < 0) lo[a] = 0;
-    hi[a] = std::min(nb_ - 1, (v[a] + kHalo) / block_size_);
+    lo[a] = std::max(0, (v[a] - halo_) / block_size_);
+    if (v[a] - halo_ < 0) lo[a] = 0;
+    hi[a] = std::min(nb_ - 1, (v[a] + halo_) / block_size_);
   }
   for (int bz = lo[2]; bz <= hi[2]; ++bz) {
     for (int by = lo[1]; by <= hi[1]; ++by) {
@@ -90,9 +103,17 @@ void SurfaceMesher::mesh_block(int block) {
            static_cast<std::size_t>(L) * (static_cast<std::size_t>(j - b0[1] + 1) +
                                           static_cast<std::size_t>(L) * (k - b0[2] + 1));
   };
+  const int pad = field_ != nullptr ? field_->padding() : 0;
+  const float half_voxel = 0.5f * static_cast<float>(grid_.voxel_size);
   for (int k = b0[2] - 1; k <= b1[2]; ++k) {
     for (int j = b0[1] - 1; j <= b1[1]; ++j) {
       for (int i = b0[0] - 1; i <= b1[0]; ++i) {
+        if (field_ != nullptr) {
+          float s = -field_->at(i + pad, j + pad, k + pad);
+          if (cut_.enabled && i >= cut_.i && j >= cut_.j) s = std::min(s, -half_voxel);
+          s_[sidx(i, j, k)] = s;
+          continue;
+        }
         int sum = 0;
         for (int dz = -1; dz <= 1; ++dz) {
           for (int dy = -1; dy <= 1; ++dy) {
@@ -128,8 +149,8 @@ void SurfaceMesher::mesh_block(int block) {
           p0[(a + 1) % 3] = p1[(a + 1) % 3] = u;
           p0[(a + 2) % 3] = p1[(a + 2) % 3] = w;
           const float s0 = corner[p0[2]][p0[1]][p0[0]], s1 = corner[p1[2]][p1[1]][p1[0]];
-          if ((s0 >= kIso) == (s1 >= kIso)) continue;
-          const float t = (kIso - s0) / (s1 - s0);
+          if ((s0 >= iso_) == (s1 >= iso_)) continue;
+          const float t = (iso_ - s0) / (s1 - s0);
           Eigen::Vector3f q(static_cast<float>(p0[0]), static_cast<float>(p0[1]),
                             static_cast<float>(p0[2]));
           q[a] += t;
@@ -178,14 +199,14 @@ void SurfaceMesher::mesh_block(int block) {
   for (int k = b0[2]; k < b1[2]; ++k) {
     for (int j = b0[1]; j < b1[1]; ++j) {
       for (int i = b0[0]; i < b1[0]; ++i) {
-        if (s_at(i, j, k) < kIso) continue;
+        if (s_at(i, j, k) < iso_) continue;
         const int a_idx[3] = {i, j, k};
         float material = -1.0f;
         for (int axis = 0; axis < 3; ++axis) {
           for (int sign = -1; sign <= 1; sign += 2) {
             int nb[3] = {i, j, k};
             nb[axis] += sign;
-            if (s_at(nb[0], nb[1], nb[2]) >= kIso) continue;
+            if (s_at(nb[0], nb[1], nb[2]) >= iso_) continue;
             if (material < 0.0f) material = material_of(i, j, k);
             const int u = (axis + 1) % 3, w = (axis + 2) % 3;
             // Dual cells around the edge (a, a + sign e_axis): min corner along the axis is

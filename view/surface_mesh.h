@@ -14,6 +14,15 @@
 // normalised -grad s of the dual cell (differences of its 8 corners), so the surface shades
 // smoothly. Positions are world [m]: origin + h (c + 1/2) for centre c (voxel_grid.h).
 //
+// On the tooth's sampled field (the contact model "field", reference/tooth/sampled_field.h; issue
+// #30: the view meshes the surface the tool touches): s(c) = -v(c), v the field's sample at the
+// voxel centre c (its lattice point c + P), and the level is 0 instead of 1/2; everything else
+// is the same. The field's samples are distances to the tooth's source surface, so the crossings
+// on the dual cells' edges put the vertices on that surface to the interpolation's accuracy (no
+// voxel terraces). A cut-away voxel takes s = min(s, -h/2): outside, its cut face half a voxel
+// from the centres it leaves. A field edit (drilling) changes samples within the edit radius R of
+// a removed voxel (field_contact.h), so update() dirties the blocks within R + 2 of it.
+//
 // Material per quad: the material of a if it is solid, else the most frequent material among the
 // solid voxels of a's 3x3x3 neighbourhood (ties: the lower id). The cut-away (a quarter removed,
 // as in tooth_io/render_png.h) makes voxels with i >= cut_i and j >= cut_j empty for the
@@ -31,6 +40,7 @@
 #include <span>
 #include <vector>
 
+#include "reference/tooth/sampled_field.h"
 #include "reference/tooth/voxel_grid.h"
 
 namespace dentsim::view {
@@ -62,6 +72,10 @@ class SurfaceMesher {
   // Meshes `grid` whole. block_size B >= 4.
   explicit SurfaceMesher(const VoxelGrid& grid, int block_size = kDefaultBlockSize,
                          CutAway cut = {});
+  // Meshes the zero level of `field`, the sampled field of `grid` (header comment); `field` must
+  // outlive the mesher, and update() reads it as it is then. Null: the voxels, as above.
+  SurfaceMesher(const VoxelGrid& grid, const SampledField* field,
+                int block_size = kDefaultBlockSize, CutAway cut = {});
 
   // The grid changed at the flat voxel indices `changed` (the mesher's own copy is updated from
   // `grid`); re-meshes the dirty blocks and returns their ids, sorted.
@@ -77,6 +91,9 @@ class SurfaceMesher {
   std::size_t triangle_count() const;
   // The blocks update() would re-mesh for a change of voxel (i, j, k), sorted.
   std::vector<int> blocks_touched_by(int i, int j, int k) const;
+  // Voxels around a change that the mesh depends on: kHalo on the voxels, the field's edit radius
+  // + 2 on a field.
+  int halo() const { return halo_; }
 
  private:
   void mesh_block(int block);
@@ -86,6 +103,9 @@ class SurfaceMesher {
   int block_size_;
   int nb_;
   CutAway cut_;
+  const SampledField* field_ = nullptr;
+  float iso_ = 0.5f;
+  int halo_ = kHalo;
   std::vector<BlockMesh> blocks_;
   std::vector<float> s_;  // scratch: s over one block + 1 voxel halo
 };

@@ -32,6 +32,9 @@ struct ViewOptions {
   float zoom = 1.0f;                                 // > 1: closer
   bool focus_tool = false;  // aim the camera at the proxy's tip instead of the tooth's centre
   std::string method;       // shown in the overlay
+  // The tooth's sampled field (contact model "field"): mesh its zero level, the surface the tool
+  // touches, instead of the voxels (surface_mesh.h). Not owned; null: the voxels.
+  const SampledField* field = nullptr;
 };
 
 // The overlay's text lines for one tick (GL-free, so it is tested on its own).

@@ -99,7 +99,7 @@ RgbImage render_offscreen(const VoxelGrid& tooth, const TickSnapshot* tick,
   {
     const Framebuffer fb(options.width, options.height);
     GlRenderer renderer;
-    const SurfaceMesher mesher(tooth, SurfaceMesher::kDefaultBlockSize,
+    const SurfaceMesher mesher(tooth, options.field, SurfaceMesher::kDefaultBlockSize,
                                options.cutaway ? centre_cut(tooth) : CutAway{});
     renderer.sync(mesher);
     OrbitCamera cam = camera_for(tooth, options);
