@@ -24,7 +24,8 @@ compensation, reference/lag_compensation.h), --contact-zeta (damping in contact)
 diagnostics --ideal-obs / --freeze-obs. --grid2 runs the stiff grid (K 6000-18000 N/m). Beyond the
 staircase (section 8): --setmember SIGMA_F (a set-membership estimate, SetMember: the model's
 prediction kept while it is inside the encoder cell, corrected only at the cell's bounds), with
---sm-snap 0|1, --sm-cap 0|1, --sm-pos-only; --coulomb F (the device's Coulomb friction);
+--sm-snap 0|1, --sm-cap 0|1, --sm-pos-only; --coulomb F (the device's Coulomb friction), --kh,
+--bh (the hand's stiffness and damping: a 1-DoF reduction of another axis, e.g. the gimbal pitch);
 --estimate-stats and --dump FILE (the tick's series) for diagnosis.
 
 Prints the quiet measures of the held press (t in [1.5, 3.0] s): ripple of the contact force and of
@@ -175,7 +176,7 @@ def run(a):
     T = 1e-3
     n_sub = 8
     md, mh = a.mdev, a.mh
-    Kh, Bh, bd = 135.0, 6.45, 0.0125
+    Kh, Bh, bd = a.kh, a.bh, 0.0125
     m2, Kvc, Bvc = 0.05, 1200.0, a.bvc
     M1 = md + mh
     ML = M1 + m2
@@ -421,6 +422,8 @@ def main():
     p.add_argument("--mdev", type=float, default=0.136, help="device apparent mass along z [kg]")
     p.add_argument("--coulomb", type=float, default=0.0, help="the device's Coulomb friction at the tip [N] (tanh over 0.1 mm/s)")
     p.add_argument("--mh", type=float, default=0.554, help="hand mass [kg]")
+    p.add_argument("--kh", type=float, default=135.0, help="hand stiffness K_h [N/m]")
+    p.add_argument("--bh", type=float, default=6.45, help="hand damping B_h [N s/m]")
     p.add_argument("--md", type=float, default=0.0, help="desired tool mass M_d [kg] (0: the preset's rule)")
     p.add_argument("--md-extra", type=float, default=0.01, help="instrument mass over M_L [kg] (explorer)")
     p.add_argument("--dd", type=float, default=0.2, help="D_d [N s/m]")
