@@ -21,7 +21,12 @@ filter of reference/encoder_kalman.h, with the observer on its velocity as in th
 (docs/derivations/quiet_stiffness.md section 5): --pc raw|allow (a passivity observer/controller on
 the device port, with the encoder-error allowance), --eb (energy bounding), --lead (loop-lag
 compensation, reference/lag_compensation.h), --contact-zeta (damping in contact), and the
-diagnostics --ideal-obs / --freeze-obs. --grid2 runs the stiff grid (K 6000-18000 N/m).
+diagnostics --ideal-obs / --freeze-obs. --grid2 runs the stiff grid (K 6000-18000 N/m). Beyond the
+staircase (section 8): --setmember SIGMA_F (a set-membership estimate, SetMember: the model's
+prediction kept while it is inside the encoder cell, corrected only at the cell's bounds), with
+--sm-snap 0|1, --sm-cap 0|1, --sm-pos-only; --coulomb F (the device's Coulomb friction), --kh,
+--bh (the hand's stiffness and damping: a 1-DoF reduction of another axis, e.g. the gimbal pitch);
+--estimate-stats and --dump FILE (the tick's series) for diagnosis.
 
 Prints the quiet measures of the held press (t in [1.5, 3.0] s): ripple of the contact force and of
 the device force (RMS minus 0.1 s moving average, over the mean), contact fraction, losses, static
@@ -98,11 +103,80 @@ class AlphaBeta:
         return z, v
 
 
+class SetMember:
+    """Set-membership estimate of (z, v) from an incremental encoder, predicted with the model's
+    acceleration like AlphaBeta, but with no pull toward the cell's centre: the count says only
+    that z lies in the cell [z_q, z_q + Delta], so a prediction inside the cell is kept as it is.
+    Two corrections, each a Kalman update with the prediction's covariance P (process noise the
+    unknown force sigma_a, as AlphaBeta):
+      - a count transition: the truth crossed the boundary b between the cells during the tick
+        that ended, at an instant uniform over it, so z(t_k) = b + v tau, tau ~ U(0, T):
+        measurement b + v- T / 2 with variance (v- T)^2 / 12;
+      - a prediction outside the cell without a transition: projected onto the nearest bound
+        (an exact measurement of the bound, the estimate projection of a constrained Kalman
+        filter), the velocity corrected by P_vz / P_zz times the projection.
+    At rest (a = 0, no transition) every point of the cell is a rest state."""
+
+    def __init__(self, delta, T, sigma_a, cap=True, snap=True):
+        self.snap = snap
+        import numpy as _np
+        self.np = _np
+        self.F = _np.array([[1, T], [0, 1]])
+        G = _np.array([[0.5 * T * T], [T]])
+        self.Q = G @ G.T * sigma_a ** 2
+        self.d = delta
+        self.T = T
+        self.cap = cap
+        self.z = None
+        self.v = 0.0
+        self.P = _np.diag([delta ** 2 / 12, 0.0])
+        self.zq_prev = None
+
+    def _update(self, y, R):
+        P = self.P
+        S = P[0, 0] + R
+        if S <= 0:
+            return
+        Kz, Kv = P[0, 0] / S, P[1, 0] / S
+        r = y - self.z
+        self.z += Kz * r
+        self.v += Kv * r
+        KH = self.np.array([[Kz, 0.0], [Kv, 0.0]])
+        self.P = (self.np.eye(2) - KH) @ P
+
+    def update(self, zq, a_pred, T):
+        if self.z is None:
+            self.z = zq + 0.5 * self.d
+            self.zq_prev = zq
+            return self.z, 0.0
+        d = self.d
+        self.z = self.z + T * self.v + 0.5 * T * T * a_pred
+        self.v = self.v + T * a_pred
+        self.P = self.F @ self.P @ self.F.T + self.Q
+        if self.snap and zq != self.zq_prev:
+            b = zq if zq > self.zq_prev else zq + d
+            y = min(max(b + 0.5 * self.v * T, zq), zq + d)
+            self._update(y, (self.v * T) ** 2 / 12 + (1e-6 * d) ** 2)
+        lo, hi = zq, zq + d
+        if self.z < lo or self.z > hi:
+            y = min(max(self.z, lo), hi)
+            self._update(y, 0.0)
+            self.z = y
+        if self.cap and self.P[0, 0] > d * d / 12:
+            # the cell bounds the position's spread (uniform over the cell at most)
+            c = math.sqrt(d * d / 12 / self.P[0, 0])
+            self.P[0, 0] *= c * c
+            self.P[0, 1] *= c
+            self.P[1, 0] *= c
+        self.zq_prev = zq
+        return self.z, self.v
+
+
 def run(a):
     T = 1e-3
     n_sub = 8
     md, mh = a.mdev, a.mh
-    Kh, Bh, bd = 135.0, 6.45, 0.0125
+    Kh, Bh, bd = a.kh, a.bh, 0.0125
     m2, Kvc, Bvc = 0.05, 1200.0, a.bvc
     M1 = md + mh
     ML = M1 + m2
@@ -137,7 +211,13 @@ def run(a):
     sc = None
     if a.kalman > 0 and delta > 0:
         sc = AlphaBeta(delta, T, a.kalman / M1, a.project)
+    sc_vel = None
+    if a.setmember > 0 and delta > 0 and a.sm_pos_only:
+        sc_vel = AlphaBeta(delta, T, a.setmember / M1, a.project)
+    if a.setmember > 0 and delta > 0:
+        sc = SetMember(delta, T, a.setmember / M1, cap=bool(a.sm_cap), snap=bool(a.sm_snap))
     fc_log, fd_log, inc_log, pen_log, t_log = [], [], [], [], []
+    dump_log = []
     ea_true_log, ea_count_log, dT1_log = [], [], []
     T1_log_prev, zq_log_prev, T1_first_prev = 0.0, zq_prev, 0.0
     # passivity observer/controller state (--pc): the energy the controller has absorbed at the
@@ -145,6 +225,7 @@ def run(a):
     E_obs, E_allow, zs_prev, T1_cmd_prev, pc_energy, pc_fire, pc_tv = 0.0, 0.0, None, 0.0, 0.0, 0, 0.0
     alpha_max = a.pc_max if a.pc_max > 0 else md / T  # default: the largest damping an explicit tick applies stably to the device alone
     alpha = 1.0 - math.exp(-2 * math.pi * a.cutoff * T) if a.cutoff > 0 else 1.0
+    fcoul, vs_coul = a.coulomb, 1e-4  # the device's Coulomb friction, smoothed over 0.1 mm/s
     for k in range(nT):
         t = k * T
         zq = z if delta == 0 else delta * math.floor(z / delta)
@@ -165,6 +246,8 @@ def run(a):
         if sc is not None:
             a_pred = (T1 + f_hat) / M1
             zs, vs = sc.update(zq, a_pred, T)
+            if sc_vel is not None:  # --sm-pos-only: the Kalman filter's velocity, SetMember's position
+                _, vs = sc_vel.update(zq, a_pred, T)
             if not a.subcount_vel:
                 vs = vm
         if a.cell_coupling and delta > 0:
@@ -258,13 +341,16 @@ def run(a):
         h = T / n_sub
         for _ in range(n_sub):
             def acc(zz, vv):
-                return (T1 - bd * vv + Kh * (zr - zz) - Bh * vv + fff) / M1
+                return (T1 - bd * vv + Kh * (zr - zz) - Bh * vv + fff - fcoul * math.tanh(vv / vs_coul)) / M1
             k1v, k1z = acc(z, v), v
             k2v, k2z = acc(z + h / 2 * k1z, v + h / 2 * k1v), v + h / 2 * k1v
             k3v, k3z = acc(z + h / 2 * k2z, v + h / 2 * k2v), v + h / 2 * k2v
             k4v, k4z = acc(z + h * k3z, v + h * k3v), v + h * k3v
             z += h / 6 * (k1z + 2 * k2z + 2 * k3z + k4z)
             v += h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
+        if a.dump or a.estimate_stats:
+            zr_, fff_ = href(t)
+            dump_log.append((t, z, zs, zq, f_hat, Kh * (zr_ - z) + fff_, T1, F2 if incontact else 0.0, vs, v))
         t_log.append(t)
         fc_log.append(abs(F2) if incontact else 0.0)
         fd_log.append(abs(T1))
@@ -278,6 +364,19 @@ def run(a):
         T1_log_prev, zq_log_prev = T1, zq
         dT1_log.append(abs(T1 - T1_first_prev))
         T1_first_prev = T1
+    if a.estimate_stats and delta > 0:
+        dl = np.array(dump_log)
+        sel = dl[:, 0] >= 1.5 + a.settle
+        t_, z_, ze_, zq_, fh_, Fh_ = dl[sel, :6].T
+        u_ = (ze_ - zq_) / delta
+        hist = np.histogram(u_, bins=[0, 1e-6, 0.25, 0.5, 0.75, 1 - 1e-6, 1 + 1e-9])[0] / len(u_)
+        print("estimate in its cell [at the lower bound, (0, 1/4), (1/4, 1/2), (1/2, 3/4), (3/4, 1), "
+              "at the upper bound]: " + " ".join(f"{x:.2f}" for x in hist) +
+              f"; estimate error RMS {1e6 * np.sqrt(np.mean((ze_ - z_) ** 2)):.1f} um"
+              f"; count changes {np.sum(np.diff(zq_) != 0) / (t_[-1] - t_[0]):.0f} /s"
+              f"; observer error RMS {1e3 * np.sqrt(np.mean((fh_ - Fh_) ** 2)):.1f} mN")
+    if a.dump:
+        np.savetxt(a.dump, np.array(dump_log), header="t z z_est z_q f_hat F_h_static T1 F2 v_est v")
     t_log = np.array(t_log)
     fc, fd, inc, pen = map(np.array, (fc_log, fd_log, inc_log, pen_log))
     if a.kick:
@@ -321,7 +420,10 @@ def main():
     p.add_argument("--delta", type=float, default=0.1e-3, help="tip quantum along z [m]")
     p.add_argument("--no-quant", action="store_true")
     p.add_argument("--mdev", type=float, default=0.136, help="device apparent mass along z [kg]")
+    p.add_argument("--coulomb", type=float, default=0.0, help="the device's Coulomb friction at the tip [N] (tanh over 0.1 mm/s)")
     p.add_argument("--mh", type=float, default=0.554, help="hand mass [kg]")
+    p.add_argument("--kh", type=float, default=135.0, help="hand stiffness K_h [N/m]")
+    p.add_argument("--bh", type=float, default=6.45, help="hand damping B_h [N s/m]")
     p.add_argument("--md", type=float, default=0.0, help="desired tool mass M_d [kg] (0: the preset's rule)")
     p.add_argument("--md-extra", type=float, default=0.01, help="instrument mass over M_L [kg] (explorer)")
     p.add_argument("--dd", type=float, default=0.2, help="D_d [N s/m]")
@@ -339,6 +441,15 @@ def main():
     p.add_argument("--foaw", type=int, default=0, help="velocity: adaptive windowing, max window [ticks] (0 = the low-pass)")
     p.add_argument("--foaw-where", default="all", help="all | coupling")
     p.add_argument("--kalman", type=float, default=0.0, help="remedy: model-based Kalman estimate, sigma of the unknown force [N] (0 = off)")
+    p.add_argument("--setmember", type=float, default=0.0, help="remedy: set-membership estimate (SetMember), sigma of the unknown force [N] (0 = off)")
+    p.add_argument("--dump", default="", help="write the tick's series (t z z_est z_q f_hat F_h T1 F2 v_est v; F_h the "
+                   "hand's spring and feed-forward force, without its damper) to this file")
+    p.add_argument("--estimate-stats", action="store_true",
+                   help="print where the position estimate sits in its encoder cell, its error, the count "
+                        "changes per second and the observer's error (hand's force without its damper) over the held press")
+    p.add_argument("--sm-pos-only", action="store_true", help="SetMember's position for the coupling and the contact, the Kalman filter's (AlphaBeta) velocity for the rest")
+    p.add_argument("--sm-snap", type=int, default=1, help="SetMember: update at a count transition (the boundary's crossing)")
+    p.add_argument("--sm-cap", type=int, default=1, help="SetMember: cap the position variance at Delta^2/12")
     p.add_argument("--project", type=int, default=1, help="project the Kalman estimate into the cell")
     p.add_argument("--subcount-vel", type=int, default=1, help="the coupling and feed-forward use the Kalman velocity too")
     p.add_argument("--obs-subcount", type=int, default=1, help="the observer uses the Kalman velocity (as the tick does)")

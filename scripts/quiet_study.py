@@ -15,7 +15,7 @@ Two jobs, both small and dependency-light (python3 + numpy):
       `dentsim run probe --show | quiet_study.py patch method.encoder_kalman=true`
       (a list element by its index: hand.script.2.force_n='[0, 0, -3]')
 
-  quiet_study.py measure DIR [--from S] [--to S] [--json]
+  quiet_study.py measure DIR [--from S] [--to S] [--json] [--detail]
       reads DIR/timeseries.csv of `dentsim run SCENE --out DIR` and prints the quiet measures
       over the window [from, to] (default: the press/slide/probe phase minus its first 0.5 s):
         ripple_contact   RMS(F - F averaged over 0.1 s) / mean F, F the contact force
@@ -180,6 +180,20 @@ def measure_dict(args):
         "contact_force_max_n": float(np.max(s["contact_force_n"])),
         "faults": ",".join(report_faults(args.dir)) or "none",
     }
+    if getattr(args, "detail", False):
+        # section 8.4: what moves in the window: the RMS of the device's tip z [m] and orientation
+        # [rad] about their 0.1 s centred moving average, and the frequency of the largest peak
+        # (above 2 Hz) of the contact force's spectrum (Hann window)
+        for k in ("device_z_m", "device_rx_rad", "device_ry_rad", "device_rz_rad"):
+            x = s[k][w]
+            avg = np.convolve(x, np.ones(n_avg) / n_avg, mode="valid")
+            core = x[n_avg // 2:n_avg // 2 + len(avg)]
+            out["fluct_" + k] = float(np.sqrt(np.mean((core - avg) ** 2)))
+        x = fc - np.mean(fc)
+        spec = np.abs(np.fft.rfft(x * np.hanning(len(x))))
+        f = np.fft.rfftfreq(len(x), dt)
+        sel = f > 2.0
+        out["contact_force_peak_hz"] = float(f[sel][np.argmax(spec[sel])]) if sel.any() else float("nan")
     return out
 
 
@@ -303,6 +317,9 @@ def main():
     me.add_argument("--from", dest="t_from", type=float)
     me.add_argument("--to", dest="t_to", type=float)
     me.add_argument("--json", action="store_true")
+    me.add_argument("--detail", action="store_true",
+                    help="also the device's tip z and orientation fluctuation (RMS about the 0.1 s "
+                         "average) and the contact force's spectral peak [Hz]")
     ga = sub.add_parser("gains")
     ga.add_argument("dentsim")
     ga.add_argument("out")
