@@ -7,7 +7,7 @@
 # report's own quiet measures (report.json `quiet.phases[0]`, sim/quiet_measures.h).
 # Usage: scripts/quiet_targets.sh [OUT_DIR]   (default /tmp/quiet_targets; 16 runs, ~1 min)
 # DENTSIM (default build/release/cli/dentsim) and PY (default /usr/bin/python3, with numpy)
-# override. Prints one table row per run (docs/derivations/quiet_stiffness.md section 8).
+# override. Prints one table row per run (docs/derivations/quiet_stiffness.md section 9).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-/tmp/quiet_targets}
