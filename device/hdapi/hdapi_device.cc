@@ -191,9 +191,9 @@ HdapiDevice::HdapiDevice(HdapiConfig config) : cfg_(std::move(config)), vel_(6, 
     scheduler_started_ = true;
     check("hdStartScheduler");
     // The first sample: wait for the first tick so read() is valid before the loop.
-    if (!wait_ticks(1)) {
+    if (!wait_ticks(1, cfg_.start_timeout_s)) {
       throw HdapiError("HDAPI scheduler started but did not call the servo callback within " +
-                       std::to_string(cfg_.tick_timeout_s) + " s (library " + lib_->path + ")");
+                       std::to_string(cfg_.start_timeout_s) + " s (library " + lib_->path + ")");
     }
   } catch (...) {
     shutdown();
@@ -313,10 +313,10 @@ void HdapiDevice::write(const VecX& tau) {
   wait_seq_ = ++cmd_seq_;
 }
 
-bool HdapiDevice::wait_ticks(long n) {
+bool HdapiDevice::wait_ticks(long n, double timeout_s) {
   const long target = ticks_.load() + n;
-  const auto deadline = std::chrono::steady_clock::now() +
-                        std::chrono::duration<double>(cfg_.tick_timeout_s * static_cast<double>(n));
+  const double wait_s = timeout_s > 0.0 ? timeout_s : cfg_.tick_timeout_s * static_cast<double>(n);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(wait_s);
   while (ticks_.load() < target) {
     if (std::chrono::steady_clock::now() > deadline) {
       scheduler_timed_out();

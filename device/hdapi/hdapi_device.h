@@ -65,6 +65,10 @@ struct HdapiConfig {
   HdJointConvention convention;
   int rate_hz = 1000;           // scheduler rate asked for
   double tick_timeout_s = 0.1;  // advance() waits this long for a tick, then scheduler_stopped
+  // Start-up waits this long for the scheduler's first callback, then fails: the start of the
+  // vendor's real-time thread is not a servo deadline, and on a busy machine it can take longer
+  // than a tick's timeout (measured: > 0.1 s with 40 probes started at once on 2 cores).
+  double start_timeout_s = 2.0;
   VelocityEstimatorParams velocity;
   VecX tau_max;                 // [N m] (empty: phantom_tau_max(), gimbal capped by the device)
   VecX tau_fault;               // [N m] (empty: 4 tau_max)
@@ -117,8 +121,8 @@ class HdapiDevice : public Device {
   // write() command (nullptr: back to write()). Both must outlive the device or the next call.
   void set_servo_function(ServoFn fn, void* context);
   // Waits until the scheduler has run `ticks` more ticks; false (and kFaultSchedulerStopped)
-  // when the wait exceeds ticks x tick_timeout_s.
-  bool wait_ticks(long ticks);
+  // when the wait exceeds ticks x tick_timeout_s (timeout_s > 0: that long instead).
+  bool wait_ticks(long ticks, double timeout_s = 0.0);
 
   const HdDeviceInfo& info() const { return info_; }
   long ticks() const { return ticks_.load(); }

@@ -232,6 +232,33 @@ TEST(HdapiDevice, SchedulerStallIsSchedulerStopped) {
   expect_fault_and_zero_torque(dev, kFaultSchedulerStopped, "scheduler_stopped", 300);
 }
 
+// Start-up waits for the scheduler's first callback by its own timeout, not a tick's: a
+// scheduler whose first tick comes 300 ms late (a busy machine starting the vendor's thread)
+// starts under the default 2 s, even with a tick timeout of 50 ms; a start timeout below the
+// delay fails with a message naming the wait and the library.
+TEST(HdapiDevice, LateFirstCallbackStartsWithinTheStartTimeoutOnly) {
+  const EmulatorEnv env({{"DENTSIM_HD_EMU_STALL_AT", "0"},
+                         {"DENTSIM_HD_EMU_STALL_MS", "300"},
+                         {"DENTSIM_HD_EMU_GRAVITY", "0"}});
+  HdapiConfig c = emulator_config();
+  c.tick_timeout_s = 0.05;
+  {
+    HdapiDevice dev(c);
+    EXPECT_EQ(dev.faults(), kFaultNone);
+    EXPECT_GE(dev.ticks(), 1);
+  }
+  c.start_timeout_s = 0.1;
+  try {
+    HdapiDevice dev(c);
+    ADD_FAILURE() << "started although the first callback came after the start timeout";
+  } catch (const HdapiError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("did not call the servo callback within 0.100000 s"), std::string::npos)
+        << what;
+    EXPECT_NE(what.find(DENTSIM_HD_EMULATOR), std::string::npos) << what;
+  }
+}
+
 TEST(HdapiDevice, CallbackEndedByTheLibraryIsSchedulerStopped) {
   const EmulatorEnv env({{"DENTSIM_HD_EMU_DONE_AT", "40"}, {"DENTSIM_HD_EMU_GRAVITY", "0"}});
   HdapiConfig c = emulator_config();
