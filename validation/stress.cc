@@ -155,7 +155,8 @@ StressResult run_stress(const StressConfig& c,
       ++res.rejected_configs;
       continue;
     }
-    if ((!c.only_method.empty() && d.patch["method"]["name"] != c.only_method) ||
+    if (res.runs < c.first_run ||
+        (!c.only_method.empty() && d.patch["method"]["name"] != c.only_method) ||
         (!c.only_scene.empty() && d.scene != c.only_scene)) {
       ++res.skipped_runs;
       ++res.runs;

@@ -42,6 +42,8 @@ struct StressConfig {
   // and count ticks_per_run each toward `ticks` without running: a filtered form covers the same
   // stretch of the draw as the unfiltered one (issue #32: the 10^7 form's PMI drilling runs).
   std::string only_method, only_scene;
+  // Runs before this index are drawn and skipped alike (a later stretch of the same draw).
+  long first_run = 0;
   // A JSON merge patch (RFC 7386) applied to every drawn patch after the draw (empty: none), e.g.
   // {"method": {"saturation_passive": false}}: the same draw under a variant of the simulator.
   std::string variant_patch;

@@ -40,6 +40,8 @@ TEST(LoopStress, EveryTickKeepsTheInvariants) {
   // DENTSIM_STRESS_VARIANT=JSON: a merge patch applied to every drawn configuration (the same
   // draw under a variant, e.g. {"method":{"saturation_passive":false}}; StressConfig).
   if (const char* v = std::getenv("DENTSIM_STRESS_VARIANT")) c.variant_patch = v;
+  // DENTSIM_STRESS_FROM_RUN=N: runs before N drawn and skipped (StressConfig::first_run).
+  if (const char* n = std::getenv("DENTSIM_STRESS_FROM_RUN")) c.first_run = std::atol(n);
   c.seed = 1 + static_cast<std::uint64_t>(::testing::UnitTest::GetInstance()->random_seed());
   // A line every 5 % of the ticks on stderr (how far a long form got, if it must be stopped):
   // the run index, the ticks done, the faults so far.
