@@ -3,6 +3,7 @@
 
 #include <span>
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -80,9 +81,55 @@ Draw draw(std::mt19937_64& rng, long run, long ticks_per_run) {
   return d;
 }
 
+StressFaultedRun faulted_run(const Draw& d, const Scene& scene, long run, long tick,
+                             const ClosedLoop& loop, const SceneRig& rig, const TickResult& r,
+                             long saturated_run, unsigned reversals) {
+  StressFaultedRun f;
+  f.run = run;
+  f.method = d.patch["method"]["name"].get<std::string>();
+  f.scene = d.scene;
+  f.pipeline = d.pipeline;
+  f.tick_hz = scene.tick_hz;
+  f.k_tooth = scene.tooth.k_tooth;
+  f.b_tooth = scene.tooth.b_tooth;
+  f.k_vc = scene.method.coupling.k_lin;
+  f.b_vc = scene.method.coupling.b_lin;
+  f.proxy_mass_kg = scene.method.proxy.mass;
+  f.friction_mu = d.patch["method"]["friction_mu"].get<double>();
+  f.jitter_us = scene.device.jitter_us;
+  f.resolution = scene.tooth.resolution;
+  f.fault = loop.fault_name();
+  f.t_s = loop.fault_time();
+  f.tick = tick;
+  if (loop.supervisor_fault() != SupervisorFault::kNone) f.detail = rig.supervisor->describe();
+  f.contact_n = r.F_contact.head<3>().norm();
+  f.coupling_n = r.F_coupling.head<3>().norm();
+  f.depth_m = r.max_depth;
+  f.saturated_run = saturated_run;
+  f.reversals_last20 = std::popcount(reversals);
+  f.patch = d.patch.dump();
+  return f;
+}
+
 }  // namespace
 
-StressResult run_stress(const StressConfig& c, const std::function<void(long, long)>& progress) {
+std::string describe_faulted_run(const StressFaultedRun& f) {
+  char b[640];
+  std::snprintf(b, sizeof b,
+                "run %ld: %s %s %s %.0f Hz, K_tooth %.0f N/m b_tooth %.2f N s/m, K_vc %.0f N/m "
+                "b_vc %.2f N s/m, proxy %.0f g, mu %.2f, jitter %.0f us, %d^3: %s at %.4f s "
+                "(tick %ld)%s%s; contact %.2f N, coupling %.2f N, depth %.3f mm, saturated %ld "
+                "ticks in a row, %d of the last 20 ticks reversed the proxy",
+                f.run, f.method.c_str(), f.scene.c_str(), f.pipeline.c_str(), f.tick_hz, f.k_tooth,
+                f.b_tooth, f.k_vc, f.b_vc, f.proxy_mass_kg * 1e3, f.friction_mu, f.jitter_us,
+                f.resolution, f.fault.c_str(), f.t_s, f.tick, f.detail.empty() ? "" : ": ",
+                f.detail.c_str(), f.contact_n, f.coupling_n, f.depth_m * 1e3, f.saturated_run,
+                f.reversals_last20);
+  return b;
+}
+
+StressResult run_stress(const StressConfig& c,
+                        const std::function<void(const StressResult&, long)>& progress) {
   if (c.ticks < 1 || c.ticks_per_run < 10) {
     throw InputError("stress: expected ticks >= 1 and ticks_per_run >= 10");
   }
@@ -91,8 +138,16 @@ StressResult run_stress(const StressConfig& c, const std::function<void(long, lo
   auto violate = [&res](const std::string& what) {
     if (res.violations++ == 0) res.first_violation = what;
   };
+  nlohmann::json variant;
+  if (!c.variant_patch.empty()) {
+    variant = nlohmann::json::parse(c.variant_patch, nullptr, false);
+    if (variant.is_discarded() || !variant.is_object()) {
+      throw InputError("stress: the variant patch is not a JSON object: " + c.variant_patch);
+    }
+  }
   while (res.ticks < c.ticks) {
-    const Draw d = draw(rng, res.runs, c.ticks_per_run);
+    Draw d = draw(rng, res.runs, c.ticks_per_run);
+    if (!variant.is_null()) d.patch.merge_patch(variant);
     Scene scene;
     try {
       scene = load_scene_patched(d.scene, d.patch, "(stress run " + std::to_string(res.runs) + ")");
@@ -100,7 +155,8 @@ StressResult run_stress(const StressConfig& c, const std::function<void(long, lo
       ++res.rejected_configs;
       continue;
     }
-    if ((!c.only_method.empty() && d.patch["method"]["name"] != c.only_method) ||
+    if (res.runs < c.first_run ||
+        (!c.only_method.empty() && d.patch["method"]["name"] != c.only_method) ||
         (!c.only_scene.empty() && d.scene != c.only_scene)) {
       ++res.skipped_runs;
       ++res.runs;
@@ -125,6 +181,9 @@ StressResult run_stress(const StressConfig& c, const std::function<void(long, lo
     const double skin = std::min(0.25 * rho, 0.5 * rig->tooth->grid().voxel_size);
     bool exploded = false;
     double run_force = 0.0, run_depth = 0.0;
+    long saturated_run = 0;  // the device's ticks saturated in a row
+    unsigned reversals = 0;  // bit j: the proxy's velocity reversed j ticks ago
+    Vec3 v_prev = Vec3::Zero();
     loop.start();
     double t_prev = loop.sample().t;
     for (long k = 0; k < c.ticks_per_run && res.ticks < c.ticks && !loop.faulted(); ++k) {
@@ -141,8 +200,14 @@ StressResult run_stress(const StressConfig& c, const std::function<void(long, lo
       if (loop.faulted()) {
         if (!applied.isZero(0.0)) violate("non-zero torque after the fault at " + at);
         ++res.faults[loop.fault_name()];
+        res.faulted_runs.push_back(
+            faulted_run(d, scene, res.runs, k, loop, *rig, r, saturated_run, reversals));
         break;
       }
+      saturated_run = r.saturated ? saturated_run + 1 : 0;
+      const Vec3 v = r.V_hat.head<3>();
+      reversals = ((reversals << 1) | (v.dot(v_prev) < 0.0 ? 1u : 0u)) & 0xFFFFFu;
+      v_prev = v;
       if (!r.tau.allFinite() || !r.T1.allFinite() || !rig->pipeline->proxy().pose.x.allFinite() ||
           !rig->pipeline->proxy().pose.R.allFinite()) {
         violate("a non-finite output without a fault at " + at);
@@ -180,7 +245,7 @@ StressResult run_stress(const StressConfig& c, const std::function<void(long, lo
       }
     }
     ++res.runs;
-    if (progress) progress(res.ticks, c.ticks);
+    if (progress) progress(res, c.ticks);
   }
   return res;
 }

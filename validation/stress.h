@@ -29,6 +29,7 @@
 #include <functional>
 #include <map>
 #include <string>
+#include <vector>
 
 namespace dentsim {
 
@@ -41,6 +42,38 @@ struct StressConfig {
   // and count ticks_per_run each toward `ticks` without running: a filtered form covers the same
   // stretch of the draw as the unfiltered one (issue #32: the 10^7 form's PMI drilling runs).
   std::string only_method, only_scene;
+  // Runs before this index are drawn and skipped alike (a later stretch of the same draw).
+  long first_run = 0;
+  // A JSON merge patch (RFC 7386) applied to every drawn patch after the draw (empty: none), e.g.
+  // {"method": {"saturation_passive": false}}: the same draw under a variant of the simulator.
+  std::string variant_patch;
+};
+
+// A run that ended in a named fault (issue #32): its configuration, what stopped it, and the
+// state around the fault, so that a fault can be judged (physical: the hand pushing the device
+// through a saturated rendering; numerical: a proxy diverging against a still device) and
+// replayed as a scene file: the built-in scene `scene` (`dentsim run SCENE --show`) with `patch`
+// merged (RFC 7386), run with `--pipeline PIPELINE`.
+struct StressFaultedRun {
+  long run = 0;  // the run index of the draw
+  std::string method, scene, pipeline;
+  double tick_hz = 0.0;
+  double k_tooth = 0.0, b_tooth = 0.0;  // [N/m], [N s/m]
+  double k_vc = 0.0, b_vc = 0.0;        // linear coupling [N/m], [N s/m]
+  double proxy_mass_kg = 0.0, friction_mu = 0.0, jitter_us = 0.0;
+  int resolution = 0;
+  std::string fault;   // its name (ClosedLoop::fault_name)
+  double t_s = 0.0;    // the device time it was raised at [s]
+  long tick = 0;       // the run's tick it was raised on
+  std::string detail;  // the figure against its bound (the supervisor's faults; else empty)
+  // At the fault tick: |f| of the contact and the coupling force on the proxy [N], the deepest
+  // contact [m]; the device's ticks saturated in a row just before it; how many of the last 20
+  // ticks reversed the proxy's linear velocity (V_hat_k . V_hat_k-1 < 0: a proxy ringing tick
+  // by tick is the signature of a numerical divergence).
+  double contact_n = 0.0, coupling_n = 0.0, depth_m = 0.0;
+  long saturated_run = 0;
+  int reversals_last20 = 0;
+  std::string patch;  // the drawn patch of the built-in scene (JSON)
 };
 
 struct StressResult {
@@ -64,9 +97,16 @@ struct StressResult {
   // pmi and pmi-pd; explicit Euler beyond its Z-width is expected to.
   std::map<std::string, long> exploded;
   std::map<std::string, long> runs_by_method;
+  std::vector<StressFaultedRun> faulted_runs;  // every run that ended in a named fault, in order
 };
 
-StressResult run_stress(const StressConfig& config,
-                        const std::function<void(long done, long total)>& progress = {});
+// `progress` is called after every run with the result so far (runs, ticks, faults).
+StressResult run_stress(
+    const StressConfig& config,
+    const std::function<void(const StressResult& so_far, long total)>& progress = {});
+
+// One line per faulted run: index, method, scene, pipeline, rate, the drawn gains, the fault,
+// when, its figure against its bound, and the state at the fault (StressFaultedRun).
+std::string describe_faulted_run(const StressFaultedRun& run);
 
 }  // namespace dentsim

@@ -79,6 +79,57 @@ TEST(SupervisorCli, StressRunThatExplodedWhileDrillingAt500HzStaysBounded) {
   }
 }
 
+// The long form's PMI drilling faults (docs/results/reliability.md "The long form's PMI drilling
+// runs"; issue #32) were physical, not numerical: run 2505 of seed 2026 (pmi, 2000 Hz, K_tooth
+// 35693 N/m, K_vc 7846 N/m), with method.saturation_passive off as it was then, ends in
+// contact_force_beyond_bound with zero torque after the device's command has been saturated for
+// ~0.2 s (the command scaled down uniformly, gravity compensation included: the device drifts off,
+// the coupling stretches, the tooth holds the proxy). The same run on a device whose motors are ten
+// times as strong (the supervisor's bound unchanged), or with saturation_passive on (the default
+// now), stays bounded without a fault: the fault comes from the saturated device, not from the
+// integration.
+TEST(SupervisorCli, StressDrillingFaultCameFromTheSaturatedDeviceNotTheIntegration) {
+  const std::string file = kData + "stress_2026_run2505_pmi_drill_2000hz.json";
+  const fs::path dir = fresh_temp_dir("dentsim_sup_saturated");
+  const auto as_drawn =
+      run_dentsim("run " + file + " --pipeline reference --out " + (dir / "as_drawn").string());
+  EXPECT_EQ(as_drawn.status, 1) << as_drawn.output;
+  const nlohmann::json j = read_json_file(dir / "as_drawn" / "report.json");
+  ASSERT_EQ(j.at("faults").size(), 1u) << as_drawn.output;
+  EXPECT_EQ(j.at("faults")[0].get<std::string>().rfind("contact_force_beyond_bound", 0), 0u)
+      << j.at("faults");
+  EXPECT_EQ(j.at("torque_after_fault_n_m").get<double>(), 0.0);
+  expect_no_null(j, "as_drawn");
+
+  // The variants: the scene with saturation_passive on, and the scene on strong motors (the
+  // shipped model, `dentsim device show`, with every joint's torque limit x10).
+  const auto shown = run_dentsim("device show");
+  ASSERT_EQ(shown.status, 0) << shown.output;
+  nlohmann::json model = nlohmann::json::parse(shown.output);
+  for (auto& tau : model.at("joints").at("torque_limit_n_m")) tau = 10.0 * tau.get<double>();
+  const fs::path strong_model = dir / "device_strong_motors.json";
+  std::ofstream(strong_model) << model.dump(1);
+  const nlohmann::json scene = read_json_file(file);
+  const struct {
+    const char* name;
+    nlohmann::json patch;
+  } variants[] = {{"saturation_passive", {{"method", {{"saturation_passive", true}}}}},
+                  {"strong_motors", {{"device", {{"model_file", strong_model.string()}}}}}};
+  for (const auto& v : variants) {
+    nlohmann::json s = scene;
+    s.merge_patch(v.patch);
+    const fs::path f = dir / (std::string(v.name) + ".json");
+    std::ofstream(f) << s.dump(1);
+    const auto r =
+        run_dentsim("run " + f.string() + " --pipeline reference --out " + (dir / v.name).string());
+    EXPECT_EQ(r.status, 0) << v.name << "\n" << r.output;
+    const nlohmann::json k = read_json_file(dir / v.name / "report.json");
+    EXPECT_TRUE(k.at("faults").empty()) << v.name << ": " << k.at("faults");
+    EXPECT_EQ(k.at("ticks").get<long>(), 2000) << v.name;
+    EXPECT_LE(k.at("max_contact_force_n").get<double>(), 0.5 * kForceBoundN) << v.name;
+  }
+}
+
 // A scene that cannot be stable (explicit Euler at 100 Hz without damping) is refused before the
 // run, naming the field and the bound; `--force` runs it, and the supervisor ends it in a named
 // fault: zero torque, the report written with finite figures, exit status 1, one line.

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <string>
 
 #include "tests/support/stress.h"
@@ -36,13 +37,31 @@ TEST(LoopStress, EveryTickKeepsTheInvariants) {
     c.only_method = s.substr(0, slash);
     if (slash != std::string::npos) c.only_scene = s.substr(slash + 1);
   }
+  // DENTSIM_STRESS_VARIANT=JSON: a merge patch applied to every drawn configuration (the same
+  // draw under a variant, e.g. {"method":{"saturation_passive":false}}; StressConfig).
+  if (const char* v = std::getenv("DENTSIM_STRESS_VARIANT")) c.variant_patch = v;
+  // DENTSIM_STRESS_FROM_RUN=N: runs before N drawn and skipped (StressConfig::first_run).
+  if (const char* n = std::getenv("DENTSIM_STRESS_FROM_RUN")) c.first_run = std::atol(n);
   c.seed = 1 + static_cast<std::uint64_t>(::testing::UnitTest::GetInstance()->random_seed());
-  // A line every 5 % of the ticks on stderr (how far a long form got, if it must be stopped).
+  // A line every 5 % of the ticks on stderr (how far a long form got, if it must be stopped):
+  // the run index, the ticks done, the faults so far.
+  // Long forms also list each faulted run there as it happens.
   long next_report = c.ticks / 20;
-  const StressResult r = run_stress(c, [&next_report, &c](long done, long total) {
-    if (c.ticks < 1000000 || done < next_report) return;
-    std::fprintf(stderr, "stress: %ld of %ld ticks\n", done, total);
-    next_report += c.ticks / 20;
+  std::size_t listed = 0;
+  const StressResult r = run_stress(c, [&next_report, &listed, &c](const StressResult& so_far,
+                                                                   long total) {
+    if (c.ticks < 1000000) return;
+    for (; listed < so_far.faulted_runs.size(); ++listed) {
+      std::fprintf(stderr, "stress: faulted %s\n",
+                   describe_faulted_run(so_far.faulted_runs[listed]).c_str());
+    }
+    if (so_far.ticks < next_report) return;
+    long faults = 0;
+    for (const auto& [name, n] : so_far.faults) faults += n;
+    std::fprintf(stderr, "stress: run %ld, %ld of %ld ticks (%.0f %%), %ld runs ended in a fault\n",
+                 so_far.runs, so_far.ticks, total,
+                 100.0 * static_cast<double>(so_far.ticks) / static_cast<double>(total), faults);
+    while (next_report <= so_far.ticks) next_report += c.ticks / 20;
   });
   std::printf(
       "stress: %ld runs, %ld ticks (seed %llu; %ld configurations refused by the scene "
@@ -55,6 +74,17 @@ TEST(LoopStress, EveryTickKeepsTheInvariants) {
                 r.skipped_runs);
   }
   for (const auto& [name, n] : r.faults) std::printf("  runs ending in %s: %ld\n", name.c_str(), n);
+  std::map<std::string, std::map<std::string, long>> by_method;  // method -> fault -> runs
+  for (const StressFaultedRun& f : r.faulted_runs) ++by_method[f.method][f.fault];
+  for (const auto& [method, faults] : by_method) {
+    for (const auto& [name, n] : faults) {
+      std::printf("  %s: %ld runs ending in %s\n", method.c_str(), n, name.c_str());
+    }
+  }
+  // Every faulted run, to judge and replay it (validation/stress.h StressFaultedRun).
+  for (const StressFaultedRun& f : r.faulted_runs) {
+    std::printf("  faulted %s\n    patch %s\n", describe_faulted_run(f).c_str(), f.patch.c_str());
+  }
   for (const auto& [method, n] : r.runs_by_method) {
     const auto e = r.exploded.find(method);
     std::printf("  %s: %ld runs, %ld with the proxy exploded\n", method.c_str(), n,
