@@ -284,9 +284,36 @@ Vec3 FieldSolid::normal(const Vec3& x, const SignedDistance& sd) const {
   return distance_gradient(tooth_, x, exact);
 }
 
+bool VoxelDistanceCache::lookup(const VoxelTooth& tooth, std::uint64_t key, double* phi) const {
+  const Entry& e = entries_[key % kEntries];
+  if (e.key != key + 1 || (e.found && tooth.grid().voxels[e.voxel] == kEmpty)) {
+    ++misses_;
+    return false;
+  }
+  ++hits_;
+  *phi = e.phi;
+  return true;
+}
+
+void VoxelDistanceCache::keep(const VoxelTooth& tooth, std::uint64_t key, const Vec3& x,
+                              const SignedDistance& sd) {
+  const VoxelGrid& grid = tooth.grid();
+  int idx[3];
+  if (sdf_detail::voxel_of(grid, x, idx) &&
+      grid.voxels[grid.index(idx[0], idx[1], idx[2])] != kEmpty) {
+    return;  // inside: the shell search, not kept
+  }
+  Entry& e = entries_[key % kEntries];
+  e.key = key + 1;
+  e.phi = sd.phi;
+  e.voxel = sd.voxel;
+  e.found = sd.found;
+}
+
 bool edit_field_for_removed_voxels(SampledField* field, FieldBricks* bricks,
                                    const VoxelTooth& tooth, std::span<const std::size_t> removed,
-                                   SignedDistanceFn sd, FieldEditStats* stats) {
+                                   SignedDistanceFn sd, FieldEditStats* stats,
+                                   VoxelDistanceCache* cache) {
   // dentsim::edit_field_for_removed_voxels, reading the samples from the bricks.
   const VoxelGrid& grid = tooth.grid();
   const std::size_t n = static_cast<std::size_t>(grid.n);
@@ -320,7 +347,17 @@ bool edit_field_for_removed_voxels(SampledField* field, FieldBricks* bricks,
           const double to_cube = h * std::sqrt(ex * ex + ey * ey + ez * ez);
           if (to_cube > std::abs(static_cast<double>(old)) + slack) continue;
           ++stats->samples_queried;
-          const double d = sd(tooth, field->sample_position(sx, sy, sz), c_out).phi;
+          const std::uint64_t key =
+              static_cast<std::uint64_t>(sx) +
+              static_cast<std::uint64_t>(m) *
+                  (static_cast<std::uint64_t>(sy) + static_cast<std::uint64_t>(m) * sz);
+          double d = 0.0;
+          if (cache == nullptr || !cache->lookup(tooth, key, &d)) {
+            const Vec3 p = field->sample_position(sx, sy, sz);
+            const SignedDistance q = sd(tooth, p, c_out);
+            d = q.phi;
+            if (cache != nullptr) cache->keep(tooth, key, p, q);
+          }
           if (!(d > old)) continue;
           if (!field->raise(sx, sy, sz, d)) {
             ++stats->samples_lost;
@@ -360,7 +397,7 @@ const Vec3& FieldContactProvider::update_field_proxy(SurfaceProxy* proxy, const 
 bool FieldContactProvider::edit_field(SampledField* field, std::span<const std::size_t> removed,
                                       FieldEditStats* stats) {
   return fast::edit_field_for_removed_voxels(field, &bricks_, tooth_, removed,
-                                             &fast::signed_distance, stats);
+                                             &fast::signed_distance, stats, &cache_);
 }
 
 namespace {

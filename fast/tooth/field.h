@@ -139,12 +139,49 @@ class FieldSolid {
   mutable long certified_ = 0, evaluated_ = 0;
 };
 
+// The exact voxel distances the field edit asked before, kept for the next edits (temporal
+// coherence: consecutive edits are of neighbouring voxels and scan mostly the same samples).
+// Claim: a sample s outside the solid (its voxel empty) whose query d = sd(tooth, p(s), reach)
+// found nearest voxel v (found), or found nothing within reach (not found), gets the same double
+// from the same query later while v is still solid (found), or forever (not found), as long as
+// the tooth only loses voxels (drilling). Proof: outside, the query (reference/tooth/sdf.cc
+// outside_distance, and its twin fast::signed_distance) returns sqrt(best2), best2 the minimum of
+// box_distance2(s, voxel) over the solid voxels with box_distance2 < reach^2 (each the same double
+// for the same voxel and point), or reach when there is none. Removing voxels shrinks that set;
+// s's voxel stays empty (the same branch); a minimum over a subset that still holds the argmin v
+// is the same double; an empty set stays empty. Inside samples (a solid voxel: the shell search)
+// are not kept. Direct-mapped, fixed size: nothing allocates in the tick.
+class VoxelDistanceCache {
+ public:
+  VoxelDistanceCache() : entries_(kEntries) {}
+  // phi of the query at sample `key` (its flat index) if kept and still valid (header comment).
+  bool lookup(const VoxelTooth& tooth, std::uint64_t key, double* phi) const;
+  // Keeps the query at sample `key` at point x when x is outside the solid.
+  void keep(const VoxelTooth& tooth, std::uint64_t key, const Vec3& x, const SignedDistance& sd);
+  long hits() const { return hits_; }
+  long misses() const { return misses_; }
+
+ private:
+  static constexpr std::size_t kEntries = 8192;
+  struct Entry {
+    std::uint64_t key = 0;  // sample index + 1 (0: empty)
+    double phi = 0.0;
+    std::size_t voxel = 0;
+    bool found = false;
+  };
+  std::vector<Entry> entries_;
+  mutable long hits_ = 0, misses_ = 0;
+};
+
 // The twin of dentsim::edit_field_for_removed_voxels: the same samples scanned, queried (with
-// `sd`), raised (on `field`, then mirrored into `bricks`), the same stats; the Lipschitz constant
-// raised in `bricks` (header comment). `bricks` must mirror `field`.
+// `sd`, or answered by `cache` when it holds the same double; FieldEditStats::samples_queried
+// counts both, as the reference's rule asks), raised (on `field`, then mirrored into `bricks`),
+// the same stats; the Lipschitz constant raised in `bricks` (header comment). `bricks` must
+// mirror `field`; `cache` may be null.
 bool edit_field_for_removed_voxels(SampledField* field, FieldBricks* bricks,
                                    const VoxelTooth& tooth, std::span<const std::size_t> removed,
-                                   SignedDistanceFn sd, FieldEditStats* stats);
+                                   SignedDistanceFn sd, FieldEditStats* stats,
+                                   VoxelDistanceCache* cache = nullptr);
 
 // The fast pipeline's provider of the field model: dentsim::ToothContactProvider with the field
 // steps replaced by their twins (everything else, the contact, the drilled voxels, the edit
@@ -154,6 +191,7 @@ class FieldContactProvider final : public dentsim::ToothContactProvider {
   FieldContactProvider(VoxelTooth& tooth, const PipelineToothSetup& setup);
   const FieldBricks& bricks() const { return bricks_; }
   const FieldSolid& solid() const { return solid_; }
+  const VoxelDistanceCache& distance_cache() const { return cache_; }
 
  protected:
   const Vec3& update_field_proxy(SurfaceProxy* proxy, const Vec3& c) override;
@@ -164,6 +202,7 @@ class FieldContactProvider final : public dentsim::ToothContactProvider {
   VoxelTooth& tooth_;
   FieldBricks bricks_;
   FieldSolid solid_;
+  VoxelDistanceCache cache_;
 };
 
 // The fast pipeline's tooth for the field model (fast::make_fast_tooth). Throws InputError

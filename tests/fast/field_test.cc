@@ -9,7 +9,8 @@
 // - the provider: the reference's and the fast provider driven along the same bur path (free
 //   space, down into the sphere drilling, sideways, away): every tick's contact, g, held fraction
 //   and removed voxels bitwise equal, and at the end the two edited fields equal at every sample,
-//   the same edit counts and the same Lipschitz constant; the fast ticks allocate nothing.
+//   the same edit counts and the same Lipschitz constant (the edit's kept voxel distances in
+//   use); the fast ticks allocate nothing.
 // Bitwise because the arithmetic is the same (docs/tolerance_policy.md item 9: equal where the
 // operations are the same).
 #include "fast/tooth/field.h"
@@ -257,9 +258,10 @@ TEST(FastFieldProvider, EqualsTheReferenceProviderWhileDrillingEditsTheField) {
     allocations = scope.count();
   }
   EXPECT_EQ(fast_provider.field_edits_pending(), 0u);
-  std::printf("%d ticks, %ld in contact, %ld voxels removed, %ld edits, %ld samples raised, "
-              "%ld queries certified, %ld evaluated, %ld allocations\n",
+  std::printf("%d ticks, %ld in contact, %ld voxels removed, %ld edits, %ld samples scanned, "
+              "%ld queried, %ld raised, %ld queries certified, %ld evaluated, %ld allocations\n",
               ticks, contact_ticks, removed, reference.field_edits().voxels,
+              reference.field_edits().samples_scanned, reference.field_edits().samples_queried,
               reference.field_edits().samples_raised, fast_provider.solid().certified(),
               fast_provider.solid().evaluated(), allocations);
   EXPECT_GT(contact_ticks, 500);
@@ -287,6 +289,11 @@ TEST(FastFieldProvider, EqualsTheReferenceProviderWhileDrillingEditsTheField) {
   EXPECT_EQ(differ, 0);
   EXPECT_EQ(tooth_r.grid().voxels, tooth_f.grid().voxels);
   EXPECT_GT(fast_provider.solid().certified(), kFree);  // free space read no sample
+  const fast::VoxelDistanceCache& cache = fast_provider.distance_cache();
+  std::printf("edit queries: %ld answered by the kept distances, %ld asked\n", cache.hits(),
+              cache.misses());
+  EXPECT_GT(cache.hits(), 0);
+  EXPECT_EQ(cache.hits() + cache.misses(), b.samples_queried);
   EXPECT_EQ(allocations, 0);
 }
 
