@@ -25,6 +25,7 @@
 #include "fast/tooth/sdf.h"
 #include "reference/tooth/tooth_contacts.h"
 #include "tests/support/alloc_counter.h"
+#include "tests/tooth/field_shapes.h"
 
 namespace dentsim {
 namespace {
@@ -38,17 +39,7 @@ const Vec3 kCentre(4.03e-3, 3.97e-3, 3.61e-3);
 
 bool in_sphere(const Vec3& p) { return (p - kCentre).norm() < kR; }
 
-VoxelGrid sphere_grid() {
-  VoxelGrid g(kN, Vec3::Zero(), kSide / kN);
-  for (int k = 0; k < kN; ++k) {
-    for (int j = 0; j < kN; ++j) {
-      for (int i = 0; i < kN; ++i) {
-        if (in_sphere(g.center(i, j, k))) g.set(i, j, k, kEnamel);
-      }
-    }
-  }
-  return g;
-}
+VoxelGrid sphere_grid() { return test::solid_grid(kN, kSide, in_sphere); }
 
 SampledField sphere_field(const VoxelGrid& g) {
   return build_sampled_field(g, triangulate_implicit(g, in_sphere),
