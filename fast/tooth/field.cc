@@ -105,7 +105,7 @@ float FieldBricks::at(int sx, int sy, int sz) const {
 void FieldBricks::mirror(int sx, int sy, int sz) {
   const float v = field_.at(sx, sy, sz);
   // The bricks holding s along each axis: its own, and the one below when s is on its apron.
-  int b[3][2], l[3][2], count[3];
+  int b[3][2] = {}, l[3][2] = {}, count[3] = {};
   const int s[3] = {sx, sy, sz};
   for (int a = 0; a < 3; ++a) {
     b[a][0] = s[a] / kFieldBrick;
