@@ -4,8 +4,8 @@
 //
 // BM_Tick/<impl>/<method>/<model>/<free|contact>: one servo tick (the pipeline's seven stages;
 // the simulated device's physics runs between ticks and is not timed: manual time = the tick's own
-// stage times). model: sdf (the scene's surface proxy) or faces (the thesis's face model, ~68
-// contacts for this bur); free: ticks before the first contact, contact: in contact (and
+// stage times). model: sdf (the scene's surface proxy), faces (the thesis's face model, ~68
+// contacts for this bur) or field (the surface proxy on the sampled field, issue #30); free: ticks before the first contact, contact: in contact (and
 // drilling). Counters: the mean time of each stage over the timed ticks [ns], and the mean
 // contact count.
 // Results: docs/benchmarks.md "The tick, stage by stage".
@@ -63,7 +63,7 @@ void BM_Tick(benchmark::State& state, const StageTable* table, bool contact, con
 const int kRegistered = [] {
   for (const StageTable* t : stage_tables()) {
     for (const char* method : {"pmi-pd", "pmi"}) {
-      for (const char* model : {"sdf", "faces"}) {
+      for (const char* model : {"sdf", "faces", "field"}) {
         for (const bool contact : {false, true}) {
           const std::string name = std::string("BM_Tick/") + t->implementation + "/" + method +
                                    "/" + model + (contact ? "/contact" : "/free");

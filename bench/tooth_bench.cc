@@ -9,9 +9,14 @@
 #include <algorithm>
 #include <memory>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "bench/tooth_bench.h"
+#include "fast/tooth/field.h"
 #include "fast/tooth/tooth_contacts.h"
+#include "sim/scene.h"
+#include "sim/simulator.h"
 #include "tooth_io/procedural_molar.h"
 #include "reference/tooth/tooth_contacts.h"
 
@@ -128,6 +133,68 @@ void BM_ToothDrillTick(benchmark::State& state) {
   state.SetLabel(state.range(1) == 0 ? "reference" : "fast");
 }
 BENCHMARK(BM_ToothDrillTick)->ArgsProduct({{128, 256}, {0, 1}})->Iterations(20000);
+
+// The field model's query (issue #30): value and gradient at a point, i.e. the surface proxy's
+// distance(x, rho) and, where found, normal(x), on the drill scene's tooth (procedural molar at
+// 128^3, 0.5 mm bur) and field: dentsim::FieldSolid (reference) against fast::FieldSolid (fast/
+// tooth/field.h). Points: `scatter`, 4096 seeded points within 0.6 mm of the occlusal anchor
+// (each query in another cell: no kept query, no certificate); `path`, 4096 points 0.55 um apart
+// (a tip at 0.55 mm/s at 1 kHz) from 1 mm above the anchor down through the band into the
+// surface, where the kept brick and query and the free-space certificate act. Results:
+// docs/benchmarks.md "The field model".
+struct FieldScene {
+  std::unique_ptr<SceneRig> rig;
+  std::vector<Vec3> scatter, path;
+  explicit FieldScene(int) {
+    Scene scene = load_scene("drill");
+    scene.tooth.contact_model = "field";
+    SceneRigOptions options;
+    options.pipeline = "reference";
+    rig = build_scene_rig(scene, options);
+    std::mt19937_64 rng(30);
+    std::uniform_real_distribution<double> u(-0.6e-3, 0.6e-3);
+    const Vec3 a = rig->anchor;
+    for (int i = 0; i < 4096; ++i) scatter.push_back(a + Vec3(u(rng), u(rng), u(rng)));
+    Vec3 x = a + Vec3(-0.4e-3, 0.1e-3, 1.0e-3);
+    for (int i = 0; i < 4096; ++i, x += Vec3(0.2e-6, 0.05e-6, -0.5e-6)) path.push_back(x);
+  }
+};
+
+template <class Solid>
+void run_field_query(benchmark::State& state, const Solid& solid, const std::vector<Vec3>& points,
+                     double rho) {
+  std::size_t i = 0;
+  long found = 0;
+  for (auto _ : state) {
+    const Vec3& x = points[i];
+    i = i + 1 == points.size() ? 0 : i + 1;
+    const SignedDistance sd = solid.distance(x, rho);
+    benchmark::DoNotOptimize(sd);
+    if (sd.found) {
+      ++found;
+      benchmark::DoNotOptimize(solid.normal(x, sd));
+    }
+  }
+  state.counters["found"] = static_cast<double>(found) / static_cast<double>(state.iterations());
+}
+
+// Args: 0 reference, 1 fast; 0 scatter, 1 path.
+void BM_FieldQuery(benchmark::State& state) {
+  FieldScene& f = bench::built_once<FieldScene>(128);
+  const std::vector<Vec3>& points = state.range(1) == 0 ? f.scatter : f.path;
+  const double rho = f.rig->tip.radius;
+  if (state.range(0) == 0) {
+    const dentsim::FieldSolid solid(*f.rig->tooth, *f.rig->field);
+    run_field_query(state, solid, points, rho);
+  } else {
+    const fast::FieldBricks bricks(*f.rig->field, 0);
+    const fast::FieldSolid solid(*f.rig->tooth, bricks);
+    run_field_query(state, solid, points, rho);
+  }
+  state.SetLabel(std::string(state.range(0) == 0 ? "reference" : "fast") +
+                 (state.range(1) == 0 ? ", scatter" : ", path"));
+}
+BENCHMARK(BM_FieldQuery)->ArgsProduct({{0, 1}, {0, 1}});
 
 }  // namespace
 }  // namespace dentsim

@@ -1,5 +1,6 @@
 #include "fast/tooth/tooth_contacts.h"
 
+#include "fast/tooth/field.h"
 #include "fast/tooth/sdf.h"
 
 namespace dentsim::fast {
@@ -36,6 +37,7 @@ std::unique_ptr<PipelineTooth> make_fast_tooth(VoxelTooth& tooth, const Pipeline
   if (setup.contact_model == ContactModel::kFaces) {
     return std::make_unique<BrickPipelineTooth>(tooth, setup);
   }
+  if (setup.contact_model == ContactModel::kField) return make_fast_field_tooth(tooth, setup);
   return make_reference_tooth(tooth, setup, &fast::signed_distance);
 }
 

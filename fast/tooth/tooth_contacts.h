@@ -36,7 +36,7 @@ class ToothContactProvider : public ToothProviderBase {
 // The fast pipeline's tooth (fast/registry.h): for the face model the brick tooth, built from
 // the reference tooth's grid and drilled by fast::ToothContactProvider; for the surface proxy the
 // reference provider on the reference tooth with the fast signed distance (fast/tooth/sdf.h); for
-// the field model the reference provider on the field (no fast twin yet, issue #30).
+// the field model fast::FieldContactProvider (fast/tooth/field.h).
 std::unique_ptr<PipelineTooth> make_fast_tooth(VoxelTooth& tooth, const PipelineToothSetup& setup);
 
 // The face model's fast tooth, for tests that reach its brick tooth (its free-space early out).

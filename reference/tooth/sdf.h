@@ -116,6 +116,10 @@ class SurfaceProxy {
   // The same steps on the sampled field of the tooth's source surface (the "field" model,
   // reference/tooth/field_contact.h); the skin is this proxy's (min(rho/4, h/2)).
   const Vec3& update(const FieldSolid& solid, const Vec3& c);
+  // The same steps on any Solid of reference/tooth/surface_proxy_core.h (defined there): a twin
+  // of FieldSolid with the same answers (the fast pipeline's, fast/tooth/field.h).
+  template <class Solid>
+  const Vec3& update_on(const Solid& solid, const Vec3& c);
   // Forgets g (the next update starts from c again).
   void reset() { valid_ = false; }
   const Vec3& g() const { return g_; }

@@ -116,3 +116,13 @@ void update(const ProxyConstants& k, const Solid& solid, bool* valid, Vec3* g, c
 }
 
 }  // namespace dentsim::proxy_detail
+
+namespace dentsim {
+
+template <class Solid>
+const Vec3& SurfaceProxy::update_on(const Solid& solid, const Vec3& c) {
+  proxy_detail::update(constants(), solid, &valid_, &g_, c);
+  return g_;
+}
+
+}  // namespace dentsim

@@ -86,10 +86,9 @@ bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out
   drill_voxels_.clear();
   if (edit_head_ < edit_queue_.size()) {  // the field follows the last ticks' cuts (bounded)
     const std::size_t count = std::min(kFieldEditsPerTick, edit_queue_.size() - edit_head_);
-    if (!edit_field_for_removed_voxels(
-            edited_field_, tooth_,
-            std::span<const std::size_t>(edit_queue_.data() + edit_head_, count), sd_,
-            &field_edits_)) {
+    if (!edit_field(edited_field_,
+                    std::span<const std::size_t>(edit_queue_.data() + edit_head_, count),
+                    &field_edits_)) {
       ++field_edit_shortfalls_;
     }
     edit_head_ += count;
@@ -99,8 +98,8 @@ bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out
     }
   }
   const Vec3 c = proxy.x + proxy.R * tip_.offset_body;
-  const Vec3& g =
-      model_ == ContactModel::kField ? surface_.update(*field_, c) : surface_.update(tooth_, c);
+  const Vec3& g = model_ == ContactModel::kField ? update_field_proxy(&surface_, c)
+                                                 : surface_.update(tooth_, c);
   Contact contact;
   if (!surface_proxy_contact(tooth_, proxy, tip_, g, k_tooth_, b_tooth_, &contact, sd_)) {
     measure_anchor(c, g, false);
@@ -130,6 +129,15 @@ bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out
     drill_voxels_.push_back(v);
   }
   return true;
+}
+
+const Vec3& ToothContactProvider::update_field_proxy(SurfaceProxy* proxy, const Vec3& c) {
+  return proxy->update(*field_, c);
+}
+
+bool ToothContactProvider::edit_field(SampledField* field, std::span<const std::size_t> removed,
+                                      FieldEditStats* stats) {
+  return edit_field_for_removed_voxels(field, tooth_, removed, sd_, stats);
 }
 
 void ToothContactProvider::measure_anchor(const Vec3& c, const Vec3& g, bool in_contact) {

@@ -143,6 +143,15 @@ class ToothContactProvider : public ToothProviderBase {
   static constexpr std::size_t kFieldEditsPerTick = 1;
   static constexpr std::size_t kFieldEditQueue = 8192;
 
+ protected:
+  // The field model's two steps on the field, which a twin with the same results may replace
+  // (the fast pipeline's, fast/tooth/field.h; neither may allocate or throw): the surface proxy's
+  // update for the tip centre c on `proxy` (here: on FieldSolid), and the subtraction of
+  // `removed` from `field` (here: edit_field_for_removed_voxels with this provider's query).
+  virtual const Vec3& update_field_proxy(SurfaceProxy* proxy, const Vec3& c);
+  virtual bool edit_field(SampledField* field, std::span<const std::size_t> removed,
+                          FieldEditStats* stats);
+
  private:
   void measure_anchor(const Vec3& c, const Vec3& g, bool in_contact);
 

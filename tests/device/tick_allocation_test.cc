@@ -25,7 +25,7 @@ struct Variant {
   bool encoder_kalman = false;
   bool lag_compensation = false;
   // tooth.contact_model; "field" drills by editing the tooth's field from its spare bricks (issue
-  // #30; fast/ runs the reference provider on the field).
+  // #30; fast/ runs its twin, fast/tooth/field.h, with its own spare bricks).
   const char* contact_model = "sdf";
 };
 

@@ -17,6 +17,7 @@
 #include "reference/tooth/field_contact.h"
 #include "reference/tooth/tooth_contacts.h"
 #include "tests/support/alloc_counter.h"
+#include "tests/tooth/field_shapes.h"
 
 namespace dentsim {
 namespace {
@@ -33,17 +34,7 @@ const Vec3 kCentre(4.03e-3, 3.97e-3, 3.61e-3);
 
 bool in_sphere(const Vec3& p) { return (p - kCentre).norm() < kR; }
 
-VoxelGrid sphere_grid() {
-  VoxelGrid g(kN, Vec3::Zero(), kSide / kN);
-  for (int k = 0; k < kN; ++k) {
-    for (int j = 0; j < kN; ++j) {
-      for (int i = 0; i < kN; ++i) {
-        if (in_sphere(g.center(i, j, k))) g.set(i, j, k, kEnamel);
-      }
-    }
-  }
-  return g;
-}
+VoxelGrid sphere_grid() { return test::solid_grid(kN, kSide, in_sphere); }
 
 // The top of the sphere and the bur's path: from 0.2 mm above contact straight down 1.1 mm, then
 // 0.6 mm along x at that depth.

@@ -1,7 +1,10 @@
-// Shapes for the field tests (tests/tooth/sampled_field_test.cc, field_contact_test.cc).
+// Shapes for the field tests (tests/tooth/sampled_field_test.cc, field_contact_test.cc,
+// field_drilling_test.cc, tests/fast/field_test.cc).
 #pragma once
 
 #include "reference/core/types.h"
+#include "reference/tooth/materials.h"
+#include "reference/tooth/voxel_grid.h"
 #include "tooth_io/mesh.h"
 
 namespace dentsim::test {
@@ -23,6 +26,20 @@ inline TriangleMesh box_mesh(const Vec3& lo, const Vec3& hi, const Mat3& R = Mat
   m.groups.push_back("");
   m.triangle_group.assign(m.triangles.size(), 0);
   return m;
+}
+
+// The n^3 grid of edge `side` at the origin whose voxels with their centre in `inside` are enamel.
+template <class Inside>
+VoxelGrid solid_grid(int n, double side, const Inside& inside) {
+  VoxelGrid g(n, Vec3::Zero(), side / n);
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        if (inside(g.center(i, j, k))) g.set(i, j, k, kEnamel);
+      }
+    }
+  }
+  return g;
 }
 
 }  // namespace dentsim::test

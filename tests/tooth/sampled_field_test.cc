@@ -28,15 +28,7 @@ double box_sdf(const Vec3& p, const Vec3& lo, const Vec3& hi) {
 }
 
 VoxelGrid grid_from(int n, double side, const std::function<bool(const Vec3&)>& inside) {
-  VoxelGrid g(n, Vec3::Zero(), side / n);
-  for (int k = 0; k < n; ++k) {
-    for (int j = 0; j < n; ++j) {
-      for (int i = 0; i < n; ++i) {
-        if (inside(g.center(i, j, k))) g.set(i, j, k, kEnamel);
-      }
-    }
-  }
-  return g;
+  return test::solid_grid(n, side, inside);
 }
 
 TEST(SampledField, PointTriangleDistanceMatchesDenseSampling) {

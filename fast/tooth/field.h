@@ -1,0 +1,213 @@
+// The fast twin of the "field" contact model (issue #30; reference: reference/tooth/field_contact.h
+// on reference/tooth/sampled_field.h; derivation docs/derivations/field_contact.md). Same model,
+// same doubles: the surface proxy (reference/tooth/surface_proxy_core.h, the same template) runs
+// on fast::FieldSolid instead of dentsim::FieldSolid, and drilling's field edit is
+// fast::edit_field_for_removed_voxels instead of the reference's. What changes is how the samples
+// are read:
+// - FieldBricks: a copy of the field's samples in bricks of 9^3 (the 8^3 of the reference's brick
+//   plus one apron layer at +x, +y, +z copied from the neighbours), so that the 8 corners of any
+//   cell are in one brick: one index read and 8 loads at fixed offsets per query, where the
+//   reference reads the index 8 times (and 16 times, twice each, with its deep-inside test). The
+//   last brick read is kept (consecutive queries of a tick, and of consecutive ticks, fall in the
+//   same brick: the index is not read again). Drilling raises the reference field's samples
+//   (SampledField::raise, the view and report read them) and copies each raised value into every
+//   brick of the copy that holds it (FieldBricks::mirror); a slot whose brick cannot be given from
+//   the copy's spare room reads through the reference field from then on (same values, slower).
+// - FieldSolid (fast): one gather gives the deep-inside test, phi and its gradient; the last
+//   query is kept (the proxy asks normal(x) right after distance(x) at the same x), and a
+//   free-space certificate answers "phi >= reach" without reading the field (below).
+// - The Lipschitz constant after an edit: the reference raises it to the cell bound of every cell
+//   in the box around the changed samples (SampledField::include_cells); the twin evaluates the
+//   same cells from the 9^3 bricks and takes one square root at the end (sqrt and / h are
+//   correctly rounded and monotone, so max_i sqrt(s_i) / h == sqrt(max_i s_i) / h exactly). The
+//   twin keeps this constant itself (FieldBricks::lipschitz); the shared SampledField's own
+//   lipschitz() is not raised by the fast pipeline (nothing in it reads that).
+//
+// Free-space certificate (FieldSolid::distance). Claim: if the last exact query (not deep inside)
+// at x0 returned phi0 = phi_0(x0), L is the field's Lipschitz constant now, and
+//     phi0 - L |x - x0| >= reach + margin,   reach > 0,
+// then the reference's distance(x, reach) on the field now returns {phi = reach, found = false},
+// so the twin returns that without reading the field. Proof: (1) phi (the trilinear interpolant,
+// coordinates clamped to the lattice; clamping is 1-Lipschitz) is L_k-Lipschitz for the L_k of
+// the field at the time of any query k (sampled_field.h; edits raise L to keep it a bound, and L
+// never falls), and edits only raise samples (SampledField::raise is a max), so the field now is
+// >= the field at query 0 everywhere: phi_now(x) >= phi_0(x) >= phi_0(x0) - L_0 |x - x0| >=
+// phi0 - L |x - x0| >= reach + margin (L >= L_0). (2) phi_now(x) >= reach > 0 means x is not deep
+// inside (there all 8 corners are -c_in < 0 and phi = -c_in exactly), so the reference evaluates
+// the interpolant and returns reach, not found, when its computed value >= reach; the margin
+// (1e-9 h, some 10^6 times the rounding of a trilinear value below 1 mm) covers the difference
+// between the computed and the exact interpolant. So in free space a tick reads no sample: its
+// queries (push-out, one sweep step, push-out) are answered from the last exact value while the
+// tip stays farther from the surface than L times its travel since then.
+//
+// Real-time: queries, mirror() and the edit neither allocate nor throw.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "reference/tooth/field_contact.h"
+#include "reference/tooth/tooth_contacts.h"
+
+namespace dentsim::fast {
+
+// The field's samples in 9^3 bricks (header comment). Reads `field` (which must outlive it).
+class FieldBricks {
+ public:
+  static constexpr int kEdge = kFieldBrick + 1;
+  static constexpr int kSamples = kEdge * kEdge * kEdge;
+  static constexpr std::int32_t kAllOutside = -1;
+  static constexpr std::int32_t kAllInside = -2;
+  static constexpr std::int32_t kViaField = -3;  // read through the reference field
+
+  // Copies the samples of `field` and reserves room for `spare` more bricks (outside the tick).
+  FieldBricks(const SampledField& field, std::size_t spare);
+
+  const SampledField& field() const { return field_; }
+  // The 8 corners of the cell with lower corner s (each in [0, m - 2]) as c[dx + 2 dy + 4 dz]
+  // (SampledField::at of s + (dx, dy, dz)).
+  void corners(const int s[3], float c[8]) const;
+  // The stored value of sample s (SampledField::at).
+  float at(int sx, int sy, int sz) const;
+  // After SampledField::raise of sample s: copies its value into every brick holding it.
+  void mirror(int sx, int sy, int sz);
+  // Raises lipschitz() as SampledField::include_cells does for the sample box [lo, hi].
+  void include_cells(const int lo[3], const int hi[3]);
+  // The field's Lipschitz constant (the reference's, raised by the edits of the fast pipeline).
+  double lipschitz() const { return lipschitz_; }
+  // Counts mirror() calls that changed a value (a query's kept results are stale after one).
+  std::uint64_t generation() const { return generation_; }
+  std::size_t brick_count() const { return bricks_.size() / kSamples; }
+  std::size_t spare_bricks() const { return (bricks_.capacity() - bricks_.size()) / kSamples; }
+
+ private:
+  std::size_t slot(int bx, int by, int bz) const {
+    return static_cast<std::size_t>(bx) +
+           static_cast<std::size_t>(nb_) *
+               (static_cast<std::size_t>(by) + static_cast<std::size_t>(nb_) * bz);
+  }
+
+  const SampledField& field_;
+  int m_ = 0, nb_ = 0;
+  float out_ = 0.0f, in_ = 0.0f;
+  double h_ = 0.0;
+  double lipschitz_ = 1.0;
+  std::uint64_t generation_ = 0;
+  std::vector<std::int32_t> index_;
+  std::vector<float> bricks_;  // brick id * 729 + x + 9 (y + 9 z)
+  // The last brick read (temporal coherence): its slot and first sample.
+  mutable std::size_t last_slot_ = std::numeric_limits<std::size_t>::max();
+  mutable const float* last_brick_ = nullptr;
+};
+
+// The twin of dentsim::FieldSolid on FieldBricks (header comment). `tooth` and `bricks` must
+// outlive it.
+class FieldSolid {
+ public:
+  FieldSolid(const VoxelTooth& tooth, const FieldBricks& bricks) : tooth_(tooth), bricks_(bricks) {}
+
+  const VoxelTooth& tooth() const { return tooth_; }
+  SignedDistance distance(const Vec3& x, double reach) const;
+  Vec3 normal(const Vec3& x, const SignedDistance& sd) const;
+  double lipschitz() const { return bricks_.lipschitz(); }
+  // Queries answered by the free-space certificate, and queries that read the field (counters
+  // for tests and benchmarks).
+  long certified() const { return certified_; }
+  long evaluated() const { return evaluated_; }
+
+ private:
+  struct Query {
+    Vec3 x = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
+    std::uint64_t generation = 0;
+    bool deep = false;
+    double value = 0.0;
+    Vec3 gradient = Vec3::Zero();
+  };
+  // The field at x: deep-inside test, phi and gradient (the reference's arithmetic), kept.
+  const Query& query(const Vec3& x) const;
+
+  const VoxelTooth& tooth_;
+  const FieldBricks& bricks_;
+  mutable Query last_;
+  mutable bool have_exact_ = false;  // x0_, phi0_: the last exact query (certificate)
+  mutable Vec3 x0_ = Vec3::Zero();
+  mutable double phi0_ = 0.0;
+  mutable long certified_ = 0, evaluated_ = 0;
+};
+
+// The exact voxel distances the field edit asked before, kept for the next edits (temporal
+// coherence: consecutive edits are of neighbouring voxels and scan mostly the same samples).
+// Claim: a sample s outside the solid (its voxel empty) whose query d = sd(tooth, p(s), reach)
+// found nearest voxel v (found), or found nothing within reach (not found), gets the same double
+// from the same query later while v is still solid (found), or forever (not found), as long as
+// the tooth only loses voxels (drilling). Proof: outside, the query (reference/tooth/sdf.cc
+// outside_distance, and its twin fast::signed_distance) returns sqrt(best2), best2 the minimum of
+// box_distance2(s, voxel) over the solid voxels with box_distance2 < reach^2 (each the same double
+// for the same voxel and point), or reach when there is none. Removing voxels shrinks that set;
+// s's voxel stays empty (the same branch); a minimum over a subset that still holds the argmin v
+// is the same double; an empty set stays empty. Inside samples (a solid voxel: the shell search)
+// are not kept. Direct-mapped, fixed size: nothing allocates in the tick.
+class VoxelDistanceCache {
+ public:
+  VoxelDistanceCache() : entries_(kEntries) {}
+  // phi of the query at sample `key` (its flat index) if kept and still valid (header comment).
+  bool lookup(const VoxelTooth& tooth, std::uint64_t key, double* phi) const;
+  // Keeps the query at sample `key` at point x when x is outside the solid.
+  void keep(const VoxelTooth& tooth, std::uint64_t key, const Vec3& x, const SignedDistance& sd);
+  long hits() const { return hits_; }
+  long misses() const { return misses_; }
+
+ private:
+  static constexpr std::size_t kEntries = 8192;
+  struct Entry {
+    std::uint64_t key = 0;  // sample index + 1 (0: empty)
+    double phi = 0.0;
+    std::size_t voxel = 0;
+    bool found = false;
+  };
+  std::vector<Entry> entries_;
+  mutable long hits_ = 0, misses_ = 0;
+};
+
+// The twin of dentsim::edit_field_for_removed_voxels: the same samples scanned, queried (with
+// `sd`, or answered by `cache` when it holds the same double; FieldEditStats::samples_queried
+// counts both, as the reference's rule asks), raised (on `field`, then mirrored into `bricks`),
+// the same stats; the Lipschitz constant raised in `bricks` (header comment). `bricks` must
+// mirror `field`; `cache` may be null.
+bool edit_field_for_removed_voxels(SampledField* field, FieldBricks* bricks,
+                                   const VoxelTooth& tooth, std::span<const std::size_t> removed,
+                                   SignedDistanceFn sd, FieldEditStats* stats,
+                                   VoxelDistanceCache* cache = nullptr);
+
+// The fast pipeline's provider of the field model: dentsim::ToothContactProvider with the field
+// steps replaced by their twins (everything else, the contact, the drilled voxels, the edit
+// queue, is the reference's code). Throws what the reference provider throws.
+class FieldContactProvider final : public dentsim::ToothContactProvider {
+ public:
+  FieldContactProvider(VoxelTooth& tooth, const PipelineToothSetup& setup);
+  const FieldBricks& bricks() const { return bricks_; }
+  const FieldSolid& solid() const { return solid_; }
+  const VoxelDistanceCache& distance_cache() const { return cache_; }
+
+ protected:
+  const Vec3& update_field_proxy(SurfaceProxy* proxy, const Vec3& c) override;
+  bool edit_field(SampledField* field, std::span<const std::size_t> removed,
+                  FieldEditStats* stats) override;
+
+ private:
+  VoxelTooth& tooth_;
+  FieldBricks bricks_;
+  FieldSolid solid_;
+  VoxelDistanceCache cache_;
+};
+
+// The fast pipeline's tooth for the field model (fast::make_fast_tooth). Throws InputError
+// without setup.field.
+std::unique_ptr<PipelineTooth> make_fast_field_tooth(VoxelTooth& tooth,
+                                                     const PipelineToothSetup& setup);
+
+}  // namespace dentsim::fast

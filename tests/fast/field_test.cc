@@ -1,0 +1,292 @@
+// The fast twin of the field contact model (fast/tooth/field.h) against the reference
+// (reference/tooth/field_contact.h, itself checked in tests/tooth/field_*_test.cc), on a drilled
+// sphere at 64^3:
+// - the kernels alone: the 9^3 bricks hold the field's every sample, a cell's corners are the
+//   field's, mirrored raises and the Lipschitz update equal the reference's (include_cells);
+// - the query: fast::FieldSolid's distance (phi, found, nearest, voxel) and normal bitwise equal
+//   to dentsim::FieldSolid's at random points, reaches and along paths (the kept query and the
+//   free-space certificate in use);
+// - the provider: the reference's and the fast provider driven along the same bur path (free
+//   space, down into the sphere drilling, sideways, away): every tick's contact, g, held fraction
+//   and removed voxels bitwise equal, and at the end the two edited fields equal at every sample,
+//   the same edit counts and the same Lipschitz constant (the edit's kept voxel distances in
+//   use); the fast ticks allocate nothing.
+// Bitwise because the arithmetic is the same (docs/tolerance_policy.md item 9: equal where the
+// operations are the same).
+#include "fast/tooth/field.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <vector>
+
+#include "fast/tooth/sdf.h"
+#include "reference/tooth/tooth_contacts.h"
+#include "tests/support/alloc_counter.h"
+#include "tests/tooth/field_shapes.h"
+
+namespace dentsim {
+namespace {
+
+constexpr double kSide = 8e-3;   // grid edge [m]
+constexpr int kN = 64;           // h = 0.125 mm
+constexpr double kR = 2.5e-3;    // sphere radius [m]
+constexpr double kRho = 0.4e-3;  // bur radius [m]
+constexpr double kK = 3000.0, kB = 5.0, kT = 1e-3;
+const Vec3 kCentre(4.03e-3, 3.97e-3, 3.61e-3);
+
+bool in_sphere(const Vec3& p) { return (p - kCentre).norm() < kR; }
+
+VoxelGrid sphere_grid() { return test::solid_grid(kN, kSide, in_sphere); }
+
+SampledField sphere_field(const VoxelGrid& g) {
+  return build_sampled_field(g, triangulate_implicit(g, in_sphere),
+                             field_band_for_tip(kRho, g.voxel_size));
+}
+
+bool same(const SignedDistance& a, const SignedDistance& b) {
+  return a.phi == b.phi && a.found == b.found && a.nearest == b.nearest && a.voxel == b.voxel;
+}
+
+TEST(FastFieldBricks, HoldEverySampleAndTheCellCorners) {
+  const VoxelGrid g = sphere_grid();
+  const SampledField field = sphere_field(g);
+  const fast::FieldBricks bricks(field, 0);
+  const int m = field.samples_per_axis();
+  long differ = 0;
+  for (int z = 0; z < m; ++z) {
+    for (int y = 0; y < m; ++y) {
+      for (int x = 0; x < m; ++x) differ += bricks.at(x, y, z) != field.at(x, y, z);
+    }
+  }
+  EXPECT_EQ(differ, 0);
+  std::mt19937_64 rng(36);
+  std::uniform_int_distribution<int> u(0, m - 2);
+  for (int trial = 0; trial < 20000; ++trial) {
+    const int s[3] = {u(rng), u(rng), u(rng)};
+    float c[8];
+    bricks.corners(s, c);
+    for (int d = 0; d < 8; ++d) {
+      ASSERT_EQ(c[d], field.at(s[0] + (d & 1), s[1] + ((d >> 1) & 1), s[2] + (d >> 2)));
+    }
+  }
+  EXPECT_EQ(bricks.lipschitz(), field.lipschitz());
+  EXPECT_GT(bricks.brick_count(), 0u);
+}
+
+TEST(FastFieldBricks, MirroredRaisesAndTheLipschitzUpdateEqualTheReference) {
+  const VoxelGrid g = sphere_grid();
+  SampledField reference = sphere_field(g);
+  SampledField mirrored = reference;
+  reference.reserve_spare_bricks(64);
+  mirrored.reserve_spare_bricks(64);
+  // Few spare bricks in the copy: some slots read through the field.
+  fast::FieldBricks bricks(mirrored, 4);
+  const int m = reference.samples_per_axis();
+  std::mt19937_64 rng(2026);
+  std::uniform_int_distribution<int> u(0, m - 1);
+  std::uniform_real_distribution<double> v(-0.3e-3, 1.5e-3);
+  for (int round = 0; round < 40; ++round) {
+    int lo[3] = {m, m, m}, hi[3] = {-1, -1, -1};
+    const int c[3] = {u(rng), u(rng), u(rng)};
+    for (int k = 0; k < 30; ++k) {
+      int s[3];
+      for (int a = 0; a < 3; ++a) s[a] = std::clamp(c[a] + u(rng) % 7 - 3, 0, m - 1);
+      const double value = v(rng);
+      const bool r = reference.raise(s[0], s[1], s[2], value);
+      ASSERT_EQ(r, mirrored.raise(s[0], s[1], s[2], value));
+      if (!r) continue;
+      bricks.mirror(s[0], s[1], s[2]);
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::min(lo[a], s[a]);
+        hi[a] = std::max(hi[a], s[a]);
+      }
+    }
+    if (hi[0] < 0) continue;
+    reference.include_cells(lo, hi);
+    bricks.include_cells(lo, hi);
+    ASSERT_EQ(bricks.lipschitz(), reference.lipschitz()) << "round " << round;
+  }
+  long differ = 0;
+  for (int z = 0; z < m; ++z) {
+    for (int y = 0; y < m; ++y) {
+      for (int x = 0; x < m; ++x) {
+        differ += bricks.at(x, y, z) != reference.at(x, y, z);
+        differ += mirrored.at(x, y, z) != reference.at(x, y, z);
+      }
+    }
+  }
+  EXPECT_EQ(differ, 0);
+  EXPECT_GT(bricks.lipschitz(), sphere_field(g).lipschitz());  // the raises did raise it
+}
+
+TEST(FastFieldSolid, EqualsTheReferenceQueryBitwise) {
+  const VoxelGrid g = sphere_grid();
+  const VoxelTooth tooth(g);
+  const SampledField field = sphere_field(g);
+  const dentsim::FieldSolid reference(tooth, field);
+  const fast::FieldBricks bricks(field, 0);
+  const fast::FieldSolid solid(tooth, bricks);
+  const double h = g.voxel_size;
+  std::mt19937_64 rng(30);
+  std::uniform_real_distribution<double> dir(-1.0, 1.0), radial(kR - 1.5e-3, kR + 2.5e-3),
+      anywhere(-0.1 * kSide, 1.1 * kSide);
+  const double reaches[] = {kRho, kRho + 4 * h, 2 * kRho, kSide};
+  long found = 0, mismatches = 0;
+  const auto check = [&](const Vec3& x, double reach) {
+    const SignedDistance r = reference.distance(x, reach);
+    const SignedDistance f = solid.distance(x, reach);
+    if (r.found) ++found;
+    if (!same(r, f)) {
+      ++mismatches;
+      ADD_FAILURE() << "distance at " << x.transpose() << " reach " << reach << ": " << r.phi
+                    << " vs " << f.phi;
+      return;
+    }
+    if (r.found && !(reference.normal(x, r) == solid.normal(x, f))) {
+      ++mismatches;
+      ADD_FAILURE() << "normal at " << x.transpose();
+    }
+  };
+  for (int trial = 0; trial < 20000; ++trial) {
+    Vec3 d(dir(rng), dir(rng), dir(rng));
+    if (d.norm() < 1e-3) continue;
+    const Vec3 x = trial % 5 == 0 ? Vec3(anywhere(rng), anywhere(rng), anywhere(rng))
+                                  : Vec3(kCentre + radial(rng) * d.normalized());
+    check(x, reaches[trial % 4]);
+  }
+  // Along paths of small steps (the certificate and the kept query at work): 2 um a step, in
+  // free space and through the surface.
+  for (int path = 0; path < 40; ++path) {
+    Vec3 d(dir(rng), dir(rng), dir(rng));
+    Vec3 x = kCentre + (kR + 1.2e-3) * d.normalized();
+    const Vec3 step = -2e-6 * d.normalized() + 1e-6 * Vec3(dir(rng), dir(rng), dir(rng));
+    for (int k = 0; k < 800; ++k, x += step) {
+      check(x, kRho);
+      check(x, kRho + 1e-5);
+    }
+  }
+  std::printf("%ld found, %ld certified, %ld evaluated, %ld mismatches\n", found,
+              solid.certified(), solid.evaluated(), mismatches);
+  EXPECT_EQ(mismatches, 0);
+  EXPECT_GT(found, 1000);
+  EXPECT_GT(solid.certified(), 10000);  // free space answered without reading the field
+}
+
+// The bur's path: free space, down 1.1 mm into the sphere (drilling), sideways 0.6 mm, away.
+constexpr int kFree = 200, kDown = 900, kSideways = 600, kAway = 300;
+const Vec3 kTop = kCentre + Vec3(0, 0, kR);
+Vec3 bur(int tick) {
+  const Vec3 start = kTop + Vec3(0, 0, kRho + 0.2e-3);
+  if (tick < kFree) return start + Vec3(0.3e-3, 0, 1e-3) * (1.0 - tick / double(kFree));
+  tick -= kFree;
+  if (tick < kDown) return start - Vec3(0, 0, 1.1e-3 * tick / kDown);
+  tick -= kDown;
+  if (tick < kSideways) {
+    return start - Vec3(0, 0, 1.1e-3) + Vec3(0.6e-3 * tick / kSideways, 0.1e-3, 0);
+  }
+  tick -= kSideways;
+  return start + Vec3(0.6e-3, 0, 3e-3 * std::min(1.0, tick / 100.0));
+}
+
+bool same(const Contact& a, const Contact& b) {
+  return a.n == b.n && a.x_o == b.x_o && a.r == b.r && a.depth == b.depth &&
+         a.stiffness == b.stiffness && a.damping == b.damping && a.weight == b.weight &&
+         a.material == b.material;
+}
+
+TEST(FastFieldProvider, EqualsTheReferenceProviderWhileDrillingEditsTheField) {
+  const VoxelGrid g = sphere_grid();
+  VoxelTooth tooth_r(g), tooth_f(g);
+  SampledField field_r = sphere_field(g);
+  SampledField field_f = field_r;
+  DrillParams drill;
+  drill.cutting_coefficient = 10.0;  // cuts fast: hundreds of voxels on this path
+  const ToolTip tip{kRho, Vec3::Zero()};
+  ToothContactProvider reference(tooth_r, tip, kK, kB, &drill, ContactModel::kField,
+                                 &signed_distance, &field_r);
+  PipelineToothSetup setup;
+  setup.tip = tip;
+  setup.k_tooth = kK;
+  setup.b_tooth = kB;
+  setup.drilling = &drill;
+  setup.contact_model = ContactModel::kField;
+  setup.field = &field_f;
+  fast::FieldContactProvider fast_provider(tooth_f, setup);
+  std::vector<Contact> out_r, out_f;
+  out_r.reserve(kContactCapacity);
+  out_f.reserve(kContactCapacity);
+  long contact_ticks = 0, removed = 0, allocations = 0;
+  const int ticks = kFree + kDown + kSideways + kAway;
+  {
+    testing::AllocationScope scope;
+    for (int tick = 0; tick < ticks; ++tick) {
+      Pose pose;
+      pose.x = bur(tick);
+      const bool ok_r = reference.contacts(pose, out_r);
+      const bool ok_f = fast_provider.contacts(pose, out_f);
+      ASSERT_EQ(ok_r, ok_f);
+      ASSERT_EQ(out_r.size(), out_f.size()) << "tick " << tick;
+      for (std::size_t i = 0; i < out_r.size(); ++i) {
+        ASSERT_TRUE(same(out_r[i], out_f[i])) << "tick " << tick;
+      }
+      ASSERT_EQ(reference.surface_proxy().g(), fast_provider.surface_proxy().g()) << tick;
+      ASSERT_EQ(reference.anchored_spring().held, fast_provider.anchored_spring().held) << tick;
+      const int rr = reference.drill(out_r, kT);
+      ASSERT_EQ(rr, fast_provider.drill(out_f, kT)) << "tick " << tick;
+      contact_ticks += out_r.empty() ? 0 : 1;
+      removed += rr;
+    }
+    // Away until both fields have followed every cut.
+    Pose away;
+    away.x = kTop + Vec3(0, 0, 4e-3);
+    while (reference.field_edits_pending() > 0) {
+      reference.contacts(away, out_r);
+      fast_provider.contacts(away, out_f);
+    }
+    allocations = scope.count();
+  }
+  EXPECT_EQ(fast_provider.field_edits_pending(), 0u);
+  std::printf("%d ticks, %ld in contact, %ld voxels removed, %ld edits, %ld samples scanned, "
+              "%ld queried, %ld raised, %ld queries certified, %ld evaluated, %ld allocations\n",
+              ticks, contact_ticks, removed, reference.field_edits().voxels,
+              reference.field_edits().samples_scanned, reference.field_edits().samples_queried,
+              reference.field_edits().samples_raised, fast_provider.solid().certified(),
+              fast_provider.solid().evaluated(), allocations);
+  EXPECT_GT(contact_ticks, 500);
+  EXPECT_GT(removed, 100);
+  const FieldEditStats& a = reference.field_edits();
+  const FieldEditStats& b = fast_provider.field_edits();
+  EXPECT_EQ(a.voxels, b.voxels);
+  EXPECT_EQ(a.samples_scanned, b.samples_scanned);
+  EXPECT_EQ(a.samples_queried, b.samples_queried);
+  EXPECT_EQ(a.samples_raised, b.samples_raised);
+  EXPECT_EQ(a.samples_lost, b.samples_lost);
+  EXPECT_GT(a.samples_raised, 0);
+  EXPECT_EQ(reference.field_edit_shortfalls(), fast_provider.field_edit_shortfalls());
+  EXPECT_EQ(fast_provider.bricks().lipschitz(), field_r.lipschitz());
+  const int m = field_r.samples_per_axis();
+  long differ = 0;
+  for (int z = 0; z < m; ++z) {
+    for (int y = 0; y < m; ++y) {
+      for (int x = 0; x < m; ++x) {
+        differ += field_f.at(x, y, z) != field_r.at(x, y, z);
+        differ += fast_provider.bricks().at(x, y, z) != field_r.at(x, y, z);
+      }
+    }
+  }
+  EXPECT_EQ(differ, 0);
+  EXPECT_EQ(tooth_r.grid().voxels, tooth_f.grid().voxels);
+  EXPECT_GT(fast_provider.solid().certified(), kFree);  // free space read no sample
+  const fast::VoxelDistanceCache& cache = fast_provider.distance_cache();
+  std::printf("edit queries: %ld answered by the kept distances, %ld asked\n", cache.hits(),
+              cache.misses());
+  EXPECT_GT(cache.hits(), 0);
+  EXPECT_EQ(cache.hits() + cache.misses(), b.samples_queried);
+  EXPECT_EQ(allocations, 0);
+}
+
+}  // namespace
+}  // namespace dentsim
