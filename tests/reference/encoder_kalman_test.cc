@@ -194,5 +194,24 @@ TEST(EncoderKalman, WithoutModelFrictionThePredictionIgnoresTheFriction) {
   EXPECT_GT(diff_on, 1e-3);                             // and the default uses it
 }
 
+// The scene key method.encoder_kalman_friction reaches the pipeline (default true).
+TEST(EncoderKalman, TheSceneKeySetsTheModelFriction) {
+  auto model_friction = [](const Scene& s) {
+    bool seen = true;
+    SceneRigOptions options;
+    options.configure_pipeline = [&](PipelineConfig& pc) {
+      seen = pc.encoder_kalman_params.model_friction;
+    };
+    build_scene_rig(s, options);
+    return seen;
+  };
+  EXPECT_TRUE(load_scene("probe").method.encoder_kalman_friction);
+  EXPECT_TRUE(model_friction(load_scene("probe")));
+  const Scene off = load_scene_patched(
+      "probe", nlohmann::json::parse(R"({"method": {"encoder_kalman_friction": false}})"), "test");
+  EXPECT_FALSE(off.method.encoder_kalman_friction);
+  EXPECT_FALSE(model_friction(off));
+}
+
 }  // namespace
 }  // namespace dentsim
