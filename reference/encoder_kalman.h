@@ -8,6 +8,11 @@
 //
 //   predict   a    = M^-1 (tau_prev + f_hat - g - tau_f)        (the tick's last terms; Coriolis
 //                                                               neglected at haptic speeds)
+//             (tau_f left out with EncoderKalmanParams::model_friction false: at a haptic
+//             standstill Coulomb friction is set-valued, and the model's smooth
+//             f_c tanh(qd_hat / v_s) at the filter's own velocity is a velocity feedback ~f_c / v_s
+//             inside the filter that the coupled M^-1 carries from the arm's joints into the
+//             gimbal's; docs/derivations/quiet_stiffness.md 8.6)
 //             q-   = q_hat + T qd_hat + T^2/2 a,  qd- = qd_hat + T a
 //   correct   r    = (q_m + Delta/2) - q-
 //             q_hat = q- + alpha r,  qd_hat = qd- + (beta / T) r

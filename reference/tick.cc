@@ -146,22 +146,29 @@ namespace reference {
 
 namespace {
 
+// The device model's inertia under the hypothesis in force of the grip detector: M (+ M_hand).
+Mat6 model_joint_inertia(const PipelineModel& m, const PipelineData& d, const DeviceTerms& t) {
+  Mat6 M = t.M;
+  if (m.grasp && d.grip.gripped) M += d.M_hand;
+  return M;
+}
+
 // The device model's joint acceleration under the torque applied over the tick that ended and the
-// observer's estimate of the hand, a = M^-1 (tau_prev + f_hat - g - tau_f), with the terms `t`
-// and the hypothesis in force of the grip detector (Coriolis neglected at haptic speeds). Its
-// inertia in *M. Zero if M is not SPD or a is not finite. Used by the encoder Kalman filter's
-// prediction and the loop-lag compensation.
+// observer's estimate of the hand, a = M^-1 (tau_prev + f_hat - g - tau_f), with the terms `t`,
+// the hypothesis in force of the grip detector and its inertia M (model_joint_inertia; Coriolis
+// neglected at haptic speeds); without the model's friction tau_f unless `with_friction`. Zero if
+// M is not SPD or a is not finite. Used by the encoder Kalman filter's prediction and the
+// loop-lag compensation.
 Vec6 model_joint_acceleration(const PipelineModel& m, const PipelineData& d, const DeviceTerms& t,
-                              Mat6* M_out) {
+                              const Mat6& M, bool with_friction) {
   const bool gripped = m.grasp && d.grip.gripped;
-  Mat6& M = *M_out;
-  M = t.M;
-  if (gripped) M += d.M_hand;
   Vec6 f_hat = Vec6::Zero();
   if (m.observe) f_hat = gripped ? d.obs1.f_hat : d.obs0.f_hat;
   const Eigen::LLT<Mat6> llt(M);
   Vec6 accel = Vec6::Zero();
-  if (llt.info() == Eigen::Success) accel = llt.solve(d.tau_prev + f_hat - t.g - t.tau_f);
+  Vec6 b = d.tau_prev + f_hat - t.g;
+  if (with_friction) b -= t.tau_f;
+  if (llt.info() == Eigen::Success) accel = llt.solve(b);
   if (!accel.allFinite()) accel.setZero();
   return accel;
 }
@@ -175,8 +182,7 @@ void encoder_kalman_step(const PipelineModel& m, PipelineData& d) {
   } else {
     const double T = d.have_prev && d.t > d.t_prev ? d.t - d.t_prev : d.T;
     const DeviceTerms& t = d.dev;
-    Mat6 M;
-    const Vec6 accel = model_joint_acceleration(m, d, t, &M);
+    const Mat6 M = model_joint_inertia(m, d, t);
     // sigma_a,i = sigma_f (|J_v,i| + lever |J_w,i|) / M_ii: the force the model does not know.
     const EncoderKalmanParams& p = m.encoder_kalman_params;
     Vec6 sigma_a = Vec6::Zero();
@@ -185,6 +191,11 @@ void encoder_kalman_step(const PipelineModel& m, PipelineData& d) {
           t.J_t.col(i).head<3>().norm() + p.grip_lever_m * t.J_t.col(i).tail<3>().norm();
       sigma_a(i) = M(i, i) > 0.0 ? p.force_sigma_n * lever / M(i, i) : 0.0;
     }
+    // model_friction false: the prediction leaves the joints' friction to the process noise (a
+    // haptic standstill's Coulomb friction is set-valued; the model's smooth f_c tanh(qd / v_s)
+    // at the filter's own velocity closes a velocity loop inside the filter that M^-1 carries
+    // from the arm into the gimbal: docs/derivations/quiet_stiffness.md 8.6).
+    const Vec6 accel = model_joint_acceleration(m, d, t, M, p.model_friction);
     encoder_kalman_update(d.q, d.qd, m.encoder_quantum, accel, sigma_a, T, d.enc);
   }
   d.q = d.enc.q;
@@ -245,8 +256,8 @@ TickStatus device_terms(const PipelineModel& m, PipelineData& d) {
     // Loop-lag compensation (reference/lag_compensation.h): the coupling and D_d see the velocity
     // at the midpoint of the coming tick; the observer and the hand's terms keep the measured one.
     const double T_last = d.t > d.t_prev ? d.t - d.t_prev : d.T;
-    Mat6 M;
-    const Vec6 accel = model_joint_acceleration(m, d, t, &M);
+    const Vec6 accel =
+        model_joint_acceleration(m, d, t, model_joint_inertia(m, d, t), true);
     d.r.V1.noalias() = t.J_t * (d.qd + loop_velocity_lag(m.velocity_estimate, T_last, d.T) * accel);
   }
   return TickStatus::kOk;

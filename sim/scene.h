@@ -69,6 +69,9 @@ struct SceneMethod {
   // Remedy of issue #29 (docs/derivations/quiet_stiffness.md): the pipeline estimates the joint
   // state between encoder counts with the device model (reference/encoder_kalman.h).
   bool encoder_kalman = false;
+  // With encoder_kalman: whether its prediction includes the device model's joint friction
+  // (reference/encoder_kalman.h; false leaves it to the process noise: quiet_stiffness.md 8.6).
+  bool encoder_kalman_friction = true;
   // Remedy of issue #29 for the stiff contact mode: the coupling and D_d see the device velocity
   // advanced over the loop's known lags with the device model (reference/lag_compensation.h).
   bool lag_compensation = false;

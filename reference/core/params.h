@@ -96,6 +96,10 @@ struct EncoderKalmanParams {
   // (docs/derivations/quiet_stiffness.md).
   double force_sigma_n = 0.05;
   double grip_lever_m = 0.01;  // a pen grip's lever for the hand's torque [m]
+  // The prediction's acceleration includes the model's joint friction tau_f (true, the default)
+  // or leaves it to the process noise (false; scene key method.encoder_kalman_friction):
+  // docs/derivations/quiet_stiffness.md 8.6.
+  bool model_friction = true;
 };
 
 // The sensorless grip detector's band, power filter and CUSUM thresholds

@@ -2,7 +2,8 @@
 // gains against the iterated Riccati equation, the estimate never leaves the encoder cell and
 // beats the cell centre and the driver's backward difference on a quantised trajectory whose
 // acceleration the model knows, and the fast pipeline equals the reference tick for tick with the
-// filter on (the stage is shared: fast::device_terms calls the reference's).
+// filter on (the stage is shared: fast::device_terms calls the reference's); the prediction does
+// not use the model's joint friction (docs/derivations/quiet_stiffness.md 8.6).
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -17,6 +18,9 @@
 #include "sim/scene.h"
 #include "sim/simulator.h"
 #include "reference/encoder_kalman.h"
+#include "reference/phantom/phantom_model.h"
+#include "reference/phantom/phantom_params.h"
+#include "reference/tick.h"
 
 namespace dentsim {
 namespace {
@@ -122,6 +126,91 @@ TEST(EncoderKalman, FastPipelineEqualsTheReferenceWithTheFilterOn) {
               max_diff, max_tau, max_change);
   EXPECT_LE(max_diff, 1e-9 * max_tau);
   EXPECT_GT(max_change, 1e-3 * max_tau);
+}
+
+
+// EncoderKalmanParams::model_friction = false (scene key method.encoder_kalman_friction) leaves the
+// joints' friction to the process noise (a haptic standstill's Coulomb friction is set-valued, not
+// the smooth f_c tanh(qd_hat / v_s) of the filter's own velocity, whose slope made the Phantom's
+// gimbal hunt: quiet_stiffness.md 8.6). The device_terms stage on the same quantised samples and
+// applied torque, with two device models that differ only in their Coulomb friction (the
+// Phantom's and 20 times it): without the model's friction the estimates are identical; with it
+// (the default) they differ, as the models' friction terms do.
+TEST(EncoderKalman, WithoutModelFrictionThePredictionIgnoresTheFriction) {
+  const PhantomParams base = default_phantom_params();
+  PhantomParams rough = base;
+  rough.coulomb_n_m = 20.0 * base.coulomb_n_m;
+  ASSERT_GT(base.coulomb_n_m.minCoeff(), 0.0);
+  const PhantomModel model_a(base), model_b(rough);
+  auto run = [&](bool model_friction, double* friction_diff) {
+    PipelineConfig cfg;
+    cfg.encoder_kalman = true;
+    cfg.encoder_kalman_params.model_friction = model_friction;
+    cfg.encoder_quantum = VecX(6);
+    for (int i = 0; i < 6; ++i) {
+      cfg.encoder_quantum(i) = 2.0 * M_PI / base.encoder_counts_per_rev(i);
+    }
+    ReferencePipeline pa(model_a, cfg), pb(model_b, cfg);
+    PipelineData da = pa.data(), db = pb.data();
+    const Vec6 q0(0.0, 0.35, 0.3, 0.0, 0.0, 0.0);
+    const Vec6 tau(0.01, -0.02, 0.015, 1e-3, -1e-3, 5e-4);
+    double max_diff = 0.0, max_move = 0.0;
+    *friction_diff = 0.0;
+    Vec6 q_prev = q0;
+    for (int k = 0; k <= 400; ++k) {
+      const double t = 1e-3 * k;
+      // A slow back-and-forth through zero velocity, as at a press: 2 Hz, 5 counts per joint.
+      Vec6 q_meas;
+      for (int i = 0; i < 6; ++i) {
+        const double d = cfg.encoder_quantum(i);
+        q_meas(i) = d * std::floor((q0(i) + 5.0 * d * std::sin(4.0 * M_PI * t)) / d);
+      }
+      for (PipelineData* d : {&da, &db}) {
+        d->q = q_meas;
+        d->qd = (q_meas - q_prev) / 1e-3;
+        d->t = t;
+        d->T = 1e-3;
+        d->tau_prev = tau;
+      }
+      q_prev = q_meas;
+      EXPECT_EQ(reference::device_terms(pa.model(), da), TickStatus::kOk);
+      EXPECT_EQ(reference::device_terms(pb.model(), db), TickStatus::kOk);
+      max_diff = std::max({max_diff, (da.q - db.q).cwiseAbs().maxCoeff(),
+                           (da.qd - db.qd).cwiseAbs().maxCoeff()});
+      *friction_diff = std::max(*friction_diff, (da.dev.tau_f - db.dev.tau_f).norm());
+      max_move = std::max(max_move, (da.q - q0).cwiseAbs().maxCoeff());
+    }
+    EXPECT_GT(max_move, 2.0 * cfg.encoder_quantum(3));  // the estimate moves
+    return max_diff;
+  };
+  double friction_off = 0.0, friction_on = 0.0;
+  const double diff_off = run(false, &friction_off);
+  const double diff_on = run(true, &friction_on);
+  std::printf("estimate difference: %.3e without the model's friction, %.3e with it "
+              "(friction terms differ by %.3e / %.3e N m)\n",
+              diff_off, diff_on, friction_off, friction_on);
+  EXPECT_EQ(diff_off, 0.0);
+  EXPECT_GT(friction_off, 10.0 * base.coulomb_n_m(0));  // the models do differ
+  EXPECT_GT(diff_on, 1e-3);                             // and the default uses it
+}
+
+// The scene key method.encoder_kalman_friction reaches the pipeline (default true).
+TEST(EncoderKalman, TheSceneKeySetsTheModelFriction) {
+  auto model_friction = [](const Scene& s) {
+    bool seen = true;
+    SceneRigOptions options;
+    options.configure_pipeline = [&](PipelineConfig& pc) {
+      seen = pc.encoder_kalman_params.model_friction;
+    };
+    build_scene_rig(s, options);
+    return seen;
+  };
+  EXPECT_TRUE(load_scene("probe").method.encoder_kalman_friction);
+  EXPECT_TRUE(model_friction(load_scene("probe")));
+  const Scene off = load_scene_patched(
+      "probe", nlohmann::json::parse(R"({"method": {"encoder_kalman_friction": false}})"), "test");
+  EXPECT_FALSE(off.method.encoder_kalman_friction);
+  EXPECT_FALSE(model_friction(off));
 }
 
 }  // namespace
