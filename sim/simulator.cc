@@ -39,7 +39,7 @@
 namespace dentsim {
 namespace {
 
-VoxelGrid build_tooth(const SceneTooth& t) { return build_tooth_grid(tooth_source(t)); }
+VoxelGrid build_tooth(const SceneTooth& t) { return build_tooth_grid_cached(tooth_source(t)); }
 
 // The top of the occlusal surface near the crown's axis: the highest solid voxel top among the
 // columns within 1.5 mm (at least one voxel) of the solid's centroid in x, y.

@@ -6,6 +6,7 @@
 // scanner's); the caller places the grid.
 #pragma once
 
+#include <cstddef>
 #include <string>
 
 #include "tooth_io/volume.h"
@@ -25,5 +26,28 @@ struct ToothSource {
 
 // Throws InputError for an unknown source or bad input (naming the file).
 VoxelGrid build_tooth_grid(const ToothSource& tooth);
+
+// build_tooth_grid, remembered for the process. A run's setup builds its tooth, and the sweeps
+// (zwidth, the stress suite, crosscheck, the closed-loop tests) run hundreds to thousands of runs
+// on one tooth; the procedural molar at 128^3 is most of a short run's setup. A procedural molar,
+// or a mesh file with the same path, byte size and modification time, scale, extent and
+// resolution, built before is copied instead of built again: the copy is the grid
+// build_tooth_grid returns (the build is deterministic; tests/tooth_io/tooth_cache_test.cc).
+// Volumes are always built (a DICOM folder's files change without the folder's time changing).
+// At most kToothCacheBytes of voxels are kept, the least recently used dropped first; a grid
+// larger than that is not kept. Thread-safe (concurrent first builds of one tooth each build it).
+// Throws what build_tooth_grid throws.
+inline constexpr std::size_t kToothCacheBytes = std::size_t{256} << 20;
+VoxelGrid build_tooth_grid_cached(const ToothSource& tooth);
+
+struct ToothCacheStats {
+  long hits = 0;        // calls answered by a copy
+  long misses = 0;      // calls that built (and kept, if it fits) their grid
+  int entries = 0;      // grids kept now
+  std::size_t bytes = 0;  // their voxels [bytes]
+};
+ToothCacheStats tooth_cache_stats();
+// Forgets every kept grid (the counters stay).
+void clear_tooth_cache();
 
 }  // namespace dentsim
