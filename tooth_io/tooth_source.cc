@@ -85,7 +85,7 @@ VoxelGrid build_tooth_grid_cached(const ToothSource& t) {
   VoxelGrid grid = build_tooth_grid(t);  // outside the lock: other teeth go on meanwhile
   const std::lock_guard<std::mutex> lock(c.mutex);
   ++c.misses;
-  if (!key || grid.voxels.size() > kToothCacheBytes) return grid;
+  if (!key || grid.voxels.size() > kToothCacheBytes / 2) return grid;
   for (const auto& [k, g] : c.grids) {
     if (k == *key) return grid;  // another thread kept it meanwhile
   }

@@ -35,9 +35,10 @@ VoxelGrid build_tooth_grid(const ToothSource& tooth);
 // build_tooth_grid returns (the build is deterministic; tests/tooth_io/tooth_cache_test.cc).
 // Volumes are always built (a DICOM folder's files change without the folder's time changing).
 // At most kToothCacheBytes of voxels are kept, the least recently used dropped first; a grid
-// larger than that is not kept. Thread-safe (concurrent first builds of one tooth each build it).
-// Throws what build_tooth_grid throws.
-inline constexpr std::size_t kToothCacheBytes = std::size_t{256} << 20;
+// larger than half of that (finer than 256^3) is not kept, so a single run's memory grows by
+// at most one 256^3 grid (16 MB) and a 512^3 tooth is never held twice. Thread-safe
+// (concurrent first builds of one tooth each build it). Throws what build_tooth_grid throws.
+inline constexpr std::size_t kToothCacheBytes = std::size_t{40} << 20;
 VoxelGrid build_tooth_grid_cached(const ToothSource& tooth);
 
 struct ToothCacheStats {
