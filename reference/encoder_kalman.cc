@@ -49,6 +49,11 @@ namespace {
 // impulse at its lower bound -c (moving forward) or its upper bound +c (moving backward).
 enum class Slip { kFree, kStick, kForward, kBackward };
 
+// A sliding (or friction-free) joint's impulse: its bound, -c forward, +c backward, 0 free.
+double slip_impulse(Slip s, double c) {
+  return s == Slip::kForward ? -c : (s == Slip::kBackward ? c : 0.0);
+}
+
 }  // namespace
 
 bool encoder_stick_slip_velocity(const Mat6& M, const Vec6& b, const Vec6& f_c, const Vec6& v,
@@ -103,19 +108,11 @@ bool encoder_stick_slip_velocity(const Mat6& M, const Vec6& b, const Vec6& f_c, 
     Mat6 K = Mat6::Identity();
     Vec6 rhs = Vec6::Zero();
     for (int i = 0; i < 6; ++i) {
-      switch (state[i]) {
-        case Slip::kStick:
-          K.row(i) = W.row(i);
-          rhs(i) = -v_free(i);
-          break;
-        case Slip::kForward:
-          rhs(i) = -c(i);
-          break;
-        case Slip::kBackward:
-          rhs(i) = c(i);
-          break;
-        case Slip::kFree:
-          break;
+      if (state[i] == Slip::kStick) {
+        K.row(i) = W.row(i);
+        rhs(i) = -v_free(i);
+      } else {
+        rhs(i) = slip_impulse(state[i], c(i));
       }
     }
     const Eigen::PartialPivLU<Mat6> lu(K);
@@ -139,21 +136,9 @@ bool encoder_stick_slip_velocity(const Mat6& M, const Vec6& b, const Vec6& f_c, 
     }
     if (settled) {
       for (int i = 0; i < 6; ++i) {
-        switch (state[i]) {
-          case Slip::kStick:
-            lambda(i) = std::clamp(l2(i), -c(i), c(i));
-            break;
-          case Slip::kForward:
-            lambda(i) = -c(i);
-            break;
-          case Slip::kBackward:
-            lambda(i) = c(i);
-            break;
-          case Slip::kFree:
-            lambda(i) = 0.0;
-            break;
-        }
-        w(i) = state[i] == Slip::kStick ? 0.0 : w2(i);
+        const bool stick = state[i] == Slip::kStick;
+        lambda(i) = stick ? std::clamp(l2(i), -c(i), c(i)) : slip_impulse(state[i], c(i));
+        w(i) = stick ? 0.0 : w2(i);
       }
       break;
     }
