@@ -344,12 +344,11 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
 
   // Method and gains.
   const auto& m = rd.object(doc, "", "method");
-  rd.only_keys(
-      m, "method",
-      {"name", "k_vc_n_per_m", "b_vc_n_s_per_m", "k_vc_ang_n_m_per_rad", "b_vc_ang_n_m_s_per_rad",
-       "observer_gain_per_s", "friction_mu", "grasp_mass_scale", "grip_detector",
-       "encoder_kalman", "encoder_kalman_friction", "encoder_kalman_friction_model",
-       "lag_compensation", "saturation_passive"});
+  rd.only_keys(m, "method",
+               {"name", "k_vc_n_per_m", "b_vc_n_s_per_m", "k_vc_ang_n_m_per_rad",
+                "b_vc_ang_n_m_s_per_rad", "observer_gain_per_s", "friction_mu", "grasp_mass_scale",
+                "grip_detector", "encoder_kalman", "encoder_kalman_friction",
+                "encoder_kalman_friction_model", "lag_compensation", "saturation_passive"});
   const std::string mname = rd.string(m, "method", "name");
   try {
     s.method.method = parse_method(mname);

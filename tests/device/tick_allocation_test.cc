@@ -31,18 +31,16 @@ struct Variant {
 };
 
 TEST(TickAllocation, DrillSceneTicksAllocateNothingForEveryImplementationAndMethod) {
-  const Variant variants[] = {{"explicit", Method::kExplicitVc, false},
-                              {"pmi", Method::kPmiVc, false},
-                              {"pmi-pd", Method::kPmiPd, false},
-                              {"pmi-pd + grip detector", Method::kPmiPd, true},
-                              {"pmi-pd + grip detector + encoder kalman", Method::kPmiPd, true,
-                               true},
-                              {"pmi-pd + grip detector + lag compensation", Method::kPmiPd, true,
-                               false, true},
-                              {"pmi-pd, field model", Method::kPmiPd, false, false, false,
-                               "field"},
-                              {"pmi-pd + grip detector + encoder kalman, stick-slip friction",
-                               Method::kPmiPd, true, true, false, "sdf", true}};
+  const Variant variants[] = {
+      {"explicit", Method::kExplicitVc, false},
+      {"pmi", Method::kPmiVc, false},
+      {"pmi-pd", Method::kPmiPd, false},
+      {"pmi-pd + grip detector", Method::kPmiPd, true},
+      {"pmi-pd + grip detector + encoder kalman", Method::kPmiPd, true, true},
+      {"pmi-pd + grip detector + lag compensation", Method::kPmiPd, true, false, true},
+      {"pmi-pd, field model", Method::kPmiPd, false, false, false, "field"},
+      {"pmi-pd + grip detector + encoder kalman, stick-slip friction", Method::kPmiPd, true, true,
+       false, "sdf", true}};
   constexpr long kTicks = 10000;
   for (const StageTable* table : stage_tables()) {
     for (const Variant& v : variants) {

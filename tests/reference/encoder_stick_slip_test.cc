@@ -123,9 +123,10 @@ TEST(EncoderStickSlip, MatchesTheBruteForceEnumeration) {
     const Vec6 residual = M * (got - v) - T * (r - b.asDiagonal() * got) - lambda;
     EXPECT_LE(residual.cwiseAbs().maxCoeff(), 1e-12);
   }
-  std::printf("300 random coupled cases: %d sticking and %d sliding joints, worst |v+ - brute| "
-              "%.2e rad/s\n",
-              sticks, slips, worst);
+  std::printf(
+      "300 random coupled cases: %d sticking and %d sliding joints, worst |v+ - brute| "
+      "%.2e rad/s\n",
+      sticks, slips, worst);
   EXPECT_GT(sticks, 100);  // both regimes are exercised
   EXPECT_GT(slips, 100);
 }
@@ -222,7 +223,8 @@ TEST(EncoderStickSlip, TheSceneKeyReachesThePipeline) {
   const EncoderKalmanParams def = params(load_scene("probe"));
   EXPECT_TRUE(def.model_friction);
   EXPECT_FALSE(def.stick_slip);
-  const EncoderKalmanParams ss = params(patched(R"({"encoder_kalman_friction_model": "stick_slip"})"));
+  const EncoderKalmanParams ss =
+      params(patched(R"({"encoder_kalman_friction_model": "stick_slip"})"));
   EXPECT_TRUE(ss.model_friction);
   EXPECT_TRUE(ss.stick_slip);
   const EncoderKalmanParams none = params(patched(R"({"encoder_kalman_friction_model": "none"})"));
@@ -232,8 +234,9 @@ TEST(EncoderStickSlip, TheSceneKeyReachesThePipeline) {
       patched(R"({"encoder_kalman_friction_model": "smooth", "encoder_kalman_friction": true})"));
   EXPECT_TRUE(smooth.model_friction);
   EXPECT_FALSE(smooth.stick_slip);
-  for (const char* bad : {R"({"encoder_kalman_friction_model": "coulomb"})",
-                          R"({"encoder_kalman_friction_model": "stick_slip", "encoder_kalman_friction": false})"}) {
+  for (const char* bad :
+       {R"({"encoder_kalman_friction_model": "coulomb"})",
+        R"({"encoder_kalman_friction_model": "stick_slip", "encoder_kalman_friction": false})"}) {
     try {
       patched(bad);
       ADD_FAILURE() << "accepted " << bad;
