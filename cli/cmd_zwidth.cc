@@ -49,6 +49,8 @@ struct ZwidthOptions {
   bool grip_detector = false;
   bool encoder_kalman = false;    // --encoder-kalman: method.encoder_kalman on every run
   bool lag_compensation = false;  // --lag-compensation: method.lag_compensation on every run
+  // --encoder-kalman-friction-model: method.encoder_kalman_friction_model on every run
+  std::string encoder_kalman_friction_model = "smooth";
   std::vector<double> tap_speeds;
   double proxy_damping = -1.0;  // < 0: the rule b_2 = k_vc T / 2
   std::string device_model;     // --device MODEL ("" = the default model)
@@ -344,6 +346,13 @@ void run_zwidth(const ZwidthOptions& o) {
   }
   sc.grip_detector = o.grip_detector;
   sc.encoder_kalman = o.encoder_kalman;
+  const std::string& fm = o.encoder_kalman_friction_model;
+  if (fm != "smooth" && fm != "none" && fm != "stick_slip") {
+    throw InputError("--encoder-kalman-friction-model: expected smooth, none or stick_slip, got '" +
+                     fm + "'");
+  }
+  sc.encoder_kalman_friction = fm != "none";
+  sc.encoder_kalman_stick_slip = fm == "stick_slip";
   sc.lag_compensation = o.lag_compensation;
   if (o.proxy_damping >= 0.0) {
     if (!std::isfinite(o.proxy_damping))
@@ -493,6 +502,9 @@ void setup_zwidth(CLI::App& app) {
   sub->add_flag("--encoder-kalman", o->encoder_kalman,
                 "Every run with the method block's encoder Kalman filter (method.encoder_kalman: "
                 "a sub-count estimate of the device state, reference/encoder_kalman.h)");
+  sub->add_option("--encoder-kalman-friction-model", o->encoder_kalman_friction_model,
+                  "With --encoder-kalman: the friction in its prediction "
+                  "(method.encoder_kalman_friction_model): smooth (default), none or stick_slip");
   sub->add_flag("--lag-compensation", o->lag_compensation,
                 "Every run with the method block's loop-lag compensation "
                 "(method.lag_compensation, reference/lag_compensation.h)");

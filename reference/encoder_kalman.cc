@@ -1,6 +1,9 @@
 #include "reference/encoder_kalman.h"
 
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace dentsim {
@@ -38,6 +41,112 @@ void encoder_kalman_update(const Vec6& q_meas, const Vec6& qd_meas, const Vec6& 
     s.q(i) = std::clamp(q_pred + alpha * r, q_meas(i), q_meas(i) + d);
     s.qd(i) = qd_pred + (beta / T) * r;
   }
+}
+
+namespace {
+
+// A joint's state in the stick-slip solve: no Coulomb friction, sticking, or sliding with the
+// impulse at its lower bound -c (moving forward) or its upper bound +c (moving backward).
+enum class Slip { kFree, kStick, kForward, kBackward };
+
+// A sliding (or friction-free) joint's impulse: its bound, -c forward, +c backward, 0 free.
+double slip_impulse(Slip s, double c) {
+  return s == Slip::kForward ? -c : (s == Slip::kBackward ? c : 0.0);
+}
+
+}  // namespace
+
+bool encoder_stick_slip_velocity(const Mat6& M, const Vec6& b, const Vec6& f_c, const Vec6& v,
+                                 const Vec6& r, double T, Vec6* v_plus, Vec6* impulse) {
+  if (!(T > 0.0) || !std::isfinite(T) || !M.allFinite() || !b.allFinite() || !f_c.allFinite() ||
+      !v.allFinite() || !r.allFinite()) {
+    return false;
+  }
+  Mat6 A = M;
+  A.diagonal() += T * b.cwiseMax(0.0);  // the viscous part, implicit
+  const Eigen::LLT<Mat6> llt(A);
+  if (llt.info() != Eigen::Success) return false;
+  const Mat6 W = llt.solve(Mat6::Identity());  // the Delassus matrix
+  const Vec6 v_free = llt.solve(M * v + T * r);
+  const Vec6 c = T * f_c.cwiseMax(0.0);  // the impulse bounds
+  if (!W.allFinite() || !v_free.allFinite()) return false;
+
+  // Projected Gauss-Seidel on W: w = v_free + W lambda is the current v+.
+  Vec6 lambda = Vec6::Zero();
+  Vec6 w = v_free;
+  const double v_scale = 1.0 + v_free.cwiseAbs().maxCoeff();
+  for (int sweep = 0; sweep < kStickSlipSweeps; ++sweep) {
+    double largest = 0.0;
+    for (int i = 0; i < 6; ++i) {
+      if (!(c(i) > 0.0) || !(W(i, i) > 0.0)) continue;
+      const double li = std::clamp(lambda(i) - w(i) / W(i, i), -c(i), c(i));
+      const double dl = li - lambda(i);
+      if (dl == 0.0) continue;
+      w += W.col(i) * dl;
+      lambda(i) = li;
+      largest = std::max(largest, std::abs(W(i, i) * dl));
+    }
+    if (largest <= 1e-15 * v_scale) break;
+  }
+
+  // The active set Gauss-Seidel found, made exact: K lambda = rhs with the sticking joints' rows
+  // W_i lambda = -v_free,i and the others' lambda_i at their bound; corrected while it violates.
+  std::array<Slip, 6> state{};
+  for (int i = 0; i < 6; ++i) {
+    if (!(c(i) > 0.0)) {
+      state[i] = Slip::kFree;
+    } else if (lambda(i) <= -c(i)) {
+      state[i] = Slip::kForward;
+    } else if (lambda(i) >= c(i)) {
+      state[i] = Slip::kBackward;
+    } else {
+      state[i] = Slip::kStick;
+    }
+  }
+  const double v_tol = 1e-12 * v_scale;
+  for (int pivot = 0; pivot < kStickSlipPivots; ++pivot) {
+    Mat6 K = Mat6::Identity();
+    Vec6 rhs = Vec6::Zero();
+    for (int i = 0; i < 6; ++i) {
+      if (state[i] == Slip::kStick) {
+        K.row(i) = W.row(i);
+        rhs(i) = -v_free(i);
+      } else {
+        rhs(i) = slip_impulse(state[i], c(i));
+      }
+    }
+    const Eigen::PartialPivLU<Mat6> lu(K);
+    const Vec6 l2 = lu.solve(rhs);
+    if (!l2.allFinite()) break;
+    const Vec6 w2 = v_free + W * l2;
+    bool settled = true;
+    for (int i = 0; i < 6; ++i) {
+      const double slack = 1e-12 * c(i);
+      if (state[i] == Slip::kStick && l2(i) > c(i) + slack) {
+        state[i] = Slip::kBackward;
+      } else if (state[i] == Slip::kStick && l2(i) < -c(i) - slack) {
+        state[i] = Slip::kForward;
+      } else if ((state[i] == Slip::kForward && w2(i) < -v_tol) ||
+                 (state[i] == Slip::kBackward && w2(i) > v_tol)) {
+        state[i] = Slip::kStick;
+      } else {
+        continue;
+      }
+      settled = false;
+    }
+    if (settled) {
+      for (int i = 0; i < 6; ++i) {
+        const bool stick = state[i] == Slip::kStick;
+        lambda(i) = stick ? std::clamp(l2(i), -c(i), c(i)) : slip_impulse(state[i], c(i));
+        w(i) = stick ? 0.0 : w2(i);
+      }
+      break;
+    }
+  }
+  if (!w.allFinite()) return false;
+  *v_plus = w;
+  if (impulse != nullptr) *impulse = lambda;
+  return true;
 }
 
 }  // namespace dentsim

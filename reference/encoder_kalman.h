@@ -13,6 +13,8 @@
 //             f_c tanh(qd_hat / v_s) at the filter's own velocity is a velocity feedback ~f_c / v_s
 //             inside the filter that the coupled M^-1 carries from the arm's joints into the
 //             gimbal's; docs/derivations/quiet_stiffness.md 8.6)
+//             (with EncoderKalmanParams::stick_slip the friction is set-valued instead: a =
+//             (v+ - qd_hat) / T with v+ from encoder_stick_slip_velocity below, 8.7)
 //             q-   = q_hat + T qd_hat + T^2/2 a,  qd- = qd_hat + T a
 //   correct   r    = (q_m + Delta/2) - q-
 //             q_hat = q- + alpha r,  qd_hat = qd- + (beta / T) r
@@ -47,5 +49,25 @@ void encoder_kalman_reset(const Vec6& q_meas, const Vec6& qd0, const Vec6& quant
 void encoder_kalman_update(const Vec6& q_meas, const Vec6& qd_meas, const Vec6& quantum,
                            const Vec6& accel, const Vec6& sigma_a, double T,
                            EncoderKalmanState& s);
+
+// The velocity after one tick T of a joint system with set-valued (stick-slip) Coulomb friction
+// and implicit viscous friction, all joints coupled by the inertia M
+// (docs/derivations/quiet_stiffness.md 8.7):
+//   M (v+ - v) = T (r - B v+) + lambda,   B = diag(b),
+//   per joint i either v+_i = 0 and |lambda_i| <= f_c,i T          (stick)
+//              or lambda_i = -sign(v+_i) f_c,i T                   (slip),
+// with r the torque without friction (tau_prev + f_hat - g in the filter). With A = M + T B and
+// the Delassus matrix W = A^-1, v+ = v_free + W lambda, v_free = W (M v + T r): a box-constrained
+// LCP, the minimum of 1/2 lambda^T W lambda + lambda^T v_free over the box, unique for M SPD.
+// Solved by projected Gauss-Seidel (at most kStickSlipSweeps sweeps), then made exact on the
+// active set it found (the sticking joints' impulses solved, the sliding ones' at their bound;
+// at most kStickSlipPivots corrections; if those do not settle, the Gauss-Seidel answer stands).
+// Sticking joints get v+_i = 0 exactly. Returns false (outputs untouched) when A is not SPD, T is
+// not > 0 or an input or the answer is not finite. impulse (may be null): lambda [N m s].
+// No allocation, no exception.
+inline constexpr int kStickSlipSweeps = 40;
+inline constexpr int kStickSlipPivots = 8;
+bool encoder_stick_slip_velocity(const Mat6& M, const Vec6& b, const Vec6& f_c, const Vec6& v,
+                                 const Vec6& r, double T, Vec6* v_plus, Vec6* impulse = nullptr);
 
 }  // namespace dentsim

@@ -39,6 +39,9 @@ class GraspMassModel : public SixDofDeviceModel {
   VecX friction_torque(const VecX& q, const VecX& qd) const override {
     return base_.friction_torque(q, qd);
   }
+  bool joint_friction_coefficients(Vec6* b, Vec6* f_c) const override {
+    return base_.joint_friction_coefficients(b, f_c);
+  }
   Pose forward_kinematics(const VecX& q) const override { return base_.forward_kinematics(q); }
   Mat6 twist_to_joint(const VecX& q) const override { return base_.twist_to_joint(q); }
   // The base model's terms plus the hand's (grasp_mass_terms); J_t_dot always filled.

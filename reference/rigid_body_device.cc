@@ -60,6 +60,15 @@ VecX RigidBodyDevice::gravity(const VecX& /*q*/) const {
   return g;
 }
 
+bool RigidBodyDevice::joint_friction_coefficients(Vec6* b, Vec6* f_c) const {
+  for (int i = 0; i < 6; ++i) {
+    const bool lin = i < 3;
+    (*b)(i) = lin ? p_.damping_lin : p_.damping_ang;
+    (*f_c)(i) = lin ? p_.coulomb_lin : p_.coulomb_ang;
+  }
+  return true;
+}
+
 VecX RigidBodyDevice::friction_torque(const VecX& /*q*/, const VecX& qd) const {
   VecX f(6);
   for (int i = 0; i < 6; ++i) {

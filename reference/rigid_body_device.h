@@ -39,6 +39,8 @@ class RigidBodyDevice : public SixDofDeviceModel {
   MatX coriolis_matrix(const VecX& q, const VecX& qd) const override;
   VecX gravity(const VecX& q) const override;
   VecX friction_torque(const VecX& q, const VecX& qd) const override;
+  // damping_lin/ang and coulomb_lin/ang per joint (x joints, then theta joints); always true.
+  bool joint_friction_coefficients(Vec6* b, Vec6* f_c) const override;
   Pose forward_kinematics(const VecX& q) const override;
   Mat6 twist_to_joint(const VecX& q) const override;
 

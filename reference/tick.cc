@@ -112,6 +112,22 @@ PipelineModel make_pipeline_model(const SixDofDeviceModel& device, const Pipelin
     m.encoder_kalman = true;
     if (config.encoder_quantum.size() == n) m.encoder_quantum = config.encoder_quantum;
     m.encoder_kalman_params = ek;
+    if (ek.model_friction && ek.stick_slip) {
+      Vec6 b = Vec6::Zero(), f_c = Vec6::Zero();
+      if (!device.joint_friction_coefficients(&b, &f_c)) {
+        throw std::invalid_argument(
+            "encoder Kalman filter: the stick-slip friction model needs the device model's "
+            "viscous and Coulomb coefficients, and this device model does not give them");
+      }
+      if (!b.allFinite() || !f_c.allFinite() || (b.array() < 0.0).any() ||
+          (f_c.array() < 0.0).any()) {
+        throw std::invalid_argument(
+            "encoder Kalman filter: the device model's friction coefficients must be finite and "
+            ">= 0 for the stick-slip friction model");
+      }
+      m.encoder_friction_b = b;
+      m.encoder_friction_fc = f_c;
+    }
     // The filter's velocity carries no driver low-pass and is no backward difference: the
     // observer takes the torque as it was applied (reference/observer.h, unmatched input).
     m.observer_input = ObserverInput{};
@@ -159,14 +175,20 @@ Mat6 model_joint_inertia(const PipelineModel& m, const PipelineData& d, const De
 // neglected at haptic speeds); without the model's friction tau_f unless `with_friction`. Zero if
 // M is not SPD or a is not finite. Used by the encoder Kalman filter's prediction and the
 // loop-lag compensation.
-Vec6 model_joint_acceleration(const PipelineModel& m, const PipelineData& d, const DeviceTerms& t,
-                              const Mat6& M, bool with_friction) {
+// The joint torque the device model knows apart from friction: tau_prev + f_hat - g (the torque
+// applied over the tick that ended, the observer's estimate under the hypothesis in force).
+Vec6 model_joint_torque(const PipelineModel& m, const PipelineData& d, const DeviceTerms& t) {
   const bool gripped = m.grasp && d.grip.gripped;
   Vec6 f_hat = Vec6::Zero();
   if (m.observe) f_hat = gripped ? d.obs1.f_hat : d.obs0.f_hat;
+  return d.tau_prev + f_hat - t.g;
+}
+
+Vec6 model_joint_acceleration(const PipelineModel& m, const PipelineData& d, const DeviceTerms& t,
+                              const Mat6& M, bool with_friction) {
   const Eigen::LLT<Mat6> llt(M);
   Vec6 accel = Vec6::Zero();
-  Vec6 b = d.tau_prev + f_hat - t.g;
+  Vec6 b = model_joint_torque(m, d, t);
   if (with_friction) b -= t.tau_f;
   if (llt.info() == Eigen::Success) accel = llt.solve(b);
   if (!accel.allFinite()) accel.setZero();
@@ -195,7 +217,16 @@ void encoder_kalman_step(const PipelineModel& m, PipelineData& d) {
     // haptic standstill's Coulomb friction is set-valued; the model's smooth f_c tanh(qd / v_s)
     // at the filter's own velocity closes a velocity loop inside the filter that M^-1 carries
     // from the arm into the gimbal: docs/derivations/quiet_stiffness.md 8.6).
-    const Vec6 accel = model_joint_acceleration(m, d, t, M, p.model_friction);
+    Vec6 accel = Vec6::Zero();
+    Vec6 v_plus = Vec6::Zero();
+    if (p.model_friction && p.stick_slip &&
+        encoder_stick_slip_velocity(M, m.encoder_friction_b, m.encoder_friction_fc, d.enc.qd,
+                                    model_joint_torque(m, d, t), T, &v_plus)) {
+      // Set-valued friction (8.7): the joints that stick predict no motion at all.
+      accel = (v_plus - d.enc.qd) / T;
+    } else {
+      accel = model_joint_acceleration(m, d, t, M, p.model_friction);
+    }
     encoder_kalman_update(d.q, d.qd, m.encoder_quantum, accel, sigma_a, T, d.enc);
   }
   d.q = d.enc.q;

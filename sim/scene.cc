@@ -344,11 +344,11 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
 
   // Method and gains.
   const auto& m = rd.object(doc, "", "method");
-  rd.only_keys(
-      m, "method",
-      {"name", "k_vc_n_per_m", "b_vc_n_s_per_m", "k_vc_ang_n_m_per_rad", "b_vc_ang_n_m_s_per_rad",
-       "observer_gain_per_s", "friction_mu", "grasp_mass_scale", "grip_detector",
-       "encoder_kalman", "encoder_kalman_friction", "lag_compensation", "saturation_passive"});
+  rd.only_keys(m, "method",
+               {"name", "k_vc_n_per_m", "b_vc_n_s_per_m", "k_vc_ang_n_m_per_rad",
+                "b_vc_ang_n_m_s_per_rad", "observer_gain_per_s", "friction_mu", "grasp_mass_scale",
+                "grip_detector", "encoder_kalman", "encoder_kalman_friction",
+                "encoder_kalman_friction_model", "lag_compensation", "saturation_passive"});
   const std::string mname = rd.string(m, "method", "name");
   try {
     s.method.method = parse_method(mname);
@@ -382,6 +382,21 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   }
   s.method.encoder_kalman = rd.boolean(m, "method", "encoder_kalman", false);
   s.method.encoder_kalman_friction = rd.boolean(m, "method", "encoder_kalman_friction", true);
+  if (m.contains("encoder_kalman_friction_model")) {
+    const std::string fm = rd.string(m, "method", "encoder_kalman_friction_model");
+    if (fm != "smooth" && fm != "none" && fm != "stick_slip") {
+      rd.fail("method.encoder_kalman_friction_model",
+              "'" + fm + "' is not one of \"smooth\", \"none\", \"stick_slip\"");
+    }
+    if (m.contains("encoder_kalman_friction") &&
+        s.method.encoder_kalman_friction != (fm != "none")) {
+      rd.fail("method.encoder_kalman_friction_model",
+              "\"" + fm + "\" contradicts method.encoder_kalman_friction = " +
+                  (s.method.encoder_kalman_friction ? "true" : "false"));
+    }
+    s.method.encoder_kalman_friction = fm != "none";
+    s.method.encoder_kalman_stick_slip = fm == "stick_slip";
+  }
   s.method.lag_compensation = rd.boolean(m, "method", "lag_compensation", false);
   s.method.saturation_passive = rd.boolean(m, "method", "saturation_passive", true);
   s.method.friction.mu = rd.number(m, "method", "friction_mu", 0.0);

@@ -72,6 +72,11 @@ struct SceneMethod {
   // With encoder_kalman: whether its prediction includes the device model's joint friction
   // (reference/encoder_kalman.h; false leaves it to the process noise: quiet_stiffness.md 8.6).
   bool encoder_kalman_friction = true;
+  // With encoder_kalman and encoder_kalman_friction: the friction set-valued (stick-slip) across
+  // the coupled joints instead of the smooth tau_f (EncoderKalmanParams::stick_slip;
+  // quiet_stiffness.md 8.7). Scene key method.encoder_kalman_friction_model: "smooth" (default),
+  // "none" (= encoder_kalman_friction false) or "stick_slip".
+  bool encoder_kalman_stick_slip = false;
   // Remedy of issue #29 for the stiff contact mode: the coupling and D_d see the device velocity
   // advanced over the loop's known lags with the device model (reference/lag_compensation.h).
   bool lag_compensation = false;

@@ -259,6 +259,7 @@ void make_scene_pipeline(const Scene& scene, const SceneRigOptions& options,
   if (detect) pc.grasp_model = g.grasp.get();
   pc.encoder_kalman = scene.method.encoder_kalman;
   pc.encoder_kalman_params.model_friction = scene.method.encoder_kalman_friction;
+  pc.encoder_kalman_params.stick_slip = scene.method.encoder_kalman_stick_slip;
   pc.encoder_quantum = g.device->capabilities().encoder_quantum;
   pc.lag_compensation = scene.method.lag_compensation;
   pc.saturation_passive = scene.method.saturation_passive;

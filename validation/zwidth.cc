@@ -352,6 +352,8 @@ std::unique_ptr<Pipeline> zwidth_pipeline(Method method, const ZwidthGains& gain
   }
   // As sim/simulator.cc sets them from a scene's method block.
   pc.encoder_kalman = sc.encoder_kalman;
+  pc.encoder_kalman_params.model_friction = sc.encoder_kalman_friction;
+  pc.encoder_kalman_params.stick_slip = sc.encoder_kalman_stick_slip;
   pc.encoder_quantum = dev.capabilities().encoder_quantum;
   pc.lag_compensation = sc.lag_compensation;
   pc.velocity_estimate = matched_observer_input(dev.capabilities());

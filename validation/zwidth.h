@@ -134,6 +134,10 @@ struct ZwidthScenario {
   // encoder_kalman.h, with the device's encoder quanta) and the loop-lag compensation (reference/
   // lag_compensation.h, with the driver's velocity estimate). Off, as in a scene.
   bool encoder_kalman = false;
+  // With encoder_kalman: its prediction's friction (EncoderKalmanParams model_friction and
+  // stick_slip; method.encoder_kalman_friction_model "smooth", "none" or "stick_slip").
+  bool encoder_kalman_friction = true;
+  bool encoder_kalman_stick_slip = false;
   bool lag_compensation = false;
   // true: the pipeline scales tau uniformly into the torque limits (direction kept, reference/
   // tick.h); false: the device clips each joint (the command chain, as OpenHaptics does).

@@ -545,6 +545,9 @@ nlohmann::json zwidth_experiment_json(const ZwidthExperimentResult& r) {
   out["grasp_mass_scale"] = sc.grasp_mass_scale;
   out["grip_detector"] = sc.grip_detector;
   out["encoder_kalman"] = sc.encoder_kalman;
+  out["encoder_kalman_friction_model"] = !sc.encoder_kalman_friction    ? "none"
+                                         : sc.encoder_kalman_stick_slip ? "stick_slip"
+                                                                        : "smooth";
   out["lag_compensation"] = sc.lag_compensation;
   out["proxy_damping_rule"] = sc.proxy_damping_rule;
   out["proxy_damping_n_s_per_m"] = sc.proxy.damping_lin;

@@ -336,6 +336,13 @@ VecX PhantomDynamics<T>::gravity(const VecX& q) const {
 }
 
 template <typename T>
+bool PhantomDynamics<T>::joint_friction_coefficients(Vec6* b, Vec6* f_c) const {
+  *b = params_.damping_n_m_s_per_rad;
+  *f_c = params_.coulomb_n_m;
+  return true;
+}
+
+template <typename T>
 VecX PhantomDynamics<T>::friction_torque(const VecX& q, const VecX& qd) const {
   return terms_at(q, phantom_vec6(qd, "qd")).tau_f;
 }

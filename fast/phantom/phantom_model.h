@@ -91,6 +91,8 @@ class PhantomDynamics : public SixDofDeviceModel {
   VecX friction_torque(const VecX& q, const VecX& qd) const override;
   Pose forward_kinematics(const VecX& q) const override;
   Mat6 twist_to_joint(const VecX& q) const override;  // J1 = J_t^-1 (2.2)
+  // The params' damping and Coulomb coefficients, as the reference model's; always true.
+  bool joint_friction_coefficients(Vec6* b, Vec6* f_c) const override;
 
  private:
   DeviceTerms terms_at(const VecX& q, const Vec6& qd) const;  // q size-checked, no dJ_t/dt

@@ -58,6 +58,12 @@ class SixDofDeviceModel : public DeviceModel {
   // does not allocate (PhantomModel). Never throws for finite input of the right size.
   virtual void terms(const Vec6& q, const Vec6& qd, bool with_jacobian_rate,
                      DeviceTerms& out) const;
+
+  // The joint friction's coefficients when tau_f is b qd + f_c s(qd) per joint with s a sign
+  // (smoothed or not): viscous b [N m s/rad or N s/m] and Coulomb f_c [N m or N], true. false
+  // (the default) when the model's friction is not of that form. The encoder Kalman filter's
+  // stick-slip prediction reads them (reference/encoder_kalman.h).
+  virtual bool joint_friction_coefficients(Vec6* /*b*/, Vec6* /*f_c*/) const { return false; }
 };
 
 }  // namespace dentsim

@@ -100,6 +100,13 @@ struct EncoderKalmanParams {
   // or leaves it to the process noise (false; scene key method.encoder_kalman_friction):
   // docs/derivations/quiet_stiffness.md 8.6.
   bool model_friction = true;
+  // With model_friction: the friction is set-valued (stick-slip) instead of the model's smooth
+  // tau_f at the filter's velocity: Coulomb impulses in [-f_c T, f_c T] solved across the coupled
+  // joints with the viscous part implicit (encoder_stick_slip_velocity in
+  // reference/encoder_kalman.h; scene key method.encoder_kalman_friction_model "stick_slip";
+  // docs/derivations/quiet_stiffness.md 8.7). Needs the device model's coefficients
+  // (SixDofDeviceModel::joint_friction_coefficients).
+  bool stick_slip = false;
 };
 
 // The sensorless grip detector's band, power filter and CUSUM thresholds

@@ -116,6 +116,10 @@ struct PipelineModel {
   bool encoder_kalman = false;
   Vec6 encoder_quantum = Vec6::Zero();  // per joint [rad]; 0 = that joint is not quantised
   EncoderKalmanParams encoder_kalman_params;
+  // With encoder_kalman_params.stick_slip: the device model's joint friction coefficients
+  // (SixDofDeviceModel::joint_friction_coefficients), viscous b and Coulomb f_c per joint.
+  Vec6 encoder_friction_b = Vec6::Zero();
+  Vec6 encoder_friction_fc = Vec6::Zero();
   // Loop-lag compensation (reference/lag_compensation.h; issue #29): device_terms sets V1 =
   // J_t (qd + lag a) with the lag of `velocity_estimate` (none with the encoder Kalman filter)
   // plus the zero-order hold's half tick, a the device model's acceleration.

@@ -56,6 +56,12 @@ MatX PhantomModel::coriolis_matrix(const VecX& q, const VecX& qd) const {
 
 VecX PhantomModel::gravity(const VecX& q) const { return model_.g(phantom_vec6(q, "q")); }
 
+bool PhantomModel::joint_friction_coefficients(Vec6* b, Vec6* f_c) const {
+  *b = model_.tree().damping;
+  *f_c = model_.tree().coulomb;
+  return true;
+}
+
 VecX PhantomModel::friction_torque(const VecX& /*q*/, const VecX& qd) const {
   return model_.friction(phantom_vec6(qd, "qd"));
 }

@@ -462,6 +462,8 @@ class PhantomModel : public SixDofDeviceModel {
   // no allocation. M, C and g equal mass_matrix, coriolis_matrix and gravity bitwise.
   void terms(const Vec6& q, const Vec6& qd, bool with_jacobian_rate,
              DeviceTerms& out) const override;
+  // The tree's damping and coulomb (phantom_joint_friction's b and f_c); always true.
+  bool joint_friction_coefficients(Vec6* b, Vec6* f_c) const override;
 
  private:
   PhantomParams params_;

@@ -27,19 +27,20 @@ struct Variant {
   // tooth.contact_model; "field" drills by editing the tooth's field from its spare bricks (issue
   // #30; fast/ runs its twin, fast/tooth/field.h, with its own spare bricks).
   const char* contact_model = "sdf";
+  bool stick_slip = false;  // method.encoder_kalman_friction_model "stick_slip"
 };
 
 TEST(TickAllocation, DrillSceneTicksAllocateNothingForEveryImplementationAndMethod) {
-  const Variant variants[] = {{"explicit", Method::kExplicitVc, false},
-                              {"pmi", Method::kPmiVc, false},
-                              {"pmi-pd", Method::kPmiPd, false},
-                              {"pmi-pd + grip detector", Method::kPmiPd, true},
-                              {"pmi-pd + grip detector + encoder kalman", Method::kPmiPd, true,
-                               true},
-                              {"pmi-pd + grip detector + lag compensation", Method::kPmiPd, true,
-                               false, true},
-                              {"pmi-pd, field model", Method::kPmiPd, false, false, false,
-                               "field"}};
+  const Variant variants[] = {
+      {"explicit", Method::kExplicitVc, false},
+      {"pmi", Method::kPmiVc, false},
+      {"pmi-pd", Method::kPmiPd, false},
+      {"pmi-pd + grip detector", Method::kPmiPd, true},
+      {"pmi-pd + grip detector + encoder kalman", Method::kPmiPd, true, true},
+      {"pmi-pd + grip detector + lag compensation", Method::kPmiPd, true, false, true},
+      {"pmi-pd, field model", Method::kPmiPd, false, false, false, "field"},
+      {"pmi-pd + grip detector + encoder kalman, stick-slip friction", Method::kPmiPd, true, true,
+       false, "sdf", true}};
   constexpr long kTicks = 10000;
   for (const StageTable* table : stage_tables()) {
     for (const Variant& v : variants) {
@@ -52,6 +53,7 @@ TEST(TickAllocation, DrillSceneTicksAllocateNothingForEveryImplementationAndMeth
       }
       scene.method.encoder_kalman = v.encoder_kalman;
       scene.method.lag_compensation = v.lag_compensation;
+      scene.method.encoder_kalman_stick_slip = v.stick_slip;
       scene.tooth.contact_model = v.contact_model;
       SceneRigOptions options;
       options.pipeline = table->implementation;
