@@ -100,6 +100,7 @@ TickStatus command(const PipelineModel& m, PipelineData& d) { return reference::
 TickStatus drill(const PipelineModel& m, PipelineData& d) {
   if (m.skip_unneeded) return reference::drill(m, d);
   d.r.removed_voxels = d.env->drill(d.r.contacts, d.T);
+  if (d.env->drill_store_full()) return TickStatus::kDrillWorkTableFull;
   return TickStatus::kOk;
 }
 

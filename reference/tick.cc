@@ -488,6 +488,7 @@ TickStatus drill(const PipelineModel&, PipelineData& d) {
   TickResult& r = d.r;
   r.removed_voxels = 0;
   if (d.env->drills() && !r.contacts.empty()) r.removed_voxels = d.env->drill(r.contacts, d.T);
+  if (d.env->drill_store_full()) return TickStatus::kDrillWorkTableFull;
   return TickStatus::kOk;
 }
 

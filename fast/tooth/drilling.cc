@@ -10,7 +10,7 @@ int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> c
                DrillState* state, std::vector<std::size_t>* removed) {
   if (contacts.size() != contact_voxels.size() || !(T > 0.0) || !std::isfinite(T) ||
       !(params.bur_speed_rad_s >= 0.0) || !(params.cutting_coefficient >= 0.0) ||
-      state->work_j.size() != tooth->grid().voxels.size()) {
+      state->grid_voxels != tooth->grid().voxels.size()) {
     return 0;
   }
   if (!accumulate_drill_work(contacts, contact_voxels, tip, params, T, state)) return 0;
@@ -25,13 +25,15 @@ int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> c
   for (const std::size_t v : contact_voxels) {
     const std::uint8_t material = tooth->grid().voxels[v];
     if (material == kEmpty) continue;  // already removed this tick (several faces of one voxel)
-    if (state->work_j[v] < threshold[material]) continue;
+    const double work = state->work_j.get(v);
+    if (work < threshold[material]) continue;
     const int i = static_cast<int>(v % n);
     const int j = static_cast<int>((v / n) % n);
     const int k = static_cast<int>(v / (static_cast<std::size_t>(n) * n));
     if (!state->pulp_exposed) state->pulp_exposed = removal_opens_pulp(tooth->grid(), i, j, k);
     tooth->remove_voxel(i, j, k);
-    state->work_j[v] = 0.0;
+    state->work_j.erase(v);
+    state->surplus_j += work - threshold[material];  // the reference's energy bookkeeping
     ++state->removed_voxels[material];
     if (removed != nullptr) removed->push_back(v);
     ++count;

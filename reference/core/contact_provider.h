@@ -37,6 +37,9 @@ class ContactProvider {
     (void)T;
     return 0;
   }
+  // Whether the cut's per-voxel work store ran out of room (sticky): the tick then reports
+  // kDrillWorkTableFull and the loop owner stops the device (reference/tooth/voxel_work.h).
+  virtual bool drill_store_full() const { return false; }
 };
 
 // A provider with no contacts (free space).

@@ -24,6 +24,8 @@ const char* tick_status_name(TickStatus s) {
       return "tick_solver_failure";
     case TickStatus::kNonFiniteOutput:
       return "tick_non_finite_output";
+    case TickStatus::kDrillWorkTableFull:
+      return "tick_drill_work_table_full";
   }
   return "tick_unknown_status";
 }

@@ -54,9 +54,11 @@ enum class TickStatus : std::uint8_t {
   kBadContact,          // a contact from the environment is malformed (contact.h's rules)
   kSolverFailure,       // the PMI / friction system is singular or not finite
   kNonFiniteOutput,     // the torque or the proxy state is not finite
+  kDrillWorkTableFull,  // the drill's per-voxel work table is full (ContactProvider::drill_store_full)
 };
 // The fault name: "ok", "tick_bad_length", "tick_bad_sample", "tick_device_model_failure",
-// "tick_contact_buffer_full", "tick_bad_contact", "tick_solver_failure", "tick_non_finite_output".
+// "tick_contact_buffer_full", "tick_bad_contact", "tick_solver_failure", "tick_non_finite_output",
+// "tick_drill_work_table_full".
 const char* tick_status_name(TickStatus s);
 
 // ---- stages --------------------------------------------------------------------------------

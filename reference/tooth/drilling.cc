@@ -4,14 +4,39 @@
 #include <cmath>
 #include <string>
 
+#include "reference/core/contact_provider.h"
 #include "reference/core/io.h"
 
 namespace dentsim {
 
-DrillState make_drill_state(const VoxelGrid& grid) {
+std::size_t count_surface_voxels(const VoxelGrid& grid) {
+  std::size_t count = 0;
+  for (int k = 0; k < grid.n; ++k) {
+    for (int j = 0; j < grid.n; ++j) {
+      for (int i = 0; i < grid.n; ++i) {
+        if (grid.at(i, j, k) == kEmpty) continue;
+        bool exposed = false;
+        for (int f = 0; f < 6 && !exposed; ++f) {
+          int nb[3] = {i, j, k};
+          nb[face_axis(f)] += face_sign(f);
+          exposed = grid.at(nb[0], nb[1], nb[2]) == kEmpty;  // outside the grid reads empty
+        }
+        if (exposed) ++count;
+      }
+    }
+  }
+  return count;
+}
+
+std::size_t drill_work_capacity(std::size_t surface_voxels) {
+  return 2 * surface_voxels + kContactCapacity;
+}
+
+DrillState make_drill_state(const VoxelGrid& grid, std::size_t capacity) {
   DrillState state;
-  state.work_j.assign(grid.voxels.size(), 0.0);
+  state.work_j.reserve(capacity > 0 ? capacity : drill_work_capacity(count_surface_voxels(grid)));
   state.voxel_volume_m3 = grid.voxel_volume();
+  state.grid_voxels = grid.voxels.size();
   return state;
 }
 
@@ -21,13 +46,23 @@ bool accumulate_drill_work(std::span<const Contact> contacts,
   double total_weight = 0.0;
   for (const Contact& ct : contacts) total_weight += ct.weight;
   if (!(total_weight > 0.0)) return false;
+  if (!state->work_j.has_room(contacts.size())) {  // every voxel of the set might be new
+    state->work_table_full = true;
+    return false;
+  }
   // W_i = mu_c f_i omega rho T_k with f_i the contact's share of the blended normal force.
   const double speed = params.bur_speed_rad_s * tip.radius;  // u = omega rho [m/s]
+  // The surplus of the last removals is shared as the force is (weight / total weight).
+  const double surplus = state->surplus_j;
   for (std::size_t i = 0; i < contacts.size(); ++i) {
     const Contact& ct = contacts[i];
     const double f_i = ct.weight / total_weight * ct.stiffness * std::max(0.0, ct.depth);
-    state->work_j[contact_voxels[i]] += params.cutting_coefficient * f_i * speed * T;
+    double w = params.cutting_coefficient * f_i * speed * T;
+    state->delivered_j += w;
+    if (surplus > 0.0) w += surplus * (ct.weight / total_weight);
+    state->work_j.add(contact_voxels[i], w);
   }
+  state->surplus_j = 0.0;
   return true;
 }
 
@@ -72,7 +107,7 @@ int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> c
   if (!(params.bur_speed_rad_s >= 0.0) || !(params.cutting_coefficient >= 0.0)) {
     throw InputError("drill params: bur_speed_rad_s and cutting_coefficient must be >= 0");
   }
-  if (state->work_j.size() != tooth->grid().voxels.size()) {
+  if (state->grid_voxels != tooth->grid().voxels.size()) {
     throw InputError("drill_tick: drill state sized for another tooth");
   }
   if (!accumulate_drill_work(contacts, contact_voxels, tip, params, T, state)) return 0;
@@ -84,14 +119,17 @@ int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> c
   for (const std::size_t v : contact_voxels) {
     const std::uint8_t material = grid.voxels[v];
     if (material == kEmpty) continue;  // already removed this tick (several faces of one voxel)
-    if (state->work_j[v] < removal_threshold_j(material, h)) continue;
+    const double work = state->work_j.get(v);
+    const double threshold = removal_threshold_j(material, h);
+    if (work < threshold) continue;
     const int i = static_cast<int>(v % n);
     const int j = static_cast<int>((v / n) % n);
     const int k = static_cast<int>(v / (static_cast<std::size_t>(n) * n));
     if (!state->pulp_exposed) state->pulp_exposed = removal_opens_pulp(grid, i, j, k);
     tooth->octree.remove_voxel(i, j, k);
     reencode_local(tooth->octree.grid(), i, j, k, &tooth->codes);
-    state->work_j[v] = 0.0;
+    state->work_j.erase(v);
+    state->surplus_j += work - threshold;  // W - E_m >= 0 goes on to the next tick's set
     ++state->removed_voxels[material];
     if (removed != nullptr) removed->push_back(v);
     ++count;

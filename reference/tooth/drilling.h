@@ -14,7 +14,9 @@
 //                                                           dentin 0.6 J/mm^3, pulp 0.01 J/mm^3)
 // it is removed: FullOctree::remove_voxel updates the occupancy up to the root and reencode_local
 // re-encodes it and its six neighbours. Removed voxels never come back. The removed volume is
-// counted per material.
+// counted per material. A voxel removed with W > E_m hands the surplus W - E_m to the next tick's
+// set (DrillState::surplus_j), so the delivered work is conserved: delivered = sum_m e_m V_m +
+// stored work + surplus, and the removed volume converges as h -> 0 (docs/derivations/drilling.md).
 #pragma once
 
 #include <array>
@@ -26,6 +28,7 @@
 #include "reference/core/params.h"
 #include "reference/tooth/collision.h"
 #include "reference/tooth/materials.h"
+#include "reference/tooth/voxel_work.h"
 
 namespace dentsim {
 
@@ -38,13 +41,26 @@ struct DrillParams {
 };
 
 struct DrillState {
-  std::vector<double> work_j;                                 // accumulated work per voxel [J]
+  // Accumulated work per voxel [J], stored only where non-zero (sized at setup, never grown).
+  VoxelWorkTable work_j;
   std::array<std::int64_t, kMaterialCount> removed_voxels{};  // count per material id
   double voxel_volume_m3 = 0.0;                               // h^3
   // Set by the first removal that opens the pulp: a pulp voxel removed, or a removed voxel
   // face-adjacent to a pulp voxel (the chamber is then open to the cavity). The loop owner
   // stamps the time (report.json pulp_exposed_at_s).
   bool pulp_exposed = false;
+  // Set (and kept) when a tick's contact voxels did not fit the work table: that tick added no
+  // work and removed nothing; the loop owner ends the run in the named fault
+  // tick_drill_work_table_full (TickStatus::kDrillWorkTableFull).
+  bool work_table_full = false;
+  // The grid the state was made for (flat voxel count), checked by drill_tick.
+  std::size_t grid_voxels = 0;
+  // Energy bookkeeping of the removal law (docs/derivations/drilling.md): the work the bur has
+  // delivered to the tooth so far [J], and the surplus of the last removals [J]: a voxel removed
+  // with W > E_m gives W - E_m back, and the next tick's set shares it with its own work, so no
+  // delivered joule is lost to the voxel quantum (delivered = sum_m e_m V_m + stored work + surplus).
+  double delivered_j = 0.0;
+  double surplus_j = 0.0;
 
   // Removed volume of material m [m^3].
   double removed_volume_m3(int m) const { return voxel_volume_m3 * removed_voxels[m]; }
@@ -53,13 +69,22 @@ struct DrillState {
 // Throws InputError unless bur speed and cutting coefficient are finite and >= 0.
 void validate_drill_params(const DrillParams& params);
 
-// A zero-work state sized for the tooth / its grid (allocates once).
-DrillState make_drill_state(const VoxelGrid& grid);
+// Solid voxels of `grid` with an empty (or outside) face neighbour: the tooth's surface.
+std::size_t count_surface_voxels(const VoxelGrid& grid);
+
+// Entries of the work table of a drill state for a tooth whose surface holds `surface_voxels`:
+// twice the surface plus one full contact set (docs/derivations/drilling.md "Storage").
+std::size_t drill_work_capacity(std::size_t surface_voxels);
+
+// A zero-work state sized for the tooth / its grid (allocates once): a work table of
+// drill_work_capacity(count_surface_voxels(grid)) entries, or of `capacity` if given (> 0).
+DrillState make_drill_state(const VoxelGrid& grid, std::size_t capacity = 0);
 inline DrillState make_drill_state(const VoxelTooth& tooth) { return make_drill_state(tooth.grid()); }
 
 // The work step of drill_tick, shared with fast/tooth/drilling.h: adds each contact's work W_i to
 // its voxel (contact_voxels[i]) in contact order. Returns false (adding nothing) when the set's
-// total weight is not > 0. Never throws or allocates; the caller validates the arguments.
+// total weight is not > 0, or when the work table might not hold the set's voxels (then it also
+// sets state->work_table_full). Never throws or allocates; the caller validates the arguments.
 bool accumulate_drill_work(std::span<const Contact> contacts,
                            std::span<const std::size_t> contact_voxels, const ToolTip& tip,
                            const DrillParams& params, double T, DrillState* state);

@@ -54,6 +54,7 @@ inline constexpr std::size_t kDrillLogCapacity = 120000;
 class ToothProviderBase : public ContactProvider {
  public:
   bool drills() const override { return drills_; }
+  bool drill_store_full() const override { return drill_state_.work_table_full; }
   // Flat voxel index of each contact of the last query (parallel to its contact set).
   const std::vector<std::size_t>& contact_voxels() const { return voxels_; }
   const ToolTip& tip() const { return tip_; }

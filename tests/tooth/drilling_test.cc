@@ -76,8 +76,7 @@ TEST(Drilling, WorkPerTickIsMuFOmegaRhoT) {
   collide(tooth, Vec3(1.63e-3, 1.57e-3, 1.6e-3 + kRho - delta), &contacts, &voxels);
   ASSERT_GT(contacts.size(), 4u);
   EXPECT_EQ(drill_tick(contacts, voxels, tip(), params, kT, &tooth, &state), 0);
-  double total = 0.0;
-  for (const double w : state.work_j) total += w;
+  const double total = state.work_j.total();
   const double expected =
       params.cutting_coefficient * kK * delta * params.bur_speed_rad_s * kRho * kT;
   std::printf("work per tick %.6g J (closed form %.6g J)\n", total, expected);
@@ -252,6 +251,88 @@ TEST(Drilling, RejectsBadInput) {
   DrillParams negative;
   negative.cutting_coefficient = -1.0;
   EXPECT_THROW(drill_tick(contacts, voxels, tip(), negative, kT, &tooth, &state), InputError);
+}
+
+}  // namespace
+}  // namespace dentsim
+
+namespace dentsim {
+namespace {
+
+// The removal law as an energy balance (docs/derivations/drilling.md): a bur of constant force F
+// shares its power mu_c F omega rho among the top solid voxel of every column under a disc of
+// radius 0.6 mm on an enamel slab. Every delivered joule ends in a removed voxel (e_m h^3 each), in
+// a voxel's stored work, or in the surplus handed to the next tick, exactly; and the removed
+// volume is E / e_m less at most one voxel per column (the partly cut top voxels): the bound
+// N_columns h^3 falls as h, so the volume converges. Two resolutions, the same disc and energy.
+struct PlungeResult {
+  double delivered_j, volume_m3, stored_j, surplus_j, bound_m3;
+};
+
+PlungeResult plunge(int n, double h, int ticks) {
+  VoxelTooth tooth = slab(n, h, n / 2, kEnamel);
+  DrillState state = make_drill_state(tooth);
+  const DrillParams params;
+  const double force = 1.0;  // [N]
+  const double radius = 0.6e-3;
+  const Vec3 axis = tooth.grid().center(n / 2, n / 2, 0);
+  std::vector<std::pair<int, int>> columns;
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const Vec3 p = tooth.grid().center(i, j, 0) - axis;
+      if (std::hypot(p.x() + 0.5 * h, p.y() + 0.5 * h) <= radius) columns.emplace_back(i, j);
+    }
+  }
+  std::vector<Contact> contacts;
+  std::vector<std::size_t> voxels;
+  for (int t = 0; t < ticks; ++t) {
+    contacts.clear();
+    voxels.clear();
+    for (const auto& [i, j] : columns) {
+      int k = n / 2 - 1;
+      while (k >= 0 && tooth.grid().at(i, j, k) == kEmpty) --k;
+      if (k < 0) continue;
+      Contact c;
+      c.stiffness = kK;
+      c.depth = force / kK;
+      c.weight = 1.0;
+      c.material = kEnamel;
+      contacts.push_back(c);
+      voxels.push_back(tooth.grid().index(i, j, k));
+    }
+    drill_tick(contacts, voxels, tip(), params, kT, &tooth, &state);
+  }
+  const double e = material_properties(kEnamel).removal_energy_j_per_mm3 * 1e9;  // [J/m^3]
+  return {state.delivered_j, state.removed_volume_m3(kEnamel), state.work_j.total(),
+          state.surplus_j, static_cast<double>(columns.size()) * h * h * h + state.surplus_j / e};
+}
+
+TEST(Drilling, RemovedVolumeIsDeliveredEnergyOverSpecificEnergyAtTwoResolutions) {
+  const DrillParams params;
+  const double e = material_properties(kEnamel).removal_energy_j_per_mm3 * 1e9;  // [J/m^3]
+  const int ticks = 400;
+  const double energy = params.cutting_coefficient * 1.0 * params.bur_speed_rad_s * kRho * kT * ticks;
+  double volumes[2], bounds[2];
+  for (int r = 0; r < 2; ++r) {
+    const int n = r == 0 ? 32 : 64;
+    const double h = r == 0 ? 0.1e-3 : 0.05e-3;
+    const PlungeResult p = plunge(n, h, ticks);
+    std::printf("h %.3f mm: delivered %.6f J (closed form %.6f), removed %.4f mm^3, E/e %.4f mm^3, "
+                "stored %.4f J, surplus %.2e J, bound %.4f mm^3\n",
+                h * 1e3, p.delivered_j, energy, p.volume_m3 * 1e9, energy / e * 1e9, p.stored_j,
+                p.surplus_j, p.bound_m3 * 1e9);
+    EXPECT_NEAR(p.delivered_j, energy, 1e-9 * energy);
+    // The balance: delivered = e V + stored + surplus, to rounding.
+    EXPECT_NEAR(p.delivered_j, e * p.volume_m3 + p.stored_j + p.surplus_j, 1e-9 * energy);
+    EXPECT_LE(p.volume_m3, energy / e);
+    EXPECT_GE(p.volume_m3, energy / e - p.bound_m3);
+    volumes[r] = p.volume_m3;
+    bounds[r] = p.bound_m3;
+  }
+  // Both lie in [E/e - bound, E/e]: they agree within the coarse grid's bound, which is about
+  // twice the fine one's (the bound is O(h)).
+  EXPECT_NEAR(volumes[0], volumes[1], bounds[0]);
+  EXPECT_LT(bounds[1], 0.6 * bounds[0]);
 }
 
 }  // namespace
