@@ -117,7 +117,7 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
           if (to_cube > std::abs(static_cast<double>(old)) + slack) continue;
           ++stats->samples_queried;
           const Vec3 p = field.sample_position(sx, sy, sz);
-          int idx[3];
+          int idx[3] = {0, 0, 0};
           const bool in_grid = sdf_detail::voxel_of(grid, p, idx);
           const bool inside =
               in_grid && grid.voxels[grid.index(idx[0], idx[1], idx[2])] != kEmpty;
