@@ -26,9 +26,8 @@ SurfaceMesher::SurfaceMesher(const VoxelGrid& grid, const SampledField* field, i
       throw std::invalid_argument("SurfaceMesher: the field is not the grid's");
     }
     iso_ = 0.0f;
-    // edit_field_for_removed_voxels' radius R = ceil(c_out / h + 1) samples, plus the dual
-    // cells' reach.
-    halo_ = static_cast<int>(std::ceil(field_->outside_clamp() / grid.voxel_size + 1.0)) + 2;
+    // edit_field_for_removed_voxels' radius R samples, plus the dual cells' reach.
+    halo_ = field_->edit_radius() + 2;
   }
   nb_ = (grid.n + block_size - 1) / block_size;
   blocks_.resize(static_cast<std::size_t>(nb_) * nb_ * nb_);

@@ -91,9 +91,6 @@ class SurfaceMesher {
   std::size_t triangle_count() const;
   // The blocks update() would re-mesh for a change of voxel (i, j, k), sorted.
   std::vector<int> blocks_touched_by(int i, int j, int k) const;
-  // Voxels around a change that the mesh depends on: kHalo on the voxels, the field's edit radius
-  // + 2 on a field.
-  int halo() const { return halo_; }
 
  private:
   void mesh_block(int block);
@@ -105,6 +102,8 @@ class SurfaceMesher {
   CutAway cut_;
   const SampledField* field_ = nullptr;
   float iso_ = 0.5f;
+  // Voxels around a change that the mesh depends on: kHalo on the voxels, the field's edit radius
+  // + 2 on a field.
   int halo_ = kHalo;
   std::vector<BlockMesh> blocks_;
   std::vector<float> s_;  // scratch: s over one block + 1 voxel halo

@@ -8,7 +8,7 @@
 
 #include "fast/tooth/sdf.h"
 #include "reference/core/io.h"
-#include "reference/tooth/collision.h"
+#include "reference/tooth/field_edit_core.h"
 #include "reference/tooth/surface_proxy_core.h"
 
 namespace dentsim::fast {
@@ -310,73 +310,46 @@ void VoxelDistanceCache::keep(const VoxelTooth& tooth, std::uint64_t key, const 
   e.found = sd.found;
 }
 
+namespace {
+
+// The fast reads and writes for the shared edit (reference/tooth/field_edit_core.h): samples from
+// the 9^3 bricks, voxel distances kept across edits (VoxelDistanceCache), raises on the reference
+// field then mirrored into the bricks, the Lipschitz update on the bricks.
+struct FastFieldAccess {
+  SampledField* field;
+  FieldBricks* bricks;
+  const VoxelTooth& tooth;
+  SignedDistanceFn sd;
+  VoxelDistanceCache* cache;
+  std::uint64_t m;
+  float at(int sx, int sy, int sz) const { return bricks->at(sx, sy, sz); }
+  double distance(int sx, int sy, int sz, const Vec3& p, double reach) const {
+    const std::uint64_t key =
+        static_cast<std::uint64_t>(sx) +
+        m * (static_cast<std::uint64_t>(sy) + m * static_cast<std::uint64_t>(sz));
+    double d = 0.0;
+    if (cache != nullptr && cache->lookup(tooth, key, &d)) return d;
+    const SignedDistance q = sd(tooth, p, reach);
+    if (cache != nullptr) cache->keep(tooth, key, p, q);
+    return q.phi;
+  }
+  bool raise(int sx, int sy, int sz, double value) {
+    if (!field->raise(sx, sy, sz, value)) return false;
+    bricks->mirror(sx, sy, sz);
+    return true;
+  }
+  void include_cells(const int lo[3], const int hi[3]) { bricks->include_cells(lo, hi); }
+};
+
+}  // namespace
+
 bool edit_field_for_removed_voxels(SampledField* field, FieldBricks* bricks,
                                    const VoxelTooth& tooth, std::span<const std::size_t> removed,
                                    SignedDistanceFn sd, FieldEditStats* stats,
                                    VoxelDistanceCache* cache) {
-  // dentsim::edit_field_for_removed_voxels, reading the samples from the bricks.
-  const VoxelGrid& grid = tooth.grid();
-  const std::size_t n = static_cast<std::size_t>(grid.n);
-  const double h = grid.voxel_size;
-  const double c_out = field->outside_clamp();
-  const float out_f = static_cast<float>(c_out);
-  const int m = field->samples_per_axis(), pad = field->padding();
-  const int reach = static_cast<int>(std::ceil(c_out / h + 1.0));
-  const double slack = 1e-6 * h;
-  bool complete = true;
-  int lo[3] = {INT_MAX, INT_MAX, INT_MAX}, hi[3] = {-1, -1, -1};
-  for (const std::size_t v : removed) {
-    const int s0[3] = {static_cast<int>(v % n) + pad, static_cast<int>((v / n) % n) + pad,
-                       static_cast<int>(v / (n * n)) + pad};
-    ++stats->voxels;
-    for (int dz = -reach; dz <= reach; ++dz) {
-      const int sz = s0[2] + dz;
-      if (sz < 0 || sz >= m) continue;
-      const double ez = std::max(std::abs(dz) - 1.0, 0.0);
-      for (int dy = -reach; dy <= reach; ++dy) {
-        const int sy = s0[1] + dy;
-        if (sy < 0 || sy >= m) continue;
-        const double ey = std::max(std::abs(dy) - 1.0, 0.0);
-        for (int dx = -reach; dx <= reach; ++dx) {
-          const int sx = s0[0] + dx;
-          if (sx < 0 || sx >= m) continue;
-          ++stats->samples_scanned;
-          const float old = bricks->at(sx, sy, sz);
-          if (old >= out_f) continue;
-          const double ex = std::max(std::abs(dx) - 1.0, 0.0);
-          const double to_cube = h * std::sqrt(ex * ex + ey * ey + ez * ez);
-          if (to_cube > std::abs(static_cast<double>(old)) + slack) continue;
-          ++stats->samples_queried;
-          const std::uint64_t key =
-              static_cast<std::uint64_t>(sx) +
-              static_cast<std::uint64_t>(m) *
-                  (static_cast<std::uint64_t>(sy) + static_cast<std::uint64_t>(m) * sz);
-          double d = 0.0;
-          if (cache == nullptr || !cache->lookup(tooth, key, &d)) {
-            const Vec3 p = field->sample_position(sx, sy, sz);
-            const SignedDistance q = sd(tooth, p, c_out);
-            d = q.phi;
-            if (cache != nullptr) cache->keep(tooth, key, p, q);
-          }
-          if (!(d > old)) continue;
-          if (!field->raise(sx, sy, sz, d)) {
-            ++stats->samples_lost;
-            complete = false;
-            continue;
-          }
-          bricks->mirror(sx, sy, sz);
-          ++stats->samples_raised;
-          const int s[3] = {sx, sy, sz};
-          for (int a = 0; a < 3; ++a) {
-            lo[a] = std::min(lo[a], s[a]);
-            hi[a] = std::max(hi[a], s[a]);
-          }
-        }
-      }
-    }
-  }
-  if (hi[0] >= 0) bricks->include_cells(lo, hi);
-  return complete;
+  FastFieldAccess access{field, bricks, tooth, sd, cache,
+                         static_cast<std::uint64_t>(field->samples_per_axis())};
+  return field_edit_detail::edit_field(*field, tooth, removed, access, stats);
 }
 
 FieldContactProvider::FieldContactProvider(VoxelTooth& tooth, const PipelineToothSetup& setup)
@@ -400,35 +373,12 @@ bool FieldContactProvider::edit_field(SampledField* field, std::span<const std::
                                              &fast::signed_distance, stats, &cache_);
 }
 
-namespace {
-
-class FieldPipelineTooth final : public PipelineTooth {
- public:
-  FieldPipelineTooth(VoxelTooth& tooth, const PipelineToothSetup& setup)
-      : tooth_(tooth), setup_(setup), provider_(tooth, setup) {}
-
-  ToothProviderBase& provider() override { return provider_; }
-  const VoxelGrid& grid() const override { return tooth_.grid(); }
-  void tip_contacts(const Pose& pose, std::vector<Contact>* out) override {
-    out->clear();
-    collide_tool_tip(tooth_, pose, setup_.tip, setup_.k_tooth, setup_.b_tooth, &scratch_, out);
-  }
-
- private:
-  VoxelTooth& tooth_;
-  PipelineToothSetup setup_;
-  FieldContactProvider provider_;
-  CollisionScratch scratch_;
-};
-
-}  // namespace
-
 std::unique_ptr<PipelineTooth> make_fast_field_tooth(VoxelTooth& tooth,
                                                      const PipelineToothSetup& setup) {
   if (setup.field == nullptr) {
     throw InputError("contact model \"field\": no field of the tooth given");
   }
-  return std::make_unique<FieldPipelineTooth>(tooth, setup);
+  return std::make_unique<ProviderTooth<FieldContactProvider>>(tooth, setup, tooth, setup);
 }
 
 }  // namespace dentsim::fast

@@ -46,16 +46,18 @@ class FieldSolid {
 // What edit_field_for_removed_voxels did (summed over calls).
 struct FieldEditStats {
   long voxels = 0;            // removed voxels subtracted
-  long samples_scanned = 0;   // samples read (the box of each removed voxel)
+  long samples_scanned = 0;   // samples read (the ball in the box of each removed voxel)
   long samples_queried = 0;   // exact voxel-distance queries (samples the removal may change)
+  long samples_bounded = 0;   // of those, answered "no raise" by a solid neighbour voxel instead
+                              // (reference/tooth/field_edit_core.h)
   long samples_raised = 0;    // samples whose value rose
   long samples_lost = 0;      // raises refused for want of a spare brick (field then conservative)
 };
 
 // Drilling edits the field (docs/derivations/field_contact.md §5): `removed` are the flat indices
 // of voxels of `tooth` that drilling just removed (drill_tick; the octree already without them).
-// For each, every sample s with |s - p_v|_inf <= R = ceil(c_out / h + 1) samples (p_v the
-// voxel's centre) whose value v(s) < c_out and whose distance to the voxel's cube grown by h / 2
+// For each, every sample s with |s - p_v|_inf <= R = SampledField::edit_radius() = ceil(c_out / h
+// + 1) samples (p_v the voxel's centre) whose value v(s) < c_out and whose distance to the voxel's cube grown by h / 2
 // is <= |v(s)| (the cube, or the source's sub-voxel sliver next to it, held s's nearest surface,
 // so the removal may change v(s)) is set to
 //     v(s) <- max(v(s), clamp(d_vox(s), -c_in, c_out)),
@@ -63,8 +65,10 @@ struct FieldEditStats {
 // fast twin, reach c_out). The field's Lipschitz constant is then raised to the cell bound of the
 // cells around the changed samples (once all of `removed` is done), so it bounds the edited
 // field (§2, §5). Values only rise, so
-// the proxy's admissible set only grows. Bounded: (2R + 1)^3 sample reads and at most as many
-// queries per removed voxel. Never allocates (new bricks come from the field's spare room,
+// the proxy's admissible set only grows. Bounded: at most (2R + 1)^3 sample reads (only those
+// within the clamps' reach of the cube: the ball) and at most as many queries per removed voxel.
+// The loop is written once for this and the fast twin (reference/tooth/field_edit_core.h, which
+// also says why its savings change no value). Never allocates (new bricks come from the field's spare room,
 // SampledField::reserve_spare_bricks) or throws; returns false if a raise found no spare brick
 // (that sample keeps its value: the field then lags the voxels there, on the safe side).
 bool edit_field_for_removed_voxels(SampledField* field, const VoxelTooth& tooth,

@@ -50,6 +50,7 @@
 // Real-time: value() and gradient() read 8 samples through the index; nothing allocates or throws.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -129,6 +130,10 @@ class SampledField {
   void include_cells(const int lo[3], const int hi[3]);
   // The cell bound L_cell of the cell with lower corner (x, y, z), each in [0, m - 2].
   double cell_lipschitz(int x, int y, int z) const;
+  // The drilling edit's radius in samples, R = ceil(c_out / h + 1): the samples a removed voxel
+  // may change lie within R of it (max norm; reference/tooth/field_contact.h). The one definition
+  // for the edit (both twins) and the view's re-mesh halo (view/surface_mesh.h).
+  int edit_radius() const { return static_cast<int>(std::ceil(c_out_ / h_ + 1.0)); }
 
  private:
   friend SampledField build_sampled_field(const VoxelGrid&, const TriangleMesh&, const FieldBand&);

@@ -226,36 +226,12 @@ void ToothProviderBase::record_drill(std::span<const Contact> contacts, std::uin
   drill_log_.push_back(rec);
 }
 
-namespace {
-
-class ReferenceTooth final : public PipelineTooth {
- public:
-  ReferenceTooth(VoxelTooth& tooth, const PipelineToothSetup& setup, SignedDistanceFn sd)
-      : tooth_(tooth),
-        setup_(setup),
-        provider_(tooth, setup.tip, setup.k_tooth, setup.b_tooth, setup.drilling,
-                  setup.contact_model, sd, setup.field) {}
-
-  ToothProviderBase& provider() override { return provider_; }
-  const VoxelGrid& grid() const override { return tooth_.grid(); }
-  void tip_contacts(const Pose& pose, std::vector<Contact>* out) override {
-    out->clear();
-    collide_tool_tip(tooth_, pose, setup_.tip, setup_.k_tooth, setup_.b_tooth, &scratch_, out);
-  }
-
- private:
-  VoxelTooth& tooth_;
-  PipelineToothSetup setup_;
-  ToothContactProvider provider_;
-  CollisionScratch scratch_;
-};
-
-}  // namespace
-
 std::unique_ptr<PipelineTooth> make_reference_tooth(VoxelTooth& tooth,
                                                     const PipelineToothSetup& setup,
                                                     SignedDistanceFn sd) {
-  return std::make_unique<ReferenceTooth>(tooth, setup, sd);
+  return std::make_unique<ProviderTooth<ToothContactProvider>>(
+      tooth, setup, tooth, setup.tip, setup.k_tooth, setup.b_tooth, setup.drilling,
+      setup.contact_model, sd, setup.field);
 }
 
 const AnchoredSpring* anchored_spring(const ContactProvider* env) {

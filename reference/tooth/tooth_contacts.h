@@ -17,6 +17,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "reference/contact.h"
@@ -201,6 +202,31 @@ struct PipelineToothSetup {
   // The tooth's sampled field (contact model "field"; must outlive the tooth; drilling edits it),
   // else null.
   SampledField* field = nullptr;
+};
+
+// A PipelineTooth around a contact provider of type Provider, built in place from
+// `provider_args` (the reference's ToothContactProvider, the fast pipeline's field provider):
+// the provider's grid is `tooth`'s, and tip_contacts runs the face model's collision on `tooth`
+// (which must outlive it) with `setup`'s tip, stiffness and damping.
+template <class Provider>
+class ProviderTooth final : public PipelineTooth {
+ public:
+  template <class... Args>
+  ProviderTooth(VoxelTooth& tooth, const PipelineToothSetup& setup, Args&&... provider_args)
+      : tooth_(tooth), setup_(setup), provider_(std::forward<Args>(provider_args)...) {}
+
+  ToothProviderBase& provider() override { return provider_; }
+  const VoxelGrid& grid() const override { return tooth_.grid(); }
+  void tip_contacts(const Pose& pose, std::vector<Contact>* out) override {
+    out->clear();
+    collide_tool_tip(tooth_, pose, setup_.tip, setup_.k_tooth, setup_.b_tooth, &scratch_, out);
+  }
+
+ private:
+  VoxelTooth& tooth_;
+  PipelineToothSetup setup_;
+  Provider provider_;
+  CollisionScratch scratch_;
 };
 
 // The reference's tooth: ToothContactProvider over `tooth` (which must outlive it) with the

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <span>
 #include <vector>
 
 #include "reference/tooth/collision.h"
@@ -230,6 +231,105 @@ TEST(FieldDrilling, AProbeInTheFreshHoleTouchesItsFloor) {
   EXPECT_GE(to_voxels, rho - probe.surface_proxy().skin() - 0.5 * h);
   // ... deep in the hole: the bur's first leg went 0.9 mm below the top.
   EXPECT_LT(g.z() - rho, kTop.z() - 0.5e-3);
+}
+
+// The edit's savings change no value (reference/tooth/field_edit_core.h: only the ball read,
+// inside samples asked with a shorter reach, outside samples with a solid neighbour within |v|
+// not asked): a provider whose edit also applies the rule exactly as field_contact.h states it
+// (every sample of the (2R + 1)^3 box read, every candidate asked with reach c_out) to a copy of
+// the field, call by call on the same tooth, ends with the copy equal to the edited field at
+// every sample, the same samples raised and the same Lipschitz constant.
+class RuleAsWritten final : public ToothContactProvider {
+ public:
+  RuleAsWritten(VoxelTooth& tooth, const DrillParams* drill, SampledField* field,
+                SampledField* plain)
+      : ToothContactProvider(tooth, ToolTip{kRho, Vec3::Zero()}, kK, 0.0, drill,
+                             ContactModel::kField, &signed_distance, field),
+        tooth_(tooth),
+        plain_(plain) {}
+  long plain_raised = 0, plain_queried = 0;
+
+ protected:
+  bool edit_field(SampledField* field, std::span<const std::size_t> removed,
+                  FieldEditStats* stats) override {
+    const VoxelGrid& grid = tooth_.grid();
+    const int n = grid.n, m = plain_->samples_per_axis(), pad = plain_->padding();
+    const double h = grid.voxel_size, c_out = plain_->outside_clamp();
+    const int r = static_cast<int>(std::ceil(c_out / h + 1.0));
+    int lo[3] = {m, m, m}, hi[3] = {-1, -1, -1};
+    for (const std::size_t v : removed) {
+      const int c[3] = {static_cast<int>(v % n) + pad, static_cast<int>((v / n) % n) + pad,
+                        static_cast<int>(v / (std::size_t(n) * n)) + pad};
+      for (int z = std::max(0, c[2] - r); z <= std::min(m - 1, c[2] + r); ++z) {
+        for (int y = std::max(0, c[1] - r); y <= std::min(m - 1, c[1] + r); ++y) {
+          for (int x = std::max(0, c[0] - r); x <= std::min(m - 1, c[0] + r); ++x) {
+            const float old = plain_->at(x, y, z);
+            if (old >= static_cast<float>(c_out)) continue;
+            const double e[3] = {std::max(std::abs(x - c[0]) - 1.0, 0.0),
+                                 std::max(std::abs(y - c[1]) - 1.0, 0.0),
+                                 std::max(std::abs(z - c[2]) - 1.0, 0.0)};
+            if (h * std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) >
+                std::abs(static_cast<double>(old)) + 1e-6 * h) {
+              continue;
+            }
+            ++plain_queried;
+            const double d = signed_distance(tooth_, plain_->sample_position(x, y, z), c_out).phi;
+            if (!(d > old) || !plain_->raise(x, y, z, d)) continue;
+            ++plain_raised;
+            const int s[3] = {x, y, z};
+            for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], s[a]), hi[a] = std::max(hi[a], s[a]);
+          }
+        }
+      }
+    }
+    if (hi[0] >= 0) plain_->include_cells(lo, hi);
+    return ToothContactProvider::edit_field(field, removed, stats);
+  }
+
+ private:
+  VoxelTooth& tooth_;
+  SampledField* plain_;
+};
+
+TEST(FieldDrilling, TheEditsSavingsChangeNoValue) {
+  VoxelTooth tooth(sphere_grid());
+  SampledField field = build_sampled_field(tooth.grid(), triangulate_implicit(tooth.grid(), in_sphere),
+                                           field_band_for_tip(kRho, tooth.grid().voxel_size));
+  SampledField plain = field;
+  plain.reserve_spare_bricks(std::max<std::size_t>(256, plain.brick_count() / 2));
+  const DrillParams drill;
+  RuleAsWritten provider(tooth, &drill, &field, &plain);
+  std::vector<Contact> contacts;
+  contacts.reserve(kContactCapacity);
+  Pose pose;
+  long removed = 0;
+  for (int tick = 0; tick < kDown + kSideways; ++tick) {
+    pose.x = path(tick);
+    provider.contacts(pose, contacts);
+    removed += provider.drill(contacts, kT);
+  }
+  pose.x = kTop + Vec3(0, 0, 3e-3);
+  while (provider.field_edits_pending() > 0) provider.contacts(pose, contacts);
+  const FieldEditStats& e = provider.field_edits();
+  std::printf("%ld voxels removed; per voxel: rule as written %.0f read, %.1f asked; shared edit "
+              "%.0f read, %.1f asked (%.1f of them answered by a solid neighbour), %.1f raised\n",
+              removed, std::pow(2.0 * plain.edit_radius() + 1.0, 3.0),
+              double(provider.plain_queried) / e.voxels, double(e.samples_scanned) / e.voxels,
+              double(e.samples_queried) / e.voxels, double(e.samples_bounded) / e.voxels,
+              double(e.samples_raised) / e.voxels);
+  EXPECT_GT(removed, 100);
+  EXPECT_EQ(e.samples_raised, provider.plain_raised);
+  EXPECT_EQ(e.samples_queried, provider.plain_queried);
+  EXPECT_GT(e.samples_bounded, 0);
+  EXPECT_EQ(field.lipschitz(), plain.lipschitz());
+  const int m = field.samples_per_axis();
+  long differ = 0;
+  for (int z = 0; z < m; ++z) {
+    for (int y = 0; y < m; ++y) {
+      for (int x = 0; x < m; ++x) differ += field.at(x, y, z) != plain.at(x, y, z);
+    }
+  }
+  EXPECT_EQ(differ, 0);
 }
 
 }  // namespace
