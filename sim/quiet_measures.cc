@@ -102,6 +102,7 @@ void QuietSeries::reserve(std::size_t n) {
   tip_y_m.reserve(n);
   tip_z_m.reserve(n);
   energy_j.reserve(n);
+  true_energy_j.reserve(n);
   observer_error_n.reserve(n);
 }
 
@@ -210,6 +211,7 @@ QuietReport quiet_report(const QuietSeries& s, const std::vector<QuietScriptKey>
     in_contact[k + 1] = in_contact[k] + (s.contacts[k] > 0);
   std::vector<double> moving_f, still_f, moving_obs, still_obs;
   const bool observer_measured = !s.t.empty() && s.observer_error_n.size() == s.t.size();
+  const bool true_energy_measured = !s.t.empty() && s.true_energy_j.size() == s.t.size();
   QuietFreeSpace& fs = rep.free_space;
   double still_since = -1.0;  // when the reference last stopped (-1: moving)
   std::size_t still_run_begin = 0;
@@ -217,6 +219,11 @@ QuietReport quiet_report(const QuietSeries& s, const std::vector<QuietScriptKey>
   auto close_still_run = [&](std::size_t end) {
     if (in_still_run && end > still_run_begin + 1) {
       fs.still_motor_energy_j += rise(slice(s.energy_j, still_run_begin, end));
+      if (true_energy_measured) {
+        fs.still_true_motor_energy_j =
+            fs.still_true_motor_energy_j.value_or(0.0) +
+            rise(slice(s.true_energy_j, still_run_begin, end));
+      }
     }
     in_still_run = false;
   };

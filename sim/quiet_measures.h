@@ -88,6 +88,9 @@ struct QuietSeries {
   std::vector<double> device_penetration_m;  // the device tip's own penetration
   std::vector<double> tip_x_m, tip_y_m, tip_z_m;  // device tip position (world)
   std::vector<double> energy_j;                   // E_v, the energy the motors put in so far
+  // The motors' true work so far: the torque applied over each tick times the device's true joint
+  // motion (E_v without the encoders' error). Empty without ground truth (a real device).
+  std::vector<double> true_energy_j;
   // |f_hat - f_hand|: the human-force observer's error against the hand's true force (issue #29's
   // observer target). Empty when the device has no ground truth (a real device): not measured.
   std::vector<double> observer_error_n;
@@ -128,6 +131,8 @@ struct QuietFreeSpace {
   long still_pulses = 0;            // still ticks with |force| > pulse_threshold_n
   double still_pulse_rate_per_s = 0.0;
   double still_motor_energy_j = 0.0;  // sum of the rises of E_v over still stretches
+  // The same for the motors' true work (QuietSeries::true_energy_j), when measured.
+  std::optional<double> still_true_motor_energy_j;
   double still_s = 0.0;               // still_ticks * tick
   // RMS of observer_error_n over the moving / still free-space ticks (when measured).
   std::optional<double> moving_observer_rms_error_n, still_observer_rms_error_n;

@@ -146,6 +146,7 @@ nlohmann::json quiet_report_json(const QuietReport& q) {
   if (f.still_s > 0.0) j["free_space"]["still_motor_power_w"] = f.still_motor_energy_j / f.still_s;
   put(j["free_space"], "moving_observer_rms_error_n", f.moving_observer_rms_error_n);
   put(j["free_space"], "still_observer_rms_error_n", f.still_observer_rms_error_n);
+  put(j["free_space"], "still_true_motor_energy_j", f.still_true_motor_energy_j);
   // No steady press or slide phase: no verdict (the key is left out).
   if (q.quiet) j["quiet"] = *q.quiet;
   return j;

@@ -534,6 +534,7 @@ struct RunMeasurements {
     qs.tip_y_m.push_back(rec.device.x.y());
     qs.tip_z_m.push_back(rec.device.x.z());
     qs.energy_j.push_back(rec.energy_virtual_j);
+    if (truth) qs.true_energy_j.push_back(motor_work);
     if (truth) qs.observer_error_n.push_back((rec.f_observer - f_hand).norm());
     sum_obs2 += (rec.f_observer - f_hand).squaredNorm();
     ++res.ticks;
@@ -628,6 +629,7 @@ struct RunMeasurements {
   std::vector<double> stage_us[kStageCount + 2];
   double sum_f2 = 0.0, sum_fd = 0.0, sum_dd = 0.0, sum_obs2 = 0.0;
   double hand_work = 0.0;
+  double motor_work = 0.0;  // the motors' true work so far (ground truth only)
   long next_progress = 0;
   std::unique_ptr<SessionWriter> recorder;
   DeviceSample rec_sample;
@@ -714,7 +716,11 @@ double run_direct(SceneRig& rig, RunMeasurements& m, const RunSpan& span, Realti
                                       std::chrono::steady_clock::now() - t0)
                                       .count();
     // Hand port: the hand's joint torques (averaged over the tick) times the true joint motion.
-    if (truth) m.hand_work += device.hand_joint_torque().dot(device.true_q() - q_true_prev);
+    // The motors' true work: the torque applied over the tick times the same true motion.
+    if (truth) {
+      m.hand_work += device.hand_joint_torque().dot(device.true_q() - q_true_prev);
+      m.motor_work += device.applied_torque().dot(device.true_q() - q_true_prev);
+    }
     // The servo tick is what a real loop computes: the pipeline's stages and drilling. The
     // simulated device's physics (MuJoCo substeps, hand) runs inside loop.step too and is
     // reported apart, as "device_simulation". The device tip's own penetration (rendered

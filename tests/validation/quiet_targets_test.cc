@@ -84,19 +84,24 @@ TEST(QuietTargets, DrillHeldStillFor10sHasNoPulsesAndBoundedMotorEnergy) {
   ASSERT_TRUE(fs.still_observer_rms_error_n.has_value());
   EXPECT_LE(*fs.still_observer_rms_error_n, kObserverTarget);
   // The motors' energy while the hand is still: the issue measured ~1.2 mJ/s of climb with the
-  // filter off; bounded here by 10 uW on average (0.1 mJ over 10 s), and E_v over the whole run
-  // by the 1 mJ that the encoders' error alone can put in a quiet run (quiet_stiffness.md §4).
-  EXPECT_LE(fs.still_motor_energy_j, 1e-5 * fs.still_s);
+  // filter off. The motors' true work (the applied torque times the true joint motion) is
+  // bounded here by 10 uW on average (0.1 mJ over 10 s) and flat within 0.1 mJ over the last 8 s;
+  // E_v, computed from the encoders, over the whole run by the 1 mJ that the encoders' error alone
+  // can put in a quiet run (quiet_stiffness.md §4). E_v's own rise while still is that error: the
+  // filter's velocity estimate of a joint resting inside one count is not exactly zero, and which
+  // count the device rests in decides its sign and size (0.1-0.2 mJ over 10 s measured where the
+  // true work falls by 0.05 mJ), so it is reported, not bounded.
+  ASSERT_TRUE(fs.still_true_motor_energy_j.has_value());
+  EXPECT_LE(*fs.still_true_motor_energy_j, 1e-5 * fs.still_s);
   EXPECT_LE(r.virtual_energy_generated_j, 1e-3);
-  const std::vector<double>& e = r.quiet_series.energy_j;
+  const std::vector<double>& e = r.quiet_series.true_energy_j;
   ASSERT_GT(e.size(), 14000u);
-  // E_v over the last 8 s (still): no climb beyond 0.1 mJ.
   const auto [lo, hi] = std::minmax_element(e.end() - 8000, e.end());
   EXPECT_LE(*hi - *lo, 1e-4);
-  std::printf("drill 15 s: still %.1f s, pulses %ld, still force %.4f N, E_v %.3g J, still E_v "
-              "range %.3g J\n",
+  std::printf("drill 15 s: still %.1f s, pulses %ld, still force %.4f N, E_v %.3g J, still: true "
+              "motor work %.3g J (range over the last 8 s %.3g J), E_v rise %.3g J\n",
               fs.still_s, fs.still_pulses, fs.still_force_rms_n, r.virtual_energy_generated_j,
-              *hi - *lo);
+              *fs.still_true_motor_energy_j, *hi - *lo, fs.still_motor_energy_j);
 }
 
 }  // namespace
