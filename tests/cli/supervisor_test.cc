@@ -81,25 +81,35 @@ TEST(SupervisorCli, StressRunThatExplodedWhileDrillingAt500HzStaysBounded) {
 
 // The long form's PMI drilling faults (docs/results/reliability.md "The long form's PMI drilling
 // runs"; issue #32) were physical, not numerical: run 2505 of seed 2026 (pmi, 2000 Hz, K_tooth
-// 35693 N/m, K_vc 7846 N/m), with method.saturation_passive off as it was then, ends in
-// contact_force_beyond_bound with zero torque after the device's command has been saturated for
+// 35693 N/m, K_vc 7846 N/m), with method.saturation_passive off as it was then, ended in
+// contact_force_beyond_bound with zero torque after the device's command had been saturated for
 // ~0.2 s (the command scaled down uniformly, gravity compensation included: the device drifts off,
-// the coupling stretches, the tooth holds the proxy). The same run on a device whose motors are ten
-// times as strong (the supervisor's bound unchanged), or with saturation_passive on (the default
-// now), stays bounded without a fault: the fault comes from the saturated device, not from the
+// the coupling stretches, the tooth holds the proxy). Since drilling carries a removed voxel's
+// surplus work on (#30) the hole it drills differs and the same run peaks at 29.5 N, under the
+// supervisor's 34 N: whether it crosses the bound depends on the cut. What does not: the same run
+// on a device whose motors are ten times as strong (the supervisor's bound unchanged), or with
+// saturation_passive on (the default now), stays without a fault at less than half the as-drawn
+// run's peak force (11.0 N and 4.0 N): the force comes from the saturated device, not from the
 // integration.
 TEST(SupervisorCli, StressDrillingFaultCameFromTheSaturatedDeviceNotTheIntegration) {
   const std::string file = kData + "stress_2026_run2505_pmi_drill_2000hz.json";
   const fs::path dir = fresh_temp_dir("dentsim_sup_saturated");
   const auto as_drawn =
       run_dentsim("run " + file + " --pipeline reference --out " + (dir / "as_drawn").string());
-  EXPECT_EQ(as_drawn.status, 1) << as_drawn.output;
   const nlohmann::json j = read_json_file(dir / "as_drawn" / "report.json");
-  ASSERT_EQ(j.at("faults").size(), 1u) << as_drawn.output;
-  EXPECT_EQ(j.at("faults")[0].get<std::string>().rfind("contact_force_beyond_bound", 0), 0u)
-      << j.at("faults");
-  EXPECT_EQ(j.at("torque_after_fault_n_m").get<double>(), 0.0);
+  if (j.at("faults").empty()) {
+    EXPECT_EQ(as_drawn.status, 0) << as_drawn.output;
+  } else {
+    // Past the bound: the named fault, zero torque.
+    EXPECT_EQ(as_drawn.status, 1) << as_drawn.output;
+    ASSERT_EQ(j.at("faults").size(), 1u) << as_drawn.output;
+    EXPECT_EQ(j.at("faults")[0].get<std::string>().rfind("contact_force_beyond_bound", 0), 0u)
+        << j.at("faults");
+    EXPECT_EQ(j.at("torque_after_fault_n_m").get<double>(), 0.0);
+  }
   expect_no_null(j, "as_drawn");
+  const double as_drawn_peak_n = j.at("max_contact_force_n").get<double>();
+  EXPECT_GT(as_drawn_peak_n, 0.5 * kForceBoundN) << as_drawn.output;
 
   // The variants: the scene with saturation_passive on, and the scene on strong motors (the
   // shipped model, `dentsim device show`, with every joint's torque limit x10).
@@ -127,6 +137,7 @@ TEST(SupervisorCli, StressDrillingFaultCameFromTheSaturatedDeviceNotTheIntegrati
     EXPECT_TRUE(k.at("faults").empty()) << v.name << ": " << k.at("faults");
     EXPECT_EQ(k.at("ticks").get<long>(), 2000) << v.name;
     EXPECT_LE(k.at("max_contact_force_n").get<double>(), 0.5 * kForceBoundN) << v.name;
+    EXPECT_LT(k.at("max_contact_force_n").get<double>(), 0.5 * as_drawn_peak_n) << v.name;
   }
 }
 
