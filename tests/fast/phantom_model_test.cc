@@ -185,6 +185,46 @@ TEST(FastPhantomModel, SignFrictionIsTheReferenceLaw) {
   }
 }
 
+// The friction coefficients the encoder filter's stick-slip prediction reads
+// (SixDofDeviceModel::joint_friction_coefficients): fast/ and the reference give the same b and
+// f_c, bitwise, from the default file and from a file with every coefficient changed, and they
+// are the law's own: with the smoothing off, tau_f = b qd + f_c sign(qd) joint by joint.
+TEST(FastPhantomModel, JointFrictionCoefficientsAreTheReferencesAndTheLaws) {
+  PhantomParams changed = default_phantom_params();
+  changed.damping_n_m_s_per_rad << 0.011, 0.012, 0.013, 0.0014, 0.0015, 0.0016;
+  changed.coulomb_n_m << 0.021, 0.022, 0.023, 0.0024, 0.0025, 0.0026;
+  const PhantomParams changed_file = parse_phantom_params(phantom_params_to_text(changed), "changed");
+  for (const PhantomParams& p : {default_phantom_params(), changed_file}) {
+    const fast::PhantomModel f(p);
+    const PhantomModel r(p);
+    Vec6 b_f, fc_f, b_r, fc_r;
+    ASSERT_TRUE(f.joint_friction_coefficients(&b_f, &fc_f));
+    ASSERT_TRUE(r.joint_friction_coefficients(&b_r, &fc_r));
+    EXPECT_EQ(b_f, b_r);
+    EXPECT_EQ(fc_f, fc_r);
+    EXPECT_EQ(b_r, p.damping_n_m_s_per_rad);
+    EXPECT_EQ(fc_r, p.coulomb_n_m);
+    PhantomParams sharp = p;
+    sharp.coulomb_smoothing_rad_s.setZero();
+    const PhantomModel r_sharp(sharp);
+    States s(sharp, kSeed + 9);
+    for (int k = 0; k < 50; ++k) {
+      const Vec6 qd = s.qd(2.0);
+      DeviceTerms t;
+      r_sharp.terms(s.q(), qd, false, t);
+      for (int j = 0; j < 6; ++j) {
+        const double sign = qd(j) > 0.0 ? 1.0 : (qd(j) < 0.0 ? -1.0 : 0.0);
+        ASSERT_DOUBLE_EQ(t.tau_f(j), b_r(j) * qd(j) + fc_r(j) * sign) << "joint " << j;
+      }
+    }
+  }
+  // The changed file really changes them (the comparison above is not of two defaults).
+  Vec6 b0, fc0;
+  ASSERT_TRUE(PhantomModel(default_phantom_params()).joint_friction_coefficients(&b0, &fc0));
+  EXPECT_NE(b0, changed_file.damping_n_m_s_per_rad);
+  EXPECT_NE(fc0, changed_file.coulomb_n_m);
+}
+
 // Adversarial states: q = 0 (at rest and moving), gimbal lock (pitch at +-pi/2, where yaw and roll
 // axes align: J_t is singular, which terms() must not mind), velocities of 1000 rad/s, angles of
 // +-50 rad.
