@@ -30,17 +30,18 @@ def test_session_holds_every_tick_of_the_run(drill_session):
 
 @pytest.mark.parametrize("pipeline", ["fast", "reference"])
 def test_replay_equals_dentsim_replay_json(drill_session, cli, tmp_path, pipeline):
-    rec, _ = drill_session
+    rec, report = drill_session
     cli("replay", rec, "--pipeline", pipeline, "--json", tmp_path / "replay.json")
     expected = json.loads((tmp_path / "replay.json").read_text())
     # The command adds its verdict (issue #33: recorded_pipeline, verdict, failed_checks) to the
     # numbers both build with replay_report_json.
-    assert expected.pop("recorded_pipeline") == "fast"
+    recorded = expected.pop("recorded_pipeline")
+    assert recorded == report["pipeline"]
     assert expected.pop("verdict") == "PASS" and expected.pop("failed_checks") == []
     r = dentsim.replay(rec, pipeline=pipeline)
     assert r == expected
     assert r["ticks"] == round(DRILL_S * 1000)
-    if pipeline == "fast":  # the pipeline that recorded it: bit for bit
+    if pipeline == recorded:  # the pipeline that recorded it: bit for bit
         assert r["max_torque_diff_n_m"] == 0.0 and r["first_divergent_tick"] == -1
     else:  # the other one: round-off until the cut diverges (docs/tolerance_policy.md item 9)
         assert r["max_force_diff_before_divergence_n"] <= 1e-9
