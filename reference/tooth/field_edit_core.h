@@ -113,7 +113,7 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
                        static_cast<int>(v / (n * n)) + pad};
     ++stats->voxels;
     // The removed voxel's solid neighbours U (header comment): at most 26 boxes.
-    int near_lo[26][3];
+    int near_lo[26][3] = {};
     int near_count = 0;
     {
       const int c[3] = {s0[0] - pad, s0[1] - pad, s0[2] - pad};
