@@ -47,8 +47,9 @@ class FieldSolid {
 struct FieldEditStats {
   long voxels = 0;            // removed voxels subtracted
   long samples_scanned = 0;   // samples read (the ball in the box of each removed voxel)
-  long samples_queried = 0;   // exact voxel-distance queries (samples the removal may change)
-  long samples_bounded = 0;   // of those, answered "no raise" by a solid neighbour voxel instead
+  long samples_queried = 0;   // samples the removal may change (the rule's candidates)
+  long samples_bounded = 0;   // of those, answered without a voxel-distance query: inside ones
+                              // by the closed form, outside ones by a listed solid voxel
                               // (reference/tooth/field_edit_core.h)
   long samples_raised = 0;    // samples whose value rose
   long samples_lost = 0;      // raises refused for want of a spare brick (field then conservative)
@@ -60,9 +61,12 @@ struct FieldEditStats {
 // + 1) samples (p_v the voxel's centre) whose value v(s) < c_out and whose distance to the voxel's cube grown by h / 2
 // is <= |v(s)| (the cube, or the source's sub-voxel sliver next to it, held s's nearest surface,
 // so the removal may change v(s)) is set to
-//     v(s) <- max(v(s), clamp(d_vox(s), -c_in, c_out)),
-// d_vox the exact signed distance to the remaining solid voxels (`sd`: signed_distance or its
-// fast twin, reach c_out). The field's Lipschitz constant is then raised to the cell bound of the
+//     v(s) <- max(v(s), -dist(p(s), C_v))                 if s's voxel is still solid,
+//     v(s) <- max(v(s), clamp(d_vox(s), -c_in, c_out))    otherwise,
+// C_v the removed voxel's cube (the exact inside distance to the complement stays exact: no
+// query), d_vox the exact signed distance to the remaining solid voxels (`sd`: signed_distance or
+// its fast twin, reach c_out, or a shorter reach that gives the same double). The field's
+// Lipschitz constant is then raised to the cell bound of the
 // cells around the changed samples (once all of `removed` is done), so it bounds the edited
 // field (§2, §5). Values only rise, so
 // the proxy's admissible set only grows. Bounded: at most (2R + 1)^3 sample reads (only those

@@ -10,6 +10,16 @@
 //   bool raise(int sx, int sy, int sz, double value)     SampledField::raise (false: no brick)
 //   void include_cells(const int lo[3], const int hi[3]) the Lipschitz update of the sample box
 //
+// The rule (field_contact.h, docs/derivations/field_contact.md §5), per removed voxel v (cube C_v)
+// and sample s within the clamps' reach of C_v grown by h / 2 with v(s) < c_out and that distance
+// <= |v(s)|:
+// - s inside (its voxel solid now): v(s) <- max(v(s), -dist(p(s), C_v)), the exact distance to
+//   the cube in closed form (samples sit at voxel centres: h |(max(|d_a| - 1/2, 0))_a| for the
+//   offset d in samples). No query: -dist(., complement of (S minus C_v)) = max(-dist(., comp S),
+//   -dist(., C_v)), so an exact inside value stays exact (the proof in §5).
+// - s outside (its voxel empty, or beyond the grid): v(s) <- max(v(s), clamp(d_vox(s))), d_vox
+//   the exact distance to the remaining solid voxels (`Access::distance`, reach c_out).
+//
 // Two savings against the rule as written, neither changing a stored value, the Lipschitz
 // constant, or which samples are raised (so both twins and the field stay what the rule makes):
 // - Only the ball is read. A sample whose distance to the removed cube (grown by h/2) exceeds
@@ -18,23 +28,23 @@
 //   monotone), so it is not read; whole planes and rows are skipped the same way (to_cube only
 //   grows with |dx|, |dy|, |dz|: a sum of exact squares of small integers, then sqrt and * h,
 //   both monotone). FieldEditStats::samples_scanned counts the samples read.
-// - Inside samples ask with a shorter reach. For a sample in a solid voxel the query is the
-//   shell search (reference/tooth/sdf.h inside_distance), and the rule raises v(s) only if
-//   phi > v(s) >= float(-c_in). With reach r_in = max(c_in, -double(float(-c_in))) instead of
-//   c_out: if the complement lies nearer than r_in, both searches return the same double (the
-//   minimum over the same boxes: a search stops only once its shells are farther than its best,
-//   and the two bests agree once a box nearer than r_in is seen); otherwise the short search
-//   returns -r_in and the long one -d with d >= r_in, and both are <= float(-c_in) <= v(s): no
-//   raise either way. The shell search then visits at most ceil(r_in / h) + 1 shells instead of
-//   ceil(c_out / h) + 1 (at 128^3 with the drill scene's bur: 3 against 6, 343 voxels against
-//   2197).
-// - Outside samples next to a solid voxel within |v(s)| ask nothing. Outside, the query returns
+// - Outside samples ask with a shorter reach, or not at all. Outside, the query returns
 //   phi = sqrt(best2), best2 the least box_distance2 from p(s) over the solid voxels with
-//   box_distance2 < reach^2 (reference/tooth/sdf.cc outside_distance; its fast twin the same
-//   double). If one of the 27 voxels around s's own, u, is solid with box_distance2(u) = d2u <
-//   reach^2 and sqrt(d2u) <= v(s), then best2 <= d2u, so phi <= sqrt(d2u) <= v(s) (sqrt is
-//   monotone) and the rule raises nothing: the query is skipped (FieldEditStats::samples_bounded;
-//   samples_queried counts these too, so it keeps the rule's count).
+//   box_distance2 < reach^2, and the voxel of the least index among those at best2
+//   (reference/tooth/sdf.cc outside_distance, sdf_nearer; its fast twin the same doubles). Let U
+//   be the solid voxels among the 27 around s's voxel and the 26 around the removed one (after
+//   the removal), and D = (1 + 1e-9) min over U of the distance from p(s) to the voxel's cube in
+//   closed form (samples sit at voxel centres: h |(max(|u_a - c_a| - 1/2, 0))_a|, exact in
+//   integers up to the one square root; the computed box_distance2 of the same cube differs from
+//   its square by far less than the 1e-9, which holds while the coordinates are below 10^5 h).
+//   If D <= v(s) (< c_out), some solid voxel has box_distance2 < D^2 < c_out^2, so phi <= D <=
+//   v(s) and the rule raises nothing: no query. Otherwise the query is asked with reach
+//   min(D, c_out) instead of c_out: the voxels with box_distance2 < D^2 hold every voxel at the
+//   least distance (below D^2), so the search returns the same best2, voxel and nearest point,
+//   the same phi, and prunes every octree node beyond D (U empty: D = c_out, the rule's query).
+// FieldEditStats::samples_queried counts the samples the rule examines (inside and outside),
+// samples_bounded those of them answered without a voxel-distance query (inside samples by the
+// closed form, outside ones by a solid neighbour): the queries are the difference.
 //
 // Real-time: no allocation, no throw (the Access must not either).
 #pragma once
@@ -49,23 +59,33 @@
 
 namespace dentsim::field_edit_detail {
 
-// Whether a solid voxel u among the 27 around voxel idx (which holds p) has
-// sqrt(box_distance2(u, p)) <= v and box_distance2(u, p) < reach^2 (header comment).
-inline bool solid_neighbour_within(const VoxelGrid& grid, const Vec3& p, const int idx[3],
-                                   float v, double reach) {
-  const double limit = static_cast<double>(v);
-  if (!(limit >= 0.0)) return false;
-  for (int k = idx[2] - 1; k <= idx[2] + 1; ++k) {
-    for (int j = idx[1] - 1; j <= idx[1] + 1; ++j) {
-      for (int i = idx[0] - 1; i <= idx[0] + 1; ++i) {
+// (2 dist / h)^2 from the centre of voxel a to the cube of voxel b, exact in integers: the
+// per-axis gap is max(|b - a| - 1/2, 0) voxels.
+inline int lattice_distance4(const int a[3], const int b[3]) {
+  int sum = 0;
+  for (int k = 0; k < 3; ++k) {
+    const int g = std::max(2 * std::abs(b[k] - a[k]) - 1, 0);
+    sum += g * g;
+  }
+  return sum;
+}
+
+// The least lattice_distance4 from voxel position c (a sample's voxel, possibly beyond the grid)
+// to a solid voxel among the 27 around c and the `near_count` voxels `near` (INT_MAX: none).
+inline int nearest_listed4(const VoxelGrid& grid, const int c[3], const int (*near)[3],
+                           int near_count) {
+  int best = INT_MAX;
+  for (int k = c[2] - 1; k <= c[2] + 1; ++k) {
+    for (int j = c[1] - 1; j <= c[1] + 1; ++j) {
+      for (int i = c[0] - 1; i <= c[0] + 1; ++i) {
         if (!grid.inside(i, j, k) || grid.voxels[grid.index(i, j, k)] == kEmpty) continue;
-        const int lo[3] = {i, j, k}, hi[3] = {i + 1, j + 1, k + 1};
-        const double d2 = sdf_detail::box_distance2(grid, lo, hi, p, nullptr);
-        if (d2 < reach * reach && std::sqrt(d2) <= limit) return true;
+        const int u[3] = {i, j, k};
+        best = std::min(best, lattice_distance4(c, u));
       }
     }
   }
-  return false;
+  for (int u = 0; u < near_count; ++u) best = std::min(best, lattice_distance4(c, near[u]));
+  return best;
 }
 
 template <class Access>
@@ -80,10 +100,10 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
   const int m = field.samples_per_axis(), pad = field.padding();
   const int reach = field.edit_radius();
   const double slack = 1e-6 * h;  // float rounding of the stored values
+  constexpr double kWide = 1.0 + 1e-9;  // a closed-form lattice distance over the computed one
   // Any stored value below c_out has |v| <= v_max; beyond `ball` no sample can pass the test.
   const double v_max = std::max(static_cast<double>(out_f), -static_cast<double>(in_f));
   const double ball = v_max + slack;
-  const double reach_in = std::max(field.inside_clamp(), -static_cast<double>(in_f));
   bool complete = true;
   // The box of the changed samples: the cell bound is measured once all of the tick's removed
   // voxels are subtracted (a cell between two of them is whole only then).
@@ -92,6 +112,23 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
     const int s0[3] = {static_cast<int>(v % n) + pad, static_cast<int>((v / n) % n) + pad,
                        static_cast<int>(v / (n * n)) + pad};
     ++stats->voxels;
+    // The removed voxel's solid neighbours U (header comment): at most 26 boxes.
+    int near_lo[26][3] = {};
+    int near_count = 0;
+    {
+      const int c[3] = {s0[0] - pad, s0[1] - pad, s0[2] - pad};
+      for (int k = c[2] - 1; k <= c[2] + 1; ++k) {
+        for (int j = c[1] - 1; j <= c[1] + 1; ++j) {
+          for (int i = c[0] - 1; i <= c[0] + 1; ++i) {
+            if (!grid.inside(i, j, k) || grid.voxels[grid.index(i, j, k)] == kEmpty) continue;
+            near_lo[near_count][0] = i;
+            near_lo[near_count][1] = j;
+            near_lo[near_count][2] = k;
+            ++near_count;
+          }
+        }
+      }
+    }
     for (int dz = -reach; dz <= reach; ++dz) {
       const int sz = s0[2] + dz;
       if (sz < 0 || sz >= m) continue;
@@ -121,11 +158,26 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
           const bool in_grid = sdf_detail::voxel_of(grid, p, idx);
           const bool inside =
               in_grid && grid.voxels[grid.index(idx[0], idx[1], idx[2])] != kEmpty;
-          if (!inside && in_grid && solid_neighbour_within(grid, p, idx, old, c_out)) {
-            ++stats->samples_bounded;  // the query's phi <= v(s): no raise (header comment)
-            continue;
+          double d = 0.0;
+          if (inside) {  // the closed form: minus the distance to the removed cube
+            ++stats->samples_bounded;
+            const double ax = std::max(std::abs(dx) - 0.5, 0.0);
+            const double ay = std::max(std::abs(dy) - 0.5, 0.0);
+            const double az = std::max(std::abs(dz) - 0.5, 0.0);
+            d = -h * std::sqrt(ax * ax + ay * ay + az * az);
+          } else {
+            // The nearest listed solid voxel (header comment): no query if it is within v(s),
+            // else the query's reach cut down to it.
+            const int c[3] = {sx - pad, sy - pad, sz - pad};
+            const int best4 = nearest_listed4(grid, c, near_lo, near_count);
+            const double listed =
+                best4 == INT_MAX ? c_out : 0.5 * h * std::sqrt(static_cast<double>(best4)) * kWide;
+            if (listed <= static_cast<double>(old)) {
+              ++stats->samples_bounded;  // the query's phi <= v(s): no raise (header comment)
+              continue;
+            }
+            d = access.distance(sx, sy, sz, p, std::min(listed, c_out));
           }
-          const double d = access.distance(sx, sy, sz, p, inside ? reach_in : c_out);
           if (!(d > old)) continue;
           if (!access.raise(sx, sy, sz, d)) {
             ++stats->samples_lost;

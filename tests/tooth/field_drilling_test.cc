@@ -183,10 +183,12 @@ TEST(FieldDrilling, LipschitzBoundHoldsAfterTheEdits) {
   std::printf("Lipschitz: before drilling %.4f, after %.4f, brute force over all cells %.4f\n",
               d.lipschitz_before, L, cells);
   EXPECT_LE(cells, L);
-  // Once every queued edit is done the samples are the max of exact distances on both sides,
-  // so the cell bound is sqrt(3) at most (§5); lipschitz() keeps the largest bound measured,
-  // including the transients while the queue lagged a tick's cut (it only shortens the sweep).
-  EXPECT_LE(cells, std::sqrt(3.0) + 1e-6);
+  // Once every queued edit is done an edge between two inside or two outside samples changes by
+  // at most h (each side a max of 1-Lipschitz distances), an edge from an inside sample to an
+  // outside one by at most 1.5 h (field_contact.md §5), so the cell bound is 1.5 sqrt(3) at most;
+  // lipschitz() keeps the largest bound measured, including the transients while the queue
+  // lagged a tick's cut (it only shortens the sweep).
+  EXPECT_LE(cells, 1.5 * std::sqrt(3.0) + 1e-6);
   EXPECT_LE(L, 2.0 * std::sqrt(3.0));
   std::mt19937_64 rng(35);
   std::uniform_real_distribution<double> u(-1.2e-3, 1.2e-3);
@@ -234,9 +236,10 @@ TEST(FieldDrilling, AProbeInTheFreshHoleTouchesItsFloor) {
 }
 
 // The edit's savings change no value (reference/tooth/field_edit_core.h: only the ball read,
-// inside samples asked with a shorter reach, outside samples with a solid neighbour within |v|
-// not asked): a provider whose edit also applies the rule exactly as field_contact.h states it
-// (every sample of the (2R + 1)^3 box read, every candidate asked with reach c_out) to a copy of
+// outside samples with a solid neighbour within |v| not asked): a provider whose edit also
+// applies the rule exactly as field_edit_core.h states it (every sample of the (2R + 1)^3 box
+// read; inside samples minus the distance to the removed cube, every outside candidate asked
+// with reach c_out) to a copy of
 // the field, call by call on the same tooth, ends with the copy equal to the edited field at
 // every sample, the same samples raised and the same Lipschitz constant.
 class RuleAsWritten final : public ToothContactProvider {
@@ -273,7 +276,17 @@ class RuleAsWritten final : public ToothContactProvider {
               continue;
             }
             ++plain_queried;
-            const double d = signed_distance(tooth_, plain_->sample_position(x, y, z), c_out).phi;
+            // Inside (the sample's voxel solid now): minus the distance to the removed cube;
+            // outside: the exact distance to the remaining voxels.
+            const Vec3 p = plain_->sample_position(x, y, z);
+            int idx[3];
+            const bool inside = sdf_detail::voxel_of(grid, p, idx) &&
+                                grid.solid(idx[0], idx[1], idx[2]);
+            const double f[3] = {std::max(std::abs(x - c[0]) - 0.5, 0.0),
+                                 std::max(std::abs(y - c[1]) - 0.5, 0.0),
+                                 std::max(std::abs(z - c[2]) - 0.5, 0.0)};
+            const double d = inside ? -h * std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2])
+                                    : signed_distance(tooth_, p, c_out).phi;
             if (!(d > old) || !plain_->raise(x, y, z, d)) continue;
             ++plain_raised;
             const int s[3] = {x, y, z};
