@@ -257,7 +257,12 @@ void update_shape_control(const PipelineModel& m, PipelineData& d, const Vec6& t
   TickResult& r = d.r;
   if (!d.shape_engaged && !r.saturated) return;
   Vec6 b = Vec6::Zero();
-  if (m.method == Method::kPmiPd) b.noalias() = d.dev.J_t.transpose() * d.pd_T1.at(r.V_hat);
+  if (m.method == Method::kPmiPd) {
+    // The feed-forward at full scale, pd_T1 at V_hat: the solve's r.T1_pd itself unless the
+    // control was engaged there (solve_with scaled it by sigma then).
+    const Vec6 T1_pd = d.shape_engaged ? d.pd_T1.at(r.V_hat) : r.T1_pd;
+    b.noalias() = d.dev.J_t.transpose() * T1_pd;
+  }
   const Vec6 a = tau - d.shape_sigma * b;  // the command without the feed-forward
   const double feasible = feasible_feedforward_scale(a, b, m.torque_limit, kSaturationHeadroom);
   d.shape_sigma = std::min(feasible, d.shape_sigma + d.T / kShapeSigmaRecoveryS);
