@@ -1,10 +1,12 @@
 #include "fast/tick.h"
 
 #include "fast/contact.h"
+#include "fast/decomposition.h"
 #include "fast/pmi.h"
 #include "reference/decomposition.h"
 #include "reference/grip_detector.h"
 #include "reference/observer.h"
+#include "reference/tick_detail.h"
 
 namespace dentsim::fast {
 
@@ -47,6 +49,27 @@ void unneeded_decomposition(const PipelineModel& m, PipelineData& d) {
   d.pd_T2 = pd.T2;
 }
 
+// The decomposition's feed-forward on its block structure (fast/decomposition.h) when M_d and
+// D_d are diagonal; the reference's step otherwise.
+bool pd_step(const PipelineModel& m, PipelineData& d) {
+  if (!pd_tool_is_diagonal(m.tool)) return reference::detail::pd_step(m, d);
+  const TickResult& r = d.r;
+  Mat6 M_joint = d.dev.M;  // the device inertia under the hypothesis in force
+  if (m.grasp && d.grip.gripped) M_joint += d.M_hand;
+  Mat6 JM;
+  JM.noalias() = d.J1.transpose() * M_joint;
+  Mat6 M1;
+  M1.noalias() = JM * d.J1;  // J1^T M J1 (2.2)
+  PdFeedforward pd;
+  if (!pd_feedforward_diagonal(M1, m.proxy, m.tool, r.device.R, d.proxy.pose.R, r.V1, r.F1_hat,
+                               d.contact, &pd)) {
+    return false;
+  }
+  d.pd_T1 = pd.T1;
+  d.pd_T2 = pd.T2;
+  return true;
+}
+
 }  // namespace
 
 // The device model does the work (fast::PhantomModel with the fast pipeline); the stage around it
@@ -77,7 +100,7 @@ TickStatus assemble(const PipelineModel& m, PipelineData& d) {
                                           m.coupling.b_ang + m.proxy.damping_ang);
     }
   }
-  const TickStatus st = reference::detail::assemble_given_contact(m, d);
+  const TickStatus st = reference::detail::assemble_given_contact_with(m, d, pd_step);
   if (st == TickStatus::kOk && !m.skip_unneeded && m.method != Method::kPmiPd) {
     unneeded_decomposition(m, d);
   }

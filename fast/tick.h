@@ -7,7 +7,8 @@
 //   device_terms  the device model's one pass: with the fast pipeline the model is
 //                 fast::PhantomModel (fast/phantom/), specialised to the Phantom's tree
 //   collide       the environment's query: fast::ToothContactProvider (fast/tooth/)
-//   assemble      the contact wrench as symmetric rank-1 updates (fast/contact.h)
+//   assemble      the contact wrench as symmetric rank-1 updates (fast/contact.h); the pmi-pd
+//                 feed-forward on its block structure (fast/decomposition.h)
 //   solve         partial-pivoting LU of the scaled PMI system (fast/pmi.h)
 //   drill         the environment's cut: fast::drill_tick through the fast provider
 // The stage code itself is shared with the reference where nothing faster exists (observe,

@@ -18,6 +18,7 @@
 #include "reference/observer.h"
 #include "reference/pmi.h"
 #include "reference/saturation_passive.h"
+#include "reference/tick_detail.h"
 
 namespace dentsim {
 
@@ -256,7 +257,12 @@ void update_shape_control(const PipelineModel& m, PipelineData& d, const Vec6& t
   TickResult& r = d.r;
   if (!d.shape_engaged && !r.saturated) return;
   Vec6 b = Vec6::Zero();
-  if (m.method == Method::kPmiPd) b.noalias() = d.dev.J_t.transpose() * d.pd_T1.at(r.V_hat);
+  if (m.method == Method::kPmiPd) {
+    // The feed-forward at full scale, pd_T1 at V_hat: the solve's r.T1_pd itself unless the
+    // control was engaged there (solve_with scaled it by sigma then).
+    const Vec6 T1_pd = d.shape_engaged ? d.pd_T1.at(r.V_hat) : r.T1_pd;
+    b.noalias() = d.dev.J_t.transpose() * T1_pd;
+  }
   const Vec6 a = tau - d.shape_sigma * b;  // the command without the feed-forward
   const double feasible = feasible_feedforward_scale(a, b, m.torque_limit, kSaturationHeadroom);
   d.shape_sigma = std::min(feasible, d.shape_sigma + d.T / kShapeSigmaRecoveryS);
@@ -353,6 +359,25 @@ TickStatus assemble(const PipelineModel& m, PipelineData& d) {
 namespace detail {
 
 TickStatus assemble_given_contact(const PipelineModel& m, PipelineData& d) {
+  return assemble_given_contact_with(m, d, pd_step);
+}
+
+bool pd_step(const PipelineModel& m, PipelineData& d) {
+  const TickResult& r = d.r;
+  // The device inertia in maximal coordinates (2.2) under the hypothesis in force.
+  Mat6 M_joint = d.dev.M;
+  if (m.grasp && d.grip.gripped) M_joint += d.M_hand;
+  const Mat6 M1 = d.J1.transpose() * M_joint * d.J1;
+  Decomposition dec;
+  if (!decompose_locked(M1, m.proxy.M(), r.device.R, d.proxy.pose.R, &dec)) return false;
+  const PdFeedforward pd =
+      pd_feedforward(dec, m.tool_Md_llt, m.tool.D_d, r.V1, r.F1_hat, d.contact);  // (4.7)
+  d.pd_T1 = pd.T1;
+  d.pd_T2 = pd.T2;
+  return true;
+}
+
+TickStatus assemble_given_contact_with(const PipelineModel& m, PipelineData& d, PdStep pd) {
   // Force elements on the proxy, affine in the velocity they are evaluated at (the contact's,
   // d.contact, already there).
   TickResult& r = d.r;
@@ -369,20 +394,7 @@ TickStatus assemble_given_contact(const PipelineModel& m, PipelineData& d) {
     cap_coupling_to_device(m, d);
     r.shape_sigma = d.shape_sigma;
   }
-  if (m.method == Method::kPmiPd) {
-    // The device inertia in maximal coordinates (2.2) under the hypothesis in force.
-    Mat6 M_joint = d.dev.M;
-    if (m.grasp && d.grip.gripped) M_joint += d.M_hand;
-    const Mat6 M1 = d.J1.transpose() * M_joint * d.J1;
-    Decomposition dec;
-    if (!decompose_locked(M1, m.proxy.M(), r.device.R, d.proxy.pose.R, &dec)) {
-      return TickStatus::kDeviceModelFailure;
-    }
-    const PdFeedforward pd =
-        pd_feedforward(dec, m.tool_Md_llt, m.tool.D_d, r.V1, r.F1_hat, d.contact);  // (4.7)
-    d.pd_T1 = pd.T1;
-    d.pd_T2 = pd.T2;
-  }
+  if (m.method == Method::kPmiPd && !pd(m, d)) return TickStatus::kDeviceModelFailure;
   if (m.method != Method::kExplicitVc) {
     // PMI (4.9): inertia, coupling, contact and the feed-forward in one 6x6 system.
     d.sys = pmi_inertia_system_unchecked(m.proxy, d.proxy, d.T);

@@ -1,0 +1,30 @@
+// The passive decomposition's feed-forward (4.7) specialised to the structure of its matrices:
+// the fast twin of decompose_locked + pd_feedforward (reference/decomposition.h), same equations
+// and symbols, differing from the reference only by round-off (tests/fast/decomposition_test.cc).
+//
+// Structure used (every tool preset and scene has it; anything else takes the reference's path):
+//   E = diag(I, Q), Q = R2^T R1:        E^T x = [x_v; Q^T x_w], E y = [y_v; Q y_w] (3x3 blocks)
+//   E^T M2 E = diag(m I, Q^T J Q):      no 6x6 products with the proxy inertia M2 = diag(m I, J)
+//   M_d, D_d diagonal:                  A = M_L M_d^-1 scales the columns of M_L, D_d scales rows
+// and phi^T X is formed once for T1 = (I - phi^T) X - F1_hat and T2 = E phi^T X - F2:
+//   X0 = A (F1_hat + E^T f0 - D_d (V1 - phi V1)),   XG = A (E^T G - D_d phi E^T),
+//   Y = phi^T [X0 XG]:  T1 = [X0 - Y0 - F1_hat, XG - YG],  T2 = [E Y0 - f0, E YG - G].
+// About 1 300 multiplications against the reference's 3 100 (nine dense 6x6 products).
+#pragma once
+
+#include "reference/core/pipeline.h"
+#include "reference/decomposition.h"
+
+namespace dentsim::fast {
+
+// True when M_d and D_d are diagonal (the specialised path applies).
+bool pd_tool_is_diagonal(const ToolDynamics& tool);
+
+// decompose_locked (phi, M_L at the poses R1, R2 with the proxy's M2 = diag(m I, J)) and
+// pd_feedforward with a diagonal M_d, D_d (pd_tool_is_diagonal(tool) must hold). false when M_L
+// is not positive definite or phi is not finite (as decompose_locked). No allocation, no throw.
+bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const ToolDynamics& tool,
+                             const Mat3& R1, const Mat3& R2, const Vec6& V1, const Vec6& F1_hat,
+                             const AffineWrench& F2, PdFeedforward* out);
+
+}  // namespace dentsim::fast

@@ -1,0 +1,145 @@
+// Tests for fast/decomposition.h: the decomposition's feed-forward (4.7) on its block structure
+// against the reference's decompose_locked + pd_feedforward (reference/decomposition.h), on random
+// device inertias (condition numbers up to 1e4), poses, proxy inertias (isotropic and general),
+// diagonal tools (the presets and random ones), velocities, observer wrenches and contact terms.
+//
+// Tolerance (docs/tolerance_policy.md items 9 and 2): every output within 1e-10 relative to the
+// scale of the terms it sums (an output that cancels, where phi is near I, is compared at the
+// scale of what cancelled; absolute 1e-15 near zero); the signal guard (item 5) checks the outputs
+// are far from zero. Seeds fixed and printed.
+#include "fast/decomposition.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <string>
+
+#include "reference/core/so3.h"
+#include "reference/tools.h"
+#include "tests/support/random.h"
+
+namespace dentsim {
+namespace {
+
+using Rng = std::mt19937_64;
+
+double uni(Rng& rng, double a, double b) { return testing::uniform(rng, a, b); }
+
+Mat3 random_rotation(Rng& rng) { return exp_so3(testing::random_unit(rng) * uni(rng, 0.0, 3.1)); }
+
+Mat6 random_matrix(Rng& rng) {
+  Mat6 A;
+  for (int i = 0; i < 36; ++i) A(i) = uni(rng, -1.0, 1.0);
+  return A;
+}
+
+// A symmetric positive definite 6x6 with eigenvalues from `lo` to `hi`.
+Mat6 random_spd(Rng& rng, double lo, double hi) {
+  const Eigen::HouseholderQR<Mat6> qr(random_matrix(rng));
+  const Mat6 U = qr.householderQ();
+  Vec6 e;
+  for (int i = 0; i < 6; ++i) e(i) = std::exp(uni(rng, std::log(lo), std::log(hi)));
+  return U * e.asDiagonal() * U.transpose();
+}
+
+TEST(FastDecomposition, FeedforwardAgreesWithTheReference) {
+  constexpr unsigned kSeed = 30038;
+  Rng rng(kSeed);
+  double worst = 0.0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    SCOPED_TRACE("seed " + std::to_string(kSeed) + " trial " + std::to_string(trial));
+    const Mat6 M1 = random_spd(rng, 1e-2, 1e2);
+    ProxyParams proxy;
+    proxy.mass = std::pow(10.0, uni(rng, -3.0, 0.0));
+    if (trial % 2 == 0) {
+      proxy.inertia = Mat3::Identity() * std::pow(10.0, uni(rng, -6.0, -4.0));
+    } else {
+      const Mat6 S = random_spd(rng, 1e-6, 1e-4);
+      proxy.inertia = S.topLeftCorner<3, 3>();
+    }
+    ToolDynamics tool;
+    if (trial % 3 == 0) {
+      tool = tool_preset(tool_preset_names()[(trial / 3) % tool_preset_names().size()]);
+    } else {
+      Vec6 md, dd;
+      for (int i = 0; i < 6; ++i) {
+        md(i) = std::pow(10.0, uni(rng, -5.0, 1.0));
+        dd(i) = trial % 5 == 1 ? 0.0 : std::pow(10.0, uni(rng, -4.0, 1.0));
+      }
+      tool.M_d = md.asDiagonal();
+      tool.D_d = dd.asDiagonal();
+    }
+    ASSERT_TRUE(fast::pd_tool_is_diagonal(tool));
+    const Mat3 R1 = random_rotation(rng), R2 = random_rotation(rng);
+    Vec6 V1, F1_hat;
+    for (int i = 0; i < 6; ++i) V1(i) = uni(rng, -1.0, 1.0), F1_hat(i) = uni(rng, -5.0, 5.0);
+    AffineWrench F2;  // zero in free space (every fourth trial), a contact's terms otherwise
+    if (trial % 4 != 0) {
+      for (int i = 0; i < 6; ++i) F2.f0(i) = uni(rng, -5.0, 5.0);
+      F2.G = -random_spd(rng, 1e-2, 1e4);
+    }
+
+    Decomposition dec;
+    ASSERT_TRUE(decompose_locked(M1, proxy.M(), R1, R2, &dec));
+    const Eigen::LLT<Mat6> Md_llt(tool.M_d);
+    const PdFeedforward ref = pd_feedforward(dec, Md_llt, tool.D_d, V1, F1_hat, F2);
+    PdFeedforward got;
+    ASSERT_TRUE(fast::pd_feedforward_diagonal(M1, proxy, tool, R1, R2, V1, F1_hat, F2, &got));
+
+    // Each output is a difference, T1 = (I - phi^T) X - F1_hat and T2 = E phi^T X - F2, which
+    // cancels where phi is near I: its scale is that of the terms summed (item 2), |X| (1 +
+    // |phi|) and the wrench subtracted, X = M_L M1^-1 (T1 + F1_hat) (decomposition.h's identity).
+    const Mat6 back = dec.M_L * M1.inverse();
+    const double grow = 1.0 + dec.phi.cwiseAbs().rowwise().sum().maxCoeff();
+    const double s0 = std::max({(back * (ref.T1.f0 + F1_hat)).cwiseAbs().maxCoeff() * grow,
+                                F1_hat.cwiseAbs().maxCoeff(), F2.f0.cwiseAbs().maxCoeff()});
+    const double sG = std::max((back * ref.T1.G).cwiseAbs().maxCoeff() * grow,
+                               F2.G.cwiseAbs().maxCoeff());
+    const auto err = [](const auto& a, const auto& b, double scale) {
+      const double e = (a - b).cwiseAbs().maxCoeff();
+      return e <= 1e-15 ? 0.0 : e / scale;
+    };
+    const double errs[] = {err(got.T1.f0, ref.T1.f0, s0), err(got.T1.G, ref.T1.G, sG),
+                           err(got.T2.f0, ref.T2.f0, s0), err(got.T2.G, ref.T2.G, sG)};
+    for (const double e : errs) {
+      EXPECT_LE(e, 1e-10);
+      worst = std::max(worst, e);
+    }
+    // Signal guard: the outputs are far from zero.
+    ASSERT_GT(ref.T1.f0.cwiseAbs().maxCoeff(), 1e-3);
+    // (T1.G = 0 exactly without damping and contact: that case checks zero against zero.)
+    if (trial % 4 != 0 || !tool.D_d.isZero(0.0)) {
+      ASSERT_GT(ref.T1.G.cwiseAbs().maxCoeff(), 1e-6);
+    }
+  }
+  std::printf("fast vs reference feed-forward: worst relative error %.2e\n", worst);
+}
+
+TEST(FastDecomposition, LockedInertiaNotPositiveDefiniteFailsAsTheReference) {
+  Mat6 M1 = Mat6::Identity();
+  M1(0, 0) = -10.0;  // M_L = M1 + E^T M2 E not positive definite
+  const ProxyParams proxy;
+  const ToolDynamics tool = tool_preset("handpiece");
+  Decomposition dec;
+  EXPECT_FALSE(decompose_locked(M1, proxy.M(), Mat3::Identity(), Mat3::Identity(), &dec));
+  PdFeedforward out;
+  EXPECT_FALSE(fast::pd_feedforward_diagonal(M1, proxy, tool, Mat3::Identity(), Mat3::Identity(),
+                                             Vec6::Zero(), Vec6::Zero(), AffineWrench{}, &out));
+}
+
+TEST(FastDecomposition, OnlyDiagonalToolsTakeTheSpecialisedPath) {
+  ToolDynamics tool = tool_preset("explorer");
+  EXPECT_TRUE(fast::pd_tool_is_diagonal(tool));
+  tool.M_d(0, 1) = tool.M_d(1, 0) = 1e-3;
+  EXPECT_FALSE(fast::pd_tool_is_diagonal(tool));
+  tool = tool_preset("explorer");
+  tool.D_d(5, 2) = 1e-6;
+  EXPECT_FALSE(fast::pd_tool_is_diagonal(tool));
+}
+
+}  // namespace
+}  // namespace dentsim
