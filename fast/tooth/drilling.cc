@@ -32,10 +32,7 @@ int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> c
     const int k = static_cast<int>(v / (static_cast<std::size_t>(n) * n));
     if (!state->pulp_exposed) state->pulp_exposed = removal_opens_pulp(tooth->grid(), i, j, k);
     tooth->remove_voxel(i, j, k);
-    state->work_j.erase(v);
-    state->surplus_j += work - threshold[material];  // the reference's energy bookkeeping
-    ++state->removed_voxels[material];
-    if (removed != nullptr) removed->push_back(v);
+    account_removed_voxel(v, material, work, threshold[material], state, removed);
     ++count;
   }
   return count;

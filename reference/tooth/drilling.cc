@@ -94,6 +94,14 @@ bool removal_opens_pulp(const VoxelGrid& grid, int i, int j, int k) {
   return opens;
 }
 
+void account_removed_voxel(std::size_t v, std::uint8_t material, double work, double threshold,
+                           DrillState* state, std::vector<std::size_t>* removed) {
+  state->work_j.erase(v);
+  state->surplus_j += work - threshold;  // W - E_m >= 0 goes on to the next tick's set
+  ++state->removed_voxels[material];
+  if (removed != nullptr) removed->push_back(v);
+}
+
 int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> contact_voxels,
                const ToolTip& tip, const DrillParams& params, double T, VoxelTooth* tooth,
                DrillState* state, std::vector<std::size_t>* removed) {
@@ -128,10 +136,7 @@ int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> c
     if (!state->pulp_exposed) state->pulp_exposed = removal_opens_pulp(grid, i, j, k);
     tooth->octree.remove_voxel(i, j, k);
     reencode_local(tooth->octree.grid(), i, j, k, &tooth->codes);
-    state->work_j.erase(v);
-    state->surplus_j += work - threshold;  // W - E_m >= 0 goes on to the next tick's set
-    ++state->removed_voxels[material];
-    if (removed != nullptr) removed->push_back(v);
+    account_removed_voxel(v, material, work, threshold, state, removed);
     ++count;
   }
   return count;

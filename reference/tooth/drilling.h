@@ -93,15 +93,22 @@ bool accumulate_drill_work(std::span<const Contact> contacts,
 // unknown id.
 double removal_threshold_j(std::uint8_t material, double voxel_size);
 
+// Whether removing voxel (i, j, k) of `grid` (not yet removed) opens the pulp: the voxel is pulp
+// or has a pulp face neighbour (DrillState::pulp_exposed; the fast twin shares it).
+bool removal_opens_pulp(const VoxelGrid& grid, int i, int j, int k);
+
+// The energy bookkeeping of one voxel of `material` removed with `work` on it against its
+// `threshold` (both twins' drill_tick; docs/derivations/drilling.md §2): its work leaves the
+// table, the surplus W - E_m >= 0 goes on to the next tick's set, the material's count rises, and
+// its flat index v is appended to `removed` if not null.
+void account_removed_voxel(std::size_t v, std::uint8_t material, double work, double threshold,
+                           DrillState* state, std::vector<std::size_t>* removed);
+
 // One drilling step after the tick's collision: adds each contact's work to its voxel
 // (contact_voxels[i] is contact i's flat voxel index, as returned by collide_tool_tip), then
 // removes every contacted voxel whose work reached its threshold. Appends the removed flat indices
 // to `removed` if not null and returns their number. The contact set is stale afterwards. Throws
 // InputError if the vectors differ in length, T <= 0, or the params are negative.
-// Whether removing voxel (i, j, k) of `grid` (not yet removed) opens the pulp: the voxel is pulp
-// or has a pulp face neighbour (DrillState::pulp_exposed; the fast twin shares it).
-bool removal_opens_pulp(const VoxelGrid& grid, int i, int j, int k);
-
 int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> contact_voxels,
                const ToolTip& tip, const DrillParams& params, double T, VoxelTooth* tooth,
                DrillState* state, std::vector<std::size_t>* removed = nullptr);
