@@ -47,13 +47,17 @@ for f in "${flavours[@]}"; do
   #   the pinned command results (ResultsUnchanged), the closed-loop plant runs of the grip
   #   detector and the grasp mass model, the field's sliding-ripple sweep, and the allocation
   #   count over the drill scene (a Release property: the sanitizer's allocator is not the one
-  #   the servo tick runs on). Together ~6 min of processor time under the sanitizers. The
+  #   the servo tick runs on), the skip variants' closed-loop runs with and without the skips
+  #   (FastSkips.SkippingChangesNoTorque: the same ticks FastTick runs under the sanitizers), and
+  #   the procedural molar through a synthetic scan (VolumeCli.ProceduralMolarThroughASyntheticScan:
+  #   the readers and the resampling it chains run under the sanitizers in VolumeFiles and the
+  #   fuzz stage). Together ~8 min of processor time under the sanitizers. The
   #   sanitizer build does not build the suites left out whole (tests/CMakeLists.txt: the
   #   calibration and validation areas, PipelineDefault, ResultsUnchanged, TickAllocation).
   # All of them run in the Release pass.
   exclude=()
   [ "$f" = asan ] && exclude=(-LE 'calibration|validation|pins|docs'
-                              -E 'HdapiRun\..*(Matches|Excitation)|CalibrateCli\.|CalibrateSeedsCli\.|WorkLost\.(InterruptedCalibrateSeeds|TerminatedCalibrate)|GripDetector\.Plant|GraspMassModel\.ObserverSeesNoForce|FieldContact\.SlidingOnASmoothSphere')
+                              -E 'HdapiRun\..*(Matches|Excitation)|CalibrateCli\.|CalibrateSeedsCli\.|WorkLost\.(InterruptedCalibrateSeeds|TerminatedCalibrate)|GripDetector\.Plant|GraspMassModel\.ObserverSeesNoForce|FieldContact\.SlidingOnASmoothSphere|FastSkips\.SkippingChangesNoTorque|VolumeCli\.ProceduralMolarThroughASyntheticScan')
   (cd "build/$f" && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
      LSAN_OPTIONS="suppressions=$root/scripts/lsan.supp" \
      UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
