@@ -301,7 +301,7 @@ void VoxelDistanceCache::keep(const VoxelTooth& tooth, std::uint64_t key, const 
   int idx[3];
   if (sdf_detail::voxel_of(grid, x, idx) &&
       grid.voxels[grid.index(idx[0], idx[1], idx[2])] != kEmpty) {
-    return;  // inside: the shell search, not kept
+    return;  // inside: not kept (the edit asks outside samples only; field.h)
   }
   Entry& e = entries_[key % kEntries];
   e.key = key + 1;

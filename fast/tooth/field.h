@@ -149,8 +149,12 @@ class FieldSolid {
 // box_distance2(s, voxel) over the solid voxels with box_distance2 < reach^2 (each the same double
 // for the same voxel and point), or reach when there is none. Removing voxels shrinks that set;
 // s's voxel stays empty (the same branch); a minimum over a subset that still holds the argmin v
-// is the same double; an empty set stays empty. Inside samples (a solid voxel: the shell search)
-// are not kept. Direct-mapped, fixed size: nothing allocates in the tick.
+// is the same double; an empty set stays empty. The edit asks with a reach that may be shorter
+// than c_out (reference/tooth/field_edit_core.h): then a listed solid voxel lies within it, so the
+// query finds the least distance (found), and any later query of s (whose reach is again at least
+// a solid voxel's distance, or c_out) has that minimum too while v is solid; "not found" is kept
+// only from a query at c_out. The edit no longer queries inside samples (a closed form); keep()
+// still refuses them. Direct-mapped, fixed size: nothing allocates in the tick.
 class VoxelDistanceCache {
  public:
   VoxelDistanceCache() : entries_(kEntries) {}
