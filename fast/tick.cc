@@ -54,8 +54,7 @@ void unneeded_decomposition(const PipelineModel& m, PipelineData& d) {
 bool pd_step(const PipelineModel& m, PipelineData& d) {
   if (!pd_tool_is_diagonal(m.tool)) return reference::detail::pd_step(m, d);
   const TickResult& r = d.r;
-  Mat6 M_joint = d.dev.M;  // the device inertia under the hypothesis in force
-  if (m.grasp && d.grip.gripped) M_joint += d.M_hand;
+  const Mat6 M_joint = reference::detail::model_joint_inertia(m, d, d.dev.M);
   Mat6 JM;
   JM.noalias() = d.J1.transpose() * M_joint;
   Mat6 M1;

@@ -163,13 +163,6 @@ namespace reference {
 
 namespace {
 
-// The device model's inertia under the hypothesis in force of the grip detector: M (+ M_hand).
-Mat6 model_joint_inertia(const PipelineModel& m, const PipelineData& d, const DeviceTerms& t) {
-  Mat6 M = t.M;
-  if (m.grasp && d.grip.gripped) M += d.M_hand;
-  return M;
-}
-
 // The device model's joint acceleration under the torque applied over the tick that ended and the
 // observer's estimate of the hand, a = M^-1 (tau_prev + f_hat - g - tau_f), with the terms `t`,
 // the hypothesis in force of the grip detector and its inertia M (model_joint_inertia; Coriolis
@@ -205,7 +198,7 @@ void encoder_kalman_step(const PipelineModel& m, PipelineData& d) {
   } else {
     const double T = d.have_prev && d.t > d.t_prev ? d.t - d.t_prev : d.T;
     const DeviceTerms& t = d.dev;
-    const Mat6 M = model_joint_inertia(m, d, t);
+    const Mat6 M = detail::model_joint_inertia(m, d, t.M);
     // sigma_a,i = sigma_f (|J_v,i| + lever |J_w,i|) / M_ii: the force the model does not know.
     const EncoderKalmanParams& p = m.encoder_kalman_params;
     Vec6 sigma_a = Vec6::Zero();
@@ -294,7 +287,7 @@ TickStatus device_terms(const PipelineModel& m, PipelineData& d) {
     // at the midpoint of the coming tick; the observer and the hand's terms keep the measured one.
     const double T_last = d.t > d.t_prev ? d.t - d.t_prev : d.T;
     const Vec6 accel =
-        model_joint_acceleration(m, d, t, model_joint_inertia(m, d, t), true);
+        model_joint_acceleration(m, d, t, detail::model_joint_inertia(m, d, t.M), true);
     d.r.V1.noalias() = t.J_t * (d.qd + loop_velocity_lag(m.velocity_estimate, T_last, d.T) * accel);
   }
   return TickStatus::kOk;
@@ -365,8 +358,7 @@ TickStatus assemble_given_contact(const PipelineModel& m, PipelineData& d) {
 bool pd_step(const PipelineModel& m, PipelineData& d) {
   const TickResult& r = d.r;
   // The device inertia in maximal coordinates (2.2) under the hypothesis in force.
-  Mat6 M_joint = d.dev.M;
-  if (m.grasp && d.grip.gripped) M_joint += d.M_hand;
+  const Mat6 M_joint = model_joint_inertia(m, d, d.dev.M);
   const Mat6 M1 = d.J1.transpose() * M_joint * d.J1;
   Decomposition dec;
   if (!decompose_locked(M1, m.proxy.M(), r.device.R, d.proxy.pose.R, &dec)) return false;

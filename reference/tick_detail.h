@@ -6,6 +6,15 @@
 
 namespace dentsim::reference::detail {
 
+// The device's joint-space inertia under the hypothesis in force of the grip detector: M, plus the
+// hand's M_hand while the hand is judged on the tool (grasp on). The one place that picks it: the
+// encoder Kalman filter, the loop-lag compensation and both twins' decomposition read it here.
+inline Mat6 model_joint_inertia(const PipelineModel& m, const PipelineData& d, const Mat6& M) {
+  Mat6 out = M;
+  if (m.grasp && d.grip.gripped) out += d.M_hand;
+  return out;
+}
+
 // The passive decomposition's feed-forward (4.7) of a pmi-pd tick: fills d.pd_T1 and d.pd_T2 from
 // the device inertia under the hypothesis in force, the poses, r.V1, r.F1_hat and d.contact;
 // false when the locked inertia is not positive definite (or phi is not finite).
