@@ -19,6 +19,8 @@
 #include "sim/scene.h"
 #include "sim/simulator.h"
 #include "fast/registry.h"
+#include "reference/core/contact_provider.h"
+#include "reference/core/pipeline.h"
 
 namespace dentsim {
 namespace {
@@ -59,6 +61,30 @@ void BM_Tick(benchmark::State& state, const StageTable* table, bool contact, con
   state.SetLabel(std::string(table->implementation) + ", " + method + ", " + model +
                  (contact ? ", contact + drilling" : ", free space"));
 }
+
+// What the stage timing itself costs: pipeline_tick over seven stages that do nothing, with
+// PipelineModel::time_stages on (a steady_clock read before the stages and after each) and off
+// (no clock read). BM_TickTiming/1 - BM_TickTiming/0 is the timing's cost per tick.
+TickStatus empty_stage(const PipelineModel&, PipelineData&) { return TickStatus::kOk; }
+TickStatus empty_reset(const PipelineModel&, PipelineData&) { return TickStatus::kOk; }
+
+void BM_TickTiming(benchmark::State& state) {
+  StageTable table{"empty", {}, &empty_reset};
+  for (StageFn& f : table.stage) f = &empty_stage;
+  PipelineModel m;
+  m.time_stages = state.range(0) != 0;
+  auto d = std::make_unique<PipelineData>();
+  DeviceSample s;
+  s.q = VecX::Zero(6);
+  s.qd = VecX::Zero(6);
+  NoContacts none;
+  for (auto _ : state) {
+    s.t += 1e-3;
+    benchmark::DoNotOptimize(pipeline_tick(table, m, *d, s, 1e-3, none));
+  }
+  state.SetLabel(m.time_stages ? "stages timed (8 clock reads)" : "stages not timed");
+}
+BENCHMARK(BM_TickTiming)->Arg(0)->Arg(1)->Unit(benchmark::kNanosecond);
 
 const int kRegistered = [] {
   for (const StageTable* t : stage_tables()) {

@@ -152,6 +152,7 @@ PipelineModel make_pipeline_model(const SixDofDeviceModel& device, const Pipelin
   m.saturation_passive =
       config.saturation_passive && m.saturate && config.method != Method::kExplicitVc;
   m.skip_unneeded = config.skip_unneeded;
+  m.time_stages = config.time_stages;
   if (!m.skip_unneeded && config.method != Method::kPmiPd) {
     // The decomposition runs (and is discarded) with skips off: it needs M_d factorised.
     m.tool_Md_llt.compute(config.tool.M_d);

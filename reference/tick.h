@@ -53,6 +53,7 @@ struct PipelineConfig {
   const GraspMassModel* grasp_model = nullptr;
   GripDetectorParams grip_detector;
   bool skip_unneeded = true;  // PipelineModel::skip_unneeded
+  bool time_stages = true;    // PipelineModel::time_stages (false: stage_ns stays zero)
   // The encoder Kalman filter (reference/encoder_kalman.h): a sub-count estimate of (q, qd) from
   // the quantised encoders, per joint quantum `encoder_quantum` (the device's; empty or zero:
   // that joint passes through). Off by default.

@@ -357,6 +357,7 @@ std::unique_ptr<Pipeline> zwidth_pipeline(Method method, const ZwidthGains& gain
   pc.encoder_quantum = dev.capabilities().encoder_quantum;
   pc.lag_compensation = sc.lag_compensation;
   pc.velocity_estimate = matched_observer_input(dev.capabilities());
+  pc.time_stages = false;  // a sweep reads no stage time: no clock read in its ticks
   DeviceSample s0 = dev.make_sample();
   dev.read(s0);
   if (method == Method::kPmiPd) {

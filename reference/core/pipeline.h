@@ -136,6 +136,10 @@ struct PipelineModel {
   // free-space early out. false runs every one of them and discards what the method does not
   // use: the same torques (tests/fast/skip_test.cc), for checks and for bench/skip_bench.cc.
   bool skip_unneeded = true;
+  // Time each stage into TickResult::stage_ns (one steady_clock read per stage and one before
+  // them). false: no clock is read and stage_ns stays zero; nothing else changes (the same
+  // torques, bitwise). For callers that never read the times (the Z-width sweeps).
+  bool time_stages = true;
 };
 
 // ---- data ----------------------------------------------------------------------------------
@@ -268,7 +272,7 @@ struct StageTable {
 TickStatus pipeline_reset(const StageTable& table, const PipelineModel& m, PipelineData& d,
                           const DeviceSample& s);
 // One tick: checks T and the sample, runs every stage in order (timing each into
-// d.r.stage_ns), stops at the first failing stage. On failure d.r.tau and d.r.tau_gravity are
+// d.r.stage_ns when m.time_stages, else leaving it zero), stops at the first failing stage. On failure d.r.tau and d.r.tau_gravity are
 // zero and d.r.status names the failure. Never allocates, never throws.
 TickStatus pipeline_tick(const StageTable& table, const PipelineModel& m, PipelineData& d,
                          const DeviceSample& s, double T, ContactProvider& env);

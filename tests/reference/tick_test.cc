@@ -353,5 +353,49 @@ TEST(Tick, RegistryStagesInOrderAreTheTick) {
   }
 }
 
+// Stage timing off (PipelineConfig::time_stages = false): no clock is read and stage_ns stays zero,
+// while every output is bitwise the timed tick's, tick after tick (through contact, friction and
+// a failed tick).
+TEST(Tick, UntimedStagesLeaveTheTimesZeroAndChangeNothingElse) {
+  const RigidBodyDevice dev;
+  PipelineConfig cfg;
+  cfg.method = Method::kPmiPd;
+  cfg.observer_gain = VecX::Constant(6, 100.0);
+  cfg.tool = tool_preset("handpiece");
+  cfg.friction.enabled = true;
+  ReferencePipeline timed(dev, cfg);
+  cfg.time_stages = false;
+  ReferencePipeline untimed(dev, cfg);
+  EXPECT_TRUE(timed.model().time_stages);
+  EXPECT_FALSE(untimed.model().time_stages);
+  Pose pose;
+  pose.x = Vec3(0.0, 0.0, 0.8e-3);
+  DeviceSample s;
+  s.q = dev.joint_position(pose);
+  s.qd = VecX::Zero(6);
+  timed.reset(s);
+  untimed.reset(s);
+  HalfSpaceWall wall(Vec3::Zero(), Vec3::UnitZ(), 1e-3, 3000.0, 2.0);
+  int in_contact = 0;
+  for (int k = 1; k <= 60; ++k) {
+    pose.x = Vec3(1e-4 * k, 0.0, 0.8e-3 - 2e-5 * k);
+    const VecX q = dev.joint_position(pose);
+    s.qd = (q - s.q) / 1e-3;
+    s.q = q;
+    s.t = 1e-3 * k;
+    const double T = k == 30 ? -1.0 : 1e-3;  // one bad tick length: a named failure in both
+    const TickResult& a = timed.tick(s, T, wall);
+    const TickResult& b = untimed.tick(s, T, wall);
+    ASSERT_EQ(a.status, b.status) << k;
+    EXPECT_EQ(a.status == TickStatus::kOk, k != 30) << k;
+    for (int i = 0; i < 6; ++i) EXPECT_EQ(a.tau(i), b.tau(i)) << k;
+    EXPECT_EQ((timed.proxy().pose.x - untimed.proxy().pose.x).norm(), 0.0) << k;
+    EXPECT_EQ(a.contacts.size(), b.contacts.size()) << k;
+    for (int i = 0; i < kStageCount; ++i) EXPECT_EQ(b.stage_ns[i], 0) << k << " " << i;
+    in_contact += a.contacts.empty() ? 0 : 1;
+  }
+  EXPECT_GT(in_contact, 30);  // the comparison covers contact ticks, not only free space
+}
+
 }  // namespace
 }  // namespace dentsim
