@@ -146,7 +146,6 @@ def main(argv):
             return 2
         return 0
     if len(argv) < 3 or argv[1] not in ("summary", "points"):
-        print(__doc__.strip().splitlines()[2], file=sys.stderr)
         print("usage: zwidth_quiet_table.py summary A.json [B.json ...] | "
               "points A.json [--method M] [--operator OP] | tap-bound DEVICE.json [F_SAT ...]",
               file=sys.stderr)
