@@ -139,12 +139,23 @@ PhantomParams phantom_belief(const ZwidthScenario& sc) {
   return p;
 }
 
+// The simulated Phantom's joint encoder quanta [rad]: the device model file's
+// encoder_counts_per_rev when `--device` gave one (issue #29: a finer gimbal encoder), else the
+// built-in 1024 CPR x4 x drive ratio (the default file's counts, kept bit for bit).
+VecX phantom_testbed_quantum(const ZwidthScenario& sc) {
+  if (sc.phantom_device_params) {
+    return phantom_device_config(*sc.phantom_device_params).encoder_quantum;
+  }
+  return encoder_quantum(1024, 4, phantom_drive_ratios());
+}
+
 class PhantomRig : public Rig {
  public:
   explicit PhantomRig(const ZwidthScenario& sc)
       : truth_(phantom_truth(sc)), model_(make_phantom_model(sc.pipeline, phantom_belief(sc))) {
     SimulatedDeviceConfig cfg;
     cfg.gravity = false;
+    cfg.encoder_quantum = phantom_testbed_quantum(sc);
     if (sc.jitter_half_width > 0.0) {
       cfg.jitter.kind = TickJitterKind::kUniform;
       cfg.jitter.half_width = sc.jitter_half_width;
@@ -207,7 +218,7 @@ TipProperties tip_properties(const ZwidthScenario& sc) {
   tp.damping = (J1.transpose() * B * J1)(2, 2);
   tp.mass = (J1.transpose() * m.mass_matrix(q0) * J1)(2, 2);
   const Mat6 Jt = m.model().tool_jacobian(q0);
-  const VecX quantum = encoder_quantum(1024, 4, phantom_drive_ratios());
+  const VecX quantum = phantom_testbed_quantum(sc);
   for (int i = 0; i < 6; ++i) tp.quantum += std::abs(Jt(2, i)) * quantum(i);
   return tp;
 }

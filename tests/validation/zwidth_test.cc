@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <string>
 
 #include "reference/core/io.h"
@@ -232,6 +233,31 @@ TEST(ZwidthGripDetector, DropsTheHandMassOnReleaseAndKeepsItUnderGrip) {
   EXPECT_TRUE(found.stable);
   EXPECT_GE(found.grip_switches, 1);
   EXPECT_GT(found.grip_agreement, 0.5);
+}
+
+// `dentsim zwidth --device MODEL` (issue #29): the simulated device counts with the model file's
+// encoder_counts_per_rev, and the tip quantum the verdicts use follows it. At the start pose
+// q0 = 0 the tip moves along z by l1 per rad of q2 (the parallelogram keeps the forearm's angle),
+// l_tip per rad of q3 and of the gimbal pitch (l_tip = 0.04 m, the tool offset), and not with q1,
+// the yaw or the roll.
+TEST(ZwidthPhantomDevice, TipQuantumFollowsTheModelFilesEncoders) {
+  ZwidthScenario sc;
+  sc.testbed = ZwidthTestbed::kPhantom;
+  const PhantomParams base = default_phantom_params();
+  const double l1 = base.l1_m, lt = -base.tip_offset_m.z();
+  const auto quantum = [](const PhantomParams& p, int j) {
+    return 2.0 * std::numbers::pi / p.encoder_counts_per_rev[j];
+  };
+  const double built_in = testbed_tip_quantum(sc);
+  EXPECT_NEAR(built_in, l1 * quantum(base, 1) + lt * quantum(base, 2) + lt * quantum(base, 4),
+              1e-12);
+  PhantomParams fine = base;
+  for (int j = 3; j < 6; ++j) fine.encoder_counts_per_rev[j] *= 4.0;  // gimbal 4 times finer
+  sc.phantom_device_params = fine;
+  const double finer = testbed_tip_quantum(sc);
+  EXPECT_NEAR(built_in - finer, 0.75 * lt * quantum(base, 4), 1e-12);
+  std::printf("[zwidth] tip quantum along z at q0: built-in %.4g m, gimbal x4 %.4g m\n", built_in,
+              finer);
 }
 
 }  // namespace
