@@ -22,12 +22,33 @@
 //
 // Two savings against the rule as written, neither changing a stored value, the Lipschitz
 // constant, or which samples are raised (so both twins and the field stay what the rule makes):
-// - Only the ball is read. A sample whose distance to the removed cube (grown by h/2) exceeds
+// - Only the ball is read (and of it, the next point). A sample whose distance to the removed cube (grown by h/2) exceeds
 //   v_max + slack, v_max the largest |v| a stored value below c_out can have (the float clamps),
 //   fails the rule's test to_cube > |v(s)| + slack whatever v(s) is (floating-point addition is
 //   monotone), so it is not read; whole planes and rows are skipped the same way (to_cube only
 //   grows with |dx|, |dy|, |dz|: a sum of exact squares of small integers, then sqrt and * h,
 //   both monotone). FieldEditStats::samples_scanned counts the samples read.
+// - Only the samples a removal can change are read. The field keeps, for each x row of 8 samples
+//   of one of its bricks (sample x in [8 b, 8 b + 7], fixed y and z), a bound B >= |v(s)| over
+//   the row's samples with v(s) < c_out (as float), or B < 0 when it has none
+//   (SampledField::row_bound). Invariant: the build measures it; raise() is the only writer
+//   afterwards and, when the value it stores is below c_out, raises B to that |v| (the other
+//   samples of the row keep their values, so B still covers them; a brick taken from the spare
+//   room holds -c_in everywhere and starts at B = c_in); the fast twin raises through the same
+//   SampledField and its bricks mirror the same floats, so the bound is one for both twins. A
+//   sample of the row that the rule examines has old < c_out, so |old| <= B, and to_cube <=
+//   |old| + slack <= B + slack (floating-point addition is monotone). to_cube = h sqrt(q_s),
+//   q_s = ex^2 + ey^2 + ez^2 exact in small integers; h sqrt(q_s) <= B + slack gives q_s <=
+//   ((B + slack) / h)^2 (1 + 4 eps), so with t = (1 + 1e-9) (B + slack) / h (the margin far
+//   above the few roundings of t) ex^2 <= t^2 - ey^2 - ez^2 and ex <= floor(sqrt(that)) = ex_max
+//   (sqrt is correctly rounded and monotone and sqrt(ex^2) = ex). So the samples of the segment
+//   with |dx| - 1 > ex_max, and every sample of a segment with B < 0 or t^2 < ey^2 + ez^2, fail
+//   the rule's test: they are not read. A raise during the scan changes only the sample just
+//   read (each sample is read once per removed voxel), so a segment's bound read before its
+//   samples covers all of them that are still to be read. The scan then reads, within the ball,
+//   the samples whose own row allows it: near a flat floor the outside rows at height z read
+//   about ex^2 + ey^2 <= 2 z (a paraboloid over the cube, not the ball), inside rows the ball of
+//   c_in (tests/tooth/field_drilling_test.cc prints the samples read per removed voxel).
 // - Outside samples ask with a shorter reach, or not at all. Outside, the query returns
 //   phi = sqrt(best2), best2 the least box_distance2 from p(s) over the solid voxels with
 //   box_distance2 < reach^2, and the voxel of the least index among those at best2
@@ -139,56 +160,69 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
         if (sy < 0 || sy >= m) continue;
         const double ey = std::max(std::abs(dy) - 1.0, 0.0);
         if (h * std::sqrt(ey * ey + ez * ez) > ball) continue;  // the row misses the ball
-        for (int dx = -reach; dx <= reach; ++dx) {
-          const int sx = s0[0] + dx;
-          if (sx < 0 || sx >= m) continue;
-          const double ex = std::max(std::abs(dx) - 1.0, 0.0);
-          // Distance from s to the removed voxel's cube grown by h / 2 (the source's sub-voxel
-          // slivers in the empty cubes next to it went with it): beyond |v(s)| that did not
-          // hold s's nearest surface point.
-          const double to_cube = h * std::sqrt(ex * ex + ey * ey + ez * ez);
-          if (to_cube > ball) continue;
-          ++stats->samples_scanned;
-          const float old = access.at(sx, sy, sz);
-          if (old >= out_f) continue;  // at the outside clamp: a max cannot raise it
-          if (to_cube > std::abs(static_cast<double>(old)) + slack) continue;
-          ++stats->samples_queried;
-          const Vec3 p = field.sample_position(sx, sy, sz);
-          int idx[3] = {0, 0, 0};
-          const bool in_grid = sdf_detail::voxel_of(grid, p, idx);
-          const bool inside =
-              in_grid && grid.voxels[grid.index(idx[0], idx[1], idx[2])] != kEmpty;
-          double d = 0.0;
-          if (inside) {  // the closed form: minus the distance to the removed cube
-            ++stats->samples_bounded;
-            const double ax = std::max(std::abs(dx) - 0.5, 0.0);
-            const double ay = std::max(std::abs(dy) - 0.5, 0.0);
-            const double az = std::max(std::abs(dz) - 0.5, 0.0);
-            d = -h * std::sqrt(ax * ax + ay * ay + az * az);
-          } else {
-            // The nearest listed solid voxel (header comment): no query if it is within v(s),
-            // else the query's reach cut down to it.
-            const int c[3] = {sx - pad, sy - pad, sz - pad};
-            const int best4 = nearest_listed4(grid, c, near_lo, near_count);
-            const double listed =
-                best4 == INT_MAX ? c_out : 0.5 * h * std::sqrt(static_cast<double>(best4)) * kWide;
-            if (listed <= static_cast<double>(old)) {
-              ++stats->samples_bounded;  // the query's phi <= v(s): no raise (header comment)
+        // The row in segments of the field's bricks, each read only where its row bound lets a
+        // sample pass the rule's test (header comment, "Only the samples a removal can change").
+        const int x_first = std::max(0, s0[0] - reach), x_last = std::min(m - 1, s0[0] + reach);
+        for (int xb = x_first / kFieldBrick; xb * kFieldBrick <= x_last; ++xb) {
+          const float bound = field.row_bound(xb, sy, sz);
+          if (bound < 0.0f) continue;  // every sample of the segment at c_out
+          const double t = (static_cast<double>(bound) + slack) / h * kWide;
+          const double q = t * t - (ey * ey + ez * ez);
+          if (q < 0.0) continue;  // the segment's row misses the bound's ball
+          const int ex_max = static_cast<int>(std::sqrt(q));  // |dx| - 1 <= ex_max
+          const int x_lo = std::max({x_first, xb * kFieldBrick, s0[0] - ex_max - 1});
+          const int x_hi =
+              std::min({x_last, xb * kFieldBrick + kFieldBrick - 1, s0[0] + ex_max + 1});
+          for (int sx = x_lo; sx <= x_hi; ++sx) {
+            const int dx = sx - s0[0];
+            const double ex = std::max(std::abs(dx) - 1.0, 0.0);
+            // Distance from s to the removed voxel's cube grown by h / 2 (the source's sub-voxel
+            // slivers in the empty cubes next to it went with it): beyond |v(s)| that did not
+            // hold s's nearest surface point.
+            const double to_cube = h * std::sqrt(ex * ex + ey * ey + ez * ez);
+            if (to_cube > ball) continue;
+            ++stats->samples_scanned;
+            const float old = access.at(sx, sy, sz);
+            if (old >= out_f) continue;  // at the outside clamp: a max cannot raise it
+            if (to_cube > std::abs(static_cast<double>(old)) + slack) continue;
+            ++stats->samples_queried;
+            const Vec3 p = field.sample_position(sx, sy, sz);
+            int idx[3] = {0, 0, 0};
+            const bool in_grid = sdf_detail::voxel_of(grid, p, idx);
+            const bool inside =
+                in_grid && grid.voxels[grid.index(idx[0], idx[1], idx[2])] != kEmpty;
+            double d = 0.0;
+            if (inside) {  // the closed form: minus the distance to the removed cube
+              ++stats->samples_bounded;
+              const double ax = std::max(std::abs(dx) - 0.5, 0.0);
+              const double ay = std::max(std::abs(dy) - 0.5, 0.0);
+              const double az = std::max(std::abs(dz) - 0.5, 0.0);
+              d = -h * std::sqrt(ax * ax + ay * ay + az * az);
+            } else {
+              // The nearest listed solid voxel (header comment): no query if it is within v(s),
+              // else the query's reach cut down to it.
+              const int c[3] = {sx - pad, sy - pad, sz - pad};
+              const int best4 = nearest_listed4(grid, c, near_lo, near_count);
+              const double listed =
+                  best4 == INT_MAX ? c_out : 0.5 * h * std::sqrt(static_cast<double>(best4)) * kWide;
+              if (listed <= static_cast<double>(old)) {
+                ++stats->samples_bounded;  // the query's phi <= v(s): no raise (header comment)
+                continue;
+              }
+              d = access.distance(sx, sy, sz, p, std::min(listed, c_out));
+            }
+            if (!(d > old)) continue;
+            if (!access.raise(sx, sy, sz, d)) {
+              ++stats->samples_lost;
+              complete = false;
               continue;
             }
-            d = access.distance(sx, sy, sz, p, std::min(listed, c_out));
-          }
-          if (!(d > old)) continue;
-          if (!access.raise(sx, sy, sz, d)) {
-            ++stats->samples_lost;
-            complete = false;
-            continue;
-          }
-          ++stats->samples_raised;
-          const int s[3] = {sx, sy, sz};
-          for (int a = 0; a < 3; ++a) {
-            lo[a] = std::min(lo[a], s[a]);
-            hi[a] = std::max(hi[a], s[a]);
+            ++stats->samples_raised;
+            const int s[3] = {sx, sy, sz};
+            for (int a = 0; a < 3; ++a) {
+              lo[a] = std::min(lo[a], s[a]);
+              hi[a] = std::max(hi[a], s[a]);
+            }
           }
         }
       }
