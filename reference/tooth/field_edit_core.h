@@ -202,9 +202,20 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
               // The nearest listed solid voxel (header comment): no query if it is within v(s),
               // else the query's reach cut down to it.
               const int c[3] = {sx - pad, sy - pad, sz - pad};
-              const int best4 = nearest_listed4(grid, c, near_lo, near_count);
-              const double listed =
-                  best4 == INT_MAX ? c_out : 0.5 * h * std::sqrt(static_cast<double>(best4)) * kWide;
+              const auto to_listed = [&](int best4) {
+                return best4 == INT_MAX ? c_out
+                                        : 0.5 * h * std::sqrt(static_cast<double>(best4)) * kWide;
+              };
+              // The removed voxel's 26 first (no grid reads): when they already bound v(s), so
+              // does the least over all of U (to_listed is monotone), and the 27 are not read.
+              int best4 = INT_MAX;
+              for (int u = 0; u < near_count; ++u) {
+                best4 = std::min(best4, lattice_distance4(c, near_lo[u]));
+              }
+              if (to_listed(best4) > static_cast<double>(old)) {
+                best4 = std::min(best4, nearest_listed4(grid, c, near_lo, 0));
+              }
+              const double listed = to_listed(best4);
               if (listed <= static_cast<double>(old)) {
                 ++stats->samples_bounded;  // the query's phi <= v(s): no raise (header comment)
                 continue;
