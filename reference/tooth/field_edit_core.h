@@ -63,6 +63,9 @@
 //   min(D, c_out) instead of c_out: the voxels with box_distance2 < D^2 hold every voxel at the
 //   least distance (below D^2), so the search returns the same best2, voxel and nearest point,
 //   the same phi, and prunes every octree node beyond D (U empty: D = c_out, the rule's query).
+//   The 26 listed around the removed voxel are taken first (no grid reads): if their least
+//   distance already gives D' <= v(s), then D <= D' (a minimum over more voxels; the map from
+//   lattice_distance4 to D is monotone) and the 27 around s are not read: the same decision.
 // FieldEditStats::samples_queried counts the samples the rule examines (inside and outside),
 // samples_bounded those of them answered without a voxel-distance query (inside samples by the
 // closed form, outside ones by a solid neighbour): the queries are the difference.
