@@ -112,9 +112,32 @@ inline int nearest_listed4(const VoxelGrid& grid, const int c[3], const int (*ne
   return best;
 }
 
+// Where a budgeted edit stopped (edit_field with a cursor): the voxel of `removed` being
+// subtracted and the next row (dz, dy) of its box, row = (dz + R) (2R + 1) + dy + R. The edit is
+// whole when next == removed.size(). Plain data: preallocated by its owner, nothing in the tick.
+struct FieldEditCursor {
+  std::size_t next = 0;
+  int row = 0;
+};
+
+// The edit (header comment). With a cursor, it resumes there and stops after the first row at
+// which it has read `budget` samples in this call (so it reads at most budget + 2R + 1), leaving
+// the cursor at the next row; without one it subtracts all of `removed`. A budgeted edit is safe
+// and ends where the whole one does. Safe: the samples not yet reached keep a value at most
+// their edited one (values only rise), so {phi >= rho - s} is smaller, never larger, than after
+// the whole edit (the proxy's Claim 1 and the no-tunnelling argument hold for any field whose
+// Lipschitz constant bounds it, and each call raises it over the box of the samples it changed,
+// as a whole edit does). The same end: each sample's update depends only on its value, the
+// removed voxel, and the grid (the solid voxels listed around the removed voxel are listed again
+// when a call resumes); the calls take the voxels, rows and samples in the order of one whole
+// call, so while the grid does not change in between, every value and count (voxels, samples
+// read, asked, raised) ends the same; the Lipschitz constant is at least the whole edit's (a
+// pause re-measures cells between an edited and a not yet edited sample).
+// `FieldDrilling.ABudgetedEditEndsWhereTheWholeEditEnds` checks this.
 template <class Access>
 bool edit_field(const SampledField& field, const VoxelTooth& tooth,
-                std::span<const std::size_t> removed, Access& access, FieldEditStats* stats) {
+                std::span<const std::size_t> removed, Access& access, FieldEditStats* stats,
+                FieldEditCursor* cursor = nullptr, long budget = 0) {
   const VoxelGrid& grid = tooth.grid();
   const std::size_t n = static_cast<std::size_t>(grid.n);
   const double h = grid.voxel_size;
@@ -132,10 +155,17 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
   // The box of the changed samples: the cell bound is measured once all of the tick's removed
   // voxels are subtracted (a cell between two of them is whole only then).
   int lo[3] = {INT_MAX, INT_MAX, INT_MAX}, hi[3] = {-1, -1, -1};
-  for (const std::size_t v : removed) {
+  const int width = 2 * reach + 1;  // rows of a box along y (and planes along z)
+  const long scanned_before = stats->samples_scanned;
+  bool paused = false;
+  for (std::size_t at = cursor != nullptr ? cursor->next : 0; at < removed.size() && !paused;
+       ++at) {
+    const std::size_t v = removed[at];
     const int s0[3] = {static_cast<int>(v % n) + pad, static_cast<int>((v / n) % n) + pad,
                        static_cast<int>(v / (n * n)) + pad};
-    ++stats->voxels;
+    // The first row of this voxel's box this call takes (a resumed voxel's next row).
+    const int first_row = cursor != nullptr && at == cursor->next ? cursor->row : 0;
+    if (first_row == 0) ++stats->voxels;
     // The removed voxel's solid neighbours U (header comment): at most 26 boxes.
     int near_lo[26][3] = {};
     int near_count = 0;
@@ -153,12 +183,20 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
         }
       }
     }
-    for (int dz = -reach; dz <= reach; ++dz) {
+    for (int dz = -reach + first_row / width; dz <= reach && !paused; ++dz) {
       const int sz = s0[2] + dz;
       if (sz < 0 || sz >= m) continue;
       const double ez = std::max(std::abs(dz) - 1.0, 0.0);
       if (h * std::sqrt(ez * ez) > ball) continue;  // the plane misses the ball
-      for (int dy = -reach; dy <= reach; ++dy) {
+      for (int dy = -reach; dy <= reach && !paused; ++dy) {
+        const int row = (dz + reach) * width + dy + reach;
+        if (row < first_row) continue;  // taken by an earlier call
+        if (cursor != nullptr && stats->samples_scanned - scanned_before >= budget) {
+          cursor->next = at;  // the budget is spent: this row is the next call's first
+          cursor->row = row;
+          paused = true;
+          break;
+        }
         const int sy = s0[1] + dy;
         if (sy < 0 || sy >= m) continue;
         const double ey = std::max(std::abs(dy) - 1.0, 0.0);
@@ -241,6 +279,10 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
         }
       }
     }
+  }
+  if (cursor != nullptr && !paused) {  // every voxel whole
+    cursor->next = removed.size();
+    cursor->row = 0;
   }
   if (hi[0] >= 0) access.include_cells(lo, hi);
   return complete;
