@@ -122,7 +122,8 @@ struct FieldEditCursor {
 
 // The edit (header comment). With a cursor, it resumes there and stops after the first row at
 // which it has read `budget` samples in this call (so it reads at most budget + 2R + 1), leaving
-// the cursor at the next row; without one it subtracts all of `removed`. A budgeted edit is safe
+// the cursor at the next row (budget >= 1: every call then takes at least one row); without one
+// it subtracts all of `removed`. A budgeted edit is safe
 // and ends where the whole one does. Safe: the samples not yet reached keep a value at most
 // their edited one (values only rise), so {phi >= rho - s} is smaller, never larger, than after
 // the whole edit (the proxy's Claim 1 and the no-tunnelling argument hold for any field whose
