@@ -39,6 +39,18 @@ bool in_sphere(const Vec3& p) { return (p - kCentre).norm() < kR; }
 
 VoxelGrid sphere_grid() { return test::solid_grid(kN, kSide, in_sphere); }
 
+// The samples at which two fields of the same lattice differ (bitwise).
+long samples_differing(const SampledField& a, const SampledField& b) {
+  const int m = a.samples_per_axis();
+  long differ = 0;
+  for (int z = 0; z < m; ++z) {
+    for (int y = 0; y < m; ++y) {
+      for (int x = 0; x < m; ++x) differ += a.at(x, y, z) != b.at(x, y, z);
+    }
+  }
+  return differ;
+}
+
 // The top of the sphere and the bur's path: from 0.2 mm above contact straight down 1.1 mm, then
 // 0.6 mm along x at that depth.
 const Vec3 kTop = kCentre + Vec3(0, 0, kR);
@@ -337,14 +349,7 @@ TEST(FieldDrilling, TheEditsSavingsChangeNoValue) {
   EXPECT_EQ(e.samples_queried, provider.plain_queried);
   EXPECT_GT(e.samples_bounded, 0);
   EXPECT_EQ(field.lipschitz(), plain.lipschitz());
-  const int m = field.samples_per_axis();
-  long differ = 0;
-  for (int z = 0; z < m; ++z) {
-    for (int y = 0; y < m; ++y) {
-      for (int x = 0; x < m; ++x) differ += field.at(x, y, z) != plain.at(x, y, z);
-    }
-  }
-  EXPECT_EQ(differ, 0);
+  EXPECT_EQ(samples_differing(field, plain), 0);
 }
 
 // A budgeted edit (field_edit_core.h FieldEditCursor) ends where the whole edit ends: a cap of the
@@ -405,14 +410,7 @@ TEST(FieldDrilling, ABudgetedEditEndsWhereTheWholeEditEnds) {
   EXPECT_EQ(a.samples_queried, b.samples_queried);
   EXPECT_EQ(a.samples_raised, b.samples_raised);
   EXPECT_GT(a.samples_raised, 0);
-  const int m = whole.samples_per_axis();
-  long differ = 0;
-  for (int z = 0; z < m; ++z) {
-    for (int y = 0; y < m; ++y) {
-      for (int x = 0; x < m; ++x) differ += whole.at(x, y, z) != budgeted.at(x, y, z);
-    }
-  }
-  EXPECT_EQ(differ, 0);
+  EXPECT_EQ(samples_differing(whole, budgeted), 0);
   EXPECT_GE(budgeted.lipschitz(), whole.lipschitz());
 }
 
