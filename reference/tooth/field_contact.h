@@ -46,7 +46,7 @@ class FieldSolid {
 // What edit_field_for_removed_voxels did (summed over calls).
 struct FieldEditStats {
   long voxels = 0;            // removed voxels subtracted
-  long samples_scanned = 0;   // samples read (the ball in the box of each removed voxel)
+  long samples_scanned = 0;   // samples read (of the ball, those the row bounds let pass)
   long samples_queried = 0;   // samples the removal may change (the rule's candidates)
   long samples_bounded = 0;   // of those, answered without a voxel-distance query: inside ones
                               // by the closed form, outside ones by a listed solid voxel

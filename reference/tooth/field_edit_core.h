@@ -22,12 +22,33 @@
 //
 // Two savings against the rule as written, neither changing a stored value, the Lipschitz
 // constant, or which samples are raised (so both twins and the field stay what the rule makes):
-// - Only the ball is read. A sample whose distance to the removed cube (grown by h/2) exceeds
+// - Only the ball is read (and of it, the next point). A sample whose distance to the removed cube (grown by h/2) exceeds
 //   v_max + slack, v_max the largest |v| a stored value below c_out can have (the float clamps),
 //   fails the rule's test to_cube > |v(s)| + slack whatever v(s) is (floating-point addition is
 //   monotone), so it is not read; whole planes and rows are skipped the same way (to_cube only
 //   grows with |dx|, |dy|, |dz|: a sum of exact squares of small integers, then sqrt and * h,
 //   both monotone). FieldEditStats::samples_scanned counts the samples read.
+// - Only the samples a removal can change are read. The field keeps, for each x row of 8 samples
+//   of one of its bricks (sample x in [8 b, 8 b + 7], fixed y and z), a bound B >= |v(s)| over
+//   the row's samples with v(s) < c_out (as float), or B < 0 when it has none
+//   (SampledField::row_bound). Invariant: the build measures it; raise() is the only writer
+//   afterwards and, when the value it stores is below c_out, raises B to that |v| (the other
+//   samples of the row keep their values, so B still covers them; a brick taken from the spare
+//   room holds -c_in everywhere and starts at B = c_in); the fast twin raises through the same
+//   SampledField and its bricks mirror the same floats, so the bound is one for both twins. A
+//   sample of the row that the rule examines has old < c_out, so |old| <= B, and to_cube <=
+//   |old| + slack <= B + slack (floating-point addition is monotone). to_cube = h sqrt(q_s),
+//   q_s = ex^2 + ey^2 + ez^2 exact in small integers; h sqrt(q_s) <= B + slack gives q_s <=
+//   ((B + slack) / h)^2 (1 + 4 eps), so with t = (1 + 1e-9) (B + slack) / h (the margin far
+//   above the few roundings of t) ex^2 <= t^2 - ey^2 - ez^2 and ex <= floor(sqrt(that)) = ex_max
+//   (sqrt is correctly rounded and monotone and sqrt(ex^2) = ex). So the samples of the segment
+//   with |dx| - 1 > ex_max, and every sample of a segment with B < 0 or t^2 < ey^2 + ez^2, fail
+//   the rule's test: they are not read. A raise during the scan changes only the sample just
+//   read (each sample is read once per removed voxel), so a segment's bound read before its
+//   samples covers all of them that are still to be read. The scan then reads, within the ball,
+//   the samples whose own row allows it: near a flat floor the outside rows at height z read
+//   about ex^2 + ey^2 <= 2 z (a paraboloid over the cube, not the ball), inside rows the ball of
+//   c_in (tests/tooth/field_drilling_test.cc prints the samples read per removed voxel).
 // - Outside samples ask with a shorter reach, or not at all. Outside, the query returns
 //   phi = sqrt(best2), best2 the least box_distance2 from p(s) over the solid voxels with
 //   box_distance2 < reach^2, and the voxel of the least index among those at best2
@@ -42,6 +63,9 @@
 //   min(D, c_out) instead of c_out: the voxels with box_distance2 < D^2 hold every voxel at the
 //   least distance (below D^2), so the search returns the same best2, voxel and nearest point,
 //   the same phi, and prunes every octree node beyond D (U empty: D = c_out, the rule's query).
+//   The 26 listed around the removed voxel are taken first (no grid reads): if their least
+//   distance already gives D' <= v(s), then D <= D' (a minimum over more voxels; the map from
+//   lattice_distance4 to D is monotone) and the 27 around s are not read: the same decision.
 // FieldEditStats::samples_queried counts the samples the rule examines (inside and outside),
 // samples_bounded those of them answered without a voxel-distance query (inside samples by the
 // closed form, outside ones by a solid neighbour): the queries are the difference.
@@ -88,9 +112,33 @@ inline int nearest_listed4(const VoxelGrid& grid, const int c[3], const int (*ne
   return best;
 }
 
+// Where a budgeted edit stopped (edit_field with a cursor): the voxel of `removed` being
+// subtracted and the next row (dz, dy) of its box, row = (dz + R) (2R + 1) + dy + R. The edit is
+// whole when next == removed.size(). Plain data: preallocated by its owner, nothing in the tick.
+struct FieldEditCursor {
+  std::size_t next = 0;
+  int row = 0;
+};
+
+// The edit (header comment). With a cursor, it resumes there and stops after the first row at
+// which it has read `budget` samples in this call (so it reads at most budget + 2R + 1), leaving
+// the cursor at the next row (budget >= 1: every call then takes at least one row); without one
+// it subtracts all of `removed`. A budgeted edit is safe
+// and ends where the whole one does. Safe: the samples not yet reached keep a value at most
+// their edited one (values only rise), so {phi >= rho - s} is smaller, never larger, than after
+// the whole edit (the proxy's Claim 1 and the no-tunnelling argument hold for any field whose
+// Lipschitz constant bounds it, and each call raises it over the box of the samples it changed,
+// as a whole edit does). The same end: each sample's update depends only on its value, the
+// removed voxel, and the grid (the solid voxels listed around the removed voxel are listed again
+// when a call resumes); the calls take the voxels, rows and samples in the order of one whole
+// call, so while the grid does not change in between, every value and count (voxels, samples
+// read, asked, raised) ends the same; the Lipschitz constant is at least the whole edit's (a
+// pause re-measures cells between an edited and a not yet edited sample).
+// `FieldDrilling.ABudgetedEditEndsWhereTheWholeEditEnds` checks this.
 template <class Access>
 bool edit_field(const SampledField& field, const VoxelTooth& tooth,
-                std::span<const std::size_t> removed, Access& access, FieldEditStats* stats) {
+                std::span<const std::size_t> removed, Access& access, FieldEditStats* stats,
+                FieldEditCursor* cursor = nullptr, long budget = 0) {
   const VoxelGrid& grid = tooth.grid();
   const std::size_t n = static_cast<std::size_t>(grid.n);
   const double h = grid.voxel_size;
@@ -108,10 +156,17 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
   // The box of the changed samples: the cell bound is measured once all of the tick's removed
   // voxels are subtracted (a cell between two of them is whole only then).
   int lo[3] = {INT_MAX, INT_MAX, INT_MAX}, hi[3] = {-1, -1, -1};
-  for (const std::size_t v : removed) {
+  const int width = 2 * reach + 1;  // rows of a box along y (and planes along z)
+  const long scanned_before = stats->samples_scanned;
+  bool paused = false;
+  for (std::size_t at = cursor != nullptr ? cursor->next : 0; at < removed.size() && !paused;
+       ++at) {
+    const std::size_t v = removed[at];
     const int s0[3] = {static_cast<int>(v % n) + pad, static_cast<int>((v / n) % n) + pad,
                        static_cast<int>(v / (n * n)) + pad};
-    ++stats->voxels;
+    // The first row of this voxel's box this call takes (a resumed voxel's next row).
+    const int first_row = cursor != nullptr && at == cursor->next ? cursor->row : 0;
+    if (first_row == 0) ++stats->voxels;
     // The removed voxel's solid neighbours U (header comment): at most 26 boxes.
     int near_lo[26][3] = {};
     int near_count = 0;
@@ -129,70 +184,106 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
         }
       }
     }
-    for (int dz = -reach; dz <= reach; ++dz) {
+    for (int dz = -reach + first_row / width; dz <= reach && !paused; ++dz) {
       const int sz = s0[2] + dz;
       if (sz < 0 || sz >= m) continue;
       const double ez = std::max(std::abs(dz) - 1.0, 0.0);
       if (h * std::sqrt(ez * ez) > ball) continue;  // the plane misses the ball
-      for (int dy = -reach; dy <= reach; ++dy) {
+      for (int dy = -reach; dy <= reach && !paused; ++dy) {
+        const int row = (dz + reach) * width + dy + reach;
+        if (row < first_row) continue;  // taken by an earlier call
+        if (cursor != nullptr && stats->samples_scanned - scanned_before >= budget) {
+          cursor->next = at;  // the budget is spent: this row is the next call's first
+          cursor->row = row;
+          paused = true;
+          break;
+        }
         const int sy = s0[1] + dy;
         if (sy < 0 || sy >= m) continue;
         const double ey = std::max(std::abs(dy) - 1.0, 0.0);
         if (h * std::sqrt(ey * ey + ez * ez) > ball) continue;  // the row misses the ball
-        for (int dx = -reach; dx <= reach; ++dx) {
-          const int sx = s0[0] + dx;
-          if (sx < 0 || sx >= m) continue;
-          const double ex = std::max(std::abs(dx) - 1.0, 0.0);
-          // Distance from s to the removed voxel's cube grown by h / 2 (the source's sub-voxel
-          // slivers in the empty cubes next to it went with it): beyond |v(s)| that did not
-          // hold s's nearest surface point.
-          const double to_cube = h * std::sqrt(ex * ex + ey * ey + ez * ez);
-          if (to_cube > ball) continue;
-          ++stats->samples_scanned;
-          const float old = access.at(sx, sy, sz);
-          if (old >= out_f) continue;  // at the outside clamp: a max cannot raise it
-          if (to_cube > std::abs(static_cast<double>(old)) + slack) continue;
-          ++stats->samples_queried;
-          const Vec3 p = field.sample_position(sx, sy, sz);
-          int idx[3] = {0, 0, 0};
-          const bool in_grid = sdf_detail::voxel_of(grid, p, idx);
-          const bool inside =
-              in_grid && grid.voxels[grid.index(idx[0], idx[1], idx[2])] != kEmpty;
-          double d = 0.0;
-          if (inside) {  // the closed form: minus the distance to the removed cube
-            ++stats->samples_bounded;
-            const double ax = std::max(std::abs(dx) - 0.5, 0.0);
-            const double ay = std::max(std::abs(dy) - 0.5, 0.0);
-            const double az = std::max(std::abs(dz) - 0.5, 0.0);
-            d = -h * std::sqrt(ax * ax + ay * ay + az * az);
-          } else {
-            // The nearest listed solid voxel (header comment): no query if it is within v(s),
-            // else the query's reach cut down to it.
-            const int c[3] = {sx - pad, sy - pad, sz - pad};
-            const int best4 = nearest_listed4(grid, c, near_lo, near_count);
-            const double listed =
-                best4 == INT_MAX ? c_out : 0.5 * h * std::sqrt(static_cast<double>(best4)) * kWide;
-            if (listed <= static_cast<double>(old)) {
-              ++stats->samples_bounded;  // the query's phi <= v(s): no raise (header comment)
+        // The row in segments of the field's bricks, each read only where its row bound lets a
+        // sample pass the rule's test (header comment, "Only the samples a removal can change").
+        const int x_first = std::max(0, s0[0] - reach), x_last = std::min(m - 1, s0[0] + reach);
+        for (int xb = x_first / kFieldBrick; xb * kFieldBrick <= x_last; ++xb) {
+          const float bound = field.row_bound(xb, sy, sz);
+          if (bound < 0.0f) continue;  // every sample of the segment at c_out
+          const double t = (static_cast<double>(bound) + slack) / h * kWide;
+          const double q = t * t - (ey * ey + ez * ez);
+          if (q < 0.0) continue;  // the segment's row misses the bound's ball
+          const int ex_max = static_cast<int>(std::sqrt(q));  // |dx| - 1 <= ex_max
+          const int x_lo = std::max({x_first, xb * kFieldBrick, s0[0] - ex_max - 1});
+          const int x_hi =
+              std::min({x_last, xb * kFieldBrick + kFieldBrick - 1, s0[0] + ex_max + 1});
+          for (int sx = x_lo; sx <= x_hi; ++sx) {
+            const int dx = sx - s0[0];
+            const double ex = std::max(std::abs(dx) - 1.0, 0.0);
+            // Distance from s to the removed voxel's cube grown by h / 2 (the source's sub-voxel
+            // slivers in the empty cubes next to it went with it): beyond |v(s)| that did not
+            // hold s's nearest surface point.
+            const double to_cube = h * std::sqrt(ex * ex + ey * ey + ez * ez);
+            if (to_cube > ball) continue;
+            ++stats->samples_scanned;
+            const float old = access.at(sx, sy, sz);
+            if (old >= out_f) continue;  // at the outside clamp: a max cannot raise it
+            if (to_cube > std::abs(static_cast<double>(old)) + slack) continue;
+            ++stats->samples_queried;
+            const Vec3 p = field.sample_position(sx, sy, sz);
+            int idx[3] = {0, 0, 0};
+            const bool in_grid = sdf_detail::voxel_of(grid, p, idx);
+            const bool inside =
+                in_grid && grid.voxels[grid.index(idx[0], idx[1], idx[2])] != kEmpty;
+            double d = 0.0;
+            if (inside) {  // the closed form: minus the distance to the removed cube
+              ++stats->samples_bounded;
+              const double ax = std::max(std::abs(dx) - 0.5, 0.0);
+              const double ay = std::max(std::abs(dy) - 0.5, 0.0);
+              const double az = std::max(std::abs(dz) - 0.5, 0.0);
+              d = -h * std::sqrt(ax * ax + ay * ay + az * az);
+            } else {
+              // The nearest listed solid voxel (header comment): no query if it is within v(s),
+              // else the query's reach cut down to it.
+              const int c[3] = {sx - pad, sy - pad, sz - pad};
+              const auto to_listed = [&](int best4) {
+                return best4 == INT_MAX ? c_out
+                                        : 0.5 * h * std::sqrt(static_cast<double>(best4)) * kWide;
+              };
+              // The removed voxel's 26 first (no grid reads): when they already bound v(s), so
+              // does the least over all of U (to_listed is monotone), and the 27 are not read.
+              int best4 = INT_MAX;
+              for (int u = 0; u < near_count; ++u) {
+                best4 = std::min(best4, lattice_distance4(c, near_lo[u]));
+              }
+              if (to_listed(best4) > static_cast<double>(old)) {
+                best4 = std::min(best4, nearest_listed4(grid, c, near_lo, 0));
+              }
+              const double listed = to_listed(best4);
+              if (listed <= static_cast<double>(old)) {
+                ++stats->samples_bounded;  // the query's phi <= v(s): no raise (header comment)
+                continue;
+              }
+              d = access.distance(sx, sy, sz, p, std::min(listed, c_out));
+            }
+            if (!(d > old)) continue;
+            if (!access.raise(sx, sy, sz, d)) {
+              ++stats->samples_lost;
+              complete = false;
               continue;
             }
-            d = access.distance(sx, sy, sz, p, std::min(listed, c_out));
-          }
-          if (!(d > old)) continue;
-          if (!access.raise(sx, sy, sz, d)) {
-            ++stats->samples_lost;
-            complete = false;
-            continue;
-          }
-          ++stats->samples_raised;
-          const int s[3] = {sx, sy, sz};
-          for (int a = 0; a < 3; ++a) {
-            lo[a] = std::min(lo[a], s[a]);
-            hi[a] = std::max(hi[a], s[a]);
+            ++stats->samples_raised;
+            const int s[3] = {sx, sy, sz};
+            for (int a = 0; a < 3; ++a) {
+              lo[a] = std::min(lo[a], s[a]);
+              hi[a] = std::max(hi[a], s[a]);
+            }
           }
         }
       }
     }
+  }
+  if (cursor != nullptr && !paused) {  // every voxel whole
+    cursor->next = removed.size();
+    cursor->row = 0;
   }
   if (hi[0] >= 0) access.include_cells(lo, hi);
   return complete;

@@ -60,6 +60,22 @@ float SampledField::at(int sx, int sy, int sz) const {
 
 void SampledField::reserve_spare_bricks(std::size_t spare) {
   bricks_.reserve(bricks_.size() + spare * static_cast<std::size_t>(kBrickSamples));
+  row_bounds_.reserve(row_bounds_.size() + spare * static_cast<std::size_t>(kBrickRows));
+}
+
+void SampledField::measure_row_bounds(std::int32_t id) {
+  const float out_f = static_cast<float>(c_out_);
+  const std::size_t first = static_cast<std::size_t>(id) * kBrickRows;
+  if (row_bounds_.size() < first + kBrickRows) row_bounds_.resize(first + kBrickRows);
+  for (int r = 0; r < kBrickRows; ++r) {
+    float b = -1.0f;
+    for (int x = 0; x < kFieldBrick; ++x) {
+      const float v = bricks_[static_cast<std::size_t>(id) * kBrickSamples +
+                              static_cast<std::size_t>(x + kFieldBrick * r)];
+      if (v < out_f) b = std::max(b, std::abs(v));
+    }
+    row_bounds_[first + static_cast<std::size_t>(r)] = b;
+  }
 }
 
 bool SampledField::raise(int sx, int sy, int sz, double value) {
@@ -69,15 +85,25 @@ bool SampledField::raise(int sx, int sy, int sz, double value) {
   if (id < 0) {
     const float fill = id == kAllOutside ? static_cast<float>(c_out_) : static_cast<float>(-c_in_);
     if (!(v > fill)) return true;  // nothing to raise
-    if (bricks_.size() + kBrickSamples > bricks_.capacity()) return false;  // no spare brick
+    if (bricks_.size() + kBrickSamples > bricks_.capacity() ||
+        row_bounds_.size() + kBrickRows > row_bounds_.capacity()) {
+      return false;  // no spare brick
+    }
     id = static_cast<std::int32_t>(bricks_.size() / kBrickSamples);
     bricks_.insert(bricks_.end(), static_cast<std::size_t>(kBrickSamples), fill);  // in capacity
+    // Every sample is `fill` = -c_in (an all-outside slot is never raised: v <= c_out).
+    row_bounds_.insert(row_bounds_.end(), static_cast<std::size_t>(kBrickRows), std::abs(fill));
     index_[sl] = id;
   }
   const int lx = sx % kFieldBrick, ly = sy % kFieldBrick, lz = sz % kFieldBrick;
   float& stored = bricks_[static_cast<std::size_t>(id) * kBrickSamples +
                           static_cast<std::size_t>(lx + kFieldBrick * (ly + kFieldBrick * lz))];
   stored = std::max(stored, v);
+  if (stored < static_cast<float>(c_out_)) {  // the row bound covers the new value (header)
+    float& bound = row_bounds_[static_cast<std::size_t>(id) * kBrickRows +
+                               static_cast<std::size_t>(ly + kFieldBrick * lz)];
+    bound = std::max(bound, std::abs(stored));
+  }
   return true;
 }
 
@@ -341,6 +367,7 @@ SampledField build_sampled_field(const VoxelGrid& grid, const TriangleMesh& surf
         }
         f.index_[sl] = static_cast<std::int32_t>(f.bricks_.size() / kB);
         f.bricks_.insert(f.bricks_.end(), values.begin(), values.end());
+        f.measure_row_bounds(f.index_[sl]);
       }
     }
   }

@@ -104,12 +104,28 @@ class SampledField {
   // Moves the field by t [m] (the simulator places the tooth after building it).
   void translate(const Vec3& t) { origin_ += t; }
   std::size_t brick_count() const { return bricks_.size() / kBrickSamples; }
-  // Bytes of bricks plus index.
+  // Bytes of bricks, their row bounds and the index.
   std::size_t memory_bytes() const {
-    return bricks_.size() * sizeof(float) + index_.size() * sizeof(std::int32_t);
+    return (bricks_.size() + row_bounds_.size()) * sizeof(float) +
+           index_.size() * sizeof(std::int32_t);
+  }
+  // The drilling edit's row bound (reference/tooth/field_edit_core.h): B >= |v(s)| for every
+  // sample s with v(s) < c_out (as float) among the kFieldBrick samples (bx kFieldBrick + i, sy,
+  // sz), i in [0, kFieldBrick); B < 0 when the row has none. Kept by build and raise() (values
+  // only rise: an outside value's |v| may grow and raises B, an inside one's only falls), so it
+  // bounds the row after every edit; not necessarily the least bound.
+  float row_bound(int bx, int sy, int sz) const {
+    const std::int32_t id = index_[slot(bx, sy / kFieldBrick, sz / kFieldBrick)];
+    if (id >= 0) {
+      return row_bounds_[static_cast<std::size_t>(id) * kBrickRows +
+                         static_cast<std::size_t>(sy % kFieldBrick +
+                                                  kFieldBrick * (sz % kFieldBrick))];
+    }
+    return id == kAllOutside ? -1.0f : static_cast<float>(c_in_);
   }
 
   static constexpr int kBrickSamples = kFieldBrick * kFieldBrick * kFieldBrick;
+  static constexpr int kBrickRows = kFieldBrick * kFieldBrick;  // x rows of a brick
   static constexpr std::int32_t kAllOutside = -1;
   static constexpr std::int32_t kAllInside = -2;
 
@@ -153,6 +169,9 @@ class SampledField {
   double lipschitz_ = 1.0;
   std::vector<std::int32_t> index_;  // nb^3: brick id, kAllOutside or kAllInside
   std::vector<float> bricks_;        // brick id * 512 + x + 8 (y + 8 z)
+  std::vector<float> row_bounds_;    // brick id * 64 + y + 8 z: row_bound()
+  // row_bounds_ of brick `id` from its stored samples (build).
+  void measure_row_bounds(std::int32_t id);
 };
 
 // Exact distance from p to triangle (a, b, c) (Voronoi regions of the vertices, edges and face).

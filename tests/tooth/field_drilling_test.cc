@@ -16,6 +16,8 @@
 
 #include "reference/tooth/collision.h"
 #include "reference/tooth/field_contact.h"
+#include "reference/tooth/field_edit_core.h"
+#include "reference/tooth/neighbors.h"
 #include "reference/tooth/tooth_contacts.h"
 #include "tests/support/alloc_counter.h"
 #include "tests/tooth/field_shapes.h"
@@ -36,6 +38,18 @@ const Vec3 kCentre(4.03e-3, 3.97e-3, 3.61e-3);
 bool in_sphere(const Vec3& p) { return (p - kCentre).norm() < kR; }
 
 VoxelGrid sphere_grid() { return test::solid_grid(kN, kSide, in_sphere); }
+
+// The samples at which two fields of the same lattice differ (bitwise).
+long samples_differing(const SampledField& a, const SampledField& b) {
+  const int m = a.samples_per_axis();
+  long differ = 0;
+  for (int z = 0; z < m; ++z) {
+    for (int y = 0; y < m; ++y) {
+      for (int x = 0; x < m; ++x) differ += a.at(x, y, z) != b.at(x, y, z);
+    }
+  }
+  return differ;
+}
 
 // The top of the sphere and the bur's path: from 0.2 mm above contact straight down 1.1 mm, then
 // 0.6 mm along x at that depth.
@@ -335,14 +349,69 @@ TEST(FieldDrilling, TheEditsSavingsChangeNoValue) {
   EXPECT_EQ(e.samples_queried, provider.plain_queried);
   EXPECT_GT(e.samples_bounded, 0);
   EXPECT_EQ(field.lipschitz(), plain.lipschitz());
-  const int m = field.samples_per_axis();
-  long differ = 0;
-  for (int z = 0; z < m; ++z) {
-    for (int y = 0; y < m; ++y) {
-      for (int x = 0; x < m; ++x) differ += field.at(x, y, z) != plain.at(x, y, z);
+  EXPECT_EQ(samples_differing(field, plain), 0);
+}
+
+// A budgeted edit (field_edit_core.h FieldEditCursor) ends where the whole edit ends: a cap of the
+// sphere (the solid voxels within 0.6 mm of its top) is removed from the tooth at once, then
+// subtracted from one copy of the field in one call and from another in calls of at most 97
+// samples read (+ one row) each; every sample, every count and the raised samples agree, and the
+// budgeted copy's Lipschitz constant is at least the whole edit's.
+struct PlainAccess {
+  SampledField* field;
+  const VoxelTooth& tooth;
+  float at(int sx, int sy, int sz) const { return field->at(sx, sy, sz); }
+  double distance(int, int, int, const Vec3& p, double reach) const {
+    return signed_distance(tooth, p, reach).phi;
+  }
+  bool raise(int sx, int sy, int sz, double value) { return field->raise(sx, sy, sz, value); }
+  void include_cells(const int lo[3], const int hi[3]) { field->include_cells(lo, hi); }
+};
+
+TEST(FieldDrilling, ABudgetedEditEndsWhereTheWholeEditEnds) {
+  const VoxelGrid grid = sphere_grid();
+  VoxelTooth tooth(grid);
+  SampledField whole = build_sampled_field(grid, triangulate_implicit(grid, in_sphere),
+                                           field_band_for_tip(kRho, grid.voxel_size));
+  SampledField budgeted = whole;
+  whole.reserve_spare_bricks(256);
+  budgeted.reserve_spare_bricks(256);
+  std::vector<std::size_t> removed;
+  for (int k = 0; k < kN; ++k) {
+    for (int j = 0; j < kN; ++j) {
+      for (int i = 0; i < kN; ++i) {
+        if (!tooth.grid().solid(i, j, k) || (grid.center(i, j, k) - kTop).norm() > 0.6e-3) continue;
+        removed.push_back(grid.index(i, j, k));
+        tooth.octree.remove_voxel(i, j, k);
+        reencode_local(tooth.octree.grid(), i, j, k, &tooth.codes);
+      }
     }
   }
-  EXPECT_EQ(differ, 0);
+  ASSERT_GT(removed.size(), 30u);
+  FieldEditStats a, b;
+  PlainAccess access_a{&whole, tooth}, access_b{&budgeted, tooth};
+  ASSERT_TRUE(field_edit_detail::edit_field(whole, tooth, removed, access_a, &a));
+  constexpr long kBudget = 97;
+  const long row = 2 * whole.edit_radius() + 1;
+  field_edit_detail::FieldEditCursor cursor;
+  long calls = 0;
+  while (cursor.next < removed.size()) {
+    const long before = b.samples_scanned;
+    ASSERT_TRUE(field_edit_detail::edit_field(budgeted, tooth, removed, access_b, &b, &cursor,
+                                              kBudget));
+    EXPECT_LE(b.samples_scanned - before, kBudget + row);
+    ASSERT_LT(++calls, 100000);
+  }
+  std::printf("%zu voxels removed at once: whole edit %ld samples read; budgeted %ld calls\n",
+              removed.size(), a.samples_scanned, calls);
+  EXPECT_GT(calls, static_cast<long>(removed.size()));
+  EXPECT_EQ(a.voxels, b.voxels);
+  EXPECT_EQ(a.samples_scanned, b.samples_scanned);
+  EXPECT_EQ(a.samples_queried, b.samples_queried);
+  EXPECT_EQ(a.samples_raised, b.samples_raised);
+  EXPECT_GT(a.samples_raised, 0);
+  EXPECT_EQ(samples_differing(whole, budgeted), 0);
+  EXPECT_GE(budgeted.lipschitz(), whole.lipschitz());
 }
 
 }  // namespace
