@@ -2,6 +2,7 @@
 
 #include "fast/tooth/field.h"
 #include "fast/tooth/sdf.h"
+#include "reference/tooth/surface_proxy_core.h"
 
 namespace dentsim::fast {
 
@@ -33,12 +34,23 @@ void BrickPipelineTooth::tip_contacts(const Pose& pose, std::vector<Contact>* ou
   collide_tool_tip(brick_, pose, setup_.tip, setup_.k_tooth, setup_.b_tooth, out);
 }
 
+SdfContactProvider::SdfContactProvider(VoxelTooth& tooth, const PipelineToothSetup& setup)
+    : dentsim::ToothContactProvider(tooth, setup.tip, setup.k_tooth, setup.b_tooth,
+                                    setup.drilling, ContactModel::kSurfaceProxy,
+                                    &fast::signed_distance),
+      tooth_(tooth) {}
+
+const Vec3& SdfContactProvider::update_sdf_proxy(SurfaceProxy* proxy, const Vec3& c) {
+  const RecallingVoxelSolid solid(tooth_);  // one update: the tooth does not change within it
+  return proxy->update_on(solid, c);
+}
+
 std::unique_ptr<PipelineTooth> make_fast_tooth(VoxelTooth& tooth, const PipelineToothSetup& setup) {
   if (setup.contact_model == ContactModel::kFaces) {
     return std::make_unique<BrickPipelineTooth>(tooth, setup);
   }
   if (setup.contact_model == ContactModel::kField) return make_fast_field_tooth(tooth, setup);
-  return make_reference_tooth(tooth, setup, &fast::signed_distance);
+  return std::make_unique<ProviderTooth<SdfContactProvider>>(tooth, setup, tooth, setup);
 }
 
 }  // namespace dentsim::fast

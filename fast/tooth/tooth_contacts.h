@@ -37,6 +37,20 @@ class ToothContactProvider : public ToothProviderBase {
 // the reference tooth's grid and drilled by fast::ToothContactProvider; for the surface proxy the
 // reference provider on the reference tooth with the fast signed distance (fast/tooth/sdf.h); for
 // the field model fast::FieldContactProvider (fast/tooth/field.h).
+// The surface-proxy contact ("sdf") of the fast pipeline: the reference's provider with
+// fast::signed_distance, whose proxy update runs on RecallingVoxelSolid (fast/tooth/sdf.h: the
+// same answers, the repeated ones remembered), so g is bitwise the reference's.
+class SdfContactProvider final : public dentsim::ToothContactProvider {
+ public:
+  SdfContactProvider(VoxelTooth& tooth, const PipelineToothSetup& setup);
+
+ protected:
+  const Vec3& update_sdf_proxy(SurfaceProxy* proxy, const Vec3& c) override;
+
+ private:
+  const VoxelTooth& tooth_;
+};
+
 std::unique_ptr<PipelineTooth> make_fast_tooth(VoxelTooth& tooth, const PipelineToothSetup& setup);
 
 // The face model's fast tooth, for tests that reach its brick tooth (its free-space early out).

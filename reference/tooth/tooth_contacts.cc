@@ -99,7 +99,7 @@ bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out
   }
   const Vec3 c = proxy.x + proxy.R * tip_.offset_body;
   const Vec3& g = model_ == ContactModel::kField ? update_field_proxy(&surface_, c)
-                                                 : surface_.update(tooth_, c);
+                                                 : update_sdf_proxy(&surface_, c);
   Contact contact;
   if (!surface_proxy_contact(tooth_, proxy, tip_, g, k_tooth_, b_tooth_, &contact, sd_)) {
     measure_anchor(c, g, false);
@@ -133,6 +133,10 @@ bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out
 
 const Vec3& ToothContactProvider::update_field_proxy(SurfaceProxy* proxy, const Vec3& c) {
   return proxy->update(*field_, c);
+}
+
+const Vec3& ToothContactProvider::update_sdf_proxy(SurfaceProxy* proxy, const Vec3& c) {
+  return proxy->update(tooth_, c);
 }
 
 bool ToothContactProvider::edit_field(SampledField* field, std::span<const std::size_t> removed,

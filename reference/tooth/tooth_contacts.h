@@ -151,6 +151,10 @@ class ToothContactProvider : public ToothProviderBase {
   // update for the tip centre c on `proxy` (here: on FieldSolid), and the subtraction of
   // `removed` from `field` (here: edit_field_for_removed_voxels with this provider's query).
   virtual const Vec3& update_field_proxy(SurfaceProxy* proxy, const Vec3& c);
+  // kSurfaceProxy: the surface proxy's update for the tip centre c on the voxel tooth (here:
+  // SurfaceProxy::update with this provider's query), which a twin with the same results may
+  // replace (the fast pipeline's, fast/tooth/tooth_contacts.h; no allocation, no throw).
+  virtual const Vec3& update_sdf_proxy(SurfaceProxy* proxy, const Vec3& c);
   virtual bool edit_field(SampledField* field, std::span<const std::size_t> removed,
                           FieldEditStats* stats);
 

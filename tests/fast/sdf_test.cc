@@ -12,6 +12,8 @@
 #include <cstdio>
 #include <random>
 
+#include "reference/tooth/surface_proxy_core.h"
+
 #include "sim/scene.h"
 #include "sim/simulator.h"
 
@@ -90,6 +92,40 @@ TEST(FastSignedDistance, TiesAreDecidedAlike) {
   EXPECT_GT(a.found, 1000);
 }
 
+// RecallingVoxelSolid answers a point asked again from what it remembers: with every reach,
+// shorter or longer than the remembered one's, found or not, its answer is the reference's.
+TEST(FastSignedDistance, RememberedAnswersAreTheQuerysOwn) {
+  auto rig = molar_rig();
+  const VoxelTooth& tooth = *rig->tooth;
+  const double h = tooth.grid().voxel_size;
+  std::mt19937_64 rng(20261127);
+  std::uniform_real_distribution<double> near(-2e-3, 2e-3);
+  std::uniform_real_distribution<double> reach(0.2 * h, 12 * h);
+  long asked = 0, mismatches = 0, found = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const fast::RecallingVoxelSolid solid(tooth);
+    Vec3 points[3];
+    for (Vec3& p : points) p = rig->anchor + Vec3(near(rng), near(rng), near(rng));
+    for (int k = 0; k < 24; ++k) {  // the same few points, every reach in turn
+      const Vec3& x = points[k % 3];
+      const double r = reach(rng);
+      const SignedDistance want = signed_distance(tooth, x, r);
+      const SignedDistance got = solid.distance(x, r);
+      ++asked;
+      if (want.found) ++found;
+      if (want.phi != got.phi || want.found != got.found || want.nearest != got.nearest ||
+          want.voxel != got.voxel) {
+        ++mismatches;
+        ADD_FAILURE() << "phi " << want.phi << " vs " << got.phi << " at " << x.transpose()
+                      << " reach " << r;
+      }
+    }
+  }
+  EXPECT_EQ(mismatches, 0);
+  EXPECT_GT(found, asked / 4);
+  EXPECT_LT(found, asked);
+}
+
 TEST(FastSignedDistance, SurfaceProxyFollowsTheSamePathAfterDrilling) {
   auto rig = molar_rig();
   VoxelTooth& tooth = *rig->tooth;
@@ -116,7 +152,7 @@ TEST(FastSignedDistance, SurfaceProxyFollowsTheSamePathAfterDrilling) {
     }
   }
   ASSERT_GT(removed, 100);
-  SurfaceProxy ref(rho, h), fst(rho, h, &fast::signed_distance);
+  SurfaceProxy ref(rho, h), fst(rho, h, &fast::signed_distance), rec(rho, h);
   std::mt19937_64 rng(7);
   std::normal_distribution<double> step(0.0, 0.15e-3);
   Vec3 c = top + Vec3(0, 0, 2e-3);
@@ -129,6 +165,9 @@ TEST(FastSignedDistance, SurfaceProxyFollowsTheSamePathAfterDrilling) {
     const Vec3 gr = ref.update(tooth, c);
     const Vec3 gf = fst.update(tooth, c);
     ASSERT_EQ(gr, gf) << "step " << k;
+    // The fast pipeline's proxy update (fast::SdfContactProvider): the answers remembered.
+    const Vec3 gm = rec.update_on(fast::RecallingVoxelSolid(tooth), c);
+    ASSERT_EQ(gr, gm) << "step " << k;
     ++steps;
     if ((gr - c).norm() > 1e-9) ++in_contact;
   }
