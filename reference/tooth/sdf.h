@@ -97,6 +97,12 @@ struct ProxyConstants {
   double rho;   // tip radius [m]
   double skin;  // s = min(rho / 4, h / 2) [m]
   double tol;   // distance below which two points are the same [m]
+  // The push-out (step 1) stops once phi >= rho - push_tol: push_tol = s / 100, inside the skin
+  // set A_s by 0.99 s, so the no-tunnelling proof (which needs only A_s) is unchanged. Without it
+  // a push-out in a concave corner zig-zags between two walls, closing the gap to phi = rho only
+  // geometrically, and on a face q + rho u can round to phi = rho minus a few ulps: either way it
+  // ran to its cap (docs/derivations/sdf_contact.md §2 step 1, §5).
+  double push_tol;
 };
 }  // namespace proxy_detail
 
@@ -125,7 +131,7 @@ class SurfaceProxy {
   const Vec3& g() const { return g_; }
   bool valid() const { return valid_; }
   double skin() const { return skin_; }
-  proxy_detail::ProxyConstants constants() const { return {rho_, skin_, tol_}; }
+  proxy_detail::ProxyConstants constants() const { return {rho_, skin_, tol_, 0.01 * skin_}; }
 
   // Moves x into A along the shortest way (step 1); returns the final phi(x) - rho (>= 0 unless
   // the iteration cap was hit, which the crosscheck counts as penetration; 0 when x is outside

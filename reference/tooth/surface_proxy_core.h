@@ -24,8 +24,9 @@
 
 namespace dentsim::proxy_detail {
 
-// Step 1: moves x into A = {phi >= rho} along the shortest way; returns phi(x) - rho at the end
-// (0 when phi >= rho was found within the search of reach rho).
+// Step 1: moves x into A = {phi >= rho - push_tol} along the shortest way; returns phi(x) - rho at
+// the end (0 when phi >= rho was found within the search of reach rho; >= -push_tol when it
+// converged).
 template <class Solid>
 double push_out(const ProxyConstants& k, const Solid& solid, Vec3* x) {
   // Inside, the shortest way out may be long: search as far as the grid's extent. Outside, all
@@ -39,7 +40,7 @@ double push_out(const ProxyConstants& k, const Solid& solid, Vec3* x) {
                         grid.voxels[grid.index(idx[0], idx[1], idx[2])] != kEmpty;
     const double reach = inside ? far : k.rho;
     const SignedDistance sd = solid.distance(*x, reach);
-    if (!sd.found || sd.phi >= k.rho) return (sd.found ? sd.phi : reach) - k.rho;
+    if (!sd.found || sd.phi >= k.rho - k.push_tol) return (sd.found ? sd.phi : reach) - k.rho;
     const Vec3 u = solid.normal(*x, sd);
     *x = sd.nearest + k.rho * u;  // the nearest surface point, then rho out along the normal
   }
