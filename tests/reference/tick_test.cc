@@ -305,6 +305,27 @@ TEST(Tick, FullContactBufferAndMalformedContactsAreNamedStatuses) {
   EXPECT_EQ(r2.tau.norm(), 0.0);
 }
 
+// pmi-pd with friction and the handpiece's locked dynamics, for the wall-path tests below.
+PipelineConfig pmi_pd_friction_config() {
+  PipelineConfig cfg;
+  cfg.method = Method::kPmiPd;
+  cfg.observer_gain = VecX::Constant(6, 100.0);
+  cfg.tool = tool_preset("handpiece");
+  cfg.friction.enabled = true;
+  return cfg;
+}
+
+// Step k of a path that starts 0.8 mm above the wall z = 0 (k = 0: at rest) and slides along it
+// while sinking 20 um a millisecond; the velocity is the backward difference.
+void wall_path_sample(const RigidBodyDevice& dev, int k, DeviceSample* s) {
+  Pose pose;
+  pose.x = Vec3(1e-4 * k, 0.0, 0.8e-3 - 2e-5 * k);
+  const VecX q = dev.joint_position(pose);
+  s->qd = k == 0 ? VecX::Zero(6) : VecX((q - s->q) / 1e-3);
+  s->q = q;
+  s->t = 1e-3 * k;
+}
+
 // The registry drives the tick: running the reference table's stages one by one on a copy of the
 // data gives exactly what tick() gives, and the stage list is the one fast/ implements.
 TEST(Tick, RegistryStagesInOrderAreTheTick) {
@@ -314,25 +335,13 @@ TEST(Tick, RegistryStagesInOrderAreTheTick) {
   EXPECT_STREQ(reference_stage_table().implementation, "reference");
 
   const RigidBodyDevice dev;
-  PipelineConfig cfg;
-  cfg.method = Method::kPmiPd;
-  cfg.observer_gain = VecX::Constant(6, 100.0);
-  cfg.tool = tool_preset("handpiece");
-  cfg.friction.enabled = true;
-  ReferencePipeline p(dev, cfg);
-  Pose pose;
-  pose.x = Vec3(0.0, 0.0, 0.8e-3);
+  ReferencePipeline p(dev, pmi_pd_friction_config());
   DeviceSample s;
-  s.q = dev.joint_position(pose);
-  s.qd = VecX::Zero(6);
+  wall_path_sample(dev, 0, &s);
   p.reset(s);
   HalfSpaceWall wall(Vec3::Zero(), Vec3::UnitZ(), 1e-3, 3000.0, 2.0);
   for (int k = 1; k <= 50; ++k) {
-    pose.x = Vec3(1e-4 * k, 0.0, 0.8e-3 - 2e-5 * k);
-    const VecX q = dev.joint_position(pose);
-    s.qd = (q - s.q) / 1e-3;
-    s.q = q;
-    s.t = 1e-3 * k;
+    wall_path_sample(dev, k, &s);
     // By hand, on a copy of the data: the stages in registry order.
     PipelineData d = p.data();
     d.q = s.q;
@@ -358,31 +367,20 @@ TEST(Tick, RegistryStagesInOrderAreTheTick) {
 // a failed tick).
 TEST(Tick, UntimedStagesLeaveTheTimesZeroAndChangeNothingElse) {
   const RigidBodyDevice dev;
-  PipelineConfig cfg;
-  cfg.method = Method::kPmiPd;
-  cfg.observer_gain = VecX::Constant(6, 100.0);
-  cfg.tool = tool_preset("handpiece");
-  cfg.friction.enabled = true;
+  PipelineConfig cfg = pmi_pd_friction_config();
   ReferencePipeline timed(dev, cfg);
   cfg.time_stages = false;
   ReferencePipeline untimed(dev, cfg);
   EXPECT_TRUE(timed.model().time_stages);
   EXPECT_FALSE(untimed.model().time_stages);
-  Pose pose;
-  pose.x = Vec3(0.0, 0.0, 0.8e-3);
   DeviceSample s;
-  s.q = dev.joint_position(pose);
-  s.qd = VecX::Zero(6);
+  wall_path_sample(dev, 0, &s);
   timed.reset(s);
   untimed.reset(s);
   HalfSpaceWall wall(Vec3::Zero(), Vec3::UnitZ(), 1e-3, 3000.0, 2.0);
   int in_contact = 0;
   for (int k = 1; k <= 60; ++k) {
-    pose.x = Vec3(1e-4 * k, 0.0, 0.8e-3 - 2e-5 * k);
-    const VecX q = dev.joint_position(pose);
-    s.qd = (q - s.q) / 1e-3;
-    s.q = q;
-    s.t = 1e-3 * k;
+    wall_path_sample(dev, k, &s);
     const double T = k == 30 ? -1.0 : 1e-3;  // one bad tick length: a named failure in both
     const TickResult& a = timed.tick(s, T, wall);
     const TickResult& b = untimed.tick(s, T, wall);
