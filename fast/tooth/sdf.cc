@@ -121,15 +121,11 @@ SignedDistance RecallingVoxelSolid::distance(const Vec3& x, double reach) const 
     // The search's answer is the first of the solid voxels with d2 < reach^2 in the order
     // (d2, index) (sdf_detail::sdf_nearer), and reach -> reach * reach is monotone in floating
     // point: an answer found within e.reach is the answer within any reach whose square exceeds
-    // its d2; 'nothing within e.reach' is the answer within any shorter reach.
-    if (e.best2 < std::numeric_limits<double>::infinity()) {
-      if (e.best2 < reach * reach) return e.sd;
-      if (reach <= e.reach) {
-        SignedDistance none;
-        none.phi = reach;
-        return none;
-      }
-    } else if (reach <= e.reach) {
+    // its d2; 'nothing within e.reach' is the answer within any shorter reach. (A found answer has
+    // e.best2 < e.reach^2, so a reach beyond e.reach always takes the first branch; +inf, nothing
+    // found, never does.)
+    if (e.best2 < reach * reach) return e.sd;
+    if (reach <= e.reach) {
       SignedDistance none;
       none.phi = reach;
       return none;

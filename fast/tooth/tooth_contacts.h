@@ -33,10 +33,6 @@ class ToothContactProvider : public ToothProviderBase {
   BrickTooth& tooth_;
 };
 
-// The fast pipeline's tooth (fast/registry.h): for the face model the brick tooth, built from
-// the reference tooth's grid and drilled by fast::ToothContactProvider; for the surface proxy the
-// reference provider on the reference tooth with the fast signed distance (fast/tooth/sdf.h); for
-// the field model fast::FieldContactProvider (fast/tooth/field.h).
 // The surface-proxy contact ("sdf") of the fast pipeline: the reference's provider with
 // fast::signed_distance, whose proxy update runs on RecallingVoxelSolid (fast/tooth/sdf.h: the
 // same answers, the repeated ones remembered), so g is bitwise the reference's.
@@ -51,6 +47,9 @@ class SdfContactProvider final : public dentsim::ToothContactProvider {
   const VoxelTooth& tooth_;
 };
 
+// The fast pipeline's tooth (fast/registry.h): for the face model the brick tooth, built from
+// the reference tooth's grid and drilled by fast::ToothContactProvider; for the surface proxy
+// SdfContactProvider (above); for the field model fast::FieldContactProvider (fast/tooth/field.h).
 std::unique_ptr<PipelineTooth> make_fast_tooth(VoxelTooth& tooth, const PipelineToothSetup& setup);
 
 // The face model's fast tooth, for tests that reach its brick tooth (its free-space early out).
