@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "fast/decomposition.h"
+#include "fast/dense6.h"
 #include "fast/phantom/phantom_model.h"
 #include "reference/core/so3.h"
 #include "reference/tools.h"
@@ -95,6 +96,54 @@ void BM_PdFeedforwardFast(benchmark::State& state) {
 
 BENCHMARK(BM_PdFeedforwardReference)->Arg(0)->Arg(1);
 BENCHMARK(BM_PdFeedforwardFast)->Arg(0)->Arg(1);
+
+// J1 = J_t^-1 (the device_terms stage) over 256 seeded Phantom Jacobians: Eigen's partial-pivoting
+// LU and inverse (the reference's) against fast/dense6.h's.
+const std::vector<Mat6>& phantom_jacobians() {
+  static const std::vector<Mat6> out = [] {
+    const PhantomParams p = default_phantom_params();
+    const fast::PhantomModel model(p);
+    std::mt19937_64 rng(30040);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::vector<Mat6> js(256);
+    for (Mat6& J : js) {
+      Vec6 q;
+      for (int j = 0; j < 6; ++j) q(j) = p.q_min_rad(j) + u(rng) * (p.q_max_rad(j) - p.q_min_rad(j));
+      DeviceTerms t;
+      model.terms(q, Vec6::Zero(), false, t);
+      J = t.J_t;
+    }
+    return js;
+  }();
+  return out;
+}
+
+void BM_JacobianInverseEigen(benchmark::State& state) {
+  const std::vector<Mat6>& js = phantom_jacobians();
+  std::size_t k = 0;
+  for (auto _ : state) {
+    const Eigen::PartialPivLU<Mat6> lu(js[k]);
+    Mat6 inv = lu.inverse();
+    benchmark::DoNotOptimize(inv);
+    k = (k + 1) % js.size();
+  }
+}
+
+void BM_JacobianInverseDense6(benchmark::State& state) {
+  const std::vector<Mat6>& js = phantom_jacobians();
+  std::size_t k = 0;
+  for (auto _ : state) {
+    fast::Lu6 lu;
+    Mat6 inv;
+    benchmark::DoNotOptimize(fast::lu6(js[k], &lu));
+    fast::lu6_inverse(lu, &inv);
+    benchmark::DoNotOptimize(inv);
+    k = (k + 1) % js.size();
+  }
+}
+
+BENCHMARK(BM_JacobianInverseEigen);
+BENCHMARK(BM_JacobianInverseDense6);
 
 }  // namespace
 }  // namespace dentsim

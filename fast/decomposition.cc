@@ -1,7 +1,7 @@
 // The decomposition's feed-forward on its block structure (equations: fast/decomposition.h).
 #include "fast/decomposition.h"
 
-#include <Eigen/Cholesky>
+#include "fast/dense6.h"
 
 namespace dentsim::fast {
 
@@ -25,12 +25,12 @@ bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const Too
   M_L.diagonal().head<3>().array() += proxy.mass;
   M_L.bottomRightCorner<3, 3>() += Jq;
   M_L = (0.5 * (M_L + M_L.transpose())).eval();
-  const Eigen::LLT<Mat6> llt(M_L);
-  if (llt.info() != Eigen::Success) return false;
-  Mat6 M2_dev = Mat6::Zero();
-  M2_dev.diagonal().head<3>().setConstant(proxy.mass);
-  M2_dev.bottomRightCorner<3, 3>() = Jq;
-  const Mat6 phi = llt.solve(M2_dev);  // phi = M_L^-1 E^T M2 E                      (3.3)
+  Llt6 L;
+  if (!cholesky6(M_L, &L)) return false;  // fast/dense6.h
+  Mat6 phi = Mat6::Zero();
+  phi.diagonal().head<3>().setConstant(proxy.mass);
+  phi.bottomRightCorner<3, 3>() = Jq;
+  cholesky6_solve_in_place(L, &phi);  // phi = M_L^-1 E^T M2 E                      (3.3)
   if (!phi.allFinite()) return false;
 
   const Vec6 md_inv = tool.M_d.diagonal().cwiseInverse();

@@ -1,7 +1,8 @@
 #include "fast/pmi.h"
 
-#include <Eigen/LU>
 #include <cmath>
+
+#include "fast/dense6.h"
 
 #include "reference/pmi.h"
 
@@ -11,10 +12,13 @@ bool pmi_try_solve(const PmiSystem& sys, Vec6* V_hat) {
   if (!sys.A.allFinite() || !sys.b.allFinite()) return false;
   const Vec6 d = pmi_scaling(sys.A);  // the reference's scaling (reference/pmi.h)
   const Mat6 As = d.asDiagonal() * sys.A * d.asDiagonal();
-  const Eigen::PartialPivLU<Mat6> lu(As);
-  const auto U = lu.matrixLU().diagonal().cwiseAbs();
+  Lu6 lu;  // fast/dense6.h
+  if (!lu6(As, &lu)) return false;
+  const auto U = lu.lu.diagonal().cwiseAbs();
   if (!(U.minCoeff() > 1e-13 * U.maxCoeff())) return false;
-  *V_hat = d.cwiseProduct(lu.solve(d.cwiseProduct(sys.b)));
+  Vec6 x;
+  lu6_solve(lu, d.cwiseProduct(sys.b), &x);
+  *V_hat = d.cwiseProduct(x);
   return V_hat->allFinite();
 }
 

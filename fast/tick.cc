@@ -1,7 +1,10 @@
 #include "fast/tick.h"
 
+#include <limits>
+
 #include "fast/contact.h"
 #include "fast/decomposition.h"
+#include "fast/dense6.h"
 #include "fast/pmi.h"
 #include "reference/decomposition.h"
 #include "reference/grip_detector.h"
@@ -69,12 +72,23 @@ bool pd_step(const PipelineModel& m, PipelineData& d) {
   return true;
 }
 
+// J1 = J_t^-1 by fast/dense6.h's LU; a singular J_t leaves a non-finite J1, which the stage reports
+// as the reference's does.
+void invert_jacobian(const Mat6& J_t, PipelineData& d) {
+  Lu6 lu;
+  if (!lu6(J_t, &lu)) {
+    d.J1.setConstant(std::numeric_limits<double>::quiet_NaN());
+    return;
+  }
+  lu6_inverse(lu, &d.J1);
+}
+
 }  // namespace
 
 // The device model does the work (fast::PhantomModel with the fast pipeline); the stage around it
-// (finite checks, J1 = J_t^-1, V1, the hand's terms) is the reference's.
+// (finite checks, V1, the hand's terms) is the reference's; J1 = J_t^-1 is fast/dense6.h's.
 TickStatus device_terms(const PipelineModel& m, PipelineData& d) {
-  return reference::device_terms(m, d);
+  return reference::detail::device_terms_with(m, d, invert_jacobian);
 }
 
 // Two 6-vector observer updates: already allocation-free and O(36) flops; shared. Skipped (by the

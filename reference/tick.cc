@@ -266,7 +266,21 @@ void update_shape_control(const PipelineModel& m, PipelineData& d, const Vec6& t
 
 }  // namespace
 
+namespace {
+
+void invert_jacobian(const Mat6& J_t, PipelineData& d) {
+  d.J_t_lu.compute(J_t);
+  d.J1 = d.J_t_lu.inverse();
+}
+
+}  // namespace
+
 TickStatus device_terms(const PipelineModel& m, PipelineData& d) {
+  return detail::device_terms_with(m, d, invert_jacobian);
+}
+
+TickStatus detail::device_terms_with(const PipelineModel& m, PipelineData& d,
+                                     InvertJacobian invert) {
   if (m.encoder_kalman) encoder_kalman_step(m, d);
   // One pass of the device model: x1, R1, J_t (V1 = J_t qd), M, C^T qd, g, tau_f   (2.1), (2.2)
   DeviceTerms& t = d.dev;
@@ -277,8 +291,7 @@ TickStatus device_terms(const PipelineModel& m, PipelineData& d) {
     return TickStatus::kDeviceModelFailure;
   }
   // J1 = J_t^-1 (2.2): the one inverse a tick needs (observer wrench, device inertia).
-  d.J_t_lu.compute(t.J_t);
-  d.J1 = d.J_t_lu.inverse();
+  invert(t.J_t, d);
   if (!d.J1.allFinite()) return TickStatus::kDeviceModelFailure;
   d.r.device = t.pose;
   d.r.V1.noalias() = t.J_t * d.qd;  // V1 = J_t qd                                   (2.2)

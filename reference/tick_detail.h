@@ -15,6 +15,13 @@ inline Mat6 model_joint_inertia(const PipelineModel& m, const PipelineData& d, c
   return out;
 }
 
+// J1 = J_t^-1 (2.2) into d.J1 (the inverse a tick needs: observer wrench, device inertia); the
+// reference's with Eigen's partial-pivoting LU, the fast twin's with fast/dense6.h's.
+using InvertJacobian = void (*)(const Mat6& J_t, PipelineData& d);
+
+// device_terms (reference/tick.h) with the Jacobian's inverse as a parameter.
+TickStatus device_terms_with(const PipelineModel& m, PipelineData& d, InvertJacobian invert);
+
 // The passive decomposition's feed-forward (4.7) of a pmi-pd tick: fills d.pd_T1 and d.pd_T2 from
 // the device inertia under the hypothesis in force, the poses, r.V1, r.F1_hat and d.contact;
 // false when the locked inertia is not positive definite (or phi is not finite).
