@@ -17,17 +17,12 @@ std::unique_ptr<SixDofDeviceModel> make_model(const PhantomParams& params) {
   return std::make_unique<Model>(params);
 }
 
-std::unique_ptr<PipelineTooth> make_reference_pipeline_tooth(VoxelTooth& tooth,
-                                                             const PipelineToothSetup& setup) {
-  return make_reference_tooth(tooth, setup);
-}
-
 }  // namespace
 
 std::span<const Implementation* const> implementations() {
   // Function-local, so that a caller's static initialiser sees them built.
   static const Implementation kReference{&reference_stage_table(), &make_model<PhantomModel>,
-                                         nullptr, &make_reference_pipeline_tooth};
+                                         nullptr, &make_reference_tooth};
   static const Implementation kFast{&fast::fast_stage_table(), &make_model<fast::PhantomModel>,
                                     &make_model<fast::PhantomModelFloat>, &fast::make_fast_tooth};
   static const std::array<const Implementation*, 2> kAll = {&kReference, &kFast};

@@ -231,11 +231,10 @@ void ToothProviderBase::record_drill(std::span<const Contact> contacts, std::uin
 }
 
 std::unique_ptr<PipelineTooth> make_reference_tooth(VoxelTooth& tooth,
-                                                    const PipelineToothSetup& setup,
-                                                    SignedDistanceFn sd) {
+                                                    const PipelineToothSetup& setup) {
   return std::make_unique<ProviderTooth<ToothContactProvider>>(
       tooth, setup, tooth, setup.tip, setup.k_tooth, setup.b_tooth, setup.drilling,
-      setup.contact_model, sd, setup.field);
+      setup.contact_model, &signed_distance, setup.field);
 }
 
 const AnchoredSpring* anchored_spring(const ContactProvider* env) {

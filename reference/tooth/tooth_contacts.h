@@ -233,10 +233,10 @@ class ProviderTooth final : public PipelineTooth {
   CollisionScratch scratch_;
 };
 
-// The reference's tooth: ToothContactProvider over `tooth` (which must outlive it) with the
-// signed-distance query `sd` for the surface proxy. Throws what ToothContactProvider throws.
+// The reference's tooth: ToothContactProvider over `tooth` (which must outlive it), with the
+// reference's signed-distance query for the surface proxy (the fast twin's is
+// fast::make_fast_tooth). Throws what ToothContactProvider throws.
 std::unique_ptr<PipelineTooth> make_reference_tooth(VoxelTooth& tooth,
-                                                    const PipelineToothSetup& setup,
-                                                    SignedDistanceFn sd = &signed_distance);
+                                                    const PipelineToothSetup& setup);
 
 }  // namespace dentsim
