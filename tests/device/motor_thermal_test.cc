@@ -14,6 +14,7 @@
 #include "device/phantom_device.h"
 #include "reference/core/io.h"
 #include "reference/phantom/phantom_params.h"
+#include "tests/support/alloc_counter.h"
 
 namespace dentsim {
 namespace {
@@ -209,6 +210,33 @@ TEST(MotorThermal, SimulatedPhantomFaultsWithZeroTorqueOrDerates) {
     }
     std::printf("[thermal] simulated Phantom, %s: tick %ld, q2 winding %.1f C\n",
                 on == OnOverheat::kFault ? "fault" : "derate", k, th.winding_temperature_c(1));
+  }
+}
+
+TEST(MotorThermal, ThermalTicksDoNotAllocate) {
+  // Through peak, derating and the fault, the tick allocates nothing.
+  const PhantomParams prm = default_phantom_params();
+  for (OnOverheat on : {OnOverheat::kDerate, OnOverheat::kFault}) {
+    SimulatedPhantom dev(phantom_plant(prm), hot_config(on), phantom_home_q(prm));
+    DeviceSample s = dev.make_sample();
+    VecX tau = VecX::Zero(6);
+    tau(1) = 1.2;
+    tau(2) = -1.2;
+    dev.read(s);
+    dev.write(tau);
+    dev.advance();
+    long allocs = 0;
+    {
+      dentsim::testing::AllocationScope scope;
+      for (int k = 0; k < 60; ++k) {
+        dev.read(s);
+        dev.write(tau);
+        dev.advance();
+      }
+      allocs = scope.count();
+    }
+    EXPECT_EQ(allocs, 0);
+    EXPECT_LE(dev.motor_thermal().normalised_temperature(1), 1.0 + 1e-9);
   }
 }
 
