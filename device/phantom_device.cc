@@ -56,8 +56,9 @@ SimulatedDeviceConfig phantom_device_config(const PhantomParams& p) {
   c.encoder_quantum = VecX(6);
   for (int j = 0; j < 6; ++j)
     c.encoder_quantum[j] = 2.0 * std::numbers::pi / p.encoder_counts_per_rev[j];
-  c.tau_max = p.torque_limit_n_m;
-  c.tau_fault = 4.0 * p.torque_limit_n_m;
+  c.tau_max = phantom_torque_clamp(p);  // torque_limit_n_m, or the motors' peak (thermal)
+  c.tau_fault = 4.0 * c.tau_max;
+  c.torque_limit = p.torque_limit;
   c.gravity = p.gravity_on;
   c.coulomb_velocity = p.coulomb_smoothing_rad_s;
   c.coulomb_sign.assign(p.coulomb_sign.begin(), p.coulomb_sign.end());

@@ -20,7 +20,8 @@ namespace dentsim {
 MujocoPlant phantom_plant(const PhantomParams& p);
 
 // Config defaults from the model file: encoder quantum 2 pi / encoder_counts_per_rev, tau_max =
-// torque_limit_n_m, tau_fault = 4 tau_max, damping and friction from the MJCF.
+// torque_limit_n_m (or, with "torque_limit": {"model": "thermal"}, the motors' peak and their
+// thermal model), tau_fault = 4 tau_max, damping and friction from the MJCF.
 SimulatedDeviceConfig phantom_device_config(const PhantomParams& p);
 
 // A pose in the middle of the workspace (arm at 45 deg, gimbal centred): the midpoint of the joint

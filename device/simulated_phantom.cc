@@ -180,6 +180,13 @@ SimulatedPhantom::SimulatedPhantom(const MujocoPlant& plant, SimulatedDeviceConf
       cfg_.tau_max.size() == n ? cfg_.tau_max : (n == 6 ? phantom_tau_max() : VecX::Ones(n));
   limits_.tau_fault = cfg_.tau_fault.size() == n ? cfg_.tau_fault : VecX(4.0 * limits_.tau_max);
   limits_.max_joint_step = cfg_.max_joint_step;
+  if (cfg_.torque_limit.model == TorqueLimitModel::kThermal) {
+    if (n != 6) {
+      throw InputError("simulated device: config.torque_limit thermal needs 6 joints, the plant has " +
+                       std::to_string(n));
+    }
+    thermal_ = MotorThermal(cfg_.torque_limit);
+  }
 
   // Tip body inertia as compiled (restored when the hand is released).
   const int b = h_->tip_body_id();
@@ -321,6 +328,12 @@ void SimulatedPhantom::advance() {
   const double T = draw_tick();
   T_last_ = T;
   if (faults_ != kFaultNone) tau_applied_.setZero();
+  // The motors' thermal limit of this tick (derated in place, or a warm-motor fault).
+  if (thermal_.active() && thermal_.limit(tau_applied_, T) &&
+      cfg_.torque_limit.on_overheat == OnOverheat::kFault) {
+    faults_ |= kFaultMotorTemperature;
+    tau_applied_.setZero();
+  }
   // Zero-order hold: the torque is written once and held over every substep of the tick.
   for (int j = 0; j < m->nv; ++j) d->qfrc_applied[j] = 0.0;
   for (int i = 0; i < n; ++i) d->qfrc_applied[plant_.device_dof[i]] = tau_applied_[i];
@@ -355,6 +368,7 @@ void SimulatedPhantom::advance() {
     }
     n_sub_last_ = N;
   }
+  thermal_.advance(tau_applied_, T);
   refresh_truth();
   // The device clock: the sum of the drawn tick lengths (a non-positive draw is a clock fault).
   t_prev_sample_ = t_sample_;

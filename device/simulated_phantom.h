@@ -13,6 +13,10 @@
 //   device clock's tick length.
 // - Saturation: the applied torque is clipped to +-tau_max (OpenHaptics' joint-torque clamp,
 //   (400, 350, 200, 188, 188, 48) mN m); a command beyond tau_fault is a fault (device.h).
+//   Optionally (config.torque_limit kThermal) tau_max is the motors' peak and a thermal model of
+//   each motor lowers the limit of a tick when the winding would overheat over it
+//   (device/motor_thermal.h): derated towards the continuous rating, or the fault
+//   motor_temperature with zero torque.
 // - Joint damping b [N m s/rad] and Coulomb frictionloss f_c [N m] on the device dofs (MuJoCo's
 //   own dof_damping / dof_frictionloss, so the integrator and the constraint solver treat them).
 //   They are not published for the Phantom: the defaults below are assumptions to be replaced by
@@ -39,6 +43,7 @@
 #include <vector>
 
 #include "device/device.h"
+#include "device/motor_thermal.h"
 #include "device/scripted_hand.h"
 #include "device/velocity_estimator.h"
 #include "plant/mujoco_plant.h"
@@ -74,6 +79,9 @@ struct SimulatedDeviceConfig {
   VecX tau_max;                 // [N m] (empty: Phantom defaults for 6 joints, else 1)
   VecX tau_fault;               // [N m] (empty: 4 tau_max)
   double max_joint_step = 0.1;  // [rad] encoder-jump fault threshold per tick
+  // Motor torque limit model (device/motor_thermal.h): kClamp (default) clips to tau_max only;
+  // kThermal (6 joints) adds each motor's thermal limit below tau_max (set tau_max to its peak).
+  MotorThermalParams torque_limit;
   // Joint damping and friction of the device dofs.
   bool damping_on = true;
   bool friction_on = true;
@@ -147,6 +155,8 @@ class SimulatedPhantom : public Device {
   double energy() const;
   // Encoder quantum per joint [rad] (0 when quantisation is off).
   const VecX& quantum() const { return caps_.encoder_quantum; }
+  // The motors' thermal state (inactive unless config.torque_limit is kThermal).
+  const MotorThermal& motor_thermal() const { return thermal_; }
 
   const mjModel_* model() const;
   const SimulatedDeviceConfig& config() const { return cfg_; }
@@ -168,6 +178,7 @@ class SimulatedPhantom : public Device {
   DeviceCapabilities caps_;
   DeviceLimits limits_;
   VelocityEstimator vel_;
+  MotorThermal thermal_;
   std::mt19937_64 rng_;
   std::size_t trace_index_ = 0;
   SubstepHook hook_;

@@ -18,7 +18,9 @@ q2 alone), so max f / max p <= F_sat / p_lb, p_lb the tap's penetration when the
 with F_sat plus its friction and damping from the first contact on (the hand on a tool of mass
 m_d: 0, 0.12 kg, the model's mass along z at q0 (docs/derivations/quiet_stiffness.md section 10),
 and 0.2 kg; the largest of the three bounds is the one to use). Optional F_SAT values [N] replace
-the file's, to find the force that would reach a Z-width. Standard library only.
+the file's, to find the force that would reach a Z-width. A file with "torque_limit": {"model":
+"thermal"} is bounded by its peak torque instead (the simulated device's clamp then). Standard
+library only.
 """
 import json
 import sys
@@ -122,11 +124,19 @@ def tap_bound(path, f_sats):
     l1 = d["arm"]["l1_m"]
     j = d["joints"]
     f_file = j["torque_limit_n_m"][1] / l1
+    tl = d.get("torque_limit") or {}
+    if tl.get("model") == "thermal":
+        # The thermal torque limit: the clamp is the motors' peak (the winding's limit is seconds
+        # away at the peak, a tap's impact lasts ~0.1 s), so the peak bounds the force along z.
+        print("torque_limit thermal: F_sat at the peak = %.3f N m / %.3f m = %.3f N (continuous "
+              "%.3f N m: %.3f N; the file's clamp %.3f N)" % (
+                  tl["peak_n_m"][1], l1, tl["peak_n_m"][1] / l1, tl["continuous_n_m"][1],
+                  tl["continuous_n_m"][1] / l1, f_file))
+        f_file = tl["peak_n_m"][1] / l1
     f_fric = j["coulomb_n_m"][1] / l1
     b_tip = j["damping_n_m_s_per_rad"][1] / l1 ** 2
     print("F_sat = tau_max(q2) / l1 = %.3f N m / %.3f m = %.3f N along z at q0; friction %.1f mN, "
-          "damping %.4f N s/m at the tip" % (j["torque_limit_n_m"][1], l1, f_file, 1e3 * f_fric,
-                                            b_tip))
+          "damping %.4f N s/m at the tip" % (f_file * l1, l1, f_file, 1e3 * f_fric, b_tip))
     print("| F_sat [N] | tap speed [m/s] | max penetration >= [mm] at m_d 0 / 0.12 / 0.2 kg | "
           "tap Z-width <= [N/m] (the largest) |")
     print("|---|---|---|---|")

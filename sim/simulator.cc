@@ -255,7 +255,7 @@ void make_scene_pipeline(const Scene& scene, const SceneRigOptions& options,
   // The observer's input matched to the driver's velocity estimate (reference/observer.h): without
   // it the decomposition's feed-forward closes a loop through the velocity filter's lag.
   pc.observer_input = matched_observer_input(g.device->capabilities());
-  pc.torque_limit = g.params.torque_limit_n_m;
+  pc.torque_limit = phantom_torque_clamp(g.params);  // the motors' peak with a thermal limit
   if (detect) pc.grasp_model = g.grasp.get();
   pc.encoder_kalman = scene.method.encoder_kalman;
   pc.encoder_kalman_params.model_friction = scene.method.encoder_kalman_friction;
@@ -272,7 +272,7 @@ void make_scene_pipeline(const Scene& scene, const SceneRigOptions& options,
 // The loop owner's safety chain.
 void make_safety_chain(DeviceBackend backend, SceneRig& g) {
   SafetyLimits limits;
-  limits.tau_max = g.params.torque_limit_n_m;
+  limits.tau_max = phantom_torque_clamp(g.params);
   limits.qd_max = VecX::Constant(g.device->dof(), kSceneMaxJointSpeed);
   limits.ramp_time_s = 0.0;
   if (backend == DeviceBackend::kHdapi) {

@@ -156,6 +156,15 @@ class PhantomRig : public Rig {
     SimulatedDeviceConfig cfg;
     cfg.gravity = false;
     cfg.encoder_quantum = phantom_testbed_quantum(sc);
+    if (sc.phantom_device_params) {
+      // The model file's motor limit (issue #29): its torque_limit_n_m clamp, or with
+      // "torque_limit": {"model": "thermal"} the motors' peak and thermal model. Without a file
+      // the built-in clamp (the default file's, bit for bit).
+      const SimulatedDeviceConfig file = phantom_device_config(*sc.phantom_device_params);
+      cfg.tau_max = file.tau_max;
+      cfg.tau_fault = file.tau_fault;
+      cfg.torque_limit = file.torque_limit;
+    }
     if (sc.jitter_half_width > 0.0) {
       cfg.jitter.kind = TickJitterKind::kUniform;
       cfg.jitter.half_width = sc.jitter_half_width;

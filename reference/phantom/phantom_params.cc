@@ -79,7 +79,74 @@ const BodyField kBodies[] = {
 
 std::string vec_str(const Eigen::VectorXd& v) { return vec(v); }
 
+// The optional "torque_limit" block: {"model": "clamp"} or the thermal model's keys.
+MotorThermalParams read_torque_limit(const JsonReader& r, const JsonReader::Json& root) {
+  const auto& b = r.object(root, "", "torque_limit");
+  const std::string path = "torque_limit";
+  MotorThermalParams t;
+  const std::string model = r.string(b, path, "model");
+  if (model == "clamp") {
+    r.only_keys(b, path, {"model"});
+    return t;
+  }
+  if (model != "thermal") {
+    r.fail("torque_limit.model", "expected \"clamp\" or \"thermal\", got \"" + model + "\"");
+  }
+  r.only_keys(b, path,
+              {"model", "peak_n_m", "continuous_n_m", "thermal_resistance_winding_housing_k_per_w",
+               "thermal_resistance_housing_ambient_k_per_w", "thermal_time_constant_winding_s",
+               "thermal_time_constant_motor_s", "max_winding_temperature_c",
+               "ambient_temperature_c", "on_overheat"});
+  t.model = TorqueLimitModel::kThermal;
+  t.peak_n_m = r.vector<6>(b, path, "peak_n_m");
+  t.continuous_n_m = r.vector<6>(b, path, "continuous_n_m");
+  t.r_winding_housing_k_per_w = r.vector<6>(b, path, "thermal_resistance_winding_housing_k_per_w");
+  t.r_housing_ambient_k_per_w = r.vector<6>(b, path, "thermal_resistance_housing_ambient_k_per_w");
+  t.tau_winding_s = r.vector<6>(b, path, "thermal_time_constant_winding_s");
+  t.tau_motor_s = r.vector<6>(b, path, "thermal_time_constant_motor_s");
+  t.max_winding_c = r.vector<6>(b, path, "max_winding_temperature_c");
+  t.ambient_c = r.number(b, path, "ambient_temperature_c");
+  const std::string on = r.string(b, path, "on_overheat");
+  if (on == "derate") {
+    t.on_overheat = OnOverheat::kDerate;
+  } else if (on == "fault") {
+    t.on_overheat = OnOverheat::kFault;
+  } else {
+    r.fail("torque_limit.on_overheat", "expected \"derate\" or \"fault\", got \"" + on + "\"");
+  }
+  return t;
+}
+
 }  // namespace
+
+Vec6 phantom_torque_clamp(const PhantomParams& p) {
+  return p.torque_limit.model == TorqueLimitModel::kThermal ? p.torque_limit.peak_n_m
+                                                            : p.torque_limit_n_m;
+}
+
+MotorThermalParams phantom_thermal_torque_limit() {
+  // docs/device_facts.md §3 "Motor thermal limit": Maxon RE 25 (continuous 28.6 mN m, stall
+  // 129 mN m) through the capstans (13.3, 11.2, 11.2); thermal data of the RE 25 catalogue page
+  // (assumed where docs/device_facts.md says so). Gimbal: no published motor data; its
+  // torque_limit_n_m as both peak and continuous (assumed), so the gimbal keeps its clamp.
+  MotorThermalParams t;
+  t.model = TorqueLimitModel::kThermal;
+  const Vec3 ratio(13.3, 11.2, 11.2);
+  for (int j = 0; j < 3; ++j) {
+    t.peak_n_m(j) = 0.129 * ratio(j);
+    t.continuous_n_m(j) = 0.0286 * ratio(j);
+  }
+  t.peak_n_m.tail<3>() << 0.188, 0.188, 0.048;
+  t.continuous_n_m.tail<3>() = t.peak_n_m.tail<3>();
+  t.r_winding_housing_k_per_w.setConstant(3.1);
+  t.r_housing_ambient_k_per_w.setConstant(14.0);
+  t.tau_winding_s.setConstant(12.5);
+  t.tau_motor_s.setConstant(612.0);
+  t.max_winding_c.setConstant(125.0);
+  t.ambient_c = 25.0;
+  t.on_overheat = OnOverheat::kDerate;
+  return t;
+}
 
 PhantomParams default_phantom_params() {
   PhantomParams p;
@@ -181,8 +248,27 @@ std::string phantom_params_to_text(const PhantomParams& p) {
   s << "    \"q_max_rad\": " << vec(p.q_max_rad) << ",\n";
   s << "    \"torque_limit_n_m\": " << vec(p.torque_limit_n_m) << ",\n";
   s << "    \"encoder_counts_per_rev\": " << vec(p.encoder_counts_per_rev) << "\n";
-  s << "  }\n";
-  s << "}\n";
+  s << "  }";
+  // Written only when not the clamp: the files written before read (and write) the same.
+  const MotorThermalParams& t = p.torque_limit;
+  if (t.model == TorqueLimitModel::kThermal) {
+    s << ",\n  \"torque_limit\": {\n";
+    s << "    \"model\": \"thermal\",\n";
+    s << "    \"peak_n_m\": " << vec(t.peak_n_m) << ",\n";
+    s << "    \"continuous_n_m\": " << vec(t.continuous_n_m) << ",\n";
+    s << "    \"thermal_resistance_winding_housing_k_per_w\": " << vec(t.r_winding_housing_k_per_w)
+      << ",\n";
+    s << "    \"thermal_resistance_housing_ambient_k_per_w\": " << vec(t.r_housing_ambient_k_per_w)
+      << ",\n";
+    s << "    \"thermal_time_constant_winding_s\": " << vec(t.tau_winding_s) << ",\n";
+    s << "    \"thermal_time_constant_motor_s\": " << vec(t.tau_motor_s) << ",\n";
+    s << "    \"max_winding_temperature_c\": " << vec(t.max_winding_c) << ",\n";
+    s << "    \"ambient_temperature_c\": " << num(t.ambient_c) << ",\n";
+    s << "    \"on_overheat\": \""
+      << (t.on_overheat == OnOverheat::kFault ? "fault" : "derate") << "\"\n";
+    s << "  }";
+  }
+  s << "\n}\n";
   return s.str();
 }
 
@@ -197,7 +283,7 @@ PhantomParams parse_phantom_params(const std::string& text, const std::string& o
     r.fail("(top level)", "expected a JSON object, got " + JsonReader::shown(root));
   r.only_keys(root, "",
               {"format", "version", "name", "gravity_on", "gravity_m_s2", "arm", "bodies", "gimbal",
-               "joints"});
+               "joints", "torque_limit"});
   const auto& format = r.member(root, "", "format");
   if (!format.is_string() || format.get<std::string>() != kFormat) {
     r.fail("format", std::string("expected \"") + kFormat + "\", got " + JsonReader::shown(format));
@@ -273,6 +359,7 @@ PhantomParams parse_phantom_params(const std::string& text, const std::string& o
   p.q_max_rad = r.vector<6>(joints, "joints", "q_max_rad");
   p.torque_limit_n_m = r.vector<6>(joints, "joints", "torque_limit_n_m");
   p.encoder_counts_per_rev = r.vector<6>(joints, "joints", "encoder_counts_per_rev");
+  if (r.has(root, "torque_limit")) p.torque_limit = read_torque_limit(r, root);
 
   validate_phantom_params(p, origin);
   return p;
@@ -363,6 +450,36 @@ void validate_phantom_params(const PhantomParams& p, const std::string& origin,
     }
     positive(p.torque_limit_n_m(j), "joints.torque_limit_n_m" + idx);
     positive(p.encoder_counts_per_rev(j), "joints.encoder_counts_per_rev" + idx);
+  }
+  const MotorThermalParams& t = p.torque_limit;
+  if (t.model == TorqueLimitModel::kThermal) {
+    if (!std::isfinite(t.ambient_c)) {
+      r.fail("torque_limit.ambient_temperature_c", "expected a finite temperature, got " +
+                                                       num(t.ambient_c));
+    }
+    for (int j = 0; j < 6; ++j) {
+      std::string idx("[");
+      idx += std::to_string(j);
+      idx += ']';
+      positive(t.continuous_n_m(j), "torque_limit.continuous_n_m" + idx);
+      positive(t.peak_n_m(j), "torque_limit.peak_n_m" + idx);
+      if (t.peak_n_m(j) < t.continuous_n_m(j)) {
+        r.fail("torque_limit.peak_n_m" + idx, "expected at least continuous_n_m = " +
+                                                  num(t.continuous_n_m(j)) + ", got " +
+                                                  num(t.peak_n_m(j)));
+      }
+      positive(t.r_winding_housing_k_per_w(j),
+               "torque_limit.thermal_resistance_winding_housing_k_per_w" + idx);
+      positive(t.r_housing_ambient_k_per_w(j),
+               "torque_limit.thermal_resistance_housing_ambient_k_per_w" + idx);
+      positive(t.tau_winding_s(j), "torque_limit.thermal_time_constant_winding_s" + idx);
+      positive(t.tau_motor_s(j), "torque_limit.thermal_time_constant_motor_s" + idx);
+      if (!std::isfinite(t.max_winding_c(j)) || !(t.max_winding_c(j) > t.ambient_c)) {
+        r.fail("torque_limit.max_winding_temperature_c" + idx,
+               "expected a finite temperature above ambient_temperature_c = " + num(t.ambient_c) +
+                   ", got " + num(t.max_winding_c(j)));
+      }
+    }
   }
 
   // M(q) positive definite over the joint-limit box: at its centre, its 64 corners and a

@@ -42,6 +42,32 @@ struct PhantomBody {
   bool operator==(const PhantomBody&) const = default;
 };
 
+// How the simulated device limits each joint's motor torque (model-file key "torque_limit",
+// optional; docs/simulated_device.md "Motor torque limit"). kClamp (absent key, or
+// {"model": "clamp"}): every tick's torque is clipped to joints.torque_limit_n_m, the
+// OpenHaptics "max continuous" clamp. kThermal: clipped to peak_n_m, and a two-node thermal model
+// of each motor (winding, housing; device/motor_thermal.h) lowers the limit once the winding would
+// pass max_winding_temperature_c: back towards continuous_n_m (on_overheat "derate") or to a
+// motor_temperature fault with zero torque (on_overheat "fault", as HDAPI's HD_WARM_MOTORS).
+// The heat is P_j = P_cont,j (tau_j / continuous_n_m_j)^2 with P_cont,j = (T_max,j - T_amb) /
+// (R_wh,j + R_ha,j): continuous_n_m is the torque whose steady-state winding sits at T_max.
+enum class TorqueLimitModel { kClamp, kThermal };
+enum class OnOverheat { kDerate, kFault };
+struct MotorThermalParams {
+  TorqueLimitModel model = TorqueLimitModel::kClamp;
+  Vec6 peak_n_m = Vec6::Zero();                 // |tau_j| <= peak at every tick [N m]
+  Vec6 continuous_n_m = Vec6::Zero();           // thermal rating at the joint [N m]
+  Vec6 r_winding_housing_k_per_w = Vec6::Zero();  // R_wh [K/W]
+  Vec6 r_housing_ambient_k_per_w = Vec6::Zero();  // R_ha [K/W]
+  Vec6 tau_winding_s = Vec6::Zero();            // C_w R_wh [s]
+  Vec6 tau_motor_s = Vec6::Zero();              // C_h R_ha [s]
+  Vec6 max_winding_c = Vec6::Zero();            // T_max [deg C]
+  double ambient_c = 25.0;                      // T_amb [deg C], also the initial temperature
+  OnOverheat on_overheat = OnOverheat::kDerate;
+
+  bool operator==(const MotorThermalParams&) const = default;
+};
+
 struct PhantomParams {
   std::string name;
 
@@ -86,12 +112,22 @@ struct PhantomParams {
   Vec6 q_max_rad = Vec6::Constant(1.0);
   Vec6 torque_limit_n_m = Vec6::Zero();
   Vec6 encoder_counts_per_rev = Vec6::Zero();  // counts per joint revolution (after the capstan)
+  // The motor torque limit model (key "torque_limit"; absent: kClamp at torque_limit_n_m).
+  MotorThermalParams torque_limit;
 
   bool gravity_on = true;
   double gravity_m_s2 = 9.81;  // |g|, acting along -z of {O}
 
   bool operator==(const PhantomParams&) const = default;
 };
+
+// The torque the simulated device clips every tick's command to: torque_limit_n_m (kClamp) or
+// the peak (kThermal). What a pipeline's and a safety chain's saturation should use.
+Vec6 phantom_torque_clamp(const PhantomParams& p);
+// The Premium 1.5A's motors as a thermal torque limit (Maxon RE 25 on the arm, docs/device_facts.md
+// §3 "Motor thermal limit"): peak (1.716, 1.445, 1.445) N m, continuous (0.380, 0.320, 0.320) N m;
+// the gimbal's peak = continuous = its torque_limit_n_m (no published peak).
+MotorThermalParams phantom_thermal_torque_limit();
 
 // The published Premium 1.5A set (Cavusoglu 2002 arm, drive train of docs/device_facts.md §3,
 // nominal gimbal).

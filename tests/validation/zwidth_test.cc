@@ -260,5 +260,37 @@ TEST(ZwidthPhantomDevice, TipQuantumFollowsTheModelFilesEncoders) {
               finer);
 }
 
+// A tap through the simulated Phantom (issue #29, the tap target): with the default clamp the
+// force fed back along z at q0 is at most tau_max(q2) / l1 = 1.628 N; with the model file's
+// thermal torque limit (peak 1.445 N m on q2) the same tap pushes past it, the motors stay far
+// from their winding limit over a tap, and the device reports no fault.
+TEST(ZwidthPhantomDevice, ThermalTorqueLimitLetsATapPastTheContinuousClamp) {
+  ZwidthScenario sc;
+  sc.testbed = ZwidthTestbed::kPhantom;
+  sc.pipeline = "fast";
+  sc.push_force_n = 1.0;
+  sc.hold_s = 1.0;
+  sc.observer_gain = 30.0;
+  sc.grasp_mass_scale = 1.0;
+  sc.grip_detector = true;
+  const ZwidthGains gains{1600.0, 2.0, 3000.0};
+  const PhantomParams base = default_phantom_params();
+  const double f_clamp = base.torque_limit_n_m(1) / base.l1_m;
+  const ZwidthRun clamp = run_zwidth_once(Method::kPmiPd, ZwidthOperator::kTap, gains, sc, 0.3);
+  PhantomParams thermal = base;
+  thermal.torque_limit = phantom_thermal_torque_limit();
+  sc.phantom_device_params = thermal;
+  const ZwidthRun hot = run_zwidth_once(Method::kPmiPd, ZwidthOperator::kTap, gains, sc, 0.3);
+  std::printf("[zwidth] tap 0.3 m/s at (1600, 2, 3000): clamp max force %.3f N (F_sat %.3f N, "
+              "saturated %d), thermal max force %.3f N (saturated %d), Z-width %.0f / %.0f N/m\n",
+              clamp.max_force_n, f_clamp, static_cast<int>(clamp.saturated), hot.max_force_n,
+              static_cast<int>(hot.saturated), clamp.z_width_n_per_m, hot.z_width_n_per_m);
+  EXPECT_TRUE(clamp.saturated);
+  EXPECT_LE(clamp.max_force_n, f_clamp * (1.0 + 1e-3));  // the arm a little off q0 at impact
+  EXPECT_GT(hot.max_force_n, 1.5 * f_clamp);
+  EXPECT_EQ(hot.faults, 0u);
+  EXPECT_GT(hot.z_width_n_per_m, 2.0 * clamp.z_width_n_per_m);
+}
+
 }  // namespace
 }  // namespace dentsim
