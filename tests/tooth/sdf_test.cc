@@ -1,7 +1,8 @@
 // The surface-proxy contact (reference/tooth/sdf.h): the signed distance equals the brute force
 // over every voxel, the proxy never crosses a wall one voxel thick whatever the tool's step, a
-// proxy found inside leaves along the shortest way, the contact's depth on a flat face is the
-// tool's exact depth, and the provider's model switch (faces / sdf).
+// proxy found inside leaves along the shortest way, the push-out leaves a concave corner in a few
+// queries (the corner step), the contact's depth on a flat face is the tool's exact depth, and
+// the provider's model switch (faces / sdf).
 #include "reference/tooth/sdf.h"
 
 #include <gtest/gtest.h>
