@@ -19,14 +19,73 @@
 
 #include <algorithm>
 
+#include <Eigen/LU>
+
 #include "reference/core/types.h"
 #include "reference/tooth/sdf.h"
 
 namespace dentsim::proxy_detail {
 
+// A wall the push-out has met: its offset plane {y : n . (y - q) = rho} (n the unit normal at
+// the query, q the nearest point; docs/derivations/sdf_contact.md §2 step 1).
+struct PushWall {
+  Vec3 n;
+  Vec3 q;
+};
+
+// The corner step of the push-out (docs/derivations/sdf_contact.md §2 step 1): the displacement d
+// of least norm with n_i . d >= r_i for the current wall (i = 0: r_0 = rho - phi(x)) and the
+// walls met before (r_i = rho - n_i . (x - q_i)), i.e. the nearest point of the intersection of
+// their offset half-spaces. Enumerates the active sets that hold the current wall (a strictly
+// convex QP: the one KKT point, multipliers >= 0, is its minimum); an active set whose normals are
+// near-parallel (Gram determinant below kCornerMinGram) is skipped. False when the plain step
+// d = r_0 n_0 already keeps every earlier wall within push_tol, or no active set qualifies.
+inline constexpr double kCornerMinGram = 1e-2;  // sin^2 of the least angle between two normals
+inline bool corner_step(const ProxyConstants& k, const PushWall* walls, const double* r, int count,
+                        Vec3* d) {
+  const Vec3 plain = r[0] * walls[0].n;
+  bool violated = false;
+  for (int i = 1; i < count; ++i) violated |= walls[i].n.dot(plain) < r[i] - k.push_tol;
+  if (!violated) return false;
+  bool found = false;
+  double best = 0.0;
+  // Active sets {0} + subsets of {1, .., count - 1} (bit i - 1 of `mask`), at most 3 walls.
+  for (int mask = 1; mask < (1 << (count - 1)); ++mask) {
+    int act[3] = {0, 0, 0};
+    int m = 1;
+    for (int i = 1; i < count; ++i) {
+      if (mask & (1 << (i - 1))) act[m++] = i;
+    }
+    Eigen::Matrix3d gram = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+    for (int a = 0; a < m; ++a) {
+      rhs(a) = r[act[a]];
+      for (int b = 0; b < m; ++b) gram(a, b) = walls[act[a]].n.dot(walls[act[b]].n);
+    }
+    if (!(gram.determinant() >= kCornerMinGram)) continue;
+    const Eigen::Vector3d lambda = gram.inverse() * rhs;  // fixed size: closed form, no allocation
+    Vec3 step = Vec3::Zero();
+    bool ok = true;
+    for (int a = 0; a < m; ++a) {
+      ok &= lambda(a) >= 0.0;
+      step += lambda(a) * walls[act[a]].n;
+    }
+    for (int i = 1; i < count; ++i) ok &= walls[i].n.dot(step) >= r[i] - k.push_tol;
+    if (ok && (!found || step.squaredNorm() < best)) {
+      found = true;
+      best = step.squaredNorm();
+      *d = step;
+    }
+  }
+  return found;
+}
+
 // Step 1: moves x into A = {phi >= rho - push_tol} along the shortest way; returns phi(x) - rho at
 // the end (0 when phi >= rho was found within the search of reach rho; >= -push_tol when it
-// converged).
+// converged). Each step moves x to rho outside the nearest surface point along the normal (the
+// plain step), except in a concave corner: where that step would undo an earlier wall's (by more
+// than push_tol), x moves onto the nearest point of the walls' offset half-spaces (corner_step),
+// if that step is no longer than phi(x) / L (the ball it stays in holds no solid).
 template <class Solid>
 double push_out(const ProxyConstants& k, const Solid& solid, Vec3* x) {
   // Inside, the shortest way out may be long: search as far as the grid's extent. Outside, all
@@ -34,6 +93,11 @@ double push_out(const ProxyConstants& k, const Solid& solid, Vec3* x) {
   // nearest point exactly when it is nearer than rho and stops early otherwise.
   const VoxelGrid& grid = solid.tooth().grid();
   const double far = grid.voxel_size * grid.n;
+  // walls[0]: the current one; walls[1..]: the last kPushWallsKept met before, newest first.
+  constexpr int kPushWallsKept = 2;
+  PushWall walls[kPushWallsKept + 1];
+  double r[kPushWallsKept + 1];
+  int kept = 0;
   for (int it = 0; it < kSurfaceProxyPushOuts; ++it) {
     int idx[3];
     const bool inside = sdf_detail::voxel_of(grid, *x, idx) &&
@@ -42,7 +106,25 @@ double push_out(const ProxyConstants& k, const Solid& solid, Vec3* x) {
     const SignedDistance sd = solid.distance(*x, reach);
     if (!sd.found || sd.phi >= k.rho - k.push_tol) return (sd.found ? sd.phi : reach) - k.rho;
     const Vec3 u = solid.normal(*x, sd);
-    *x = sd.nearest + k.rho * u;  // the nearest surface point, then rho out along the normal
+    walls[0] = {u, sd.nearest};
+    r[0] = k.rho - sd.phi;
+    for (int i = 1; i <= kept; ++i) r[i] = k.rho - walls[i].n.dot(*x - walls[i].q);
+    Vec3 d = Vec3::Zero();
+    if (kept > 0 && corner_step(k, walls, r, kept + 1, &d) &&
+        d.norm() * solid.lipschitz() <= sd.phi) {
+      *x += d;
+    } else {
+      *x = sd.nearest + k.rho * u;  // the nearest surface point, then rho out along the normal
+    }
+    // Remember the current wall (a near-parallel earlier one gives way to it, else the oldest).
+    int slot = std::min(kept + 1, kPushWallsKept);
+    for (int i = 1; i <= kept; ++i) {
+      const double c = u.dot(walls[i].n);
+      if (1.0 - c * c < kCornerMinGram && c > 0.0) slot = i;
+    }
+    for (int i = slot; i > 1; --i) walls[i] = walls[i - 1];
+    walls[1] = walls[0];
+    kept = std::max(kept, slot);
   }
   const SignedDistance sd = solid.distance(*x, k.rho);
   return sd.phi - k.rho;

@@ -1,7 +1,8 @@
 // The surface-proxy contact (reference/tooth/sdf.h): the signed distance equals the brute force
 // over every voxel, the proxy never crosses a wall one voxel thick whatever the tool's step, a
-// proxy found inside leaves along the shortest way, the contact's depth on a flat face is the
-// tool's exact depth, and the provider's model switch (faces / sdf).
+// proxy found inside leaves along the shortest way, the push-out leaves a concave corner in a few
+// queries (the corner step), the contact's depth on a flat face is the tool's exact depth, and
+// the provider's model switch (faces / sdf).
 #include "reference/tooth/sdf.h"
 
 #include <gtest/gtest.h>
@@ -13,8 +14,10 @@
 #include <functional>
 #include <limits>
 #include <random>
+#include <vector>
 
 #include "reference/core/io.h"
+#include "reference/tooth/surface_proxy_core.h"
 #include "reference/tooth/tooth_contacts.h"
 
 namespace dentsim {
@@ -170,6 +173,177 @@ TEST(SurfaceProxy, ProxyFoundInsideLeavesAlongTheShortestWay) {
   EXPECT_NEAR(g.x(), c.x(), 1e-12);
   EXPECT_NEAR(g.y(), c.y(), 1e-12);
   EXPECT_NEAR(g.z(), 3.2e-3 + kRho, 1e-12);
+}
+
+// The push-out in a concave corner (docs/derivations/sdf_contact.md §2 step 1). A Solid of the
+// proxy's core that counts its queries, over either an analytic corner (the free space is the
+// intersection of the half-spaces n_i . y > 0: phi = min_i n_i . y, the nearest point along the
+// wall of the least index among ties) or the voxel tooth.
+struct CornerSolid {
+  const VoxelTooth& empty;  // a grid with no solid voxel: the push-out never thinks it is inside
+  std::vector<Vec3> normals;
+  mutable int queries = 0;
+  const VoxelTooth& tooth() const { return empty; }
+  SignedDistance distance(const Vec3& x, double reach) const {
+    ++queries;
+    SignedDistance sd;
+    std::size_t wall = 0;
+    for (std::size_t i = 1; i < normals.size(); ++i) {
+      if (normals[i].dot(x) < normals[wall].dot(x)) wall = i;
+    }
+    sd.phi = normals[wall].dot(x);
+    sd.found = sd.phi < reach;
+    if (!sd.found) sd.phi = reach;
+    sd.nearest = x - sd.phi * normals[wall];
+    sd.voxel = wall;
+    return sd;
+  }
+  Vec3 normal(const Vec3&, const SignedDistance& sd) const { return normals[sd.voxel]; }
+  double lipschitz() const { return 1.0; }
+};
+
+struct CountingVoxelSolid {
+  const VoxelTooth& voxels;
+  mutable int queries = 0;
+  const VoxelTooth& tooth() const { return voxels; }
+  SignedDistance distance(const Vec3& x, double reach) const {
+    ++queries;
+    return signed_distance(voxels, x, reach);
+  }
+  Vec3 normal(const Vec3& x, const SignedDistance& sd) const {
+    return distance_gradient(voxels, x, sd);
+  }
+  double lipschitz() const { return 1.0; }
+};
+
+// The push-out before the corner step, for comparison: x <- q + rho u until phi >= rho - t_p, at
+// most kSurfaceProxyPushOuts steps; returns its queries (cap + 1 when it did not get there).
+template <class Solid>
+int plain_push_out_queries(const proxy_detail::ProxyConstants& k, const Solid& solid, Vec3 x) {
+  for (int it = 0; it < kSurfaceProxyPushOuts; ++it) {
+    const SignedDistance sd = solid.distance(x, k.rho);
+    if (!sd.found || sd.phi >= k.rho - k.push_tol) return it + 1;
+    x = sd.nearest + k.rho * solid.normal(x, sd);
+  }
+  return kSurfaceProxyPushOuts + 1;
+}
+
+// Two walls of a V-groove with normals 127 deg apart (n1 . n2 = -0.6: the plain step closes the
+// gap to A only by 0.6 a step) and three walls of a pyramidal pit (n_i . n_j = -0.4): from the
+// skin's edge (phi = rho - s) the corner step reaches A in 3 and 4 queries, on the Euclidean
+// nearest point of the offset corner (the groove's offset edge, the pit's offset apex), where the
+// plain step needed 10-12 and 14 or more, and ended short of it.
+TEST(SurfaceProxy, PushOutLeavesAConcaveCornerInAFewQueries) {
+  const VoxelTooth empty = make_tooth(4, [](const Vec3&) { return false; });
+  SurfaceProxy proxy(kRho, 0.1e-3);
+  const proxy_detail::ProxyConstants k = proxy.constants();
+  const double s = proxy.skin();
+  {
+    const double a = std::atan(2.0);  // walls of slope 2: n1 . n2 = cos(2a) = -0.6
+    CornerSolid groove{empty, {Vec3(std::sin(a), 0, std::cos(a)), Vec3(-std::sin(a), 0, std::cos(a))}, 0};
+    ASSERT_NEAR(groove.normals[0].dot(groove.normals[1]), -0.6, 1e-15);
+    for (const double off : {0.0, 0.02e-3, -0.03e-3}) {
+      // Start rho - s from wall 0 (the nearer), `off` along the groove's cross-section.
+      const double z = (kRho - s + std::sin(a) * std::abs(off)) / std::cos(a);
+      Vec3 x(off, 1e-3, z);
+      ASSERT_NEAR(groove.distance(x, kRho).phi, kRho - s, 1e-15);
+      const int plain = plain_push_out_queries(k, groove, x);
+      groove.queries = 0;
+      const double gap = proxy_detail::push_out(k, groove, &x);
+      EXPECT_LE(groove.queries, 3) << off;
+      EXPECT_GE(plain, 10) << off;
+      EXPECT_GE(gap, -1e-12 * kRho);
+      // The offset edge (n_i . y = rho for both) nearest to the start: x = 0, z = rho / cos a.
+      EXPECT_NEAR(x.x(), 0.0, 1e-15);
+      EXPECT_NEAR(x.y(), 1e-3, 1e-15);
+      EXPECT_NEAR(x.z(), kRho / std::cos(a), 1e-15);
+    }
+  }
+  {
+    // n_i = (sin b cos t_i, sin b sin t_i, cos b), t_i = 0, 120, 240 deg: n_i . n_j = -0.4 when
+    // 1.5 cos^2 b = 0.1.
+    const double b = std::acos(std::sqrt(0.1 / 1.5));
+    const double pi = std::acos(-1.0);
+    CornerSolid pit{empty, {}, 0};
+    for (int i = 0; i < 3; ++i) {
+      const double t = 2.0 * pi * i / 3.0;
+      pit.normals.emplace_back(std::sin(b) * std::cos(t), std::sin(b) * std::sin(t), std::cos(b));
+    }
+    ASSERT_NEAR(pit.normals[0].dot(pit.normals[2]), -0.4, 1e-14);
+    // On the pit's axis rho - s from the walls; the offset apex is (0, 0, rho / cos b).
+    Vec3 x(0, 0, (kRho - s) / std::cos(b));
+    const int plain = plain_push_out_queries(k, pit, x);
+    pit.queries = 0;
+    const double gap = proxy_detail::push_out(k, pit, &x);
+    EXPECT_LE(pit.queries, 4);
+    EXPECT_GE(plain, 14);
+    EXPECT_GE(gap, -1e-12 * kRho);
+    EXPECT_NEAR(x.x(), 0.0, 1e-15);
+    EXPECT_NEAR(x.y(), 0.0, 1e-15);
+    EXPECT_NEAR(x.z(), kRho / std::cos(b), 1e-15);
+  }
+}
+
+// The same on voxel walls: a V-groove of slope 2 cut in a block (a staircase of one voxel across
+// per two up) and a pit with three such walls (the free space above z0 + 2 max_i u_i . (p - c),
+// u_i horizontal at 120 deg); the tip is put in them at phi = rho - s (where the swept test
+// leaves it) on a 5 x 5 pattern of vertical lines a quarter voxel apart. The staircase's nearest
+// features are its step edges, so the walls are not planes: the push-out reaches A (phi >= rho -
+// t_p) in at most 3 queries in the groove (the plain step: up to 5) and 7 in the pit (the plain
+// step ran to its cap of 16 steps from 6 of the 25 starts), never in more than the plain step;
+// the move stays outside the solid (the corner step's Lipschitz bound, §2).
+TEST(SurfaceProxy, PushOutLeavesAVoxelCornerInAFewQueries) {
+  const double h = kSide / 64;
+  const Vec3 c(3.2e-3, 3.2e-3, 2.0e-3);
+  const double pi = std::acos(-1.0);
+  const VoxelTooth groove = make_tooth(64, [&](const Vec3& p) {
+    return p.z() < std::min(c.z() + 2.0 * std::abs(p.x() - c.x()), 5.0e-3);
+  });
+  const VoxelTooth pit = make_tooth(64, [&](const Vec3& p) {
+    double up = -1e9;
+    for (int i = 0; i < 3; ++i) {
+      const double t = 2.0 * pi * i / 3.0;
+      up = std::max(up, (p.x() - c.x()) * std::cos(t) + (p.y() - c.y()) * std::sin(t));
+    }
+    return p.z() < std::min(c.z() + 2.0 * up, 5.0e-3);
+  });
+  SurfaceProxy proxy(kRho, h);
+  const proxy_detail::ProxyConstants k = proxy.constants();
+  int worst[2] = {0, 0}, worst_plain[2] = {0, 0}, slower = 0;
+  for (const int w : {0, 1}) {
+    const VoxelTooth* tooth = w == 0 ? &groove : &pit;
+    CountingVoxelSolid solid{*tooth, 0};
+    for (int i = -2; i <= 2; ++i) {
+      for (int j = -2; j <= 2; ++j) {
+        // Bisection down the vertical line for phi = rho - s (phi grows with z there).
+        const Vec3 line(c.x() + 0.25 * i * h, c.y() + 0.25 * j * h, 0.0);
+        double lo = c.z() - 1e-3, hi = c.z() + 3e-3;
+        for (int b = 0; b < 60; ++b) {
+          const double mid = 0.5 * (lo + hi);
+          const double phi = signed_distance(*tooth, line + Vec3(0, 0, mid), 2 * kRho).phi;
+          (phi > kRho - k.skin ? hi : lo) = mid;
+        }
+        Vec3 x = line + Vec3(0, 0, hi);
+        const Vec3 start = x;
+        const int plain = plain_push_out_queries(k, solid, x);
+        solid.queries = 0;
+        EXPECT_GE(proxy_detail::push_out(k, solid, &x), -k.push_tol);
+        for (int t = 1; t <= 10; ++t) {
+          EXPECT_GT(signed_distance(*tooth, start + (t / 10.0) * (x - start), kRho).phi, 0.0);
+        }
+        worst[w] = std::max(worst[w], solid.queries);
+        worst_plain[w] = std::max(worst_plain[w], plain);
+        if (solid.queries > plain) ++slower;
+      }
+    }
+  }
+  std::printf("push-out queries at most: groove %d (plain step %d), pit %d (plain step %d)\n",
+              worst[0], worst_plain[0], worst[1], worst_plain[1]);
+  EXPECT_LE(worst[0], 3);
+  EXPECT_GE(worst_plain[0], 5);
+  EXPECT_LE(worst[1], 7);
+  EXPECT_EQ(worst_plain[1], kSurfaceProxyPushOuts + 1);  // the plain step ran to its cap
+  EXPECT_EQ(slower, 0);
 }
 
 TEST(SurfaceProxy, FlatFaceContactIsTheToolsDepthAndSlidesWithoutRipple) {
