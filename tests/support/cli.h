@@ -1,5 +1,5 @@
-// Running the dentsim binary from end-to-end tests. DENTSIM_BINARY is a compile definition of
-// every test executable (tests/CMakeLists.txt).
+// Running the dentsim binary from end-to-end tests. DENTSIM_BINARY is the build's binary, in
+// every test file (tests/support/build_paths.h, given by tests/CMakeLists.txt).
 #pragma once
 
 #include <signal.h>

@@ -30,6 +30,19 @@ namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 using testing::LayeredSphere;
 
+// The sanitizer pass (scripts/test.sh) reads the same three files — the same formats, gzip, the
+// oblique and anisotropic axes, the DICOM series — rendered at twice the spacing (1/8 of the
+// samples) and voxelised at 128^3 instead of 256^3: the readers, the resampling and the material
+// stages take the same paths on fewer samples, and the volumes and the centroid are held to the
+// same bounds. The Release pass runs the full size (docs/results/ci_time.md).
+#if defined(__SANITIZE_ADDRESS__)
+constexpr double kScanSpacingScale = 2.0;
+constexpr int kToothResolution = 128;
+#else
+constexpr double kScanSpacingScale = 1.0;
+constexpr int kToothResolution = 256;
+#endif
+
 class VolumeFiles : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -39,7 +52,8 @@ class VolumeFiles : public ::testing::Test {
   void TearDown() override { fs::remove_all(dir_); }
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
 
-  // Reads back `file`, compares with `written`, voxelises at 256^3 and checks the volumes.
+  // Reads back `file`, compares with `written`, voxelises at 256^3 (128^3 under the sanitizers)
+  // and checks the volumes.
   void check_round_trip_and_volumes(const ScanVolume& written, const std::string& file,
                                     const std::string& format) {
     const ScanVolume v = load_volume(file);
@@ -56,7 +70,7 @@ class VolumeFiles : public ::testing::Test {
     EXPECT_EQ(differ, 0);  // integer-valued samples: every format stores them exactly
 
     VolumeToothOptions opt;
-    opt.resolution = 256;
+    opt.resolution = kToothResolution;
     VolumeToothReport rep;
     const VoxelGrid g = build_volume_tooth(v, opt, &rep);
     const LayeredSphere s;
@@ -69,10 +83,11 @@ class VolumeFiles : public ::testing::Test {
     const double h3 = g.voxel_volume();
     const double enamel = counts[kEnamel] * h3, dentin = counts[kDentin] * h3,
                  pulp = counts[kPulp] * h3;
-    std::printf("%s 256^3 h = %.4f mm: enamel %.2f / %.2f, dentin %.2f / %.2f, pulp %.2f / %.2f "
+    std::printf("%s %d^3 h = %.4f mm: enamel %.2f / %.2f, dentin %.2f / %.2f, pulp %.2f / %.2f "
                 "mm^3; thresholds %.1f %.1f; partial-volume voxels %ld, islands %ld (%ld voxels)\n",
-                format.c_str(), g.voxel_size * 1e3, enamel * 1e9, s.enamel_volume() * 1e9,
-                dentin * 1e9, s.dentin_volume() * 1e9, pulp * 1e9, s.pulp_volume() * 1e9,
+                format.c_str(), kToothResolution, g.voxel_size * 1e3, enamel * 1e9,
+                s.enamel_volume() * 1e9, dentin * 1e9, s.dentin_volume() * 1e9, pulp * 1e9,
+                s.pulp_volume() * 1e9,
                 rep.thresholds.dentin_lo, rep.thresholds.enamel_lo, rep.partial_volume_voxels,
                 rep.island_components, rep.island_voxels);
     EXPECT_NEAR(enamel / s.enamel_volume(), 1.0, 0.05);
@@ -86,22 +101,24 @@ class VolumeFiles : public ::testing::Test {
 };
 
 TEST_F(VolumeFiles, NiftiGzObliqueAnisotropic) {
-  const ScanVolume v = testing::render_sphere(LayeredSphere{}, Vec3(0.08e-3, 0.08e-3, 0.125e-3),
-                                              testing::rotation(0.5, Vec3(1, 1, 0)));
+  const ScanVolume v =
+      testing::render_sphere(LayeredSphere{}, kScanSpacingScale * Vec3(0.08e-3, 0.08e-3, 0.125e-3),
+                             testing::rotation(0.5, Vec3(1, 1, 0)));
   write_nifti(v, path("sphere.nii.gz"));
   check_round_trip_and_volumes(v, path("sphere.nii.gz"), "NIfTI-1");
 }
 
 TEST_F(VolumeFiles, NrrdAxisAligned) {
-  const ScanVolume v = testing::render_sphere(LayeredSphere{}, Vec3(0.1e-3, 0.09e-3, 0.11e-3),
-                                              Mat3::Identity(), 7);
+  const ScanVolume v = testing::render_sphere(
+      LayeredSphere{}, kScanSpacingScale * Vec3(0.1e-3, 0.09e-3, 0.11e-3), Mat3::Identity(), 7);
   write_nrrd(v, path("sphere.nrrd"));
   check_round_trip_and_volumes(v, path("sphere.nrrd"), "NRRD");
 }
 
 TEST_F(VolumeFiles, DicomSeriesOblique) {
-  const ScanVolume v = testing::render_sphere(LayeredSphere{}, Vec3(0.09e-3, 0.09e-3, 0.15e-3),
-                                              testing::rotation(0.35, Vec3(1, 0, 0)), 11);
+  const ScanVolume v =
+      testing::render_sphere(LayeredSphere{}, kScanSpacingScale * Vec3(0.09e-3, 0.09e-3, 0.15e-3),
+                             testing::rotation(0.35, Vec3(1, 0, 0)), 11);
   write_dicom_series(v, path("series"));
   check_round_trip_and_volumes(v, path("series"), "DICOM");
 }

@@ -9,13 +9,14 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <string>
 
 #include "reference/core/io.h"
 
 namespace dentsim {
 namespace {
 
-const char* kData = DENTSIM_SOURCE_DIR "/../shared/data";
+const std::string kData = std::string(DENTSIM_SOURCE_DIR) + "/../shared/data";
 
 TEST(CrosscheckContact, ShortSweepSdfNeverPopsThroughFacesDo) {
   ContactCrosscheckOptions o;
