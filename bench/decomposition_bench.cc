@@ -26,6 +26,17 @@ struct PdState {
   AffineWrench F2;
 };
 
+// The Phantom's terms at rest at a configuration drawn uniformly within its joint limits.
+DeviceTerms random_phantom_terms(const PhantomParams& p, const fast::PhantomModel& model,
+                                 std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Vec6 q;
+  for (int j = 0; j < 6; ++j) q(j) = p.q_min_rad(j) + u(rng) * (p.q_max_rad(j) - p.q_min_rad(j));
+  DeviceTerms t;
+  model.terms(q, Vec6::Zero(), false, t);
+  return t;
+}
+
 const std::vector<PdState>& pd_states(bool contact) {
   static const auto make = [](bool with_contact) {
     const PhantomParams p = default_phantom_params();
@@ -34,10 +45,7 @@ const std::vector<PdState>& pd_states(bool contact) {
     std::uniform_real_distribution<double> u(0.0, 1.0);
     std::vector<PdState> out(256);
     for (PdState& s : out) {
-      Vec6 q;
-      for (int j = 0; j < 6; ++j) q(j) = p.q_min_rad(j) + u(rng) * (p.q_max_rad(j) - p.q_min_rad(j));
-      DeviceTerms t;
-      model.terms(q, Vec6::Zero(), false, t);
+      const DeviceTerms t = random_phantom_terms(p, model, rng);
       const Mat6 J1 = t.J_t.partialPivLu().inverse();
       s.M1 = J1.transpose() * t.M * J1;
       s.R1 = t.pose.R;
@@ -104,15 +112,8 @@ const std::vector<Mat6>& phantom_jacobians() {
     const PhantomParams p = default_phantom_params();
     const fast::PhantomModel model(p);
     std::mt19937_64 rng(30040);
-    std::uniform_real_distribution<double> u(0.0, 1.0);
     std::vector<Mat6> js(256);
-    for (Mat6& J : js) {
-      Vec6 q;
-      for (int j = 0; j < 6; ++j) q(j) = p.q_min_rad(j) + u(rng) * (p.q_max_rad(j) - p.q_min_rad(j));
-      DeviceTerms t;
-      model.terms(q, Vec6::Zero(), false, t);
-      J = t.J_t;
-    }
+    for (Mat6& J : js) J = random_phantom_terms(p, model, rng).J_t;
     return js;
   }();
   return out;
