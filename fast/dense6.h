@@ -92,7 +92,8 @@ inline void lu6_solve(const Lu6& f, const Vec6& b, Vec6* x) {
 // factor, so the loops keep it in registers).
 inline void lu6_inverse(const Lu6& f, Mat6* inv) {
   const Mat6& a = f.lu;
-  Eigen::Matrix<double, 6, 6, Eigen::RowMajor> x = Eigen::Matrix<double, 6, 6, Eigen::RowMajor>::Zero();
+  using RowMajor6 = Eigen::Matrix<double, 6, 6, Eigen::RowMajor>;
+  RowMajor6 x = RowMajor6::Zero();
   for (int i = 0; i < 6; ++i) x(i, f.perm[i]) = 1.0;  // P
   for (int k = 0; k < 6; ++k) {  // L Y = P
     for (int i = k + 1; i < 6; ++i) x.row(i) -= a(i, k) * x.row(k);
