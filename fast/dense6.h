@@ -2,9 +2,9 @@
 // tick factors three 6x6 matrices: J_t (its inverse J1, (2.2)), the PMI system (4.9) and the
 // locked inertia M_L (phi = M_L^-1 E^T M2 E, (3.3)). Eigen's PartialPivLU and LLT of a Mat6 go
 // through their generic paths (the blocked LU on a strided reference, and for a matrix right-hand
-// side the level-3 triangular solve with its packing): callgrind gave ~15k of a free-space tick's
-// ~40k instructions to them (docs/benchmarks.md "Dense 6x6 kernels"). These are the textbook
-// algorithms with loops of compile-time length, which the compiler unrolls:
+// side the level-3 triangular solve with its packing): callgrind gave ~12k of a free-space tick's
+// 36k instructions to them; 8k of it is saved here (docs/benchmarks.md "Dense 6x6 kernels").
+// These are the textbook algorithms with loops of compile-time length, which the compiler unrolls:
 //
 //   LU with partial pivoting (Golub & Van Loan, Alg. 3.4.1): for k = 0..5, the row p >= k with
 //   the largest |A(p,k)| (the first of equals, as Eigen) is swapped into row k, then
