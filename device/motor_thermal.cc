@@ -21,6 +21,10 @@ double MotorThermal::heat(int j, double tau) const noexcept {
 }
 
 void MotorThermal::exp_at(int j, double T, double e[4]) const noexcept {
+  if (T == exp_T_(j)) {
+    for (int k = 0; k < 4; ++k) e[k] = exp_e_(j, k);
+    return;
+  }
   // A = [-a, a; b, -(b + c)]: a = 1 / tau_w, b = R_ha / (tau_m R_wh), c = 1 / tau_m. Its
   // eigenvalues are real and distinct ((a + b + c)^2 - 4 a c = (a - c)^2 + b^2 + 2 b (a + c) > 0),
   // so e^{AT} = (e^{l1 T} (A - l2 I) - e^{l2 T} (A - l1 I)) / (l1 - l2).
@@ -36,7 +40,9 @@ void MotorThermal::exp_at(int j, double T, double e[4]) const noexcept {
   for (int k = 0; k < 4; ++k) {
     const double diag = (k == 0 || k == 3) ? 1.0 : 0.0;
     e[k] = (e1 * (A[k] - l2 * diag) - e2 * (A[k] - l1 * diag)) / d;
+    exp_e_(j, k) = e[k];
   }
+  exp_T_(j) = T;
 }
 
 double MotorThermal::allowed_torque(int j, double T) const noexcept {

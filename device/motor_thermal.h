@@ -25,6 +25,8 @@
 // Nothing here allocates or throws after construction.
 #pragma once
 
+#include <limits>
+
 #include "reference/core/types.h"
 #include "reference/phantom/phantom_params.h"
 
@@ -61,7 +63,9 @@ class MotorThermal {
   double step_response(int j, double tau, double t) const noexcept;
 
  private:
-  // e^{A T} of joint j's network (2x2, row-major a11 a12 a21 a22).
+  // e^{A T} of joint j's network (2x2, row-major a11 a12 a21 a22). A device tick asks it twice
+  // with the same T (limit, then advance): the last T's matrix is kept per joint, so the two
+  // exponentials are taken once a tick (the same doubles either way).
   void exp_at(int j, double T, double e[4]) const noexcept;
   double heat(int j, double tau) const noexcept;  // P [W]
 
@@ -70,6 +74,9 @@ class MotorThermal {
   Vec6 rise_max_ = Vec6::Ones();  // Tmax - T_amb [K]
   Vec6 p_cont_ = Vec6::Zero();    // [W]
   Vec6 tw_ = Vec6::Zero(), th_ = Vec6::Zero();
+  // exp_at's last T and its e^{AT}, per joint (NaN: none yet).
+  mutable Vec6 exp_T_ = Vec6::Constant(std::numeric_limits<double>::quiet_NaN());
+  mutable Eigen::Matrix<double, 6, 4, Eigen::RowMajor> exp_e_ = decltype(exp_e_)::Zero();
 };
 
 }  // namespace dentsim
