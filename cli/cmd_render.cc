@@ -59,7 +59,7 @@ void render(const RenderCliOptions& o) {
     vo.zoom = o.zoom;
     vo.method = method_name(scene.method.method);
     vo.field = rig->field.get();
-    write_png(o.png, view::render_offscreen(rig->tooth_before, nullptr, vo));
+    write_png(o.png, view::render_offscreen(rig->tooth_before.unpack(), nullptr, vo));
     std::printf("render: scene %s at t = 0 s (before the first tick, %s pipeline): wrote %s\n",
                 scene.name.c_str(), o.pipeline.c_str(), o.png.c_str());
     return;

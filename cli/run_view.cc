@@ -72,10 +72,11 @@ void write_tooth_pictures(const RunResult& r, const std::string& dir) {
   std::string why;
   if (view::headless_available(&why)) {
     try {
-      write_png(dir + "/tooth_before.png",
-                view::render_tooth_panels(r.tooth_before, 512, 55.0f, r.field_before.get()));
-      write_png(dir + "/tooth_after.png",
-                view::render_tooth_panels(r.tooth_after, 512, 55.0f, r.field_after.get()));
+      // One grid unpacked at a time (RunResult keeps them as runs).
+      write_png(dir + "/tooth_before.png", view::render_tooth_panels(r.tooth_before.unpack(), 512,
+                                                                     55.0f, r.field_before.get()));
+      write_png(dir + "/tooth_after.png", view::render_tooth_panels(r.tooth_after.unpack(), 512,
+                                                                    55.0f, r.field_after.get()));
       return;
     } catch (const InputError& e) {
       why = e.what();
@@ -85,8 +86,8 @@ void write_tooth_pictures(const RunResult& r, const std::string& dir) {
   // Seen from above the occlusal surface, where the tool works.
   RenderOptions view;
   view.elevation_deg = 55.0;
-  write_png(dir + "/tooth_before.png", render_voxels(r.tooth_before, view));
-  write_png(dir + "/tooth_after.png", render_voxels(r.tooth_after, view));
+  write_png(dir + "/tooth_before.png", render_voxels(r.tooth_before.unpack(), view));
+  write_png(dir + "/tooth_after.png", render_voxels(r.tooth_after.unpack(), view));
 }
 
 }  // namespace dentsim::cli

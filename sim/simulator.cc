@@ -167,7 +167,7 @@ void place_tooth(const Scene& scene, SceneRig& g) {
   g.anchor = g.home.x + scene.tooth.anchor_offset;
   const Vec3 tooth_shift = g.anchor - occlusal_anchor(grid);
   grid.origin += tooth_shift;
-  g.tooth_before = grid;
+  g.tooth_before = VoxelRuns(grid);
   g.tooth = std::make_unique<VoxelTooth>(std::move(grid));
   g.tip.radius = scene.tool.bur_radius;
   g.measure_contacts.reserve(4096);
@@ -747,13 +747,7 @@ void report_tooth(const SceneRig& rig, RunResult& res) {
     res.pulp_exposed_at_s = contacts.pulp_exposed_tick() * rig.tick;
   }
   res.drill_log = contacts.drill_log();
-  res.tooth_after = rig.tooth_grid();
-  if (rig.field) {
-    // Undrilled, the field is the one the run started with.
-    res.field_after = res.drill_log.empty() && res.field_before
-                          ? res.field_before
-                          : std::make_shared<const SampledField>(*rig.field);
-  }
+  res.tooth_after = VoxelRuns(rig.tooth_grid());
 }
 
 // The supervisor's totals; its reason appended to a fault it raised.
@@ -818,6 +812,16 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   if (!callback) res.virtual_energy_generated_j = loop.energy_virtual_j();
   res.tick_s = T;
   report_tooth(*rig, res);
+  if (rig->field) {
+    // Undrilled, the field is the one the run started with; drilled, the rig's own field is
+    // handed over (the rig ends here; the object, which its tooth points to, stays where it is):
+    // no third copy of the band beside field_before (#30).
+    if (res.drill_log.empty() && res.field_before) {
+      res.field_after = res.field_before;
+    } else {
+      res.field_after = std::shared_ptr<const SampledField>(std::move(rig->field));
+    }
+  }
   report_supervisor(*rig, res);
   const bool faulted = callback ? !res.faults.empty() : loop.faulted();
   res.torque_after_fault_n_m = faulted ? rig->loop_device->applied_torque().norm() : 0.0;

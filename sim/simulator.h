@@ -49,6 +49,7 @@
 #include "reference/tick.h"
 #include "reference/tooth/tooth_contacts.h"
 #include "reference/tooth/voxel_grid.h"
+#include "reference/tooth/voxel_runs.h"
 
 namespace dentsim {
 
@@ -141,7 +142,9 @@ struct RunResult {
   std::vector<RunSample> series;
   std::string hd_loop;                  // hdapi: "callback" or "caller" (empty for a simulated run)
   long callback_dropped_ticks = 0;      // hdapi callback loop: records the full ring dropped
-  VoxelGrid tooth_before, tooth_after;  // for pictures
+  // The tooth before the first tick and after the last, for pictures: as runs (reference/tooth/
+  // voxel_runs.h; unpack() gives the grid), not two more N^3 grids beside the run's own (#30).
+  VoxelRuns tooth_before, tooth_after;
   // The tooth's sampled field before the first tick and after the last (contact model "field",
   // as drilling edited it); null for the other models. For pictures (view/pictures.h).
   std::shared_ptr<const SampledField> field_before, field_after;
@@ -198,7 +201,7 @@ struct SceneRig {
   std::unique_ptr<FaultInjectingDevice> faulty;  // set when a fault is injected
   std::unique_ptr<Device> backend;               // the hdapi device, when it drives the loop
   Device* loop_device = nullptr;                 // what the loop drives (device, backend, faulty)
-  VoxelGrid tooth_before;
+  VoxelRuns tooth_before;  // the placed tooth before the first tick (unpack() for the grid)
   std::unique_ptr<VoxelTooth> tooth;        // the reference tooth (drilled by "reference")
   std::unique_ptr<SampledField> field;  // the tooth's field (contact model "field"), else null
   // The pipeline implementation's tooth over `tooth` (fast/registry.h): what its stages query

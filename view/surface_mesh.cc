@@ -7,11 +7,6 @@
 #include <stdexcept>
 
 namespace dentsim::view {
-namespace {
-
-constexpr int kW1[3] = {1, 2, 1};
-
-}  // namespace
 
 SurfaceMesher::SurfaceMesher(const VoxelGrid& grid, int block_size, CutAway cut)
     : SurfaceMesher(grid, nullptr, block_size, cut) {}
@@ -31,6 +26,7 @@ SurfaceMesher::SurfaceMesher(const VoxelGrid& grid, const SampledField* field, i
   }
   nb_ = (grid.n + block_size - 1) / block_size;
   blocks_.resize(static_cast<std::size_t>(nb_) * nb_ * nb_);
+  if (field_ == nullptr) count_block_solids();
   for (int b = 0; b < static_cast<int>(blocks_.size()); ++b) mesh_block(b);
 }
 
@@ -74,15 +70,118 @@ std::vector<int> SurfaceMesher::update(const VoxelGrid& grid,
   const std::size_t n = static_cast<std::size_t>(grid_.n);
   for (std::size_t idx : changed) {
     if (idx >= grid_.voxels.size()) continue;
+    const bool was_solid = grid_.voxels[idx] != 0;
     grid_.voxels[idx] = grid.voxels[idx];
     const int i = static_cast<int>(idx % n), j = static_cast<int>((idx / n) % n),
               k = static_cast<int>(idx / (n * n));
+    if (!block_solid_.empty() && was_solid != (grid_.voxels[idx] != 0)) {
+      const std::size_t b = static_cast<std::size_t>(i / block_size_) +
+                            static_cast<std::size_t>(nb_) *
+                                (static_cast<std::size_t>(j / block_size_) +
+                                 static_cast<std::size_t>(nb_) * (k / block_size_));
+      block_solid_[b] = was_solid ? block_solid_[b] - 1 : block_solid_[b] + 1;
+    }
     for (int b : blocks_touched_by(i, j, k)) dirty.push_back(b);
   }
   std::sort(dirty.begin(), dirty.end());
   dirty.erase(std::unique(dirty.begin(), dirty.end()), dirty.end());
   for (int b : dirty) mesh_block(b);
   return dirty;
+}
+
+void SurfaceMesher::count_block_solids() {
+  block_solid_.assign(blocks_.size(), 0);
+  const std::size_t n = static_cast<std::size_t>(grid_.n);
+  const int B = block_size_;
+  for (int k = 0; k < grid_.n; ++k) {
+    for (int j = 0; j < grid_.n; ++j) {
+      const std::uint8_t* row = grid_.voxels.data() + n * (static_cast<std::size_t>(j) + n * k);
+      const std::size_t base = static_cast<std::size_t>(nb_) * (j / B + nb_ * (k / B));
+      for (int i = 0; i < grid_.n; ++i) block_solid_[base + i / B] += row[i] != 0 ? 1 : 0;
+    }
+  }
+}
+
+bool SurfaceMesher::uniform_neighbourhood(const int b0[3]) const {
+  // A block's quads read o within +-2 voxels of it (header comment), inside its neighbour blocks
+  // (B >= 4): if those blocks hold no solid voxel, s = 0 on the block and its halo; if they are
+  // all solid, inside the grid and clear of the cut, s = 1 there. Either way no edge crosses 1/2.
+  const int B = block_size_;
+  const int c[3] = {b0[0] / B, b0[1] / B, b0[2] / B};
+  bool empty = true, full = true;
+  for (int z = c[2] - 1; z <= c[2] + 1; ++z) {
+    for (int y = c[1] - 1; y <= c[1] + 1; ++y) {
+      for (int x = c[0] - 1; x <= c[0] + 1; ++x) {
+        if (x < 0 || y < 0 || z < 0 || x >= nb_ || y >= nb_ || z >= nb_) {
+          full = false;  // outside the grid reads empty
+          continue;
+        }
+        const std::uint32_t solid = block_solid_[static_cast<std::size_t>(x) +
+                                                 static_cast<std::size_t>(nb_) * (y + nb_ * z)];
+        if (solid != 0) empty = false;
+        const int extent[3] = {std::min(B, grid_.n - x * B), std::min(B, grid_.n - y * B),
+                               std::min(B, grid_.n - z * B)};
+        if (solid != static_cast<std::uint32_t>(extent[0] * extent[1] * extent[2])) full = false;
+      }
+    }
+  }
+  if (full && cut_.enabled) {
+    // The neighbourhood's voxels reach (c + 2) B - 1 along x and y: clear of the cut below it.
+    full = (c[0] + 2) * B - 1 < cut_.i || (c[1] + 2) * B - 1 < cut_.j;
+  }
+  return empty || full;
+}
+
+void SurfaceMesher::smooth_occupancy(const int b0[3], const int b1[3], int L) {
+  // s(c) = sum_d w(d) o(c + d) / 64 over the cells [b0 - 1, b1] (header comment), as three
+  // passes of the 1-2-1 filter along x, y and z: the same integer sums as the 27-term one.
+  const int R = L + 2;  // o over the voxels [b0 - 2, b0 + L - 1] per axis
+  o_.assign(static_cast<std::size_t>(R) * R * R, 0);
+  auto oidx = [R](int x, int y, int z) {
+    return static_cast<std::size_t>(x) +
+           static_cast<std::size_t>(R) * (static_cast<std::size_t>(y) + static_cast<std::size_t>(R) * z);
+  };
+  const int hi[3] = {b1[0] - b0[0] + 3, b1[1] - b0[1] + 3, b1[2] - b0[2] + 3};  // last local + 1
+  for (int z = 0; z <= hi[2]; ++z) {
+    for (int y = 0; y <= hi[1]; ++y) {
+      for (int x = 0; x <= hi[0]; ++x) {
+        o_[oidx(x, y, z)] = occupied(b0[0] - 2 + x, b0[1] - 2 + y, b0[2] - 2 + z) ? 1 : 0;
+      }
+    }
+  }
+  // Pass a filters along axis a the cells 1..hi-1 of that axis, all of the axes not yet passed.
+  // Pass a: axes 0..a in [1, hi - 1] (filtered), the later ones in [0, hi] (still needed).
+  std::vector<int>& t = filter_;
+  std::vector<int>& u = filter_out_;
+  t.assign(o_.begin(), o_.end());
+  u.resize(t.size());
+  for (int a = 0; a < 3; ++a) {
+    const std::size_t step = a == 0 ? 1 : (a == 1 ? R : static_cast<std::size_t>(R) * R);
+    int lo[3], top[3];
+    for (int b = 0; b < 3; ++b) {
+      lo[b] = b <= a ? 1 : 0;
+      top[b] = b <= a ? hi[b] - 1 : hi[b];
+    }
+    for (int z = lo[2]; z <= top[2]; ++z) {
+      for (int y = lo[1]; y <= top[1]; ++y) {
+        for (int x = lo[0]; x <= top[0]; ++x) {
+          const std::size_t m = oidx(x, y, z);
+          u[m] = t[m - step] + 2 * t[m] + t[m + step];
+        }
+      }
+    }
+    t.swap(u);
+  }
+  for (int z = 1; z < hi[2]; ++z) {
+    for (int y = 1; y < hi[1]; ++y) {
+      for (int x = 1; x < hi[0]; ++x) {
+        s_[static_cast<std::size_t>(x - 1) +
+           static_cast<std::size_t>(L) *
+               (static_cast<std::size_t>(y - 1) + static_cast<std::size_t>(L) * (z - 1))] =
+            static_cast<float>(t[oidx(x, y, z)]) / 64.0f;
+      }
+    }
+  }
 }
 
 void SurfaceMesher::mesh_block(int block) {
@@ -104,26 +203,23 @@ void SurfaceMesher::mesh_block(int block) {
   };
   const int pad = field_ != nullptr ? field_->padding() : 0;
   const float half_voxel = 0.5f * static_cast<float>(grid_.voxel_size);
-  for (int k = b0[2] - 1; k <= b1[2]; ++k) {
-    for (int j = b0[1] - 1; j <= b1[1]; ++j) {
-      for (int i = b0[0] - 1; i <= b1[0]; ++i) {
-        if (field_ != nullptr) {
+  if (field_ != nullptr) {
+    // Samples all at c_out (s = -c_out < 0, the cut only lowers s): no cell inside, no quad.
+    const int lo[3] = {b0[0] - 1 + pad, b0[1] - 1 + pad, b0[2] - 1 + pad};
+    const int hi[3] = {b1[0] + pad, b1[1] + pad, b1[2] + pad};
+    if (field_->all_outside(lo, hi)) return;
+    for (int k = b0[2] - 1; k <= b1[2]; ++k) {
+      for (int j = b0[1] - 1; j <= b1[1]; ++j) {
+        for (int i = b0[0] - 1; i <= b1[0]; ++i) {
           float s = -field_->at(i + pad, j + pad, k + pad);
           if (cut_.enabled && i >= cut_.i && j >= cut_.j) s = std::min(s, -half_voxel);
           s_[sidx(i, j, k)] = s;
-          continue;
         }
-        int sum = 0;
-        for (int dz = -1; dz <= 1; ++dz) {
-          for (int dy = -1; dy <= 1; ++dy) {
-            for (int dx = -1; dx <= 1; ++dx) {
-              if (occupied(i + dx, j + dy, k + dz)) sum += kW1[dx + 1] * kW1[dy + 1] * kW1[dz + 1];
-            }
-          }
-        }
-        s_[sidx(i, j, k)] = static_cast<float>(sum) / 64.0f;
       }
     }
+  } else {
+    if (uniform_neighbourhood(b0)) return;  // no crossing: no quad (and the mesh stays empty)
+    smooth_occupancy(b0, b1, L);
   }
   auto s_at = [&](int i, int j, int k) { return s_[sidx(i, j, k)]; };
   const float h = static_cast<float>(grid_.voxel_size);

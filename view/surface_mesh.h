@@ -95,6 +95,12 @@ class SurfaceMesher {
  private:
   void mesh_block(int block);
   bool occupied(int i, int j, int k) const;
+  // The voxels' path (no field): the solid voxels per block, the test that lets mesh_block skip
+  // a block whose +-1 block neighbourhood is all empty or all solid (it has no quad), and s over
+  // a block and its halo by a separable filter (the same sums as the 27-term definition).
+  void count_block_solids();
+  bool uniform_neighbourhood(const int b0[3]) const;
+  void smooth_occupancy(const int b0[3], const int b1[3], int L);
 
   VoxelGrid grid_;
   int block_size_;
@@ -107,6 +113,9 @@ class SurfaceMesher {
   int halo_ = kHalo;
   std::vector<BlockMesh> blocks_;
   std::vector<float> s_;  // scratch: s over one block + 1 voxel halo
+  std::vector<std::uint32_t> block_solid_;  // solid voxels per block (voxels' path)
+  std::vector<std::uint8_t> o_;             // scratch: o over one block + 2 voxel halo
+  std::vector<int> filter_, filter_out_;    // scratch: the separable filter's passes
 };
 
 // The cut-away through the centre of the solid's bounding box: removes the +x, +y quarter (seen

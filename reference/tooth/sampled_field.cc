@@ -58,6 +58,17 @@ float SampledField::at(int sx, int sy, int sz) const {
   return id == kAllOutside ? static_cast<float>(c_out_) : static_cast<float>(-c_in_);
 }
 
+bool SampledField::all_outside(const int lo[3], const int hi[3]) const {
+  for (int bz = lo[2] / kFieldBrick; bz <= hi[2] / kFieldBrick; ++bz) {
+    for (int by = lo[1] / kFieldBrick; by <= hi[1] / kFieldBrick; ++by) {
+      for (int bx = lo[0] / kFieldBrick; bx <= hi[0] / kFieldBrick; ++bx) {
+        if (index_[slot(bx, by, bz)] != kAllOutside) return false;
+      }
+    }
+  }
+  return true;
+}
+
 void SampledField::reserve_spare_bricks(std::size_t spare) {
   bricks_.reserve(bricks_.size() + spare * static_cast<std::size_t>(kBrickSamples));
   row_bounds_.reserve(row_bounds_.size() + spare * static_cast<std::size_t>(kBrickRows));

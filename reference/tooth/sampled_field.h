@@ -96,6 +96,9 @@ class SampledField {
   bool deep_inside(const Vec3& x) const;
   // Stored value of sample s (lattice coordinates, each in [0, samples_per_axis())).
   float at(int sx, int sy, int sz) const;
+  // Whether every sample of the box [lo, hi] (inclusive lattice coordinates in [0, m)) lies in a
+  // brick slot marked all outside, i.e. holds c_out (the view skips such blocks; issue #30).
+  bool all_outside(const int lo[3], const int hi[3]) const;
   int samples_per_axis() const { return m_; }
   int padding() const { return pad_; }  // P
   Vec3 sample_position(int sx, int sy, int sz) const {

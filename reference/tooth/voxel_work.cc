@@ -22,23 +22,25 @@ std::size_t VoxelWorkTable::slot_of(std::size_t v) const {
 
 double VoxelWorkTable::get(std::size_t v) const {
   if (keys_.empty()) return 0.0;
+  const Key key = static_cast<Key>(v);
   for (std::size_t s = slot_of(v);; s = (s + 1) & mask_) {
-    if (keys_[s] == v) return work_[s];
+    if (keys_[s] == key) return work_[s];
     if (keys_[s] == kEmptyKey) return 0.0;
   }
 }
 
 bool VoxelWorkTable::add(std::size_t v, double w) {
   if (keys_.empty()) return false;
+  const Key key = static_cast<Key>(v);
   std::size_t s = slot_of(v);
   for (; keys_[s] != kEmptyKey; s = (s + 1) & mask_) {
-    if (keys_[s] == v) {
+    if (keys_[s] == key) {
       work_[s] += w;
       return true;
     }
   }
   if (size_ >= capacity_) return false;
-  keys_[s] = v;
+  keys_[s] = key;
   work_[s] = 0.0 + w;  // the dense store's 0.0 + w, bit for bit
   ++size_;
   return true;
@@ -46,8 +48,9 @@ bool VoxelWorkTable::add(std::size_t v, double w) {
 
 void VoxelWorkTable::erase(std::size_t v) {
   if (keys_.empty()) return;
+  const Key key = static_cast<Key>(v);
   std::size_t s = slot_of(v);
-  for (; keys_[s] != v; s = (s + 1) & mask_) {
+  for (; keys_[s] != key; s = (s + 1) & mask_) {
     if (keys_[s] == kEmptyKey) return;
   }
   // Backward-shift deletion: move later members of the probe run into the hole when their home

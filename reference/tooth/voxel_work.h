@@ -24,8 +24,8 @@ class VoxelWorkTable {
 
   // Work on voxel v [J]; 0 when v holds none.
   double get(std::size_t v) const;
-  // Adds w to voxel v's work. Returns false (adding nothing) when v holds no entry and the table
-  // already holds capacity() entries.
+  // Adds w to voxel v's work (v < 2^32 - 1). Returns false (adding nothing) when v holds no entry
+  // and the table already holds capacity() entries.
   bool add(std::size_t v, double w);
   // Forgets voxel v's work (its entry, if any).
   void erase(std::size_t v);
@@ -35,21 +35,24 @@ class VoxelWorkTable {
   std::size_t size() const { return size_; }
   std::size_t capacity() const { return capacity_; }
   // Bytes of the table's storage.
-  std::size_t bytes() const { return keys_.capacity() * (sizeof(std::size_t) + sizeof(double)); }
+  std::size_t bytes() const { return keys_.capacity() * (sizeof(Key) + sizeof(double)); }
   // Sum of the stored work [J] (tests and reports; walks every slot).
   double total() const;
   // Calls f(v, work) for every entry, in slot order.
   template <class F>
   void for_each(F&& f) const {
     for (std::size_t s = 0; s < keys_.size(); ++s) {
-      if (keys_[s] != kEmptyKey) f(keys_[s], work_[s]);
+      if (keys_[s] != kEmptyKey) f(static_cast<std::size_t>(keys_[s]), work_[s]);
     }
   }
 
  private:
-  static constexpr std::size_t kEmptyKey = ~std::size_t{0};
+  // A flat voxel index in 32 bits (12 bytes a slot, not 16): a grid has at most 1024^3 = 2^30
+  // voxels (FullOctree's limit), so every index fits below kEmptyKey.
+  using Key = std::uint32_t;
+  static constexpr Key kEmptyKey = ~Key{0};
   std::size_t slot_of(std::size_t v) const;  // home slot (a multiplicative hash)
-  std::vector<std::size_t> keys_;            // flat voxel index, or kEmptyKey
+  std::vector<Key> keys_;                    // flat voxel index, or kEmptyKey
   std::vector<double> work_;
   std::size_t mask_ = 0;
   std::size_t size_ = 0;

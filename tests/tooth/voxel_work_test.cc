@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "reference/tooth/drilling.h"
+#include "tooth_io/procedural_molar.h"
 
 namespace dentsim {
 namespace {
@@ -106,6 +107,33 @@ TEST(VoxelWorkTable, SetupCapacityFollowsTheSurface) {
   const DrillState state = make_drill_state(g);
   EXPECT_EQ(state.work_j.capacity(), drill_work_capacity(152));
   EXPECT_EQ(state.grid_voxels, g.voxels.size());
+}
+
+// The work's storage follows the tooth's surface, not its grid (issue #30): on the procedural
+// molar at 64^3 and 128^3 the table's bytes are at most 12 bytes (a 32-bit key and a double) a
+// slot in fewer than 4 (2 S_0 + 4096) slots (load <= 1/2, rounded up to a power of two), S_0 the
+// surface voxels, which grow as N^2: at 128^3 that is under a quarter of a dense double per
+// voxel (8 N^3 bytes, the store this table replaced).
+TEST(VoxelWorkTable, StorageFollowsTheSurfaceNotTheGrid) {
+  std::size_t surface[2] = {0, 0};
+  for (int r = 0; r < 2; ++r) {
+    const int n = r == 0 ? 64 : 128;
+    const VoxelGrid g = voxelize_procedural_molar(MolarParams{}, n);
+    surface[r] = count_surface_voxels(g);
+    const DrillState state = make_drill_state(g);
+    const std::size_t capacity = drill_work_capacity(surface[r]);
+    EXPECT_EQ(state.work_j.capacity(), capacity);
+    EXPECT_LE(state.work_j.bytes(), 12 * 4 * capacity) << "N = " << n;
+    EXPECT_GE(state.work_j.bytes(), 12 * 2 * capacity) << "N = " << n;
+    if (n == 128) {
+      EXPECT_LT(4 * state.work_j.bytes(), 8 * g.voxels.size());
+    }
+  }
+  // The surface about quadruples when N doubles (4.41 measured: 64^3 is coarse), the grid grows
+  // eightfold.
+  const double ratio = static_cast<double>(surface[1]) / static_cast<double>(surface[0]);
+  EXPECT_GT(ratio, 3.5);
+  EXPECT_LT(ratio, 5.0);
 }
 
 }  // namespace

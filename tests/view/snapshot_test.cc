@@ -173,7 +173,7 @@ TEST(SnapshotChannel, StalledRendererDoesNotChangeASingleTick) {
   EXPECT_EQ(a.virtual_energy_generated_j, b.virtual_energy_generated_j);
   EXPECT_EQ(a.hand_work_j, b.hand_work_j);
   EXPECT_EQ(a.faults, b.faults);
-  EXPECT_EQ(a.tooth_after.voxels, b.tooth_after.voxels);
+  EXPECT_EQ(a.tooth_after.unpack().voxels, b.tooth_after.unpack().voxels);
   ASSERT_EQ(a.series.size(), b.series.size());
   for (std::size_t i = 0; i < a.series.size(); ++i) {
     const RunSample& x = a.series[i];
@@ -190,7 +190,7 @@ TEST(SnapshotChannel, StalledRendererDoesNotChangeASingleTick) {
   TickSnapshot last;
   ch.latest(&last);
   ch.sync_tooth(&g, &c);
-  EXPECT_EQ(g.voxels, b.tooth_after.voxels);
+  EXPECT_EQ(g.voxels, b.tooth_after.unpack().voxels);
   EXPECT_EQ(last.tick, b.ticks - 1);
   EXPECT_EQ(last.removed_volume_mm3, b.removed_volume_mm3);
 }

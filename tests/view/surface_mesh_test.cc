@@ -6,12 +6,14 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
 #include <numbers>
 #include <set>
 #include <tuple>
+#include <vector>
 
 #include "reference/tooth/sampled_field.h"
 #include "tooth_io/procedural_molar.h"
@@ -282,6 +284,127 @@ TEST(SurfaceMesh, CutAwayShowsTheInnerLayers) {
   EXPECT_GT(face[kEnamel], 0);
   EXPECT_GT(face[kDentin], face[kEnamel]) << "dentin is the bulk of the section";
   EXPECT_GT(face[kPulp], 0);
+}
+
+// The definition of s (header comment): the 27-term weighted sum, cut-away voxels empty.
+float definition_s(const VoxelGrid& g, const CutAway& cut, int i, int j, int k) {
+  constexpr int w1[3] = {1, 2, 1};
+  int sum = 0;
+  for (int dz = -1; dz <= 1; ++dz) {
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int a = i + dx, b = j + dy, c = k + dz;
+        const bool cut_away = cut.enabled && a >= cut.i && b >= cut.j;
+        if (g.solid(a, b, c) && !cut_away) sum += w1[dx + 1] * w1[dy + 1] * w1[dz + 1];
+      }
+    }
+  }
+  return static_cast<float>(sum) / 64.0f;
+}
+
+// Every triangle of the mesh as its three vertices' positions, normals and material, sorted:
+// what the mesh is, whatever the blocks.
+std::vector<std::array<float, 19>> triangle_soup(const SurfaceMesher& m) {
+  std::vector<std::array<float, 19>> out;
+  for (const BlockMesh& b : m.blocks()) {
+    for (std::size_t t = 0; t + 2 < b.indices.size(); t += 3) {
+      std::array<float, 19> tri{};
+      for (int c = 0; c < 3; ++c) {
+        const MeshVertex& v = b.vertices[b.indices[t + c]];
+        for (int a = 0; a < 3; ++a) {
+          tri[6 * c + a] = v.p[a];
+          tri[6 * c + 3 + a] = v.n[a];
+        }
+        tri[18] = v.material;
+      }
+      out.push_back(tri);
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// The mesher skips blocks whose neighbourhood is all empty or all solid and builds s by a
+// separable filter (issue #30: the pictures at 512^3). Its quads are still those of the
+// definition: one per (inside centre, outside face neighbour) pair, two triangles each, counted
+// here by brute force over the whole grid; and the triangles are the same whatever the block size
+// (4, 8, 16: different blocks skipped, different filter windows), with and without the cut.
+TEST(SurfaceMesh, SkippedBlocksAndSeparableFilterKeepTheDefinitionsQuads) {
+  VoxelGrid g = voxelize_procedural_molar(MolarParams{}, 64);
+  for (int k = 20; k < 30; ++k) {  // a drilled shaft: more surface inside the bulk
+    for (int j = 30; j < 34; ++j) {
+      for (int i = 30; i < 34; ++i) g.set(i, j, k, kEmpty);
+    }
+  }
+  for (const CutAway cut : {CutAway{}, centre_cut(g)}) {
+    long pairs = 0;
+    for (int k = 0; k < g.n; ++k) {
+      for (int j = 0; j < g.n; ++j) {
+        for (int i = 0; i < g.n; ++i) {
+          if (definition_s(g, cut, i, j, k) < 0.5f) continue;
+          for (int f = 0; f < 6; ++f) {
+            int nb[3] = {i, j, k};
+            nb[f / 2] += f % 2 == 0 ? -1 : 1;
+            if (definition_s(g, cut, nb[0], nb[1], nb[2]) < 0.5f) ++pairs;
+          }
+        }
+      }
+    }
+    ASSERT_GT(pairs, 1000);
+    const SurfaceMesher m8(g, 8, cut);
+    EXPECT_EQ(static_cast<long>(m8.triangle_count()), 2 * pairs) << "cut " << cut.enabled;
+    const auto soup = triangle_soup(m8);
+    EXPECT_EQ(triangle_soup(SurfaceMesher(g, 4, cut)), soup) << "cut " << cut.enabled;
+    EXPECT_EQ(triangle_soup(SurfaceMesher(g, 16, cut)), soup) << "cut " << cut.enabled;
+  }
+}
+
+// The same on the field (the view skips blocks whose samples are all the outside clamp): a ball
+// of radius 10.3 h in a 64^3 grid, most of whose 8^3 blocks are far outside.
+TEST(SurfaceMesh, FieldBlocksSkippedOutsideKeepTheDefinitionsQuads) {
+  const int n = 64;
+  const double h = 1e-4, r = 10.3 * h;
+  VoxelGrid g(n, Vec3(0.01, -0.02, 0.03), h);
+  const Vec3 centre = g.origin + Vec3(30.21, 33.87, 29.43) * h;
+  const auto inside = [&](const Vec3& p) { return (p - centre).norm() < r; };
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        if (inside(g.center(i, j, k))) g.set(i, j, k, kEnamel);
+      }
+    }
+  }
+  FieldBand band;
+  band.outside_m = 3 * h;
+  const SampledField field = build_sampled_field(g, triangulate_implicit(g, inside), band);
+  const int pad = field.padding();
+  const float half_voxel = 0.5f * static_cast<float>(h);
+  for (const CutAway cut : {CutAway{}, centre_cut(g)}) {
+    auto s_of = [&](int i, int j, int k) {
+      float v = -field.at(i + pad, j + pad, k + pad);
+      if (cut.enabled && i >= cut.i && j >= cut.j) v = std::min(v, -half_voxel);
+      return v;
+    };
+    long pairs = 0;
+    for (int k = 0; k < n; ++k) {
+      for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) {
+          if (s_of(i, j, k) < 0.0f) continue;
+          for (int f = 0; f < 6; ++f) {
+            int nb[3] = {i, j, k};
+            nb[f / 2] += f % 2 == 0 ? -1 : 1;
+            if (s_of(nb[0], nb[1], nb[2]) < 0.0f) ++pairs;
+          }
+        }
+      }
+    }
+    ASSERT_GT(pairs, 500);
+    const SurfaceMesher m8(g, &field, 8, cut);
+    EXPECT_EQ(static_cast<long>(m8.triangle_count()), 2 * pairs) << "cut " << cut.enabled;
+    const auto soup = triangle_soup(m8);
+    EXPECT_EQ(triangle_soup(SurfaceMesher(g, &field, 4, cut)), soup) << "cut " << cut.enabled;
+    EXPECT_EQ(triangle_soup(SurfaceMesher(g, &field, 16, cut)), soup) << "cut " << cut.enabled;
+  }
 }
 
 }  // namespace

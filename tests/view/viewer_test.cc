@@ -165,8 +165,9 @@ TEST(ViewerXvfb, WindowShowsTheDrillingAndMatchesTheHeadlessRender) {
   RunOptions one_tick;
   one_tick.duration_override = 1e-3;
   const RunResult r = run_scene(load_scene("drill"), one_tick);
+  const VoxelGrid before = r.tooth_before.unpack();
   const std::vector<std::uint8_t> expected =
-      testing::voxel_silhouette(r.tooth_before, camera_for(r.tooth_before, defaults), w, h);
+      testing::voxel_silhouette(before, camera_for(before, defaults), w, h);
   long want = 0, covered = 0, drawn = 0, drawn_outside = 0, enamel = 0, tooth_pixels = 0;
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {

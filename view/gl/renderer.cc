@@ -110,6 +110,13 @@ struct GlMesh {
   std::uint64_t version = 0;
 
   void upload(const std::vector<MeshVertex>& v, const std::vector<std::uint32_t>& idx) {
+    // An empty block that never held triangles gets no GL objects: most blocks of a tooth's grid
+    // are empty, and a software GL (llvmpipe) spends kilobytes on each vertex array and buffer
+    // (issue #30: 262144 blocks at 512^3). It draws nothing either way.
+    if (vao == 0 && idx.empty()) {
+      count = 0;
+      return;
+    }
     if (vao == 0) {
       glGenVertexArrays(1, &vao);
       glGenBuffers(1, &vbo);

@@ -1,0 +1,41 @@
+#include "reference/tooth/voxel_runs.h"
+
+namespace dentsim {
+
+VoxelRuns::VoxelRuns(const VoxelGrid& grid)
+    : n_(grid.n), origin_(grid.origin), voxel_size_(grid.voxel_size) {
+  const std::vector<std::uint8_t>& v = grid.voxels;
+  // Two passes: count the runs, then fill exactly that much (no slack kept in the result).
+  std::size_t runs = 0;
+  for (std::size_t x = 0; x < v.size();) {
+    std::size_t end = x + 1;
+    while (end < v.size() && v[end] == v[x] && end - x < kMaxRun) ++end;
+    ++runs;
+    x = end;
+  }
+  material_.reserve(runs);
+  length_.reserve(runs);
+  for (std::size_t x = 0; x < v.size();) {
+    std::size_t end = x + 1;
+    while (end < v.size() && v[end] == v[x] && end - x < kMaxRun) ++end;
+    material_.push_back(v[x]);
+    length_.push_back(static_cast<std::uint32_t>(end - x));
+    x = end;
+  }
+}
+
+VoxelGrid VoxelRuns::unpack() const {
+  VoxelGrid g;
+  g.n = n_;
+  g.origin = origin_;
+  g.voxel_size = voxel_size_;
+  std::size_t total = 0;
+  for (const std::uint32_t l : length_) total += l;
+  g.voxels.reserve(total);
+  for (std::size_t r = 0; r < material_.size(); ++r) {
+    g.voxels.insert(g.voxels.end(), length_[r], material_[r]);
+  }
+  return g;
+}
+
+}  // namespace dentsim
