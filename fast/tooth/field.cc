@@ -186,10 +186,16 @@ void FieldBricks::include_cells(const int lo[3], const int hi[3]) {
   }
 }
 
-FieldSample FieldBricks::sample(const Vec3& x, bool* deep) const {
+namespace {
+
+// FieldBricks::sample's work, with internal linkage so that FieldSolid::query inlines it (the
+// member itself is an exported symbol, which -fPIC keeps out of line; GCC 12 does not inline a
+// function called twice of this size without the attribute).
+[[gnu::always_inline]] inline FieldSample sample_bricks(const FieldBricks& bricks, const Vec3& x,
+                                                       bool* deep) {
   FieldSample out;
   if (deep != nullptr) *deep = false;
-  const SampledField& f = field_;
+  const SampledField& f = bricks.field();
   const int m = f.samples_per_axis();
   if (m < 2) return out;  // SampledField::sample's empty field (deep_inside false)
   const Vec3 origin = f.sample_position(0, 0, 0);
@@ -203,10 +209,11 @@ FieldSample FieldBricks::sample(const Vec3& x, bool* deep) const {
     t[a] = u - i;
   }
   float cf[8];
-  corners(s, cf);
+  bricks.corners(s, cf);
   if (deep != nullptr) {
     bool all_in = true;
-    for (int d = 0; d < 8; ++d) all_in = all_in && cf[d] == in_;
+    const float floor_value = static_cast<float>(-f.inside_clamp());
+    for (int d = 0; d < 8; ++d) all_in = all_in && cf[d] == floor_value;
     *deep = all_in;
   }
   // SampledField::sample's arithmetic, c[dx][dy][dz] = cf[dx + 2 dy + 4 dz].
@@ -233,6 +240,12 @@ FieldSample FieldBricks::sample(const Vec3& x, bool* deep) const {
   return out;
 }
 
+}  // namespace
+
+FieldSample FieldBricks::sample(const Vec3& x, bool* deep) const {
+  return sample_bricks(*this, x, deep);
+}
+
 const FieldSolid::Query& FieldSolid::query(const Vec3& x) const {
   if (last_.generation == bricks_.generation() && last_.x.x() == x.x() && last_.x.y() == x.y() &&
       last_.x.z() == x.z()) {
@@ -242,7 +255,7 @@ const FieldSolid::Query& FieldSolid::query(const Vec3& x) const {
   last_.x = x;
   last_.generation = bricks_.generation();
   bool deep = false;
-  const FieldSample s = bricks_.sample(x, &deep);
+  const FieldSample s = sample_bricks(bricks_, x, &deep);
   last_.deep = deep;
   last_.value = s.value;
   last_.gradient = s.gradient;
