@@ -186,22 +186,18 @@ void FieldBricks::include_cells(const int lo[3], const int hi[3]) {
   }
 }
 
-const FieldSolid::Query& FieldSolid::query(const Vec3& x) const {
-  if (last_.generation == bricks_.generation() && last_.x.x() == x.x() && last_.x.y() == x.y() &&
-      last_.x.z() == x.z()) {
-    return last_;
-  }
-  ++evaluated_;
-  const SampledField& f = bricks_.field();
-  last_.x = x;
-  last_.generation = bricks_.generation();
+namespace {
+
+// FieldBricks::sample's work, with internal linkage so that FieldSolid::query inlines it (the
+// member itself is an exported symbol, which -fPIC keeps out of line; GCC 12 does not inline a
+// function called twice of this size without the attribute).
+[[gnu::always_inline]] inline FieldSample sample_bricks(const FieldBricks& bricks, const Vec3& x,
+                                                       bool* deep) {
+  FieldSample out;
+  if (deep != nullptr) *deep = false;
+  const SampledField& f = bricks.field();
   const int m = f.samples_per_axis();
-  if (m < 2) {  // SampledField::sample's empty field (deep_inside false, phi 0, no gradient)
-    last_.deep = false;
-    last_.value = 0.0;
-    last_.gradient = Vec3::Zero();
-    return last_;
-  }
+  if (m < 2) return out;  // SampledField::sample's empty field (deep_inside false)
   const Vec3 origin = f.sample_position(0, 0, 0);
   const double h = f.voxel_size();
   int s[3];
@@ -213,11 +209,13 @@ const FieldSolid::Query& FieldSolid::query(const Vec3& x) const {
     t[a] = u - i;
   }
   float cf[8];
-  bricks_.corners(s, cf);
-  const float floor_value = static_cast<float>(-f.inside_clamp());
-  bool deep = true;
-  for (int d = 0; d < 8; ++d) deep = deep && cf[d] == floor_value;
-  last_.deep = deep;
+  bricks.corners(s, cf);
+  if (deep != nullptr) {
+    bool all_in = true;
+    const float floor_value = static_cast<float>(-f.inside_clamp());
+    for (int d = 0; d < 8; ++d) all_in = all_in && cf[d] == floor_value;
+    *deep = all_in;
+  }
   // SampledField::sample's arithmetic, c[dx][dy][dz] = cf[dx + 2 dy + 4 dz].
   const auto c = [&](int dx, int dy, int dz) {
     return static_cast<double>(cf[dx + 2 * dy + 4 * dz]);
@@ -232,13 +230,35 @@ const FieldSolid::Query& FieldSolid::query(const Vec3& x) const {
   }
   const double ey0 = ex[0][0] + ty * (ex[1][0] - ex[0][0]);
   const double ey1 = ex[0][1] + ty * (ex[1][1] - ex[0][1]);
-  last_.value = ey0 + tz * (ey1 - ey0);
+  out.value = ey0 + tz * (ey1 - ey0);
   const double gx0 = dx_edge[0][0] + ty * (dx_edge[1][0] - dx_edge[0][0]);
   const double gx1 = dx_edge[0][1] + ty * (dx_edge[1][1] - dx_edge[0][1]);
   const double gx = gx0 + tz * (gx1 - gx0);
   const double gy = (ex[1][0] - ex[0][0]) + tz * ((ex[1][1] - ex[0][1]) - (ex[1][0] - ex[0][0]));
   const double gz = ey1 - ey0;
-  last_.gradient = Vec3(gx, gy, gz) / h;
+  out.gradient = Vec3(gx, gy, gz) / h;
+  return out;
+}
+
+}  // namespace
+
+FieldSample FieldBricks::sample(const Vec3& x, bool* deep) const {
+  return sample_bricks(*this, x, deep);
+}
+
+const FieldSolid::Query& FieldSolid::query(const Vec3& x) const {
+  if (last_.generation == bricks_.generation() && last_.x.x() == x.x() && last_.x.y() == x.y() &&
+      last_.x.z() == x.z()) {
+    return last_;
+  }
+  ++evaluated_;
+  last_.x = x;
+  last_.generation = bricks_.generation();
+  bool deep = false;
+  const FieldSample s = sample_bricks(bricks_, x, &deep);
+  last_.deep = deep;
+  last_.value = s.value;
+  last_.gradient = s.gradient;
   return last_;
 }
 

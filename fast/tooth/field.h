@@ -73,6 +73,11 @@ class FieldBricks {
   void corners(const int s[3], float c[8]) const;
   // The stored value of sample s (SampledField::at).
   float at(int sx, int sy, int sz) const;
+  // phi(x) and its gradient: SampledField::sample's arithmetic on the same samples, so bitwise
+  // equal to field().sample(x) (tests/fast/field_test.cc), from one gather (corners()). When
+  // `deep` is given, *deep tells whether all 8 corners are the inside clamp
+  // (SampledField::deep_inside) from the same gather.
+  FieldSample sample(const Vec3& x, bool* deep = nullptr) const;
   // After SampledField::raise of sample s: copies its value into every brick holding it.
   void mirror(int sx, int sy, int sz);
   // Raises lipschitz() as SampledField::include_cells does for the sample box [lo, hi].

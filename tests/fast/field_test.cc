@@ -2,7 +2,8 @@
 // (reference/tooth/field_contact.h, itself checked in tests/tooth/field_*_test.cc), on a drilled
 // sphere at 64^3:
 // - the kernels alone: the 9^3 bricks hold the field's every sample, a cell's corners are the
-//   field's, mirrored raises and the Lipschitz update equal the reference's (include_cells);
+//   field's, the sample (value, gradient, deep-inside flag) is the field's bitwise, before and
+//   after mirrored raises, and the Lipschitz update equals the reference's (include_cells);
 // - the query: fast::FieldSolid's distance (phi, found, nearest, voxel) and normal bitwise equal
 //   to dentsim::FieldSolid's at random points, reaches and along paths (the kept query and the
 //   free-space certificate in use);
@@ -18,6 +19,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <random>
 #include <vector>
@@ -50,6 +52,30 @@ bool same(const SignedDistance& a, const SignedDistance& b) {
   return a.phi == b.phi && a.found == b.found && a.nearest == b.nearest && a.voxel == b.voxel;
 }
 
+// Points over the lattice and beyond it (clamped coordinates), `count` of them: how many of
+// fast::FieldBricks::sample's value, gradient or deep flag differ from the reference field's
+// sample() and deep_inside(); *deep_count counts the deep points.
+long sample_mismatches(const SampledField& field, const fast::FieldBricks& bricks,
+                       std::uint64_t seed, int count, long* deep_count) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> anywhere(-0.1 * kSide, 1.1 * kSide);
+  std::uniform_real_distribution<double> dir(-1.0, 1.0), radial(kR - 1.0e-3, kR + 1.5e-3);
+  long differ = 0;
+  for (int trial = 0; trial < count; ++trial) {
+    const Vec3 d(dir(rng), dir(rng), dir(rng));
+    const Vec3 x = trial % 4 == 0 || d.norm() < 1e-3
+                       ? Vec3(anywhere(rng), anywhere(rng), anywhere(rng))
+                       : Vec3(kCentre + radial(rng) * d.normalized());
+    bool deep = false;
+    const FieldSample f = bricks.sample(x, &deep);
+    const FieldSample r = field.sample(x);
+    differ += !(f.value == r.value && f.gradient == r.gradient &&
+                deep == field.deep_inside(x) && bricks.sample(x).value == r.value);
+    *deep_count += deep ? 1 : 0;
+  }
+  return differ;
+}
+
 TEST(FastFieldBricks, HoldEverySampleAndTheCellCorners) {
   const VoxelGrid g = sphere_grid();
   const SampledField field = sphere_field(g);
@@ -74,6 +100,17 @@ TEST(FastFieldBricks, HoldEverySampleAndTheCellCorners) {
   }
   EXPECT_EQ(bricks.lipschitz(), field.lipschitz());
   EXPECT_GT(bricks.brick_count(), 0u);
+}
+
+// The fast sample (value, gradient and the deep-inside flag from one gather) is the reference's
+// bitwise: the same arithmetic on the same samples.
+TEST(FastFieldBricks, SampleEqualsTheReferenceSampleBitwise) {
+  const VoxelGrid g = sphere_grid();
+  const SampledField field = sphere_field(g);
+  const fast::FieldBricks bricks(field, 0);
+  long deep = 0;
+  EXPECT_EQ(sample_mismatches(field, bricks, 41, 20000, &deep), 0);
+  EXPECT_GT(deep, 100);  // the deep-inside flag was exercised both ways
 }
 
 TEST(FastFieldBricks, MirroredRaisesAndTheLipschitzUpdateEqualTheReference) {
@@ -120,6 +157,8 @@ TEST(FastFieldBricks, MirroredRaisesAndTheLipschitzUpdateEqualTheReference) {
   }
   EXPECT_EQ(differ, 0);
   EXPECT_GT(bricks.lipschitz(), sphere_field(g).lipschitz());  // the raises did raise it
+  long deep = 0;  // the sample on mirrored bricks and read-through slots
+  EXPECT_EQ(sample_mismatches(reference, bricks, 42, 20000, &deep), 0);
 }
 
 TEST(FastFieldSolid, EqualsTheReferenceQueryBitwise) {
