@@ -293,10 +293,6 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
     rd.fail("tooth.contact_model", "expected \"sdf\" (the default), \"faces\" or \"field\" (got \"" +
                                        s.tooth.contact_model + "\")");
   }
-  if (s.tooth.contact_model == "field" && s.tooth.source == "volume") {
-    rd.fail("tooth.contact_model",
-            "\"field\" needs a procedural or mesh tooth (a scan's field is not built yet; use \"sdf\")");
-  }
 
   // Tool.
   const auto& tl = rd.object(doc, "", "tool");

@@ -24,14 +24,16 @@ VoxelGrid build_tooth_grid(const ToothSource& t) {
     opt.resolution = t.resolution;
     return voxelize_mesh(loaded.mesh, opt);
   }
-  if (t.source == "volume") {
-    VolumeToothOptions opt;
-    opt.resolution = t.resolution;
-    opt.automatic_thresholds = t.automatic_thresholds;
-    opt.thresholds = t.thresholds;
-    return build_volume_tooth(load_volume(t.path), opt);
-  }
+  if (t.source == "volume") return build_volume_tooth(load_volume(t.path), volume_tooth_options(t));
   throw InputError("tooth source '" + t.source + "': expected procedural, mesh or volume");
+}
+
+VolumeToothOptions volume_tooth_options(const ToothSource& t) {
+  VolumeToothOptions opt;
+  opt.resolution = t.resolution;
+  opt.automatic_thresholds = t.automatic_thresholds;
+  opt.thresholds = t.thresholds;
+  return opt;
 }
 
 namespace {

@@ -27,6 +27,9 @@ struct ToothSource {
 // Throws InputError for an unknown source or bad input (naming the file).
 VoxelGrid build_tooth_grid(const ToothSource& tooth);
 
+// The options build_tooth_grid builds a volume tooth with (its resolution and thresholds).
+VolumeToothOptions volume_tooth_options(const ToothSource& tooth);
+
 // build_tooth_grid, remembered for the process. A run's setup builds its tooth, and the sweeps
 // (zwidth, the stress suite, crosscheck, the closed-loop tests) run hundreds to thousands of runs
 // on one tooth; the procedural molar at 128^3 is most of a short run's setup. A procedural molar,

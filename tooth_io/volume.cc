@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <utility>
 
 #include "reference/core/io.h"
 #include "tooth_io/voxelize.h"
@@ -276,12 +277,41 @@ long remove_islands(VoxelGrid& grid, int min_voxels, long* voxels) {
   return n_small;
 }
 
+std::uint8_t VolumeSolidRule::classify(double value, bool at_edge) const {
+  const std::uint8_t c = classify_intensity(thresholds, value);
+  if (at_edge && c == kDentin) return value >= cut ? kEnamel : kEmpty;
+  return c;
+}
+
 VoxelGrid build_volume_tooth(const ScanVolume& volume, const VolumeToothOptions& options,
-                             VolumeToothReport* report) {
+                             VolumeToothReport* report, VolumeSolidRule* rule) {
+  // A degenerate volume (trilinear interpolation needs two samples per axis).
+  std::size_t samples = 1;
+  for (int d = 0; d < 3; ++d) {
+    if (volume.dims[d] < 2) {
+      throw InputError(volume.source + ": size " + std::to_string(volume.dims[d]) + " along axis " +
+                       std::to_string(d) + "; expected at least 2 samples per axis");
+    }
+    if (!(volume.spacing[d] > 0.0) || !std::isfinite(volume.spacing[d])) {
+      throw InputError(volume.source + ": spacing " + std::to_string(volume.spacing[d]) +
+                       " along axis " + std::to_string(d) + "; expected a positive finite length");
+    }
+    samples *= static_cast<std::size_t>(volume.dims[d]);
+  }
+  if (volume.values.size() != samples) {
+    throw InputError(volume.source + ": " + std::to_string(volume.values.size()) +
+                     " samples for a " + std::to_string(volume.dims[0]) + " x " +
+                     std::to_string(volume.dims[1]) + " x " + std::to_string(volume.dims[2]) +
+                     " lattice");
+  }
   VolumeToothReport rep;
   // 1. Thresholds and the class means of the raw samples.
-  rep.thresholds = options.automatic_thresholds ? otsu_three_class(volume.values)
-                                                : options.thresholds;
+  try {
+    rep.thresholds = options.automatic_thresholds ? otsu_three_class(volume.values)
+                                                  : options.thresholds;
+  } catch (const InputError& e) {
+    throw InputError(volume.source + ": " + e.what());
+  }
   const MaterialThresholds& th = rep.thresholds;
   Mask sample_class(volume.values.size());
   std::array<double, 3> sum = {0, 0, 0};
@@ -347,12 +377,17 @@ VoxelGrid build_volume_tooth(const ScanVolume& volume, const VolumeToothOptions&
     is_enamel[x] = grid.voxels[x] == kEnamel;
     is_empty[x] = grid.voxels[x] == kEmpty;
   }
-  const Mask near_enamel = dilate_cube(is_enamel, n, r);
+  VolumeSolidRule solid_rule;
+  solid_rule.thresholds = th;
+  solid_rule.background = background;
+  solid_rule.cut = 0.5 * (rep.class_means[2] + rep.class_means[0]);
+  solid_rule.edge = dilate_cube(is_enamel, n, r);  // near enamel, then also near background:
   const Mask near_empty = dilate_cube(is_empty, n, r);
-  const double cut = 0.5 * (rep.class_means[2] + rep.class_means[0]);
   for (std::size_t x = 0; x < grid.voxels.size(); ++x) {
-    if (options.partial_volume_rule && grid.voxels[x] == kDentin && near_enamel[x] && near_empty[x]) {
-      grid.voxels[x] = value[x] >= cut ? kEnamel : kEmpty;
+    solid_rule.edge[x] =
+        options.partial_volume_rule && solid_rule.edge[x] != 0 && near_empty[x] != 0 ? 1 : 0;
+    if (solid_rule.edge[x] && grid.voxels[x] == kDentin) {
+      grid.voxels[x] = solid_rule.classify(value[x], true);
       ++rep.partial_volume_voxels;
     }
   }
@@ -371,6 +406,7 @@ VoxelGrid build_volume_tooth(const ScanVolume& volume, const VolumeToothOptions&
     }
   }
   if (report != nullptr) *report = rep;
+  if (rule != nullptr) *rule = std::move(solid_rule);
   return grid;
 }
 

@@ -117,9 +117,24 @@ struct VolumeToothReport {
   double interpolation_radius_voxels = 0;  // step 4's r
 };
 
-// Steps 1-6. Throws InputError when nothing is classed solid.
+// Steps 3-4 as a rule on an intensity, so that the solid can be asked between the voxel centres
+// too (the scan's field: tooth_io/tooth_field.h). At a voxel centre, with that voxel's `edge`
+// flag and the float intensity step 3 stores, classify() is the class steps 3-4 give the voxel.
+struct VolumeSolidRule {
+  MaterialThresholds thresholds;
+  double background = 0.0;  // sample_trilinear's value outside the sampled lattice (step 3)
+  double cut = 0.0;         // step 4's level, (mean enamel + mean background) / 2
+  std::vector<std::uint8_t> edge;  // per grid voxel (N^3): 1 where step 4 applies
+  // The class of intensity `value` where step 4 applies (`at_edge`: dentin is cut at `cut` into
+  // enamel or background) or not (classify_intensity).
+  std::uint8_t classify(double value, bool at_edge) const;
+};
+
+// Steps 1-6; `rule` (if given) receives steps 3-4's rule. Throws InputError naming the volume's
+// source when it is degenerate (a size below 2 samples, samples missing, a spacing that is not
+// positive and finite) or when nothing is classed solid.
 VoxelGrid build_volume_tooth(const ScanVolume& volume, const VolumeToothOptions& options,
-                             VolumeToothReport* report = nullptr);
+                             VolumeToothReport* report = nullptr, VolumeSolidRule* rule = nullptr);
 
 // Mean centre of the solid voxels [m] (zero for an empty grid).
 Vec3 solid_centroid(const VoxelGrid& grid);

@@ -407,42 +407,40 @@ SampledField build_sampled_field(const VoxelGrid& grid, const TriangleMesh& surf
   return f;
 }
 
-TriangleMesh triangulate_implicit(const VoxelGrid& grid,
-                                  const std::function<bool(const Vec3&)>& inside) {
+TriangleMesh triangulate_voxel_signs(
+    const VoxelGrid& grid, const std::function<Vec3(const Vec3& p_in, const Vec3& p_out)>& place) {
   TriangleMesh mesh;
   mesh.groups.push_back("");
   const int n = grid.n;
   // Kuhn's six tetrahedra of a cell along its diagonal 0 -> 7 (corner c = x + 2 y + 4 z): for each
   // order of the axes (a, b, c), the vertices 0, e_a, e_a + e_b, 7. Every tetrahedron edge joins
   // corners c0 < c1 with c1 - c0 a sum of distinct unit steps, so it is keyed by its lower
-  // sample and that step (1..7).
+  // sample (in [-1, n]^3: the cells run from -1 to n - 1, so that a solid voxel on the grid's
+  // boundary layer meets the empty centres beyond it) and that step (1..7).
   constexpr int kAxisBit[3] = {1, 2, 4};
   constexpr int kOrders[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  const std::uint64_t span = static_cast<std::uint64_t>(n) + 2;
   std::unordered_map<std::uint64_t, int> edge_vertex;
   const auto corner_position = [&](int i, int j, int k, int c) {
     return grid.center(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
   };
   const auto vertex_on = [&](int i, int j, int k, int c0, int c1, bool in0) {
     // c0 < c1; the key names the lower corner's sample and the step.
-    const int ci = i + (c0 & 1), cj = j + ((c0 >> 1) & 1), ck = k + ((c0 >> 2) & 1);
-    const std::uint64_t key =
-        (static_cast<std::uint64_t>(grid.index(ci, cj, ck)) << 3) | static_cast<unsigned>(c1 - c0);
+    const std::uint64_t ci = static_cast<std::uint64_t>(i + (c0 & 1) + 1),
+                        cj = static_cast<std::uint64_t>(j + ((c0 >> 1) & 1) + 1),
+                        ck = static_cast<std::uint64_t>(k + ((c0 >> 2) & 1) + 1);
+    const std::uint64_t key = ((ci + span * (cj + span * ck)) << 3) | static_cast<unsigned>(c1 - c0);
     const auto it = edge_vertex.find(key);
     if (it != edge_vertex.end()) return it->second;
-    Vec3 p_in = corner_position(i, j, k, in0 ? c0 : c1);
-    Vec3 p_out = corner_position(i, j, k, in0 ? c1 : c0);
-    for (int it2 = 0; it2 < 40; ++it2) {
-      const Vec3 mid = 0.5 * (p_in + p_out);
-      (inside(mid) ? p_in : p_out) = mid;
-    }
     const int v = static_cast<int>(mesh.vertices.size());
-    mesh.vertices.push_back(0.5 * (p_in + p_out));
+    mesh.vertices.push_back(place(corner_position(i, j, k, in0 ? c0 : c1),
+                                  corner_position(i, j, k, in0 ? c1 : c0)));
     edge_vertex.emplace(key, v);
     return v;
   };
-  for (int k = 0; k + 1 < n; ++k) {
-    for (int j = 0; j + 1 < n; ++j) {
-      for (int i = 0; i + 1 < n; ++i) {
+  for (int k = -1; k < n; ++k) {
+    for (int j = -1; j < n; ++j) {
+      for (int i = -1; i < n; ++i) {
         bool s[8];
         int count = 0;
         for (int c = 0; c < 8; ++c) {
@@ -476,6 +474,18 @@ TriangleMesh triangulate_implicit(const VoxelGrid& grid,
     }
   }
   return mesh;
+}
+
+TriangleMesh triangulate_implicit(const VoxelGrid& grid,
+                                  const std::function<bool(const Vec3&)>& inside) {
+  return triangulate_voxel_signs(grid, [&](const Vec3& in, const Vec3& out) {
+    Vec3 p_in = in, p_out = out;
+    for (int it = 0; it < 40; ++it) {
+      const Vec3 mid = 0.5 * (p_in + p_out);
+      (inside(mid) ? p_in : p_out) = mid;
+    }
+    return Vec3(0.5 * (p_in + p_out));
+  });
 }
 
 }  // namespace dentsim

@@ -1,6 +1,6 @@
 // The tooth as a smooth field (issue #30; BEYOND THE THESIS; derivation in
 // docs/derivations/field_contact.md): a sampled signed distance to the tooth's *source* surface
-// (the mesh's triangles, the procedural molar's implicit surface), stored in a narrow band of
+// (the mesh's triangles, the procedural molar's implicit surface, a scan's iso-surface), stored in a narrow band of
 // sparse bricks and interpolated trilinearly, so that the surface sits between the samples
 // (sub-voxel) instead of on the voxel staircase.
 //
@@ -12,10 +12,10 @@
 //   v(s) = clamp(sigma(s) d(s), -c_in, c_out),
 // d(s) the exact (unsigned) distance from p(s) to the source surface (nearest triangle), sigma(s)
 // = -1 if voxel s - P is solid in the tooth grid, else +1 (the voxeliser's own inside test: the
-// mesh's winding number or the molar's implicit function at the voxel centre, so the field's sign
-// and the materials agree sample by sample). Clamping keeps the band narrow: only the outside
-// within c_out matters to the tool (the surface proxy keeps its centre at phi >= rho - s), the
-// inside only down to c_in.
+// mesh's winding number, the molar's implicit function or the scan's class at the voxel centre,
+// so the field's sign and the materials agree sample by sample). Clamping keeps the band narrow:
+// only the outside within c_out matters to the tool (the surface proxy keeps its centre at
+// phi >= rho - s), the inside only down to c_in.
 //
 // The field phi(x) is the trilinear interpolant of v over the lattice (coordinates clamped to the
 // lattice outside it). It is continuous everywhere, and inside one cell its gradient component
@@ -186,10 +186,21 @@ double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, cons
 SampledField build_sampled_field(const VoxelGrid& grid, const TriangleMesh& surface,
                                  const FieldBand& band);
 
-// The surface of an implicit solid {p : inside(p)} as triangles, by marching tetrahedra over the
-// cells of voxel centres (six tetrahedra per cell), each vertex placed on its edge where `inside`
-// changes, by bisection to 2^-40 of the edge (each edge once). The signs at the voxel centres are the grid's solid
-// voxels (which must be inside() at the centres, as voxelize_procedural_molar makes them).
+// The surface between the grid's solid and empty voxel centres as triangles, by marching
+// tetrahedra over the cells of voxel centres (Kuhn's six tetrahedra per cell): one vertex on each
+// tetrahedron edge that joins a solid centre p_in and an empty one p_out, at place(p_in, p_out)
+// (asked once per edge; it should return a point of the segment, so that every sample the
+// surface separates has its sign from the grid). Centres beyond the grid count as empty (as in
+// the grid and the field), so the surface is closed even where solid voxels touch the grid's
+// boundary layer (the procedural molar's and the tests' grids keep an empty margin: no cell
+// beyond it has a solid corner, and the surface is the one of the cells inside).
+TriangleMesh triangulate_voxel_signs(
+    const VoxelGrid& grid, const std::function<Vec3(const Vec3& p_in, const Vec3& p_out)>& place);
+
+// The surface of an implicit solid {p : inside(p)} as triangles: triangulate_voxel_signs with each
+// vertex placed on its edge where `inside` changes, by bisection to 2^-40 of the edge. The signs
+// at the voxel centres are the grid's solid voxels (which must be inside() at the centres, as
+// voxelize_procedural_molar makes them).
 TriangleMesh triangulate_implicit(const VoxelGrid& grid,
                                   const std::function<bool(const Vec3&)>& inside);
 
