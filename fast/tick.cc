@@ -137,6 +137,7 @@ TickStatus drill(const PipelineModel& m, PipelineData& d) {
   if (m.skip_unneeded) return reference::drill(m, d);
   d.r.removed_voxels = d.env->drill(d.r.contacts, d.T);
   if (d.env->drill_store_full()) return TickStatus::kDrillWorkTableFull;
+  if (d.env->field_edit_shortfall()) return TickStatus::kFieldEditShortfall;
   return TickStatus::kOk;
 }
 

@@ -507,6 +507,8 @@ TickStatus drill(const PipelineModel&, PipelineData& d) {
   r.removed_voxels = 0;
   if (d.env->drills() && !r.contacts.empty()) r.removed_voxels = d.env->drill(r.contacts, d.T);
   if (d.env->drill_store_full()) return TickStatus::kDrillWorkTableFull;
+  // The collide stage's edit and this stage's queue (tooth_contacts.h): both counted by now.
+  if (d.env->field_edit_shortfall()) return TickStatus::kFieldEditShortfall;
   return TickStatus::kOk;
 }
 

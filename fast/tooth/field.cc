@@ -366,10 +366,11 @@ struct FastFieldAccess {
 bool edit_field_for_removed_voxels(SampledField* field, FieldBricks* bricks,
                                    const VoxelTooth& tooth, std::span<const std::size_t> removed,
                                    SignedDistanceFn sd, FieldEditStats* stats,
-                                   VoxelDistanceCache* cache) {
+                                   VoxelDistanceCache* cache, FieldEditCursor* cursor,
+                                   long budget) {
   FastFieldAccess access{field, bricks, tooth, sd, cache,
                          static_cast<std::uint64_t>(field->samples_per_axis())};
-  return field_edit_detail::edit_field(*field, tooth, removed, access, stats);
+  return field_edit_detail::edit_field(*field, tooth, removed, access, stats, cursor, budget);
 }
 
 FieldContactProvider::FieldContactProvider(VoxelTooth& tooth, const PipelineToothSetup& setup)
@@ -388,9 +389,11 @@ const Vec3& FieldContactProvider::update_field_proxy(SurfaceProxy* proxy, const 
 }
 
 bool FieldContactProvider::edit_field(SampledField* field, std::span<const std::size_t> removed,
-                                      FieldEditStats* stats) {
+                                      FieldEditStats* stats, FieldEditCursor* cursor,
+                                      long budget) {
   return fast::edit_field_for_removed_voxels(field, &bricks_, tooth_, removed,
-                                             &fast::signed_distance, stats, &cache_);
+                                             &fast::signed_distance, stats, &cache_, cursor,
+                                             budget);
 }
 
 std::unique_ptr<PipelineTooth> make_fast_field_tooth(VoxelTooth& tooth,

@@ -186,11 +186,12 @@ class VoxelDistanceCache {
 // `sd`, or answered by `cache` when it holds the same double; FieldEditStats::samples_queried
 // counts both, as the reference's rule asks), raised (on `field`, then mirrored into `bricks`),
 // the same stats; the Lipschitz constant raised in `bricks` (header comment). `bricks` must
-// mirror `field`; `cache` may be null.
+// mirror `field`; `cache` may be null. `cursor` and `budget` as the reference's (a budgeted edit).
 bool edit_field_for_removed_voxels(SampledField* field, FieldBricks* bricks,
                                    const VoxelTooth& tooth, std::span<const std::size_t> removed,
                                    SignedDistanceFn sd, FieldEditStats* stats,
-                                   VoxelDistanceCache* cache = nullptr);
+                                   VoxelDistanceCache* cache = nullptr,
+                                   FieldEditCursor* cursor = nullptr, long budget = 0);
 
 // The fast pipeline's provider of the field model: dentsim::ToothContactProvider with the field
 // steps replaced by their twins (everything else, the contact, the drilled voxels, the edit
@@ -205,7 +206,7 @@ class FieldContactProvider final : public dentsim::ToothContactProvider {
  protected:
   const Vec3& update_field_proxy(SurfaceProxy* proxy, const Vec3& c) override;
   bool edit_field(SampledField* field, std::span<const std::size_t> removed,
-                  FieldEditStats* stats) override;
+                  FieldEditStats* stats, FieldEditCursor* cursor, long budget) override;
 
  private:
   VoxelTooth& tooth_;

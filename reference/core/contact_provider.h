@@ -40,6 +40,11 @@ class ContactProvider {
   // Whether the cut's per-voxel work store ran out of room (sticky): the tick then reports
   // kDrillWorkTableFull and the loop owner stops the device (reference/tooth/voxel_work.h).
   virtual bool drill_store_full() const { return false; }
+  // Whether the field model's drilling edit fell short (sticky): a removed voxel found no room in
+  // the edit queue, or a sample no spare brick, so the field keeps material the voxels lost for
+  // good. The tick then reports kFieldEditShortfall and the loop owner stops the device
+  // (reference/tooth/tooth_contacts.h; why a fault: docs/derivations/field_contact.md §6).
+  virtual bool field_edit_shortfall() const { return false; }
 };
 
 // A provider with no contacts (free space).

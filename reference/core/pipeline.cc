@@ -26,6 +26,8 @@ const char* tick_status_name(TickStatus s) {
       return "tick_non_finite_output";
     case TickStatus::kDrillWorkTableFull:
       return "tick_drill_work_table_full";
+    case TickStatus::kFieldEditShortfall:
+      return "tick_field_edit_shortfall";
   }
   return "tick_unknown_status";
 }

@@ -55,10 +55,12 @@ enum class TickStatus : std::uint8_t {
   kSolverFailure,       // the PMI / friction system is singular or not finite
   kNonFiniteOutput,     // the torque or the proxy state is not finite
   kDrillWorkTableFull,  // the drill's per-voxel work table is full (ContactProvider::drill_store_full)
+  kFieldEditShortfall,  // the field model's edit fell short: no spare brick or queue slot
+                        // (ContactProvider::field_edit_shortfall)
 };
 // The fault name: "ok", "tick_bad_length", "tick_bad_sample", "tick_device_model_failure",
 // "tick_contact_buffer_full", "tick_bad_contact", "tick_solver_failure", "tick_non_finite_output",
-// "tick_drill_work_table_full".
+// "tick_drill_work_table_full", "tick_field_edit_shortfall".
 const char* tick_status_name(TickStatus s);
 
 // ---- stages --------------------------------------------------------------------------------

@@ -59,9 +59,10 @@ struct FieldAccess {
 
 bool edit_field_for_removed_voxels(SampledField* field, const VoxelTooth& tooth,
                                    std::span<const std::size_t> removed, SignedDistanceFn sd,
-                                   FieldEditStats* stats) {
+                                   FieldEditStats* stats, FieldEditCursor* cursor,
+                                   long budget) {
   FieldAccess access{field, tooth, sd};
-  return field_edit_detail::edit_field(*field, tooth, removed, access, stats);
+  return field_edit_detail::edit_field(*field, tooth, removed, access, stats, cursor, budget);
 }
 
 const Vec3& SurfaceProxy::update(const FieldSolid& solid, const Vec3& c) {

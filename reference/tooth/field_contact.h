@@ -45,7 +45,7 @@ class FieldSolid {
 
 // What edit_field_for_removed_voxels did (summed over calls).
 struct FieldEditStats {
-  long voxels = 0;            // removed voxels subtracted
+  long voxels = 0;            // removed voxels subtracted (counted when a voxel's box is done)
   long samples_scanned = 0;   // samples read (of the ball, those the row bounds let pass)
   long samples_queried = 0;   // samples the removal may change (the rule's candidates)
   long samples_bounded = 0;   // of those, answered without a voxel-distance query: inside ones
@@ -53,6 +53,15 @@ struct FieldEditStats {
                               // (reference/tooth/field_edit_core.h)
   long samples_raised = 0;    // samples whose value rose
   long samples_lost = 0;      // raises refused for want of a spare brick (field then conservative)
+};
+
+// Where a budgeted edit stopped (edit_field_for_removed_voxels with a cursor): the voxel of
+// `removed` being subtracted and the next row (dz, dy) of its box, row = (dz + R) (2R + 1) + dy +
+// R. The edit of `removed` is whole when next == removed.size(). Plain data: preallocated by its
+// owner (the provider, tooth_contacts.h), nothing in the tick.
+struct FieldEditCursor {
+  std::size_t next = 0;
+  int row = 0;
 };
 
 // Drilling edits the field (docs/derivations/field_contact.md §5): `removed` are the flat indices
@@ -75,8 +84,12 @@ struct FieldEditStats {
 // also says why its savings change no value). Never allocates (new bricks come from the field's spare room,
 // SampledField::reserve_spare_bricks) or throws; returns false if a raise found no spare brick
 // (that sample keeps its value: the field then lags the voxels there, on the safe side).
+// With `cursor`: resumes there and reads about `budget` samples (at most budget + 2R + 1, budget
+// >= 1), leaving the cursor where the next call resumes (field_edit_core.h edit_field: a budgeted
+// edit is safe after every call and ends where the whole edit ends).
 bool edit_field_for_removed_voxels(SampledField* field, const VoxelTooth& tooth,
                                    std::span<const std::size_t> removed, SignedDistanceFn sd,
-                                   FieldEditStats* stats);
+                                   FieldEditStats* stats, FieldEditCursor* cursor = nullptr,
+                                   long budget = 0);
 
 }  // namespace dentsim

@@ -112,29 +112,43 @@ inline int nearest_listed4(const VoxelGrid& grid, const int c[3], const int (*ne
   return best;
 }
 
-// Where a budgeted edit stopped (edit_field with a cursor): the voxel of `removed` being
-// subtracted and the next row (dz, dy) of its box, row = (dz + R) (2R + 1) + dy + R. The edit is
-// whole when next == removed.size(). Plain data: preallocated by its owner, nothing in the tick.
-struct FieldEditCursor {
-  std::size_t next = 0;
-  int row = 0;
-};
+// Where a budgeted edit stopped (reference/tooth/field_contact.h).
+using dentsim::FieldEditCursor;
 
-// The edit (header comment). With a cursor, it resumes there and stops after the first row at
-// which it has read `budget` samples in this call (so it reads at most budget + 2R + 1), leaving
-// the cursor at the next row (budget >= 1: every call then takes at least one row); without one
-// it subtracts all of `removed`. A budgeted edit is safe
-// and ends where the whole one does. Safe: the samples not yet reached keep a value at most
-// their edited one (values only rise), so {phi >= rho - s} is smaller, never larger, than after
-// the whole edit (the proxy's Claim 1 and the no-tunnelling argument hold for any field whose
-// Lipschitz constant bounds it, and each call raises it over the box of the samples it changed,
-// as a whole edit does). The same end: each sample's update depends only on its value, the
-// removed voxel, and the grid (the solid voxels listed around the removed voxel are listed again
-// when a call resumes); the calls take the voxels, rows and samples in the order of one whole
-// call, so while the grid does not change in between, every value and count (voxels, samples
-// read, asked, raised) ends the same; the Lipschitz constant is at least the whole edit's (a
-// pause re-measures cells between an edited and a not yet edited sample).
-// `FieldDrilling.ABudgetedEditEndsWhereTheWholeEditEnds` checks this.
+// The edit (header comment). With a cursor, it resumes there and stops before the first row (or
+// the first voxel) at which it has read `budget` samples in this call (so it reads at most budget
+// + 2R + 1: each row holds at most 2R + 1 samples of the box, and a row is begun only while fewer
+// than `budget` are read), leaving the cursor there (budget >= 1: every call then takes at least
+// one row); without one it subtracts all of `removed`. Rows the ball or the row bounds skip read
+// no sample and are not counted: at most (2R + 1)^2 a voxel. A budgeted edit is safe after every
+// call and ends where the whole one does:
+// - Values only rise (every write is SampledField::raise, a max), so {phi >= rho - s} only grows:
+//   a proxy admissible before the call stays admissible, and no call puts it inside material.
+//   The samples not yet reached hold at most their edited value: the admissible set is smaller,
+//   never larger, than after the whole edit (material the voxels lost, never a tunnel).
+// - lipschitz() bounds the field after every call, whole or stopped inside a voxel's box. Claim:
+//   if L >= L_cell(c) for every cell c before the call (docs/derivations/field_contact.md §2), the
+//   same holds after it. Proof: L_cell(c) is a function of c's 8 corner values only. A cell none
+//   of whose corners the call changed keeps its L_cell <= L, and L never falls. A sample changes
+//   only through a raise that returned true (a refused one, samples_lost, writes nothing), and each
+//   such sample s widens [lo, hi] to hold it; a cell with s as a corner has its lower corner in
+//   [s_a - 1, s_a] on each axis a (and in [0, m - 2]), so in [max(0, lo_a - 1), min(m - 2, hi_a)]:
+//   exactly the cells Access::include_cells measures after the loop (SampledField::include_cells;
+//   the fast twin measures the same cells from its bricks) and raises L over. So every cell is
+//   covered, whichever samples the call reached: the proof uses only which samples changed, not
+//   that a voxel's box, or `removed`, was finished. (A cell between a sample edited and one not
+//   yet edited may exceed the whole edit's 1.5 sqrt(3) of §5; L then keeps that transient, which
+//   only shortens the proxy's sweep steps.)
+// - The same end: each sample's update depends only on its value, the removed voxel and the grid
+//   (the solid voxels listed around the removed voxel are listed again when a call resumes); the
+//   calls take the voxels, rows and samples in the order of one whole call, so while the grid does
+//   not change in between, every value and count (voxels, samples read, asked, raised) ends the
+//   same; the Lipschitz constant is at least the whole edit's (the calls re-measure every cell the
+//   whole edit does, some of them also at a pause). When the grid changes in between (drilling
+//   goes on while the provider's queue drains), a sample reached later is evaluated on the later
+//   grid, as when the queue lags by whole voxels: the rule and the proofs above hold per call.
+// `FieldDrilling.ABudgetedEditEndsWhereTheWholeEditEnds` and
+// `FieldDrilling.TheProvidersBudgetedEditEndsWhereTheWholeEditEnds` check this.
 template <class Access>
 bool edit_field(const SampledField& field, const VoxelTooth& tooth,
                 std::span<const std::size_t> removed, Access& access, FieldEditStats* stats,
@@ -153,11 +167,16 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
   const double v_max = std::max(static_cast<double>(out_f), -static_cast<double>(in_f));
   const double ball = v_max + slack;
   bool complete = true;
-  // The box of the changed samples: the cell bound is measured once all of the tick's removed
-  // voxels are subtracted (a cell between two of them is whole only then).
+  // The box of the changed samples: the cell bound is measured once, at the end of the call
+  // (over all of `removed`, or up to where a budgeted call stops; the comment above says why that
+  // keeps lipschitz() a bound).
   int lo[3] = {INT_MAX, INT_MAX, INT_MAX}, hi[3] = {-1, -1, -1};
   const int width = 2 * reach + 1;  // rows of a box along y (and planes along z)
   const long scanned_before = stats->samples_scanned;
+  // Whether this call has read its budget (never without a cursor).
+  const auto spent = [&] {
+    return cursor != nullptr && stats->samples_scanned - scanned_before >= budget;
+  };
   bool paused = false;
   for (std::size_t at = cursor != nullptr ? cursor->next : 0; at < removed.size() && !paused;
        ++at) {
@@ -166,7 +185,12 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
                        static_cast<int>(v / (n * n)) + pad};
     // The first row of this voxel's box this call takes (a resumed voxel's next row).
     const int first_row = cursor != nullptr && at == cursor->next ? cursor->row : 0;
-    if (first_row == 0) ++stats->voxels;
+    if (spent()) {  // the budget is spent before this voxel's next row: the next call's first
+      cursor->next = at;
+      cursor->row = first_row;
+      paused = true;
+      break;
+    }
     // The removed voxel's solid neighbours U (header comment): at most 26 boxes.
     int near_lo[26][3] = {};
     int near_count = 0;
@@ -192,7 +216,7 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
       for (int dy = -reach; dy <= reach && !paused; ++dy) {
         const int row = (dz + reach) * width + dy + reach;
         if (row < first_row) continue;  // taken by an earlier call
-        if (cursor != nullptr && stats->samples_scanned - scanned_before >= budget) {
+        if (spent()) {
           cursor->next = at;  // the budget is spent: this row is the next call's first
           cursor->row = row;
           paused = true;
@@ -280,6 +304,7 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
         }
       }
     }
+    if (!paused) ++stats->voxels;  // this voxel's box is done
   }
   if (cursor != nullptr && !paused) {  // every voxel whole
     cursor->next = removed.size();

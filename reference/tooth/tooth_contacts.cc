@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "reference/core/io.h"
@@ -68,7 +69,7 @@ ToothContactProvider::ToothContactProvider(VoxelTooth& tooth, ToolTip tip, doubl
       // bricks again, at least 256 (0.5 MB).
       field->reserve_spare_bricks(std::max<std::size_t>(256, field->brick_count() / 2));
       edited_field_ = field;
-      edit_queue_.reserve(kFieldEditQueue);
+      edit_queue_.assign(kFieldEditQueue, 0);
     }
     field_ = std::make_unique<FieldSolid>(tooth, *field);
   }
@@ -84,19 +85,7 @@ bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out
   }
   drill_contacts_.clear();
   drill_voxels_.clear();
-  if (edit_head_ < edit_queue_.size()) {  // the field follows the last ticks' cuts (bounded)
-    const std::size_t count = std::min(kFieldEditsPerTick, edit_queue_.size() - edit_head_);
-    if (!edit_field(edited_field_,
-                    std::span<const std::size_t>(edit_queue_.data() + edit_head_, count),
-                    &field_edits_)) {
-      ++field_edit_shortfalls_;
-    }
-    edit_head_ += count;
-    if (edit_head_ == edit_queue_.size()) {
-      edit_queue_.clear();
-      edit_head_ = 0;
-    }
-  }
+  if (edit_count_ > 0) edit_queued_voxels();  // the field follows the last ticks' cuts (bounded)
   const Vec3 c = proxy.x + proxy.R * tip_.offset_body;
   const Vec3& g = model_ == ContactModel::kField ? update_field_proxy(&surface_, c)
                                                  : update_sdf_proxy(&surface_, c);
@@ -140,8 +129,50 @@ const Vec3& ToothContactProvider::update_sdf_proxy(SurfaceProxy* proxy, const Ve
 }
 
 bool ToothContactProvider::edit_field(SampledField* field, std::span<const std::size_t> removed,
-                                      FieldEditStats* stats) {
-  return edit_field_for_removed_voxels(field, tooth_, removed, sd_, stats);
+                                      FieldEditStats* stats, FieldEditCursor* cursor,
+                                      long budget) {
+  return edit_field_for_removed_voxels(field, tooth_, removed, sd_, stats, cursor, budget);
+}
+
+void ToothContactProvider::edit_queued_voxels() {
+  // The ring's queued voxels in at most two contiguous runs (before and after its end), the
+  // second with what the first left of the budget. A call that finishes its run read fewer than
+  // its budget at its last row's start, so the two read at most budget + 2R + 1 together.
+  const std::size_t capacity = edit_queue_.size();
+  long left = field_edit_budget_;
+  while (edit_count_ > 0 && left > 0) {
+    const std::size_t run = std::min(edit_count_, capacity - edit_head_);
+    const long read_before = field_edits_.samples_scanned;
+    edit_cursor_.next = 0;  // the run starts at the queue's head (edit_cursor_.row: where in it)
+    if (!edit_field(edited_field_, std::span<const std::size_t>(&edit_queue_[edit_head_], run),
+                    &field_edits_, &edit_cursor_, left)) {
+      ++field_edit_shortfalls_;
+    }
+    const std::size_t done = edit_cursor_.next;  // voxels finished; the next one may be begun
+    edit_cursor_.next = 0;
+    edit_head_ = (edit_head_ + done) % capacity;
+    edit_count_ -= done;
+    if (done < run) break;  // paused inside the run: the budget is spent
+    left -= field_edits_.samples_scanned - read_before;
+  }
+  if (edit_count_ == 0) edit_head_ = 0;
+}
+
+void ToothContactProvider::set_field_edit_rate(double samples_per_second) {
+  if (!(samples_per_second > 0.0)) {
+    throw InputError("field edit rate " + std::to_string(samples_per_second) +
+                     " samples/s: expected > 0 (+inf: no budget)");
+  }
+  field_edit_rate_ = samples_per_second;
+}
+
+void ToothContactProvider::set_field_edit_queue(std::size_t capacity) {
+  if (capacity < 1 || edit_count_ > 0) {
+    throw InputError("field edit queue of " + std::to_string(capacity) +
+                     " voxels: expected >= 1, set before any voxel is queued");
+  }
+  if (edited_field_ != nullptr) edit_queue_.assign(capacity, 0);
+  edit_head_ = 0;
 }
 
 void ToothContactProvider::measure_anchor(const Vec3& c, const Vec3& g, bool in_contact) {
@@ -181,9 +212,15 @@ int ToothContactProvider::drill(std::span<const Contact> contacts, double T) {
     drill_contacts_.clear();
     drill_voxels_.clear();
     if (edited_field_ != nullptr) {  // queued for the next contacts() calls
+      // The next calls' budget, from this tick's length (header: budget(T)).
+      const double budget = field_edit_rate_ * T;
+      field_edit_budget_ = budget >= 1e15 ? std::numeric_limits<long>::max()
+                                          : std::max(1L, static_cast<long>(budget));
+      const std::size_t capacity = edit_queue_.size();
       for (const std::size_t v : removed_) {
-        if (edit_queue_.size() < edit_queue_.capacity()) {
-          edit_queue_.push_back(v);
+        if (edit_count_ < capacity) {
+          edit_queue_[(edit_head_ + edit_count_) % capacity] = v;
+          ++edit_count_;
         } else {
           ++field_edit_shortfalls_;  // never grow in the tick: that voxel stays in the field
         }

@@ -132,18 +132,36 @@ class ToothContactProvider : public ToothProviderBase {
   // A flat face: g follows c, h = 0; a held anchor (a drilled hole, a corner): h = 1; a concave
   // face of radius r_A at depth delta: delta / (r_A + delta).
   const AnchoredSpring& anchored_spring() const { return anchored_; }
-  // kField with drilling: drill() queues the voxels it removed, and each contacts() call first
-  // subtracts at most kFieldEditsPerTick of the queued ones from the field
-  // (edit_field_for_removed_voxels), so a tick's edit cost is bounded whatever the tick removed;
-  // the field lags the voxels by the queue (on the safe side: material the voxels lost, never a
-  // tunnel). What the edits did so far, the queued voxels, and the edits that were incomplete
-  // for want of a spare brick or a queue slot (0 in a healthy run; the field then keeps material
-  // the voxels lost).
+  // kField with drilling: drill() queues the voxels it removed (a ring of kFieldEditQueue), and
+  // each contacts() call first subtracts queued ones from the field, reading about budget(T)
+  // samples (edit_field_for_removed_voxels with this provider's cursor: at most budget(T) + 2R + 1,
+  // R = SampledField::edit_radius()), resuming where the last call stopped, even in the middle of
+  // a removed voxel's box, and advancing the queue by the voxels it finished. budget(T) =
+  // max(1, floor(rate T)) samples, rate = field_edit_rate() [samples/s], T the tick's length (the
+  // last drill() call's), so the edit's share of a tick's time is the same at every servo rate:
+  // a contact tick's edit stays within its stated bound whatever the tick removed and however
+  // many samples a removed voxel's edit reads (docs/derivations/field_contact.md §5 "Per tick").
+  // The field lags the voxels by the queue (on the safe side: material the voxels lost, never a
+  // tunnel). What the edits did so far, the queued voxels, and the edits that were incomplete for
+  // want of a spare brick or a queue slot (0 in a healthy run; the field then keeps material the
+  // voxels lost for good, and the tick reports kFieldEditShortfall: field_edit_shortfall()).
   const FieldEditStats& field_edits() const { return field_edits_; }
-  std::size_t field_edits_pending() const { return edit_queue_.size() - edit_head_; }
+  std::size_t field_edits_pending() const { return edit_count_; }
   long field_edit_shortfalls() const { return field_edit_shortfalls_; }
-  static constexpr std::size_t kFieldEditsPerTick = 1;
+  bool field_edit_shortfall() const override { return field_edit_shortfalls_ > 0; }
+  // The default rate: 10 % of a tick's time at the fast twin's measured cost per sample read
+  // (docs/derivations/field_contact.md §5 "Per tick"): 500 samples a tick at 1 kHz, 62 at 8 kHz.
+  static constexpr double kFieldEditSamplesPerSecond = 5e5;
   static constexpr std::size_t kFieldEditQueue = 8192;
+  double field_edit_rate() const { return field_edit_rate_; }
+  // The samples the next contacts() call's edit may read, + 2R + 1 (budget(T) above).
+  long field_edit_budget() const { return field_edit_budget_; }
+  // Setup only (not in the tick). The edit's rate [samples/s]: > 0, +infinity for no budget (each
+  // call subtracts every queued voxel); InputError otherwise.
+  void set_field_edit_rate(double samples_per_second);
+  // Setup only, with nothing queued: room for `capacity` >= 1 queued voxels (allocates; for tests
+  // that force a full queue); InputError otherwise.
+  void set_field_edit_queue(std::size_t capacity);
 
  protected:
   // The field model's two steps on the field, which a twin with the same results may replace
@@ -155,11 +173,14 @@ class ToothContactProvider : public ToothProviderBase {
   // SurfaceProxy::update with this provider's query), which a twin with the same results may
   // replace (the fast pipeline's, fast/tooth/tooth_contacts.h; no allocation, no throw).
   virtual const Vec3& update_sdf_proxy(SurfaceProxy* proxy, const Vec3& c);
+  // The edit takes `cursor` and `budget` as edit_field_for_removed_voxels does.
   virtual bool edit_field(SampledField* field, std::span<const std::size_t> removed,
-                          FieldEditStats* stats);
+                          FieldEditStats* stats, FieldEditCursor* cursor, long budget);
 
  private:
   void measure_anchor(const Vec3& c, const Vec3& g, bool in_contact);
+  // The start of contacts() with edits queued: subtracts up to the budget's samples of them.
+  void edit_queued_voxels();
 
   VoxelTooth& tooth_;
   CollisionScratch scratch_;
@@ -168,8 +189,13 @@ class ToothContactProvider : public ToothProviderBase {
   SignedDistanceFn sd_;
   std::unique_ptr<FieldSolid> field_;  // kField
   SampledField* edited_field_ = nullptr;  // kField with drilling: the field drill() edits
-  std::vector<std::size_t> edit_queue_;   // removed voxels not yet subtracted from [edit_head_]
-  std::size_t edit_head_ = 0;
+  // Removed voxels not yet subtracted: a ring, edit_count_ of them from [edit_head_]; the first
+  // is subtracted in part when edit_cursor_.row > 0 (edit_cursor_.next is 0 between calls).
+  std::vector<std::size_t> edit_queue_;
+  std::size_t edit_head_ = 0, edit_count_ = 0;
+  FieldEditCursor edit_cursor_;
+  double field_edit_rate_ = kFieldEditSamplesPerSecond;
+  long field_edit_budget_ = 1;
   FieldEditStats field_edits_;
   long field_edit_shortfalls_ = 0;
   std::vector<Contact> drill_contacts_;  // kSurfaceProxy: the drilled voxels' force shares

@@ -6,10 +6,12 @@
 #include <gtest/gtest.h>
 #include <time.h>
 
+#include <cstdio>
 #include <memory>
 
 #include "sim/scene.h"
 #include "device/simulated_phantom.h"
+#include "reference/tooth/tooth_contacts.h"
 #include "sim/simulator.h"
 
 namespace dentsim {
@@ -125,6 +127,48 @@ TEST(ClosedLoop, WatchdogTripsOnATickThatOverrunsItsCpuBudget) {
     EXPECT_EQ(fault_tick, 201);  // the tick after the slow one
     EXPECT_TRUE(loop.commanded_torque().isZero(0.0));
     EXPECT_TRUE(rig->loop_device->applied_torque().isZero(0.0));
+  }
+}
+
+// The field model's drilling edit falling short (no queue slot for a removed voxel; no spare
+// brick likewise) is a named tick fault with zero torque, latched on the tick it happens, in both
+// pipelines: the drill scene with the field model and an edit queue of one voxel, so the first
+// tick that removes a voxel while one is queued overflows it (docs/derivations/field_contact.md
+// §6 says why a fault and not a warning).
+TEST(ClosedLoop, AFieldEditShortfallIsANamedFaultWithZeroTorque) {
+  for (const char* pipeline : {"reference", "fast"}) {
+    SCOPED_TRACE(pipeline);
+    Scene scene = load_scene("drill");
+    scene.tooth.contact_model = "field";
+    SceneRigOptions o;
+    o.pipeline = pipeline;
+    const auto rig = build_scene_rig(scene, o);
+    auto* tooth = dynamic_cast<ToothContactProvider*>(rig->contacts);
+    ASSERT_NE(tooth, nullptr);
+    tooth->set_field_edit_queue(1);
+    ClosedLoop& loop = *rig->loop;
+    loop.start();
+    long fault_tick = -1, removed = 0;
+    for (long k = 0; k < 10000 && !loop.faulted(); ++k) {
+      ASSERT_EQ(tooth->field_edit_shortfalls(), 0) << "tick " << k;  // no fault before one
+      const TickResult& r = loop.step();
+      removed += r.removed_voxels;
+      if (loop.faulted()) {
+        fault_tick = k;
+        EXPECT_EQ(r.status, TickStatus::kFieldEditShortfall);
+        EXPECT_TRUE(r.tau.isZero(0.0));
+      }
+    }
+    ASSERT_GE(fault_tick, 0) << "no shortfall in 10^4 ticks";
+    std::printf("%s: fault at tick %ld after %ld voxels removed, %ld shortfalls\n", pipeline,
+                fault_tick, removed, tooth->field_edit_shortfalls());
+    EXPECT_GT(tooth->field_edit_shortfalls(), 0);
+    EXPECT_EQ(loop.fault(), TickStatus::kFieldEditShortfall);
+    EXPECT_STREQ(loop.fault_name(), "tick_field_edit_shortfall");
+    EXPECT_TRUE(loop.commanded_torque().isZero(0.0));
+    loop.step();  // latched: zero torque from then on
+    EXPECT_STREQ(loop.fault_name(), "tick_field_edit_shortfall");
+    EXPECT_TRUE(loop.commanded_torque().isZero(0.0));
   }
 }
 

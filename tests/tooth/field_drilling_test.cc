@@ -9,7 +9,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <climits>
 #include <cstdio>
+#include <limits>
 #include <random>
 #include <span>
 #include <vector>
@@ -93,7 +95,8 @@ const Drilled& drilled() {
         provider.contacts(pose, contacts);
         out->removed += provider.drill(contacts, kT);
       }
-      // Away from the tooth until the field has followed every cut (kFieldEditsPerTick a tick).
+      // Away from the tooth until the field has followed every cut (the provider's budget of
+      // samples a tick).
       pose.x = kTop + Vec3(0, 0, 3e-3);
       while (provider.field_edits_pending() > 0) provider.contacts(pose, contacts);
       out->allocations = scope.count();
@@ -268,7 +271,10 @@ class RuleAsWritten final : public ToothContactProvider {
 
  protected:
   bool edit_field(SampledField* field, std::span<const std::size_t> removed,
-                  FieldEditStats* stats) override {
+                  FieldEditStats* stats, FieldEditCursor* cursor, long budget) override {
+    // No budget (set_field_edit_rate(inf) below): every call subtracts the whole queue.
+    EXPECT_EQ(cursor->next, 0u);
+    EXPECT_EQ(cursor->row, 0);
     const VoxelGrid& grid = tooth_.grid();
     const int n = grid.n, m = plain_->samples_per_axis(), pad = plain_->padding();
     const double h = grid.voxel_size, c_out = plain_->outside_clamp();
@@ -310,7 +316,9 @@ class RuleAsWritten final : public ToothContactProvider {
       }
     }
     if (hi[0] >= 0) plain_->include_cells(lo, hi);
-    return ToothContactProvider::edit_field(field, removed, stats);
+    const bool whole = ToothContactProvider::edit_field(field, removed, stats, cursor, budget);
+    EXPECT_EQ(cursor->next, removed.size());
+    return whole;
   }
 
  private:
@@ -326,6 +334,7 @@ TEST(FieldDrilling, TheEditsSavingsChangeNoValue) {
   plain.reserve_spare_bricks(std::max<std::size_t>(256, plain.brick_count() / 2));
   const DrillParams drill;
   RuleAsWritten provider(tooth, &drill, &field, &plain);
+  provider.set_field_edit_rate(std::numeric_limits<double>::infinity());
   std::vector<Contact> contacts;
   contacts.reserve(kContactCapacity);
   Pose pose;
@@ -352,11 +361,43 @@ TEST(FieldDrilling, TheEditsSavingsChangeNoValue) {
   EXPECT_EQ(samples_differing(field, plain), 0);
 }
 
+// The largest cell bound (SampledField::cell_lipschitz, brute force) over the cells with lower
+// corner in [lo, hi] (clamped to the lattice's cells).
+double max_cell_lipschitz(const SampledField& f, const int lo[3], const int hi[3]) {
+  const int m = f.samples_per_axis();
+  double worst = 0.0;
+  for (int z = std::max(0, lo[2]); z <= std::min(m - 2, hi[2]); ++z) {
+    for (int y = std::max(0, lo[1]); y <= std::min(m - 2, hi[1]); ++y) {
+      for (int x = std::max(0, lo[0]); x <= std::min(m - 2, hi[0]); ++x) {
+        worst = std::max(worst, f.cell_lipschitz(x, y, z));
+      }
+    }
+  }
+  return worst;
+}
+
+// The cells an edit of `removed` can change: every corner within R samples of a removed voxel's
+// sample (field_edit_core.h), so lower corners in the voxels' sample box grown by R + 1.
+void edit_region(const SampledField& f, const VoxelGrid& grid,
+                 std::span<const std::size_t> removed, int lo[3], int hi[3]) {
+  const std::size_t n = static_cast<std::size_t>(grid.n);
+  const int grow = f.edit_radius() + 1, pad = f.padding();
+  for (int a = 0; a < 3; ++a) lo[a] = INT_MAX, hi[a] = INT_MIN;
+  for (const std::size_t v : removed) {
+    const int s[3] = {static_cast<int>(v % n) + pad, static_cast<int>((v / n) % n) + pad,
+                      static_cast<int>(v / (n * n)) + pad};
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], s[a] - grow), hi[a] = std::max(hi[a], s[a] + grow);
+  }
+}
+
 // A budgeted edit (field_edit_core.h FieldEditCursor) ends where the whole edit ends: a cap of the
-// sphere (the solid voxels within 0.6 mm of its top) is removed from the tooth at once, then
-// subtracted from one copy of the field in one call and from another in calls of at most 97
-// samples read (+ one row) each; every sample, every count and the raised samples agree, and the
-// budgeted copy's Lipschitz constant is at least the whole edit's.
+// sphere (the solid voxels within 0.45 mm of its top) is removed from the tooth at once, then
+// subtracted from one copy of the field in one call and from others in calls of a budget of 1
+// sample (one row a call), 97 and 300 samples, and no budget (LONG_MAX): every call reads at most
+// budget + 2R + 1 samples, lipschitz() bounds every cell after every call (brute force over the
+// cells the edit can change; the others are the build's, bounded before), and at the end every
+// sample, every count and the raised samples agree with the whole edit, and the budgeted copy's
+// Lipschitz constant is at least the whole edit's.
 struct PlainAccess {
   SampledField* field;
   const VoxelTooth& tooth;
@@ -373,14 +414,13 @@ TEST(FieldDrilling, ABudgetedEditEndsWhereTheWholeEditEnds) {
   VoxelTooth tooth(grid);
   SampledField whole = build_sampled_field(grid, triangulate_implicit(grid, in_sphere),
                                            field_band_for_tip(kRho, grid.voxel_size));
-  SampledField budgeted = whole;
+  const SampledField built = whole;
   whole.reserve_spare_bricks(256);
-  budgeted.reserve_spare_bricks(256);
   std::vector<std::size_t> removed;
   for (int k = 0; k < kN; ++k) {
     for (int j = 0; j < kN; ++j) {
       for (int i = 0; i < kN; ++i) {
-        if (!tooth.grid().solid(i, j, k) || (grid.center(i, j, k) - kTop).norm() > 0.6e-3) continue;
+        if (!tooth.grid().solid(i, j, k) || (grid.center(i, j, k) - kTop).norm() > 0.45e-3) continue;
         removed.push_back(grid.index(i, j, k));
         tooth.octree.remove_voxel(i, j, k);
         reencode_local(tooth.octree.grid(), i, j, k, &tooth.codes);
@@ -388,30 +428,133 @@ TEST(FieldDrilling, ABudgetedEditEndsWhereTheWholeEditEnds) {
     }
   }
   ASSERT_GT(removed.size(), 30u);
-  FieldEditStats a, b;
-  PlainAccess access_a{&whole, tooth}, access_b{&budgeted, tooth};
+  FieldEditStats a;
+  PlainAccess access_a{&whole, tooth};
   ASSERT_TRUE(field_edit_detail::edit_field(whole, tooth, removed, access_a, &a));
-  constexpr long kBudget = 97;
-  const long row = 2 * whole.edit_radius() + 1;
-  field_edit_detail::FieldEditCursor cursor;
-  long calls = 0;
-  while (cursor.next < removed.size()) {
-    const long before = b.samples_scanned;
-    ASSERT_TRUE(field_edit_detail::edit_field(budgeted, tooth, removed, access_b, &b, &cursor,
-                                              kBudget));
-    EXPECT_LE(b.samples_scanned - before, kBudget + row);
-    ASSERT_LT(++calls, 100000);
-  }
-  std::printf("%zu voxels removed at once: whole edit %ld samples read; budgeted %ld calls\n",
-              removed.size(), a.samples_scanned, calls);
-  EXPECT_GT(calls, static_cast<long>(removed.size()));
-  EXPECT_EQ(a.voxels, b.voxels);
-  EXPECT_EQ(a.samples_scanned, b.samples_scanned);
-  EXPECT_EQ(a.samples_queried, b.samples_queried);
-  EXPECT_EQ(a.samples_raised, b.samples_raised);
   EXPECT_GT(a.samples_raised, 0);
-  EXPECT_EQ(samples_differing(whole, budgeted), 0);
-  EXPECT_GE(budgeted.lipschitz(), whole.lipschitz());
+  int lo[3], hi[3];
+  edit_region(whole, grid, removed, lo, hi);
+  const long row = 2 * whole.edit_radius() + 1;
+  for (const long budget : {1L, 97L, 300L, LONG_MAX}) {
+    SampledField budgeted = built;
+    budgeted.reserve_spare_bricks(256);
+    FieldEditStats b;
+    PlainAccess access_b{&budgeted, tooth};
+    field_edit_detail::FieldEditCursor cursor;
+    long calls = 0, most = 0;
+    double worst = 0.0;  // the largest cell bound over lipschitz() after any call
+    while (cursor.next < removed.size()) {
+      const long before = b.samples_scanned;
+      ASSERT_TRUE(field_edit_detail::edit_field(budgeted, tooth, removed, access_b, &b, &cursor,
+                                                budget));
+      most = std::max(most, b.samples_scanned - before);
+      worst = std::max(worst, max_cell_lipschitz(budgeted, lo, hi) / budgeted.lipschitz());
+      ASSERT_LT(++calls, 1000000);
+    }
+    std::printf("%zu voxels removed at once, budget %ld: %ld calls, at most %ld samples read a "
+                "call (whole edit: %ld); largest cell bound / lipschitz() after a call %.4f\n",
+                removed.size(), budget, calls, most, a.samples_scanned, worst);
+    EXPECT_LE(most, budget == LONG_MAX ? a.samples_scanned : budget + row) << budget;
+    EXPECT_LE(worst, 1.0) << budget;
+    if (budget < 1000) {
+      EXPECT_GT(calls, static_cast<long>(removed.size())) << budget;
+    }
+    EXPECT_EQ(a.voxels, b.voxels) << budget;
+    EXPECT_EQ(a.samples_scanned, b.samples_scanned) << budget;
+    EXPECT_EQ(a.samples_queried, b.samples_queried) << budget;
+    EXPECT_EQ(a.samples_raised, b.samples_raised) << budget;
+    EXPECT_EQ(samples_differing(whole, budgeted), 0) << budget;
+    EXPECT_GE(budgeted.lipschitz(), whole.lipschitz()) << budget;
+  }
+  // The cells outside the region were the build's, which lipschitz() bounded from the start.
+  const int all_lo[3] = {0, 0, 0}, all_hi[3] = {INT_MAX, INT_MAX, INT_MAX};
+  EXPECT_LE(max_cell_lipschitz(whole, all_lo, all_hi), whole.lipschitz());
+}
+
+// The provider's budget (ToothContactProvider::set_field_edit_rate: budget(T) = rate T samples a
+// contacts() call): the bur presses once into the sphere with a cutting coefficient that removes
+// every voxel it touches in that tick (a burst of removals), then waits away from the tooth while
+// the queue drains. At a budget of 1 sample (a row a call), 300 samples and none, every call reads
+// at most budget + 2R + 1 samples, lipschitz() bounds every cell after every call (brute force),
+// nothing allocates, and once the queue is empty every sample of the field equals the unbudgeted
+// run's, with the same counts: the grid no longer changes while the queue drains.
+TEST(FieldDrilling, TheProvidersBudgetedEditEndsWhereTheWholeEditEnds) {
+  const VoxelGrid grid = sphere_grid();
+  const SampledField built = build_sampled_field(grid, triangulate_implicit(grid, in_sphere),
+                                                 field_band_for_tip(kRho, grid.voxel_size));
+  DrillParams drill;
+  drill.cutting_coefficient = 1e6;  // every voxel the bur touches goes in its first tick
+  struct Run {
+    SampledField field;
+    FieldEditStats edits;
+    long removed = 0, calls = 0, most = 0, allocations = 0;
+    double worst = 0.0;
+  };
+  const auto run = [&](double rate) {
+    Run out{built, FieldEditStats{}};
+    VoxelTooth tooth(grid);
+    ToothContactProvider provider(tooth, ToolTip{kRho, Vec3::Zero()}, kK, 0.0, &drill,
+                                  ContactModel::kField, &signed_distance, &out.field);
+    provider.set_field_edit_rate(rate);
+    std::vector<Contact> contacts;
+    contacts.reserve(kContactCapacity);
+    Pose pose;
+    pose.x = kTop + Vec3(0, 0, kRho + 0.2e-3);  // above the top, then pressed 0.3 mm in
+    provider.contacts(pose, contacts);
+    pose.x = kTop + Vec3(0, 0, kRho - 0.3e-3);
+    provider.contacts(pose, contacts);
+    EXPECT_EQ(contacts.size(), 1u);
+    out.removed = provider.drill(contacts, kT);
+    std::vector<std::size_t> removed(provider.last_removed());
+    int lo[3], hi[3];
+    edit_region(out.field, grid, removed, lo, hi);
+    const long row = 2 * out.field.edit_radius() + 1;
+    pose.x = kTop + Vec3(0, 0, 3e-3);  // away: nothing more is drilled
+    while (provider.field_edits_pending() > 0) {
+      const long before = provider.field_edits().samples_scanned;
+      long allocations = 0;
+      {
+        testing::AllocationScope scope;
+        provider.contacts(pose, contacts);
+        allocations = scope.count();
+      }
+      out.allocations += allocations;
+      const long read = provider.field_edits().samples_scanned - before;
+      out.most = std::max(out.most, read);
+      if (provider.field_edit_budget() < LONG_MAX - row) {  // else no budget
+        EXPECT_LE(read, provider.field_edit_budget() + row);
+      }
+      out.worst = std::max(out.worst, max_cell_lipschitz(out.field, lo, hi) / out.field.lipschitz());
+      if (++out.calls > 1000000) break;
+    }
+    out.edits = provider.field_edits();
+    EXPECT_EQ(provider.field_edit_shortfalls(), 0);
+    return out;
+  };
+  const Run whole = run(std::numeric_limits<double>::infinity());
+  std::printf("one tick's burst: %ld voxels removed, the whole edit %ld samples read in %ld call\n",
+              whole.removed, whole.edits.samples_scanned, whole.calls);
+  ASSERT_GT(whole.removed, 10);
+  EXPECT_EQ(whole.calls, 1);
+  EXPECT_EQ(whole.edits.voxels, whole.removed);
+  EXPECT_LE(whole.worst, 1.0);
+  EXPECT_EQ(whole.allocations, 0);
+  for (const double samples : {1.0, 300.0}) {
+    const Run b = run(samples / kT);  // budget(kT) = samples
+    std::printf("budget %.0f samples a call: %ld calls, at most %ld samples read a call; largest "
+                "cell bound / lipschitz() after a call %.4f\n",
+                samples, b.calls, b.most, b.worst);
+    EXPECT_EQ(b.removed, whole.removed);
+    EXPECT_GT(b.calls, samples == 1.0 ? whole.removed : 1);
+    EXPECT_LE(b.worst, 1.0);
+    EXPECT_EQ(b.allocations, 0);
+    EXPECT_EQ(b.edits.voxels, whole.edits.voxels);
+    EXPECT_EQ(b.edits.samples_scanned, whole.edits.samples_scanned);
+    EXPECT_EQ(b.edits.samples_queried, whole.edits.samples_queried);
+    EXPECT_EQ(b.edits.samples_raised, whole.edits.samples_raised);
+    EXPECT_EQ(samples_differing(b.field, whole.field), 0) << samples;
+    EXPECT_GE(b.field.lipschitz(), whole.field.lipschitz());
+  }
 }
 
 }  // namespace
