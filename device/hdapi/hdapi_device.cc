@@ -221,6 +221,7 @@ HDCallbackCode HdapiDevice::servo_callback(void* self) {
 
 HDCallbackCode HdapiDevice::tick() {
   const HdLibrary& l = *lib_;
+  scheduler_thread_.store(std::this_thread::get_id());
   const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
   l.hdBeginFrame(hhd_);
   HDdouble qv[6 + 16] = {};  // room for a library that writes more than three values
@@ -247,11 +248,17 @@ HDCallbackCode HdapiDevice::tick() {
 
   // The command: the servo function's, or the last write().
   bool stop = false;
+  // fn_running_ is raised before fn_ is read (both seq_cst), so set_servo_function, which clears
+  // fn_ before it reads fn_running_, either sees this call in flight and waits for it, or this
+  // tick reads the cleared fn_.
+  fn_running_.store(true);
   const ServoFn fn = fn_.load();
   if (fn != nullptr) {
     stop = !fn(fn_ctx_.load(), s_, tau_fn_);
     f |= condition_command(tau_fn_, limits_, true, tau_cmd_);
-  } else if (cmd_mu_.try_lock()) {
+  }
+  fn_running_.store(false);
+  if (fn == nullptr && cmd_mu_.try_lock()) {
     tau_cmd_ = tau_written_;
     cmd_seq_rt_ = cmd_seq_;
     cmd_mu_.unlock();
@@ -367,6 +374,12 @@ std::array<double, 6> HdapiDevice::motor_temperature() const {
 
 void HdapiDevice::set_servo_function(ServoFn fn, void* context) {
   fn_.store(nullptr);
+  // A callback already inside the old function (on the scheduler thread) finishes before this
+  // returns, so the caller may then destroy what the old function used (the servo, the pipeline).
+  // Not from inside the callback itself: it would wait for its own call.
+  if (std::this_thread::get_id() != scheduler_thread_.load()) {
+    while (fn_running_.load()) std::this_thread::sleep_for(std::chrono::microseconds(20));
+  }
   fn_ctx_.store(context);
   fn_.store(fn);
 }

@@ -38,6 +38,7 @@
 #include <chrono>
 #include <mutex>
 #include <string>
+#include <thread>
 
 #include "device/device.h"
 #include "device/hdapi/hdapi_library.h"
@@ -118,7 +119,9 @@ class HdapiDevice : public Device {
   void clear_faults() override { faults_.store(kFaultNone); }
 
   // Runs `fn(context, ...)` in the scheduler callback from the next tick on, in place of the
-  // write() command (nullptr: back to write()). Both must outlive the device or the next call.
+  // write() command (nullptr: back to write()). Both must outlive the device or the next call;
+  // called from another thread than the scheduler's, it returns only once no callback is inside
+  // the previous function (so the caller may then destroy what it used).
   void set_servo_function(ServoFn fn, void* context);
   // Waits until the scheduler has run `ticks` more ticks; false (and kFaultSchedulerStopped)
   // when the wait exceeds ticks x tick_timeout_s (timeout_s > 0: that long instead).
@@ -167,6 +170,8 @@ class HdapiDevice : public Device {
   mutable VecX tau_applied_read_;  // what applied_torque() returns (copied under snap_mu_)
   std::atomic<ServoFn> fn_{nullptr};
   std::atomic<void*> fn_ctx_{nullptr};
+  std::atomic<bool> fn_running_{false};               // tick() is inside its read of fn_ and call
+  std::atomic<std::thread::id> scheduler_thread_{};  // the thread tick() last ran on
   std::atomic<std::uint32_t> faults_{kFaultNone};
   std::atomic<long> ticks_{0};
   std::atomic<bool> done_{false};

@@ -136,7 +136,10 @@ TEST(CallbackServo, DrillSceneTicksInTheSchedulerCallbackWithoutAllocating) {
     // 3 s of the scene: the approach, then drilling from ~1.2 s on.
     while (next_k < 3000) {
       if (!servo.pop(rec)) {
-        ASSERT_TRUE(hd.wait_ticks(1)) << "the scheduler stopped";
+        // A generous wait: a loaded machine under the sanitizers may leave the scheduler thread
+        // unscheduled for longer than the device's 0.1 s tick timeout, which is not this test's
+        // subject; 10 s without a tick is a stopped scheduler.
+        ASSERT_TRUE(hd.wait_ticks(1, 10.0)) << "the scheduler stopped";
         continue;
       }
       out_of_order += rec.k != next_k;
@@ -149,7 +152,7 @@ TEST(CallbackServo, DrillSceneTicksInTheSchedulerCallbackWithoutAllocating) {
       energy = rec.energy_virtual_j;
     }
     servo.request_stop();
-    hd.wait_ticks(2);
+    hd.wait_ticks(2, 10.0);
     EXPECT_EQ(servo.dropped(), 0);
   }
   EXPECT_TRUE(hd.servo_done());

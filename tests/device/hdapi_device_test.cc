@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <initializer_list>
 #include <memory>
+#include <thread>
 #include <new>
 #include <string>
 #include <utility>
@@ -308,6 +309,49 @@ TEST(HdapiDevice, ServoFunctionRunsInTheSchedulerCallback) {
   EXPECT_EQ(dev.faults(), kFaultNone);
   // The last frame (the one returning DONE) commanded zero.
   EXPECT_EQ(motor_torque_mnm(dev)[1], 0.0);
+}
+
+// A servo function that stays inside each call for a while, marking when it is inside.
+struct SlowServo {
+  std::atomic<bool> inside{false};
+  std::atomic<int> calls{0};
+  static bool run(void* self, const DeviceSample&, VecX& tau) {
+    auto* p = static_cast<SlowServo*>(self);
+    p->inside.store(true);
+    p->calls.fetch_add(1);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    tau.setZero();
+    p->inside.store(false);
+    return true;
+  }
+};
+
+// Detaching (set_servo_function(nullptr)) from another thread returns only once no callback is
+// inside the old function: the caller may then destroy the servo and what it uses (a servo loop
+// whose test failed early destroyed its pipeline under a running callback, found by ASan).
+TEST(HdapiDevice, DetachingWaitsForTheCallbackInFlight) {
+  const EmulatorEnv env({{"DENTSIM_HD_EMU_GRAVITY", "0"}});
+  HdapiDevice dev(emulator_config());
+  auto servo = std::make_unique<SlowServo>();
+  dev.set_servo_function(&SlowServo::run, servo.get());
+  int detached_inside = 0;
+  for (int round = 0; round < 5; ++round) {
+    // Wait until a call is in flight, then detach from this thread.
+    for (int i = 0; i < 2000 && !servo->inside.load(); ++i) {
+      std::this_thread::sleep_for(std::chrono::microseconds(100));
+    }
+    ASSERT_TRUE(servo->inside.load()) << "no callback entered the servo function";
+    dev.set_servo_function(nullptr, nullptr);
+    detached_inside += servo->inside.load() ? 1 : 0;
+    const int calls = servo->calls.load();
+    std::this_thread::sleep_for(std::chrono::milliseconds(30));
+    EXPECT_EQ(servo->calls.load(), calls) << "a callback entered after the detach returned";
+    dev.set_servo_function(&SlowServo::run, servo.get());
+  }
+  dev.set_servo_function(nullptr, nullptr);
+  EXPECT_EQ(detached_inside, 0);
+  servo.reset();  // nothing may call it now (ASan names a use after free otherwise)
+  dev.wait_ticks(2, 10.0);
 }
 
 // Switches allocation counting on for the scheduler thread from inside its callback.
