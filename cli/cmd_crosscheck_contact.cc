@@ -77,6 +77,16 @@ void setup_crosscheck_contact(CLI::App& app) {
           row.partial                             ? "not measured: interrupted"
           : row.sliding_ripple_rms <= kRippleAim ? "met"
                                                  : "not met, reported only");
+      if (!row.partial) {
+        std::printf(
+            "crosscheck contact: model=%s n=%d closed loop (rigid device, pmi-pd, F/K <= R/3): "
+            "closed_loop_ripple_rms=%.4f (what the hand feels) geometric_ripple_rms=%.4f (the "
+            "model's shape error along the loop's path) dynamic_ripple_rms=%.4f (felt minus "
+            "shape, tick by tick) exact_sphere_ripple_rms=%.4f (the same loop on the exact "
+            "sphere), largest over the forces\n",
+            row.model.c_str(), row.resolution, row.closed_loop_ripple_rms,
+            row.geometric_ripple_rms, row.dynamic_ripple_rms, row.exact_sphere_ripple_rms);
+      }
     }
     std::printf("verdict (the default model, sdf):\n");
     Verdict v("crosscheck contact");

@@ -20,6 +20,9 @@
 #include "reference/tooth/sdf.h"
 #include "reference/tooth/tooth_contacts.h"
 #include "tooth_io/voxelize.h"
+#include "reference/tools.h"
+#include "reference/core/so3.h"
+#include "validation/wall_loop.h"
 
 namespace dentsim {
 namespace {
@@ -30,6 +33,12 @@ constexpr double kSlideStepM = 0.02e-3;
 constexpr double kStartGapM = 0.3e-3;  // start this far outside the tip's touching distance
 constexpr double kSphereRadiusM = 5e-3;
 constexpr int kRippleTicks = 800;
+// The closed-loop slide (see sliding_ripple_closed_loop): settle at the pole, then the same
+// meridian in kRippleTicks ticks of 1 ms.
+constexpr double kLoopSettleS = 0.4;
+constexpr double kLoopStartGapM = 0.2e-3;
+constexpr double kHandTangentialStiffness = 200.0;  // [N/m]
+constexpr double kHandDamping = 2.0;                // [N s/m]
 
 struct Probe {
   Vec3 start, d, t;
@@ -189,6 +198,157 @@ double sliding_ripple(VoxelTooth& sphere, SampledField* field, const Vec3& centr
   return std::sqrt(sum2 / kRippleTicks);
 }
 
+// Records the pose the tick's contact stage was asked at (the tool pose the contact force belongs
+// to), and forwards to the wrapped provider.
+class PoseRecorder : public ContactProvider {
+ public:
+  explicit PoseRecorder(ContactProvider& inner) : inner_(inner) {}
+  bool contacts(const Pose& proxy, std::vector<Contact>& out) override {
+    last_ = proxy.x;
+    return inner_.contacts(proxy, out);
+  }
+  const Vec3& last() const { return last_; }
+
+ private:
+  ContactProvider& inner_;
+  Vec3 last_ = Vec3::Zero();
+};
+
+// The exact sphere of radius R about c as a contact provider (the penalty law of the models:
+// depth R + rho - |x - c|, normal (x - c) / |x - c|, stiffness K, weight 1), for the loop's own
+// ripple with no shape error at all.
+class ExactBall : public ContactProvider {
+ public:
+  ExactBall(const Vec3& centre, double radius, double rho, double k)
+      : c_(centre), r_(radius), rho_(rho), k_(k) {}
+  bool contacts(const Pose& proxy, std::vector<Contact>& out) override {
+    out.clear();
+    const Vec3 d = proxy.x - c_;
+    const double dist = d.norm();
+    const double depth = r_ + rho_ - dist;
+    if (depth <= 0.0 || dist == 0.0) return true;
+    if (out.capacity() == 0) return false;
+    const Vec3 n = d / dist;
+    Contact c;
+    const Vec3 x_c = proxy.x - rho_ * n;
+    c.x_o = x_c + depth * n;
+    c.n = n;
+    c.r = proxy.R.transpose() * (x_c - proxy.x);
+    c.depth = depth;
+    c.stiffness = k_;
+    c.damping = 0.0;
+    c.weight = 1.0;
+    out.push_back(c);
+    return true;
+  }
+
+ private:
+  Vec3 c_;
+  double r_, rho_, k_;
+};
+
+// The meridian of sliding_ripple (polar angle 0..80 deg at azimuth 20 deg), at the polar angle
+// 80 deg x s(fraction), s the smoothstep 3 f^2 - 2 f^3: the hand starts and stops without a jerk
+// (a reference whose speed steps would ring the loop by the hand's own doing).
+Vec3 meridian(double fraction) {
+  const double azimuth = 20.0 * std::numbers::pi / 180.0;
+  const double f = std::clamp(fraction, 0.0, 1.0);
+  const double polar = (80.0 * std::numbers::pi / 180.0) * f * f * (3.0 - 2.0 * f);
+  return Vec3(std::sin(polar) * std::cos(azimuth), std::sin(polar) * std::sin(azimuth),
+              std::cos(polar));
+}
+
+// The RMS over the series of |e_i - mean of e over the centred window of +-kRippleWindow ticks|,
+// over `scale`: the fluctuation, without the slow part (the rendered tool's drag while it slides,
+// the hand's steering lag), which is a feel the tool is given, not a ripple.
+constexpr int kRippleWindow = 25;  // +-25 ms: passes what is faster than ~20 Hz
+
+double detrended_rms(const std::vector<Vec3>& e, double scale) {
+  const int n = static_cast<int>(e.size());
+  double sum2 = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const int lo = std::max(0, i - kRippleWindow), hi = std::min(n - 1, i + kRippleWindow);
+    Vec3 mean = Vec3::Zero();
+    for (int j = lo; j <= hi; ++j) mean += e[static_cast<std::size_t>(j)];
+    mean /= static_cast<double>(hi - lo + 1);
+    sum2 += (e[static_cast<std::size_t>(i)] - mean).squaredNorm();
+  }
+  return std::sqrt(sum2 / static_cast<double>(n)) / scale;
+}
+
+double rms(const std::vector<Vec3>& e, double scale) {
+  double sum2 = 0.0;
+  for (const Vec3& v : e) sum2 += v.squaredNorm();
+  return std::sqrt(sum2 / static_cast<double>(e.size())) / scale;
+}
+
+// Whether the closed-loop slide is measured at this push: the tool sits F / K inside the sphere,
+// and past a third of its radius the hand's script (steering towards the centre) rather than the
+// model decides where the tool goes (at 8.5 N and 3000 N/m the tool sits 2.6 mm from the centre of
+// the 5 mm sphere; it slips through the centre there on the exact sphere too).
+bool closed_loop_measured(double force, const ContactCrosscheckOptions& o) {
+  return force / o.k_tooth <= kSphereRadiusM / 3.0;
+}
+
+// The closed-loop slide over `provider` (a model's sphere or the exact one).
+ClosedLoopRipple sliding_ripple_closed_loop(ContactProvider& provider, const Vec3& centre,
+                                            double force, const ContactCrosscheckOptions& o) {
+  const double rho = o.tip_radius_m;
+  PoseRecorder recorder(provider);
+  WallLoopConfig c;
+  c.device.mass = 0.075;  // the apparent tip of a Phantom Premium (validation/wall_demo.h)
+  c.device.inertia = Mat3::Identity() * 2e-4;
+  c.device.damping_lin = 0.5;
+  c.device.damping_ang = 0.002;
+  c.pipeline.method = Method::kPmiPd;
+  c.pipeline.tool = tool_preset("handpiece");
+  c.pipeline.observer_gain = VecX::Constant(6, 100.0);  // coupling, proxy: the defaults
+  c.tick = 1e-3;
+  const double r_eq = kSphereRadiusM + rho - force / o.k_tooth;
+  c.start = centre + (kSphereRadiusM + rho + kLoopStartGapM) * meridian(0.0);
+  const double slide_s = kRippleTicks * c.tick;
+  c.duration = kLoopSettleS + slide_s;
+  // The hand pushes with `force` towards the centre (ramped over 0.2 s), steers along the
+  // meridian with a spring in the tangent plane only (so the normal force is the push), and
+  // damps all motion a little; the wrist holds the orientation (WallHand's defaults).
+  const WallHand wrist;
+  const HandWrenchFn hand = [&](double t, const Vec3& x, const Mat3& R, const Vec3& v,
+                                const Vec3& w) {
+    const Vec3 u = (x - centre).normalized();
+    const Vec3 x_ref = centre + r_eq * meridian((t - kLoopSettleS) / slide_s);
+    const Vec3 to_ref = x_ref - x;
+    const double ramp = std::min(1.0, t / 0.2);
+    const Vec3 f = -ramp * force * u + kHandTangentialStiffness * (to_ref - to_ref.dot(u) * u) -
+                   kHandDamping * v;
+    const Vec3 tau = -wrist.stiffness_ang * log_so3(R) - wrist.damping_ang * w;
+    return stack(f, tau);
+  };
+  std::vector<Vec3> e_total, e_geo, e_dyn;
+  e_total.reserve(kRippleTicks);
+  e_geo.reserve(kRippleTicks);
+  e_dyn.reserve(kRippleTicks);
+  const bool finite = run_provider_loop(c, recorder, hand, [&](const ProviderLoopRecord& rec) {
+    if (rec.t <= kLoopSettleS + 0.5 * c.tick) return;  // the slide's ticks only
+    const Vec3 x = recorder.last();  // the pose the contact force was computed at
+    const Vec3 u = (x - centre).normalized();
+    const Vec3 f_contact = blended_contact_force(rec.tick->contacts);
+    const Vec3 f_exact = o.k_tooth * std::max(0.0, kSphereRadiusM + rho - (x - centre).norm()) * u;
+    e_total.push_back(rec.device_force - force * u);
+    e_geo.push_back(f_contact - f_exact);
+    e_dyn.push_back(e_total.back() - e_geo.back());
+  });
+  ClosedLoopRipple out;
+  if (!finite || e_total.empty()) {
+    out.total = out.geometric = out.dynamic = out.error = std::numeric_limits<double>::infinity();
+    return out;
+  }
+  out.total = detrended_rms(e_total, force);
+  out.geometric = detrended_rms(e_geo, force);
+  out.dynamic = detrended_rms(e_dyn, force);
+  out.error = rms(e_total, force);
+  return out;
+}
+
 }  // namespace
 
 ContactCrosscheckResult crosscheck_contact(const ContactCrosscheckOptions& o) {
@@ -290,6 +450,15 @@ ContactCrosscheckResult crosscheck_contact(const ContactCrosscheckOptions& o) {
                                [&](const Vec3& p) { return (p - centre).norm() < kSphereRadiusM; }),
           field_band_for_tip(o.tip_radius_m, h_molar)));
     }
+    // The loop on the exact sphere: the same for every model (no voxels, no field).
+    constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+    std::vector<double> exact_sphere;
+    for (const double f : o.forces_n) {
+      ExactBall ball(centre, kSphereRadiusM, o.tip_radius_m, o.k_tooth);
+      exact_sphere.push_back(closed_loop_measured(f, o)
+                                 ? sliding_ripple_closed_loop(ball, centre, f, o).total
+                                 : kNaN);
+    }
     for (std::size_t m = 0; m < models.size(); ++m) {
       rows[m].voxel_size_m = h_molar;
       for (const double f : o.forces_n) {
@@ -298,6 +467,24 @@ ContactCrosscheckResult crosscheck_contact(const ContactCrosscheckOptions& o) {
       }
       rows[m].sliding_ripple_rms =
           *std::max_element(rows[m].ripple_per_force.begin(), rows[m].ripple_per_force.end());
+      for (std::size_t fi = 0; fi < o.forces_n.size(); ++fi) {
+        const double f = o.forces_n[fi];
+        if (!closed_loop_measured(f, o)) {
+          rows[m].closed_loop_per_force.push_back({kNaN, kNaN, kNaN, kNaN, kNaN});
+          continue;
+        }
+        ToothContactProvider provider(sphere, ToolTip{o.tip_radius_m, Vec3::Zero()}, o.k_tooth,
+                                      0.0, nullptr, models[m], &signed_distance,
+                                      sphere_field.get());
+        ClosedLoopRipple cl = sliding_ripple_closed_loop(provider, centre, f, o);
+        cl.exact_sphere = exact_sphere[fi];
+        rows[m].closed_loop_per_force.push_back(cl);
+        rows[m].closed_loop_ripple_rms = std::max(rows[m].closed_loop_ripple_rms, cl.total);
+        rows[m].geometric_ripple_rms = std::max(rows[m].geometric_ripple_rms, cl.geometric);
+        rows[m].dynamic_ripple_rms = std::max(rows[m].dynamic_ripple_rms, cl.dynamic);
+        rows[m].exact_sphere_ripple_rms =
+            std::max(rows[m].exact_sphere_ripple_rms, cl.exact_sphere);
+      }
       result.rows.push_back(rows[m]);
     }
   }
@@ -311,12 +498,24 @@ nlohmann::json crosscheck_contact_json(const ContactCrosscheckResult& r) {
   for (const ContactSweepRow& row : r.rows) {
     if (row.model == "sdf") default_pops += row.pop_throughs;
     nlohmann::json per_force = nlohmann::json::array();
+    const auto or_null = [](bool have, double v) {
+      return have && !std::isnan(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+    };
     for (std::size_t i = 0; i < o.forces_n.size(); ++i) {
-      per_force.push_back({{"force_n", o.forces_n[i]},
-                           {"pop_throughs", row.pop_throughs_per_force[i]},
-                           {"sliding_ripple_rms", i < row.ripple_per_force.size()
-                                                      ? nlohmann::json(row.ripple_per_force[i])
-                                                      : nlohmann::json(nullptr)}});
+      const bool loop = i < row.closed_loop_per_force.size();
+      per_force.push_back(
+          {{"force_n", o.forces_n[i]},
+           {"pop_throughs", row.pop_throughs_per_force[i]},
+           {"sliding_ripple_rms",
+            or_null(i < row.ripple_per_force.size(),
+                    i < row.ripple_per_force.size() ? row.ripple_per_force[i] : 0.0)},
+           {"closed_loop_ripple_rms", or_null(loop, loop ? row.closed_loop_per_force[i].total : 0.0)},
+           {"geometric_ripple_rms",
+            or_null(loop, loop ? row.closed_loop_per_force[i].geometric : 0.0)},
+           {"dynamic_ripple_rms", or_null(loop, loop ? row.closed_loop_per_force[i].dynamic : 0.0)},
+           {"exact_sphere_ripple_rms",
+            or_null(loop, loop ? row.closed_loop_per_force[i].exact_sphere : 0.0)},
+           {"closed_loop_error_rms", or_null(loop, loop ? row.closed_loop_per_force[i].error : 0.0)}});
     }
     rows.push_back({{"model", row.model},
                     {"resolution", row.resolution},
@@ -326,8 +525,11 @@ nlohmann::json crosscheck_contact_json(const ContactCrosscheckResult& r) {
                     {"pop_throughs", row.pop_throughs},
                     {"max_penetration_over_radius", row.max_penetration_over_radius},
                     {"max_penetration_over_voxel", row.max_penetration_over_voxel},
-                    {"sliding_ripple_rms", row.partial ? nlohmann::json(nullptr)
-                                                       : nlohmann::json(row.sliding_ripple_rms)},
+                    {"sliding_ripple_rms", or_null(!row.partial, row.sliding_ripple_rms)},
+                    {"closed_loop_ripple_rms", or_null(!row.partial, row.closed_loop_ripple_rms)},
+                    {"geometric_ripple_rms", or_null(!row.partial, row.geometric_ripple_rms)},
+                    {"dynamic_ripple_rms", or_null(!row.partial, row.dynamic_ripple_rms)},
+                    {"exact_sphere_ripple_rms", or_null(!row.partial, row.exact_sphere_ripple_rms)},
                     {"per_force", per_force}});
     if (row.partial) rows.back()["partial"] = true;
   }

@@ -4,6 +4,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "device/closed_loop.h"
 #include "device/device.h"
@@ -30,8 +31,11 @@ struct Deriv {
 // keeps the motor-port energy E_v = ∫ V1^T T_motor dt (trapezoid per substep).
 class RigidBodyPlant : public Device {
  public:
-  RigidBodyPlant(const WallLoopConfig& cfg, const RigidBodyDevice& model)
-      : cfg_(cfg), model_(model), s_{cfg.start, Mat3::Identity(), Vec3::Zero(), Vec3::Zero()} {
+  RigidBodyPlant(const WallLoopConfig& cfg, const RigidBodyDevice& model, HandWrenchFn hand)
+      : cfg_(cfg),
+        model_(model),
+        hand_(std::move(hand)),
+        s_{cfg.start, Mat3::Identity(), Vec3::Zero(), Vec3::Zero()} {
     caps_.dof = 6;
     caps_.measures_velocity = true;
     caps_.simulated = true;
@@ -81,16 +85,7 @@ class RigidBodyPlant : public Device {
   bool finite() const {
     return s_.x.allFinite() && s_.v.allFinite() && s_.R.allFinite() && s_.w.allFinite();
   }
-  // The scripted hand: spring-damper to the moving reference plus the ramped push.
-  Vec6 hand_wrench(const BodyState& b, double t) const {
-    const WallHand& h = cfg_.hand;
-    const double along = std::min(h.speed * t, h.travel);
-    const Vec3 x_ref = h.x_start + along * h.direction.normalized();
-    const double ramp = h.push_ramp_s > 0.0 ? std::min(1.0, t / h.push_ramp_s) : 1.0;
-    const Vec3 f = h.stiffness * (x_ref - b.x) - h.damping * b.v + ramp * h.push;
-    const Vec3 tau = -h.stiffness_ang * log_so3(b.R) - h.damping_ang * b.w;  // R_ref = I
-    return stack(f, tau);
-  }
+  Vec6 hand_wrench(const BodyState& b, double t) const { return hand_(t, b.x, b.R, b.v, b.w); }
 
  private:
   // Wrench on the device from the motors (joint torque held), the hand and joint friction.
@@ -123,6 +118,7 @@ class RigidBodyPlant : public Device {
 
   const WallLoopConfig& cfg_;
   const RigidBodyDevice& model_;
+  HandWrenchFn hand_;
   DeviceCapabilities caps_;
   DeviceLimits limits_;
   BodyState s_;
@@ -131,7 +127,39 @@ class RigidBodyPlant : public Device {
   VecX tau_;
 };
 
+// The scripted hand of WallHand: spring-damper to the moving reference plus the ramped push.
+Vec6 wall_hand_wrench(const WallHand& h, double t, const Vec3& x, const Mat3& R, const Vec3& v,
+                      const Vec3& w) {
+  const double along = std::min(h.speed * t, h.travel);
+  const Vec3 x_ref = h.x_start + along * h.direction.normalized();
+  const double ramp = h.push_ramp_s > 0.0 ? std::min(1.0, t / h.push_ramp_s) : 1.0;
+  const Vec3 f = h.stiffness * (x_ref - x) - h.damping * v + ramp * h.push;
+  const Vec3 tau = -h.stiffness_ang * log_so3(R) - h.damping_ang * w;  // R_ref = I
+  return stack(f, tau);
+}
+
 }  // namespace
+
+bool run_provider_loop(const WallLoopConfig& cfg, ContactProvider& provider,
+                       const HandWrenchFn& hand,
+                       const std::function<void(const ProviderLoopRecord&)>& on_tick) {
+  const RigidBodyDevice model(cfg.device);
+  ReferencePipeline pipeline(model, cfg.pipeline);
+  RigidBodyPlant plant(cfg, model, hand);
+  ClosedLoop loop(plant, pipeline, provider);
+  loop.use_nominal_period(true);
+  const long n_ticks = static_cast<long>(std::llround(cfg.duration / cfg.tick));
+  loop.start();
+  for (long k = 0; k < n_ticks; ++k) {
+    const TickResult& r = loop.step();
+    if (loop.faulted() || !plant.finite() || !pipeline.proxy().pose.x.allFinite()) return false;
+    if (on_tick) {
+      on_tick(ProviderLoopRecord{plant.time(), plant.state().x, Vec3(r.T1.head<3>()),
+                                 pipeline.proxy().pose.x, &r});
+    }
+  }
+  return true;
+}
 
 WallLoopResult run_wall_loop(const WallLoopConfig& cfg,
                              const std::function<void(const WallLoopRecord&)>& on_tick) {
@@ -140,7 +168,10 @@ WallLoopResult run_wall_loop(const WallLoopConfig& cfg,
   HalfSpaceWall wall(cfg.wall_point, cfg.wall_normal, cfg.tip_radius, cfg.wall_stiffness,
                      cfg.wall_damping);
   const Vec3 n = wall.normal();
-  RigidBodyPlant plant(cfg, model);
+  RigidBodyPlant plant(cfg, model,
+                       [&cfg](double t, const Vec3& x, const Mat3& R, const Vec3& v, const Vec3& w) {
+                         return wall_hand_wrench(cfg.hand, t, x, R, v, w);
+                       });
   ClosedLoop loop(plant, pipeline, wall);
   loop.use_nominal_period(true);  // the ideal device's tick is exactly cfg.tick
 

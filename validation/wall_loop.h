@@ -78,4 +78,25 @@ struct WallLoopResult {
 WallLoopResult run_wall_loop(const WallLoopConfig& cfg,
                              const std::function<void(const WallLoopRecord&)>& on_tick = {});
 
+// The same loop (the ideal device, cfg.pipeline, cfg.tick, cfg.substeps, cfg.start,
+// cfg.duration) on any environment and any scripted hand; cfg.hand and the wall fields are not
+// used. `hand` gives the wrench on the device (world force [N], torque [N m] as WallHand's) from
+// the time and the device's state (tip position, orientation, world velocity, body angular
+// velocity).
+using HandWrenchFn = std::function<Vec6(double t, const Vec3& x, const Mat3& R, const Vec3& v,
+                                        const Vec3& w)>;
+
+struct ProviderLoopRecord {
+  double t;                 // time at the end of the tick [s]
+  Vec3 device_x;            // device tip position after the tick [m]
+  Vec3 device_force;        // force part of T1, the wrench the motors apply to the device [N]
+  Vec3 proxy_x;             // the virtual tool's position after the tick [m]
+  const TickResult* tick;   // the tick's result (contacts, F_contact, ...)
+};
+
+// Returns false when the loop faulted or its state blew up (the run stopped there).
+bool run_provider_loop(const WallLoopConfig& cfg, ContactProvider& provider,
+                       const HandWrenchFn& hand,
+                       const std::function<void(const ProviderLoopRecord&)>& on_tick);
+
 }  // namespace dentsim
