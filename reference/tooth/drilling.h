@@ -18,8 +18,8 @@
 // removed volume is counted per material, each voxel at its whole E_m: a voxel removed with
 // W != E_m leaves the difference in a signed carry (DrillState::carry_j): a surplus W - E_m > 0 is
 // shared by the next tick's set, a debt E_m - W > 0 is paid first from the next ticks' work. So
-// delivered = sum_m e_m V_m + stored work + carry exactly, and the removed volume has no O(h) bias
-// from the partly cut voxels of the walls (docs/derivations/drilling.md §1-2).
+// delivered = sum_m e_m V_m + stored work + carry exactly; a wall voxel keeps < E_m / 2, so the O(h)
+// deficit of the removed volume is about a quarter of the old law's (drilling.md §1-2).
 #pragma once
 
 #include <array>
@@ -122,9 +122,9 @@ void account_removed_voxel(std::size_t v, std::uint8_t material, double work, do
 
 // One drilling step after the tick's collision: adds each contact's work to its voxel
 // (contact_voxels[i] is contact i's flat voxel index, as returned by collide_tool_tip), then
-// removes every contacted voxel whose work reached theta times its threshold (removal_due). Appends the removed flat indices
-// to `removed` if not null and returns their number. The contact set is stale afterwards. Throws
-// InputError if the vectors differ in length, T <= 0, or the params are negative.
+// removes every contacted voxel whose work reached theta E_m (removal_due). Appends the removed
+// flat indices to `removed` if not null and returns their number; the contact set is stale after.
+// Throws InputError if the vectors differ in length, T <= 0, or the params are negative.
 int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> contact_voxels,
                const ToolTip& tip, const DrillParams& params, double T, VoxelTooth* tooth,
                DrillState* state, std::vector<std::size_t>* removed = nullptr);

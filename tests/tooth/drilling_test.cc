@@ -430,7 +430,8 @@ TEST(Drilling, ScriptedGrooveRemovesTheSameVolumeAtTwoResolutions) {
                 "(%.0f %% of theta e per voxel), carry %.2e J\n",
                 h * 1e3, g[r].volume_m3 * 1e9, energy / e * 1e9, g[r].stored_j,
                 g[r].stored_volume_m3 * 1e9,
-                100.0 * g[r].stored_j / (kRemovalFraction * e * g[r].stored_volume_m3), g[r].carry_j);
+                100.0 * g[r].stored_j / (kRemovalFraction * e * g[r].stored_volume_m3),
+                g[r].carry_j);
     EXPECT_NEAR(g[r].delivered_j, energy, 1e-9 * energy);
     EXPECT_NEAR(g[r].delivered_j, e * g[r].volume_m3 + g[r].stored_j + g[r].carry_j,
                 1e-9 * energy);
