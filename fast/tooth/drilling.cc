@@ -26,7 +26,7 @@ int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> c
     const std::uint8_t material = tooth->grid().voxels[v];
     if (material == kEmpty) continue;  // already removed this tick (several faces of one voxel)
     const double work = state->work_j.get(v);
-    if (work < threshold[material]) continue;
+    if (!removal_due(work, threshold[material])) continue;
     const int i = static_cast<int>(v % n);
     const int j = static_cast<int>((v / n) % n);
     const int k = static_cast<int>(v / (static_cast<std::size_t>(n) * n));

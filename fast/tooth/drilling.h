@@ -1,11 +1,11 @@
 // Fast drilling of the voxel tooth: the twin of reference/tooth/drilling.h (thesis §2.5.2
 // "Drilling"; the work model W_i = mu_c f_i omega rho T_k and the thresholds are stated there and
-// in docs/tooth_octree.md). Same work per voxel summed in the same order, same removal test and
-// order, so the removed voxel sets, the codes and the removed volume per material equal the
-// reference's bitwise. Removal updates the fast tooth incrementally (BrickTooth::remove_voxel:
-// the exposed-face bit toward the removed voxel in each solid neighbour, surface masks and the
-// brick octree). Runs inside the servo tick: never allocates (beyond `removed`'s capacity) and
-// never throws.
+// in docs/tooth_octree.md). Same work per voxel summed in the same order (the shared
+// accumulate_drill_work, carry included), same removal test (removal_due) and order, so the
+// removed voxel sets, the codes and the removed volume per material equal the reference's bitwise.
+// Removal updates the fast tooth incrementally (BrickTooth::remove_voxel: the exposed-face bit
+// toward the removed voxel in each solid neighbour, surface masks and the brick octree).
+// Runs inside the servo tick: never allocates (beyond `removed`'s capacity) and never throws.
 #pragma once
 
 #include <cstddef>

@@ -52,17 +52,31 @@ bool accumulate_drill_work(std::span<const Contact> contacts,
   }
   // W_i = mu_c f_i omega rho T_k with f_i the contact's share of the blended normal force.
   const double speed = params.bur_speed_rad_s * tip.radius;  // u = omega rho [m/s]
-  // The surplus of the last removals is shared as the force is (weight / total weight).
-  const double surplus = state->surplus_j;
+  const auto work_of = [&](const Contact& ct) {
+    const double f_i = ct.weight / total_weight * ct.stiffness * std::max(0.0, ct.depth);
+    return params.cutting_coefficient * f_i * speed * T;
+  };
+  double delivered = 0.0;
+  for (const Contact& ct : contacts) delivered += work_of(ct);
+  state->delivered_j += delivered;
+  // The carry of the last removals: a surplus (> 0) is shared as the force is (weight / total
+  // weight); a debt (< 0) is paid first: the tick's work is scaled by (delivered - paid) /
+  // delivered, the rest of the debt waits for the next ticks.
+  const double surplus = std::max(0.0, state->carry_j);
+  double scale = 1.0;
+  double carry_after = 0.0;
+  if (state->carry_j < 0.0) {
+    const double paid = std::min(-state->carry_j, delivered);
+    if (paid > 0.0) scale = (delivered - paid) / delivered;
+    carry_after = state->carry_j + paid;
+  }
   for (std::size_t i = 0; i < contacts.size(); ++i) {
     const Contact& ct = contacts[i];
-    const double f_i = ct.weight / total_weight * ct.stiffness * std::max(0.0, ct.depth);
-    double w = params.cutting_coefficient * f_i * speed * T;
-    state->delivered_j += w;
+    double w = work_of(ct) * scale;
     if (surplus > 0.0) w += surplus * (ct.weight / total_weight);
     state->work_j.add(contact_voxels[i], w);
   }
-  state->surplus_j = 0.0;
+  state->carry_j = carry_after;
   return true;
 }
 
@@ -97,7 +111,7 @@ bool removal_opens_pulp(const VoxelGrid& grid, int i, int j, int k) {
 void account_removed_voxel(std::size_t v, std::uint8_t material, double work, double threshold,
                            DrillState* state, std::vector<std::size_t>* removed) {
   state->work_j.erase(v);
-  state->surplus_j += work - threshold;  // W - E_m >= 0 goes on to the next tick's set
+  state->carry_j += work - threshold;  // a surplus (W > E_m) or a debt (W < E_m) carried on
   ++state->removed_voxels[material];
   if (removed != nullptr) removed->push_back(v);
 }
@@ -129,7 +143,7 @@ int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> c
     if (material == kEmpty) continue;  // already removed this tick (several faces of one voxel)
     const double work = state->work_j.get(v);
     const double threshold = removal_threshold_j(material, h);
-    if (work < threshold) continue;
+    if (!removal_due(work, threshold)) continue;
     const int i = static_cast<int>(v % n);
     const int j = static_cast<int>((v / n) % n);
     const int k = static_cast<int>(v / (static_cast<std::size_t>(n) * n));

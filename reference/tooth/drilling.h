@@ -9,14 +9,17 @@
 // tangential to normal bur force) does the work
 //   W_i = mu_c f_i u T_k = mu_c f_i omega rho T_k          [J]
 // on contact i's voxel during the tick of length T_k [s]. Each voxel sums the work done on it over
-// the ticks; once it reaches its material's threshold
+// the ticks; its material's threshold is
 //   E_m = removal_energy_j_per_mm3(m) * 1e9 [J/m^3] * h^3   (materials.cc: enamel 3.0 J/mm^3,
 //                                                           dentin 0.6 J/mm^3, pulp 0.01 J/mm^3)
-// it is removed: FullOctree::remove_voxel updates the occupancy up to the root and reencode_local
-// re-encodes it and its six neighbours. Removed voxels never come back. The removed volume is
-// counted per material. A voxel removed with W > E_m hands the surplus W - E_m to the next tick's
-// set (DrillState::surplus_j), so the delivered work is conserved: delivered = sum_m e_m V_m +
-// stored work + surplus, and the removed volume converges as h -> 0 (docs/derivations/drilling.md).
+// and it is removed once its work reaches theta E_m, theta = kRemovalFraction = 1/2: the cut front
+// has passed its centre (issue #30). FullOctree::remove_voxel updates the occupancy up to the root
+// and reencode_local re-encodes it and its six neighbours. Removed voxels never come back. The
+// removed volume is counted per material, each voxel at its whole E_m: a voxel removed with
+// W != E_m leaves the difference in a signed carry (DrillState::carry_j): a surplus W - E_m > 0 is
+// shared by the next tick's set, a debt E_m - W > 0 is paid first from the next ticks' work. So
+// delivered = sum_m e_m V_m + stored work + carry exactly; a wall voxel keeps < E_m / 2, so the O(h)
+// deficit of the removed volume is about a quarter of the old law's (drilling.md §1-2).
 #pragma once
 
 #include <array>
@@ -56,11 +59,13 @@ struct DrillState {
   // The grid the state was made for (flat voxel count), checked by drill_tick.
   std::size_t grid_voxels = 0;
   // Energy bookkeeping of the removal law (docs/derivations/drilling.md): the work the bur has
-  // delivered to the tooth so far [J], and the surplus of the last removals [J]: a voxel removed
-  // with W > E_m gives W - E_m back, and the next tick's set shares it with its own work, so no
-  // delivered joule is lost to the voxel quantum (delivered = sum_m e_m V_m + stored work + surplus).
+  // delivered to the tooth so far [J], and the signed carry of the last removals [J]: a voxel
+  // removed with work W against its threshold E_m adds W - E_m. A positive carry (a surplus) is
+  // shared by the next tick's set with its own work; a negative one (a debt: a voxel removed at
+  // theta E_m <= W < E_m) is paid first from the next ticks' work. No delivered joule is lost or
+  // created by the voxel quantum: delivered = sum_m e_m V_m + stored work + carry.
   double delivered_j = 0.0;
-  double surplus_j = 0.0;
+  double carry_j = 0.0;
 
   // Removed volume of material m [m^3].
   double removed_volume_m3(int m) const { return voxel_volume_m3 * removed_voxels[m]; }
@@ -82,15 +87,26 @@ DrillState make_drill_state(const VoxelGrid& grid, std::size_t capacity = 0);
 inline DrillState make_drill_state(const VoxelTooth& tooth) { return make_drill_state(tooth.grid()); }
 
 // The work step of drill_tick, shared with fast/tooth/drilling.h: adds each contact's work W_i to
-// its voxel (contact_voxels[i]) in contact order. Returns false (adding nothing) when the set's
+// its voxel (contact_voxels[i]) in contact order, settling the carry first: a surplus is shared
+// by weight on top of the W_i; a debt D takes min(D, sum_i W_i) off the tick's work, every W_i
+// scaled by the same factor. Returns false (adding nothing) when the set's
 // total weight is not > 0, or when the work table might not hold the set's voxels (then it also
 // sets state->work_table_full). Never throws or allocates; the caller validates the arguments.
 bool accumulate_drill_work(std::span<const Contact> contacts,
                            std::span<const std::size_t> contact_voxels, const ToolTip& tip,
                            const DrillParams& params, double T, DrillState* state);
 
-// Work needed to remove one voxel of `material` of edge h [J]; throws InputError for kEmpty or an
-// unknown id.
+// The removal law's fraction theta (docs/derivations/drilling.md §1): a voxel goes in the first
+// tick at whose end its work W satisfies W >= theta E_m, the cut front past its centre; it is
+// charged the whole E_m, the missing E_m - W carried as a debt (DrillState::carry_j).
+inline constexpr double kRemovalFraction = 0.5;
+// The removal test of both twins' drill_tick (one expression, so they agree bitwise).
+inline bool removal_due(double work, double threshold) {
+  return work >= kRemovalFraction * threshold;
+}
+
+// Work charged for removing one voxel of `material` of edge h, E_m = e_m h^3 [J]; throws
+// InputError for kEmpty or an unknown id.
 double removal_threshold_j(std::uint8_t material, double voxel_size);
 
 // Whether removing voxel (i, j, k) of `grid` (not yet removed) opens the pulp: the voxel is pulp
@@ -99,16 +115,16 @@ bool removal_opens_pulp(const VoxelGrid& grid, int i, int j, int k);
 
 // The energy bookkeeping of one voxel of `material` removed with `work` on it against its
 // `threshold` (both twins' drill_tick; docs/derivations/drilling.md §2): its work leaves the
-// table, the surplus W - E_m >= 0 goes on to the next tick's set, the material's count rises, and
-// its flat index v is appended to `removed` if not null.
+// table, W - E_m (a surplus if > 0, a debt if < 0) joins the carry, the material's count rises,
+// and its flat index v is appended to `removed` if not null.
 void account_removed_voxel(std::size_t v, std::uint8_t material, double work, double threshold,
                            DrillState* state, std::vector<std::size_t>* removed);
 
 // One drilling step after the tick's collision: adds each contact's work to its voxel
 // (contact_voxels[i] is contact i's flat voxel index, as returned by collide_tool_tip), then
-// removes every contacted voxel whose work reached its threshold. Appends the removed flat indices
-// to `removed` if not null and returns their number. The contact set is stale afterwards. Throws
-// InputError if the vectors differ in length, T <= 0, or the params are negative.
+// removes every contacted voxel whose work reached theta E_m (removal_due). Appends the removed
+// flat indices to `removed` if not null and returns their number; the contact set is stale after.
+// Throws InputError if the vectors differ in length, T <= 0, or the params are negative.
 int drill_tick(std::span<const Contact> contacts, std::span<const std::size_t> contact_voxels,
                const ToolTip& tip, const DrillParams& params, double T, VoxelTooth* tooth,
                DrillState* state, std::vector<std::size_t>* removed = nullptr);

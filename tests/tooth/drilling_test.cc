@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -103,9 +104,11 @@ int ticks_to_remove(std::uint8_t material, double* closed_form) {
   const double f = contacts[0].stiffness * contacts[0].depth;
   const double w = params.cutting_coefficient * f * (params.bur_speed_rad_s * kRho) * kT;
   const double e = removal_threshold_j(material, h);
-  *closed_form = std::ceil(e / w);
+  // The voxel goes when its work reaches theta E_m (kRemovalFraction: the front past its centre).
+  *closed_form = std::ceil(kRemovalFraction * e / w);
   int expected = 0;
-  for (double acc = 0.0; acc < e; acc += w) ++expected;
+  double acc = 0.0;  // the voxel's work at its removal
+  for (; acc < kRemovalFraction * e; acc += w) ++expected;
   for (int tick = 1; tick <= 100000; ++tick) {
     collide(tooth, c, &contacts, &voxels);
     EXPECT_EQ(contacts.size(), 1u);
@@ -116,6 +119,11 @@ int ticks_to_remove(std::uint8_t material, double* closed_form) {
       EXPECT_NEAR(state.removed_volume_m3(material), h * h * h, 1e-25);
       EXPECT_FALSE(tooth.octree.occupied(0, 0, 0, 0));  // the octree is empty up to the root
       EXPECT_EQ(tooth.codes.code[tooth.grid().index(4, 4, 4)], 0);
+      // Charged the whole E_m: the missing E_m - W is the carry's debt, and the balance holds.
+      EXPECT_EQ(state.delivered_j, acc);
+      EXPECT_LT(state.carry_j, 0.0);
+      EXPECT_NEAR(state.carry_j, acc - e, 1e-12 * e);
+      EXPECT_NEAR(state.delivered_j, e + state.work_j.total() + state.carry_j, 1e-12 * e);
       return tick;
     }
   }
@@ -127,7 +135,7 @@ TEST(Drilling, ExactTickOfRemovalAndEnamelHarderThanDentin) {
   const int enamel = ticks_to_remove(kEnamel, &enamel_closed);
   const int dentin = ticks_to_remove(kDentin, &dentin_closed);
   const int pulp_ticks = ticks_to_remove(kPulp, &pulp_closed);
-  std::printf("ticks to remove one voxel: enamel %d (ceil(E/W) = %.0f), dentin %d, pulp %d\n",
+  std::printf("ticks to remove one voxel: enamel %d (ceil(theta E/W) = %.0f), dentin %d, pulp %d\n",
               enamel, enamel_closed, dentin, pulp_ticks);
   EXPECT_NEAR(enamel, enamel_closed, 1.0);
   // Ratio (E_enamel / E_dentin) / (K_enamel / K_dentin) = 5 * 0.7 = 3.5.
@@ -259,14 +267,16 @@ TEST(Drilling, RejectsBadInput) {
 namespace dentsim {
 namespace {
 
-// The removal law as an energy balance (docs/derivations/drilling.md): a bur of constant force F
+// The removal law as an energy balance (docs/derivations/drilling.md §2): a bur of constant force F
 // shares its power mu_c F omega rho among the top solid voxel of every column under a disc of
 // radius 0.6 mm on an enamel slab. Every delivered joule ends in a removed voxel (e_m h^3 each), in
-// a voxel's stored work, or in the surplus handed to the next tick, exactly; and the removed
-// volume is E / e_m less at most one voxel per column (the partly cut top voxels): the bound
-// N_columns h^3 falls as h, so the volume converges. Two resolutions, the same disc and energy.
+// a voxel's stored work, or in the carry (a surplus, or the debt of voxels removed at theta E_m),
+// exactly. The columns advance in step, so the partly cut top voxels hold less than theta e h^3
+// each and the debt is less than (1 - theta) e h^3 per column: E / e - theta N h^3 - U / e <= V <=
+// E / e + (1 - theta) N h^3 (N columns), a band of N h^3 that falls as h. Two resolutions, the
+// same disc and energy.
 struct PlungeResult {
-  double delivered_j, volume_m3, stored_j, surplus_j, bound_m3;
+  double delivered_j, volume_m3, stored_j, carry_j, column_volume_m3;
 };
 
 PlungeResult plunge(int n, double h, int ticks) {
@@ -302,9 +312,8 @@ PlungeResult plunge(int n, double h, int ticks) {
     }
     drill_tick(contacts, voxels, tip(), params, kT, &tooth, &state);
   }
-  const double e = material_properties(kEnamel).removal_energy_j_per_mm3 * 1e9;  // [J/m^3]
-  return {state.delivered_j, state.removed_volume_m3(kEnamel), state.work_j.total(),
-          state.surplus_j, static_cast<double>(columns.size()) * h * h * h + state.surplus_j / e};
+  return {state.delivered_j, state.removed_volume_m3(kEnamel), state.work_j.total(), state.carry_j,
+          static_cast<double>(columns.size()) * h * h * h};
 }
 
 TEST(Drilling, RemovedVolumeIsDeliveredEnergyOverSpecificEnergyAtTwoResolutions) {
@@ -312,27 +321,129 @@ TEST(Drilling, RemovedVolumeIsDeliveredEnergyOverSpecificEnergyAtTwoResolutions)
   const double e = material_properties(kEnamel).removal_energy_j_per_mm3 * 1e9;  // [J/m^3]
   const int ticks = 400;
   const double energy = params.cutting_coefficient * 1.0 * params.bur_speed_rad_s * kRho * kT * ticks;
-  double volumes[2], bounds[2];
+  double volumes[2], bands[2];
   for (int r = 0; r < 2; ++r) {
     const int n = r == 0 ? 32 : 64;
     const double h = r == 0 ? 0.1e-3 : 0.05e-3;
     const PlungeResult p = plunge(n, h, ticks);
+    const double surplus = std::max(0.0, p.carry_j);
     std::printf("h %.3f mm: delivered %.6f J (closed form %.6f), removed %.4f mm^3, E/e %.4f mm^3, "
-                "stored %.4f J, surplus %.2e J, bound %.4f mm^3\n",
+                "stored %.4f J, carry %.2e J, N h^3 %.4f mm^3\n",
                 h * 1e3, p.delivered_j, energy, p.volume_m3 * 1e9, energy / e * 1e9, p.stored_j,
-                p.surplus_j, p.bound_m3 * 1e9);
+                p.carry_j, p.column_volume_m3 * 1e9);
     EXPECT_NEAR(p.delivered_j, energy, 1e-9 * energy);
-    // The balance: delivered = e V + stored + surplus, to rounding.
-    EXPECT_NEAR(p.delivered_j, e * p.volume_m3 + p.stored_j + p.surplus_j, 1e-9 * energy);
-    EXPECT_LE(p.volume_m3, energy / e);
-    EXPECT_GE(p.volume_m3, energy / e - p.bound_m3);
+    // The balance: delivered = e V + stored + carry, to rounding.
+    EXPECT_NEAR(p.delivered_j, e * p.volume_m3 + p.stored_j + p.carry_j, 1e-9 * energy);
+    EXPECT_LE(p.volume_m3, energy / e + (1.0 - kRemovalFraction) * p.column_volume_m3);
+    EXPECT_GE(p.volume_m3, energy / e - kRemovalFraction * p.column_volume_m3 - surplus / e);
     volumes[r] = p.volume_m3;
-    bounds[r] = p.bound_m3;
+    bands[r] = p.column_volume_m3 + surplus / e;
   }
-  // Both lie in [E/e - bound, E/e]: they agree within the coarse grid's bound, which is about
-  // twice the fine one's (the bound is O(h)).
-  EXPECT_NEAR(volumes[0], volumes[1], bounds[0]);
-  EXPECT_LT(bounds[1], 0.6 * bounds[0]);
+  // Both lie in a band of width N h^3 about E/e: they agree within the coarse grid's band, which
+  // is about twice the fine one's (N h^3 = disc area x h is O(h)).
+  EXPECT_NEAR(volumes[0], volumes[1], bands[0]);
+  EXPECT_LT(bands[1], 0.6 * bands[0]);
+}
+
+// The law on a scripted path, the cut set built as the surface-proxy contact builds it
+// (reference/tooth/tooth_contacts.cc: the solid voxels meeting the sphere of radius rho + h about
+// the bur centre g on the pushed side, weight = the cosine to the push): a 0.5 mm bur pushed down
+// with a constant 0.5 N onto an enamel slab, moved 4 mm along x in 1 s, its centre g resting on
+// what is left (the lowest height at which the sphere meets no solid voxel: the proxy's place on
+// the voxel surface). Its set is never empty, so both grids get the same E = mu_c F omega rho T
+// ticks. From the balance e V = E - S - C: every stored voxel holds less than theta e h^3 (it would
+// have gone at the end of its last tick in a set), so 0 <= S < theta e h^3 N_s (N_s stored
+// voxels), and |V_1 - V_2| <= theta max(N_s1 h_1^3, N_s2 h_2^3) + (|C_1| + |C_2|) / e.
+struct GrooveResult {
+  double delivered_j, volume_m3, stored_j, carry_j, stored_volume_m3;
+};
+
+GrooveResult groove(int n, double h, int ticks, double force) {
+  VoxelTooth tooth = slab(n, h, n / 2, kEnamel);  // top face at z = n h / 2 = 3.2 mm
+  DrillState state = make_drill_state(tooth);
+  const DrillParams params;
+  std::vector<std::size_t> candidates;
+  std::vector<Contact> contacts;
+  std::vector<std::size_t> voxels;
+  candidates.reserve(8192);
+  const Vec3 push = Vec3::UnitZ();  // the contact normal: the bur is pushed down (-z)
+  const int reach = static_cast<int>(kRho / h) + 2;
+  for (int t = 0; t < ticks; ++t) {
+    Vec3 g(1.2e-3 + 4e-3 * t / ticks, 3.23e-3, 0.0);
+    // The sphere rests on the highest constraint of the columns under it: a column whose top
+    // solid voxel's box lies at horizontal distance d < rho holds it at top + sqrt(rho^2 - d^2).
+    const int ic = static_cast<int>(g.x() / h), jc = static_cast<int>(g.y() / h);
+    for (int j = jc - reach; j <= jc + reach; ++j) {
+      for (int i = ic - reach; i <= ic + reach; ++i) {
+        int k = n - 1;
+        while (k >= 0 && tooth.grid().at(i, j, k) == kEmpty) --k;
+        if (k < 0) continue;
+        const double dx = std::max({0.0, i * h - g.x(), g.x() - (i + 1) * h});
+        const double dy = std::max({0.0, j * h - g.y(), g.y() - (j + 1) * h});
+        const double d2 = dx * dx + dy * dy;
+        if (d2 < kRho * kRho) g.z() = std::max(g.z(), (k + 1) * h + std::sqrt(kRho * kRho - d2));
+      }
+    }
+    candidates.clear();
+    tooth.octree.query_sphere(g, kRho + h, &candidates);
+    contacts.clear();
+    voxels.clear();
+    for (const std::size_t v : candidates) {
+      const int i = static_cast<int>(v % n), j = static_cast<int>((v / n) % n),
+                k = static_cast<int>(v / (static_cast<std::size_t>(n) * n));
+      const Vec3 to = tooth.grid().center(i, j, k) - g;
+      const double cosine = -push.dot(to) / to.norm();
+      if (!(cosine > 0.0)) continue;
+      Contact c;
+      c.n = push;
+      c.stiffness = kK;
+      c.depth = force / kK;
+      c.weight = cosine;
+      c.material = kEnamel;
+      contacts.push_back(c);
+      voxels.push_back(v);
+    }
+    EXPECT_FALSE(contacts.empty()) << "tick " << t;
+    drill_tick(contacts, voxels, tip(), params, kT, &tooth, &state);
+  }
+  // The law: no voxel left standing holds theta E_m (the old law left up to E_m in each).
+  const double due = kRemovalFraction * removal_threshold_j(kEnamel, h);
+  double most = 0.0;
+  state.work_j.for_each([&](std::size_t, double w) { most = std::max(most, w); });
+  EXPECT_LT(most, due);
+  return {state.delivered_j, state.removed_volume_m3(kEnamel), state.work_j.total(), state.carry_j,
+          static_cast<double>(state.work_j.size()) * h * h * h};
+}
+
+TEST(Drilling, ScriptedGrooveRemovesTheSameVolumeAtTwoResolutions) {
+  const DrillParams params;
+  const double e = material_properties(kEnamel).removal_energy_j_per_mm3 * 1e9;  // [J/m^3]
+  const int ticks = 1000;
+  const double force = 0.5;
+  const double energy =
+      params.cutting_coefficient * force * params.bur_speed_rad_s * kRho * kT * ticks;
+  GrooveResult g[2];
+  for (int r = 0; r < 2; ++r) {
+    const double h = r == 0 ? 0.1e-3 : 0.05e-3;
+    g[r] = groove(r == 0 ? 64 : 128, h, ticks, force);
+    std::printf("h %.3f mm: removed %.4f mm^3 (E/e %.4f), stored %.4f J in %.4f mm^3 of voxels "
+                "(%.0f %% of theta e per voxel), carry %.2e J\n",
+                h * 1e3, g[r].volume_m3 * 1e9, energy / e * 1e9, g[r].stored_j,
+                g[r].stored_volume_m3 * 1e9,
+                100.0 * g[r].stored_j / (kRemovalFraction * e * g[r].stored_volume_m3),
+                g[r].carry_j);
+    EXPECT_NEAR(g[r].delivered_j, energy, 1e-9 * energy);
+    EXPECT_NEAR(g[r].delivered_j, e * g[r].volume_m3 + g[r].stored_j + g[r].carry_j,
+                1e-9 * energy);
+    EXPECT_GE(g[r].stored_j, 0.0);
+    EXPECT_LT(g[r].stored_j, kRemovalFraction * e * g[r].stored_volume_m3);
+  }
+  const double bound =
+      kRemovalFraction * std::max(g[0].stored_volume_m3, g[1].stored_volume_m3) +
+      (std::abs(g[0].carry_j) + std::abs(g[1].carry_j)) / e;
+  std::printf("|V_1 - V_2| = %.4f mm^3, bound %.4f mm^3\n",
+              std::abs(g[0].volume_m3 - g[1].volume_m3) * 1e9, bound * 1e9);
+  EXPECT_LE(std::abs(g[0].volume_m3 - g[1].volume_m3), bound);
 }
 
 }  // namespace
