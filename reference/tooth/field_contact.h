@@ -64,8 +64,11 @@ struct FieldEditStats {
 // twin its kept distance; the same charge in both twins, so both pause at the same rows), and the
 // cells whose Lipschitz bound is re-measured (kFieldEditCellsPerUnit a unit, rounded up per row).
 // Measured with callgrind over the fast edit of tests/fast/field_test.cc's path (docs/benchmarks.md
-// "The field edit's budget of work per tick"); the query's weight is the fast twin's mean over
-// its kept answers and its octree queries, the cell's a cell's share of a sample read's cost.
+// "The field edit's budget of work per tick"): a sample read with its share of the rows, voxels
+// and candidates 597 instructions, a distance call 1 513 on the mean (2.5 units; an octree query
+// 6 032, 10.1 units; a kept answer far less), a cell 188 (1/3 unit). The query's weight lies
+// between the mean and an octree query; the cell's, set before that measurement, is below its
+// cost (1 per 3 cells would match).
 inline constexpr long kFieldEditVoxelWeight = 4;
 inline constexpr long kFieldEditRowWeight = 1;
 inline constexpr long kFieldEditQueryWeight = 4;

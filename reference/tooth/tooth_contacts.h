@@ -152,9 +152,9 @@ class ToothContactProvider : public ToothProviderBase {
   long field_edit_shortfalls() const { return field_edit_shortfalls_; }
   bool field_edit_shortfall() const override { return field_edit_shortfalls_ > 0; }
   // The default rate, in units of work a second (the name predates the weights: a unit is a
-  // sample read, field_contact.h): 1000 units a tick at 1 kHz, 125 at 8 kHz, about the ~480
-  // samples a tick (1 kHz) of the earlier budget of 500 samples at the drill's mix of ~2.1 units
-  // a sample read, so the queue keeps up with the drill scene's cutting as before
+  // sample read, field_contact.h): 1000 units a tick at 1 kHz, 125 at 8 kHz, about 420 samples
+  // a tick (1 kHz) at the measured mix of 2.38 units a sample read, against the earlier budget's
+  // 500 samples; the queue keeps up with the drill scene's cutting as before
   // (docs/derivations/field_contact.md §5 "Per tick", docs/benchmarks.md "The field edit's
   // budget of work per tick").
   static constexpr double kFieldEditSamplesPerSecond = 1e6;
