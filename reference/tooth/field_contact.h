@@ -116,9 +116,9 @@ struct FieldEditCursor {
 // SampledField::reserve_spare_bricks) or throws; returns false if a raise found no spare brick
 // (that sample keeps its value: the field then lags the voxels there, on the safe side).
 // With `cursor`: resumes there and spends about `budget` units of work (the weights below; at
-// most budget - 1 + field_edit_step_work(R), budget >= 1), leaving the cursor where the next call
-// resumes (field_edit_core.h edit_field: a budgeted edit is safe after every call and ends where
-// the whole edit ends).
+// most max(budget - 1, kFieldEditVoxelWeight) + field_edit_step_work(R), budget >= 1), leaving
+// the cursor where the next call resumes (field_edit_core.h edit_field: a budgeted edit is safe
+// after every call and ends where the whole edit ends).
 bool edit_field_for_removed_voxels(SampledField* field, const VoxelTooth& tooth,
                                    std::span<const std::size_t> removed, SignedDistanceFn sd,
                                    FieldEditStats* stats, FieldEditCursor* cursor = nullptr,

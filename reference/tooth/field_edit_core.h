@@ -122,8 +122,10 @@ using dentsim::FieldEditCursor;
 // instructions: a voxel's set-up, each row that reaches the row bounds, each sample read, each
 // voxel-distance query and each cell whose Lipschitz bound is re-measured. A step (a voxel's
 // set-up, or one row with its queries and its cells) is begun only while less than `budget` is
-// spent, so a call spends at most budget - 1 + field_edit_step_work(R) and reads at most
-// budget + 2R samples. Rows the ball skips are not charged: at most (2R + 1)^2 a voxel, a few
+// spent, except that a call's first row is always begun (after its voxel's set-up: so a call
+// takes at least one row, and a budget below a set-up's weight cannot stall the edit), so a call
+// spends at most max(budget - 1, kFieldEditVoxelWeight) + field_edit_step_work(R) and reads at
+// most budget + 2R samples. Rows the ball skips are not charged: at most (2R + 1)^2 a voxel, a few
 // instructions each. A budgeted edit is safe after every call and ends where the whole one does:
 // - Values only rise (every write is SampledField::raise, a max), so {phi >= rho - s} only grows:
 //   a proxy admissible before the call stays admissible, and no call puts it inside material.
@@ -182,8 +184,12 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
   bool complete = true;
   const int width = 2 * reach + 1;  // rows of a box along y (and planes along z)
   const long work_before = stats->work;
-  // Whether this call has spent its budget of work (never without a cursor).
-  const auto spent = [&] { return cursor != nullptr && stats->work - work_before >= budget; };
+  // Whether this call has spent its budget of work (never without a cursor, nor before the call
+  // has begun a row: every call makes progress, even when a voxel's set-up alone exceeds it).
+  bool began_row = false;
+  const auto spent = [&] {
+    return cursor != nullptr && began_row && stats->work - work_before >= budget;
+  };
   // The rows with raises, (x_lo, x_hi, sy, sz): their cells are measured at the call's end (the
   // comment above says why that keeps lipschitz() a bound), or earlier when the list is full.
   constexpr int kChangedRows = 1024;  // 16 KB of stack
@@ -243,6 +249,7 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
           paused = true;
           break;
         }
+        began_row = true;
         const int sy = s0[1] + dy;
         if (sy < 0 || sy >= m) continue;
         const double ey = std::max(std::abs(dy) - 1.0, 0.0);

@@ -137,7 +137,8 @@ bool ToothContactProvider::edit_field(SampledField* field, std::span<const std::
 void ToothContactProvider::edit_queued_voxels() {
   // The ring's queued voxels in at most two contiguous runs (before and after its end), the
   // second with what the first left of the budget. A call that finishes its run had spent less
-  // than its budget at its last step's start, so the two spend at most budget - 1 +
+  // than its budget at its last step's start, and the second is begun only with more than a
+  // voxel's set-up left, so the two spend at most max(budget - 1, kFieldEditVoxelWeight) +
   // field_edit_step_work(R) together (field_edit_core.h).
   const std::size_t capacity = edit_queue_.size();
   long left = field_edit_budget_;
@@ -155,6 +156,9 @@ void ToothContactProvider::edit_queued_voxels() {
     edit_count_ -= done;
     if (done < run) break;  // paused inside the run: the budget is spent
     left -= field_edits_.work - work_before;
+    // The second run's first row is begun whatever is left (field_edit_core.h): only with room
+    // for its voxel's set-up below the budget, so the bound above holds.
+    if (left <= kFieldEditVoxelWeight) break;
   }
   if (edit_count_ == 0) edit_head_ = 0;
 }

@@ -134,8 +134,9 @@ class ToothContactProvider : public ToothProviderBase {
   const AnchoredSpring& anchored_spring() const { return anchored_; }
   // kField with drilling: drill() queues the voxels it removed (a ring of kFieldEditQueue), and
   // each contacts() call first subtracts queued ones from the field, spending about budget(T)
-  // units of work (edit_field_for_removed_voxels with this provider's cursor: at most budget(T) -
-  // 1 + field_edit_step_work(R), R = SampledField::edit_radius(); a unit is a sample read, and the
+  // units of work (edit_field_for_removed_voxels with this provider's cursor: at most
+  // max(budget(T) - 1, kFieldEditVoxelWeight) + field_edit_step_work(R), R =
+  // SampledField::edit_radius(); a unit is a sample read, and the
   // octree queries, rows, voxels and re-measured cells are charged by their weights,
   // field_contact.h), resuming where the last call stopped, even in the middle of a removed
   // voxel's box, and advancing the queue by the voxels it finished. budget(T) = max(1, floor(rate
@@ -160,11 +161,10 @@ class ToothContactProvider : public ToothProviderBase {
   static constexpr double kFieldEditSamplesPerSecond = 1e6;
   static constexpr std::size_t kFieldEditQueue = 8192;
   double field_edit_rate() const { return field_edit_rate_; }
-  // The work the next contacts() call's edit may spend, + field_edit_step_work(R) - 1 (budget(T)
-  // above).
+  // The work the next contacts() call's edit may spend (budget(T) above; the bound adds a step).
   long field_edit_budget() const { return field_edit_budget_; }
-  // Setup only (not in the tick). The edit's rate [units of work/s]: > 0, +infinity for no budget (each
-  // call subtracts every queued voxel); InputError otherwise.
+  // Setup only (not in the tick). The edit's rate [units of work/s]: > 0, +infinity for no
+  // budget (each call subtracts every queued voxel); InputError otherwise.
   void set_field_edit_rate(double samples_per_second);
   // Setup only, with nothing queued: room for `capacity` >= 1 queued voxels (allocates; for tests
   // that force a full queue); InputError otherwise.
