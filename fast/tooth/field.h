@@ -16,8 +16,8 @@
 // - FieldSolid (fast): one gather gives the deep-inside test, phi and its gradient; the last
 //   query is kept (the proxy asks normal(x) right after distance(x) at the same x), and a
 //   free-space certificate answers "phi >= reach" without reading the field (below).
-// - The Lipschitz constant after an edit: the reference raises it to the cell bound of every cell
-//   in the box around the changed samples (SampledField::include_cells); the twin evaluates the
+// - The Lipschitz constant after an edit: the reference raises it to the cell bound of the cells
+//   around each row of changed samples (SampledField::include_cells); the twin evaluates the
 //   same cells from the 9^3 bricks and takes one square root at the end (sqrt and / h are
 //   correctly rounded and monotone, so max_i sqrt(s_i) / h == sqrt(max_i s_i) / h exactly). The
 //   twin keeps this constant itself (FieldBricks::lipschitz); the shared SampledField's own

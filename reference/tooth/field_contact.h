@@ -53,7 +53,39 @@ struct FieldEditStats {
                               // (reference/tooth/field_edit_core.h)
   long samples_raised = 0;    // samples whose value rose
   long samples_lost = 0;      // raises refused for want of a spare brick (field then conservative)
+  long rows_read = 0;         // rows of a voxel's box whose row bounds were read
+  long cells_measured = 0;    // cells whose Lipschitz bound was re-measured (with repeats)
+  long work = 0;              // the budget's units spent (weights below, field_edit_core.h)
 };
+
+// The budgeted edit's work, in units of one sample read (field_edit_core.h): a removed voxel's
+// set-up (its 26 neighbours listed), a row of its box that reaches the row bounds, a sample read,
+// a voxel-distance query (an outside candidate no listed voxel answers: the octree, or in the fast
+// twin its kept distance; the same charge in both twins, so both pause at the same rows), and the
+// cells whose Lipschitz bound is re-measured (kFieldEditCellsPerUnit a unit, rounded up per row).
+// Measured with callgrind over the fast edit of tests/fast/field_test.cc's path (docs/benchmarks.md
+// "The field edit's budget of work per tick"): a sample read with its share of the rows, voxels
+// and candidates 597 instructions, a distance call 1 513 on the mean (2.5 units; an octree query
+// 6 032, 10.1 units; a kept answer far less), a cell 188 (1/3 unit). The query's weight lies
+// between the mean and an octree query; the cell's, set before that measurement, is below its
+// cost (1 per 3 cells would match).
+inline constexpr long kFieldEditVoxelWeight = 4;
+inline constexpr long kFieldEditRowWeight = 1;
+inline constexpr long kFieldEditQueryWeight = 4;
+inline constexpr long kFieldEditCellsPerUnit = 8;
+// The units charged for `cells` re-measured cells.
+inline constexpr long field_edit_cell_work(long cells) {
+  return (cells + kFieldEditCellsPerUnit - 1) / kFieldEditCellsPerUnit;
+}
+// The most work one step of the edit adds between two of its budget checks (before a voxel's
+// set-up and before each row of its box): a voxel's set-up, or a row of 2R + 1 samples each read
+// and queried, and its raises' cells (x in [x_lo - 1, x_hi], two rows of cells in y and z).
+inline constexpr long field_edit_step_work(int reach) {
+  const long width = 2L * reach + 1;
+  const long row = kFieldEditRowWeight + width * (1 + kFieldEditQueryWeight) +
+                   field_edit_cell_work(4 * (width + 1));
+  return row > kFieldEditVoxelWeight ? row : kFieldEditVoxelWeight;
+}
 
 // Where a budgeted edit stopped (edit_field_for_removed_voxels with a cursor): the voxel of
 // `removed` being subtracted and the next row (dz, dy) of its box, row = (dz + R) (2R + 1) + dy +
@@ -75,18 +107,18 @@ struct FieldEditCursor {
 // C_v the removed voxel's cube (the exact inside distance to the complement stays exact: no
 // query), d_vox the exact signed distance to the remaining solid voxels (`sd`: signed_distance or
 // its fast twin, reach c_out, or a shorter reach that gives the same double). The field's
-// Lipschitz constant is then raised to the cell bound of the
-// cells around the changed samples (once all of `removed` is done), so it bounds the edited
-// field (§2, §5). Values only rise, so
+// Lipschitz constant is then raised to the cell bound of the cells with a changed corner (at the
+// call's end), so it bounds the edited field (§2, §5). Values only rise, so
 // the proxy's admissible set only grows. Bounded: at most (2R + 1)^3 sample reads (only those
 // within the clamps' reach of the cube: the ball) and at most as many queries per removed voxel.
 // The loop is written once for this and the fast twin (reference/tooth/field_edit_core.h, which
 // also says why its savings change no value). Never allocates (new bricks come from the field's spare room,
 // SampledField::reserve_spare_bricks) or throws; returns false if a raise found no spare brick
 // (that sample keeps its value: the field then lags the voxels there, on the safe side).
-// With `cursor`: resumes there and reads about `budget` samples (at most budget + 2R + 1, budget
-// >= 1), leaving the cursor where the next call resumes (field_edit_core.h edit_field: a budgeted
-// edit is safe after every call and ends where the whole edit ends).
+// With `cursor`: resumes there and spends about `budget` units of work (the weights below; at
+// most max(budget - 1, kFieldEditVoxelWeight) + field_edit_step_work(R), budget >= 1), leaving
+// the cursor where the next call resumes (field_edit_core.h edit_field: a budgeted edit is safe
+// after every call and ends where the whole edit ends).
 bool edit_field_for_removed_voxels(SampledField* field, const VoxelTooth& tooth,
                                    std::span<const std::size_t> removed, SignedDistanceFn sd,
                                    FieldEditStats* stats, FieldEditCursor* cursor = nullptr,

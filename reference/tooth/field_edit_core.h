@@ -116,12 +116,17 @@ inline int nearest_listed4(const VoxelGrid& grid, const int c[3], const int (*ne
 using dentsim::FieldEditCursor;
 
 // The edit (header comment). With a cursor, it resumes there and stops before the first row (or
-// the first voxel) at which it has read `budget` samples in this call (so it reads at most budget
-// + 2R + 1: each row holds at most 2R + 1 samples of the box, and a row is begun only while fewer
-// than `budget` are read), leaving the cursor there (budget >= 1: every call then takes at least
-// one row); without one it subtracts all of `removed`. Rows the ball or the row bounds skip read
-// no sample and are not counted: at most (2R + 1)^2 a voxel. A budgeted edit is safe after every
-// call and ends where the whole one does:
+// the first voxel) at which it has spent `budget` units of work in this call, leaving the cursor
+// there (budget >= 1: every call then takes at least one row); without one it subtracts all of
+// `removed`. The work (FieldEditStats::work, weights in field_contact.h) charges what costs
+// instructions: a voxel's set-up, each row that reaches the row bounds, each sample read, each
+// voxel-distance query and each cell whose Lipschitz bound is re-measured. A step (a voxel's
+// set-up, or one row with its queries and its cells) is begun only while less than `budget` is
+// spent, except that a call's first row is always begun (after its voxel's set-up: so a call
+// takes at least one row, and a budget below a set-up's weight cannot stall the edit), so a call
+// spends at most max(budget - 1, kFieldEditVoxelWeight) + field_edit_step_work(R) and reads at
+// most budget + 2R samples. Rows the ball skips are not charged: at most (2R + 1)^2 a voxel, a few
+// instructions each. A budgeted edit is safe after every call and ends where the whole one does:
 // - Values only rise (every write is SampledField::raise, a max), so {phi >= rho - s} only grows:
 //   a proxy admissible before the call stays admissible, and no call puts it inside material.
 //   The samples not yet reached hold at most their edited value: the admissible set is smaller,
@@ -132,19 +137,29 @@ using dentsim::FieldEditCursor;
 //   of whose corners the call changed keeps its L_cell <= L, and L never falls. A sample changes
 //   only through a raise that returned true (a refused one, samples_lost, writes nothing), and each
 //   such sample s widens [lo, hi] to hold it; a cell with s as a corner has its lower corner in
-//   [s_a - 1, s_a] on each axis a (and in [0, m - 2]), so in [max(0, lo_a - 1), min(m - 2, hi_a)]:
-//   exactly the cells Access::include_cells measures after the loop (SampledField::include_cells;
-//   the fast twin measures the same cells from its bricks) and raises L over. So every cell is
-//   covered, whichever samples the call reached: the proof uses only which samples changed, not
-//   that a voxel's box, or `removed`, was finished. (A cell between a sample edited and one not
-//   yet edited may exceed the whole edit's 1.5 sqrt(3) of §5; L then keeps that transient, which
-//   only shortens the proxy's sweep steps.)
+//   [s_a - 1, s_a] on each axis a (and in [0, m - 2]). The raises of one row (fixed sy, sz) lie in
+//   [x_lo, x_hi] of that row, so their cells have lower corners in [max(0, x_lo - 1),
+//   min(m - 2, x_hi)] x [sy - 1, sy] x [sz - 1, sz] (clamped to [0, m - 2]): exactly the cells
+//   Access::include_cells({x_lo, sy, sz}, {x_hi, sy, sz}) measures (SampledField::include_cells;
+//   the fast twin measures the same cells from its bricks) and raises L over, for every row with
+//   a raise, at the call's end (or earlier, when the call's list of such rows is full: a cell
+//   with a corner changed after that is measured again at the end). So every cell is covered,
+//   whichever samples the call reached: the proof uses only which samples changed, not that a
+//   voxel's box, or `removed`, was finished. (A cell between a sample edited and one not yet
+//   edited may exceed the whole edit's 1.5 sqrt(3) of §5; L then keeps that transient, which only
+//   shortens the proxy's sweep steps.) Measured per row at the call's end, not once over the
+//   bounding box of the call's raises: the same maximum (a cell of the box with no changed corner
+//   had L_cell <= L already), but at most 4 (2R + 2) cells a row, charged to the budget, and a
+//   call spanning two voxels' boxes no longer measures the space between them. (Measured after
+//   each row instead, the transients of half-edited boxes ratcheted L to 3.0 in
+//   FieldDrilling.TheEditsSavingsChangeNoValue and 7.1 in LipschitzBoundHoldsAfterTheEdits.)
 // - The same end: each sample's update depends only on its value, the removed voxel and the grid
 //   (the solid voxels listed around the removed voxel are listed again when a call resumes); the
 //   calls take the voxels, rows and samples in the order of one whole call, so while the grid does
-//   not change in between, every value and count (voxels, samples read, asked, raised) ends the
-//   same; the Lipschitz constant is at least the whole edit's (the calls re-measure every cell the
-//   whole edit does, some of them also at a pause). When the grid changes in between (drilling
+//   not change in between, every value and count (voxels, samples read, asked, raised, rows read,
+//   cells measured) ends the same, and so does the Lipschitz constant (the calls measure the same
+//   cells after the same rows as the whole edit; only the work differs: a voxel resumed at a row
+//   is charged its set-up again). When the grid changes in between (drilling
 //   goes on while the provider's queue drains), a sample reached later is evaluated on the later
 //   grid, as when the queue lags by whole voxels: the rule and the proofs above hold per call.
 // `FieldDrilling.ABudgetedEditEndsWhereTheWholeEditEnds` and
@@ -167,15 +182,26 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
   const double v_max = std::max(static_cast<double>(out_f), -static_cast<double>(in_f));
   const double ball = v_max + slack;
   bool complete = true;
-  // The box of the changed samples: the cell bound is measured once, at the end of the call
-  // (over all of `removed`, or up to where a budgeted call stops; the comment above says why that
-  // keeps lipschitz() a bound).
-  int lo[3] = {INT_MAX, INT_MAX, INT_MAX}, hi[3] = {-1, -1, -1};
   const int width = 2 * reach + 1;  // rows of a box along y (and planes along z)
-  const long scanned_before = stats->samples_scanned;
-  // Whether this call has read its budget (never without a cursor).
+  const long work_before = stats->work;
+  // Whether this call has spent its budget of work (never without a cursor, nor before the call
+  // has begun a row: every call makes progress, even when a voxel's set-up alone exceeds it).
+  bool began_row = false;
   const auto spent = [&] {
-    return cursor != nullptr && stats->samples_scanned - scanned_before >= budget;
+    return cursor != nullptr && began_row && stats->work - work_before >= budget;
+  };
+  // The rows with raises, (x_lo, x_hi, sy, sz): their cells are measured at the call's end (the
+  // comment above says why that keeps lipschitz() a bound), or earlier when the list is full.
+  constexpr int kChangedRows = 1024;  // 16 KB of stack
+  int changed[kChangedRows][4];
+  int changed_rows = 0;
+  const auto measure = [&] {
+    for (int r = 0; r < changed_rows; ++r) {
+      const int lo[3] = {changed[r][0], changed[r][2], changed[r][3]};
+      const int hi[3] = {changed[r][1], changed[r][2], changed[r][3]};
+      access.include_cells(lo, hi);
+    }
+    changed_rows = 0;
   };
   bool paused = false;
   for (std::size_t at = cursor != nullptr ? cursor->next : 0; at < removed.size() && !paused;
@@ -192,6 +218,7 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
       break;
     }
     // The removed voxel's solid neighbours U (header comment): at most 26 boxes.
+    stats->work += kFieldEditVoxelWeight;
     int near_lo[26][3] = {};
     int near_count = 0;
     {
@@ -222,10 +249,16 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
           paused = true;
           break;
         }
+        began_row = true;
         const int sy = s0[1] + dy;
         if (sy < 0 || sy >= m) continue;
         const double ey = std::max(std::abs(dy) - 1.0, 0.0);
         if (h * std::sqrt(ey * ey + ez * ez) > ball) continue;  // the row misses the ball
+        ++stats->rows_read;
+        stats->work += kFieldEditRowWeight;
+        // The x extent of this row's raises: the cells with one of them as a corner are
+        // re-measured once the row is done (header comment).
+        int raised_lo = INT_MAX, raised_hi = -1;
         // The row in segments of the field's bricks, each read only where its row bound lets a
         // sample pass the rule's test (header comment, "Only the samples a removal can change").
         const int x_first = std::max(0, s0[0] - reach), x_last = std::min(m - 1, s0[0] + reach);
@@ -248,6 +281,7 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
             const double to_cube = h * std::sqrt(ex * ex + ey * ey + ez * ez);
             if (to_cube > ball) continue;
             ++stats->samples_scanned;
+            ++stats->work;
             const float old = access.at(sx, sy, sz);
             if (old >= out_f) continue;  // at the outside clamp: a max cannot raise it
             if (to_cube > std::abs(static_cast<double>(old)) + slack) continue;
@@ -286,6 +320,7 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
                 ++stats->samples_bounded;  // the query's phi <= v(s): no raise (header comment)
                 continue;
               }
+              stats->work += kFieldEditQueryWeight;
               d = access.distance(sx, sy, sz, p, std::min(listed, c_out));
             }
             if (!(d > old)) continue;
@@ -295,12 +330,24 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
               continue;
             }
             ++stats->samples_raised;
-            const int s[3] = {sx, sy, sz};
-            for (int a = 0; a < 3; ++a) {
-              lo[a] = std::min(lo[a], s[a]);
-              hi[a] = std::max(hi[a], s[a]);
-            }
+            raised_lo = std::min(raised_lo, sx);
+            raised_hi = sx;
           }
+        }
+        if (raised_hi >= 0) {  // the cells with a corner among this row's raises: charged now,
+                               // measured at the call's end (or when the list is full)
+          const long cells = static_cast<long>(std::min(m - 2, raised_hi) -
+                                               std::max(0, raised_lo - 1) + 1) *
+                             (std::min(m - 2, sy) - std::max(0, sy - 1) + 1) *
+                             (std::min(m - 2, sz) - std::max(0, sz - 1) + 1);
+          stats->cells_measured += cells;
+          stats->work += field_edit_cell_work(cells);
+          if (changed_rows == kChangedRows) measure();
+          changed[changed_rows][0] = raised_lo;
+          changed[changed_rows][1] = raised_hi;
+          changed[changed_rows][2] = sy;
+          changed[changed_rows][3] = sz;
+          ++changed_rows;
         }
       }
     }
@@ -310,7 +357,7 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
     cursor->next = removed.size();
     cursor->row = 0;
   }
-  if (hi[0] >= 0) access.include_cells(lo, hi);
+  measure();
   return complete;
 }
 

@@ -136,13 +136,15 @@ bool ToothContactProvider::edit_field(SampledField* field, std::span<const std::
 
 void ToothContactProvider::edit_queued_voxels() {
   // The ring's queued voxels in at most two contiguous runs (before and after its end), the
-  // second with what the first left of the budget. A call that finishes its run read fewer than
-  // its budget at its last row's start, so the two read at most budget + 2R + 1 together.
+  // second with what the first left of the budget. A call that finishes its run had spent less
+  // than its budget at its last step's start, and the second is begun only with more than a
+  // voxel's set-up left, so the two spend at most max(budget - 1, kFieldEditVoxelWeight) +
+  // field_edit_step_work(R) together (field_edit_core.h).
   const std::size_t capacity = edit_queue_.size();
   long left = field_edit_budget_;
   while (edit_count_ > 0 && left > 0) {
     const std::size_t run = std::min(edit_count_, capacity - edit_head_);
-    const long read_before = field_edits_.samples_scanned;
+    const long work_before = field_edits_.work;
     edit_cursor_.next = 0;  // the run starts at the queue's head (edit_cursor_.row: where in it)
     if (!edit_field(edited_field_, std::span<const std::size_t>(&edit_queue_[edit_head_], run),
                     &field_edits_, &edit_cursor_, left)) {
@@ -153,7 +155,10 @@ void ToothContactProvider::edit_queued_voxels() {
     edit_head_ = (edit_head_ + done) % capacity;
     edit_count_ -= done;
     if (done < run) break;  // paused inside the run: the budget is spent
-    left -= field_edits_.samples_scanned - read_before;
+    left -= field_edits_.work - work_before;
+    // The second run's first row is begun whatever is left (field_edit_core.h): only with room
+    // for its voxel's set-up below the budget, so the bound above holds.
+    if (left <= kFieldEditVoxelWeight) break;
   }
   if (edit_count_ == 0) edit_head_ = 0;
 }
@@ -161,7 +166,7 @@ void ToothContactProvider::edit_queued_voxels() {
 void ToothContactProvider::set_field_edit_rate(double samples_per_second) {
   if (!(samples_per_second > 0.0)) {
     throw InputError("field edit rate " + std::to_string(samples_per_second) +
-                     " samples/s: expected > 0 (+inf: no budget)");
+                     " units of work/s: expected > 0 (+inf: no budget)");
   }
   field_edit_rate_ = samples_per_second;
 }

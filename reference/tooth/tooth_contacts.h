@@ -133,11 +133,14 @@ class ToothContactProvider : public ToothProviderBase {
   // face of radius r_A at depth delta: delta / (r_A + delta).
   const AnchoredSpring& anchored_spring() const { return anchored_; }
   // kField with drilling: drill() queues the voxels it removed (a ring of kFieldEditQueue), and
-  // each contacts() call first subtracts queued ones from the field, reading about budget(T)
-  // samples (edit_field_for_removed_voxels with this provider's cursor: at most budget(T) + 2R + 1,
-  // R = SampledField::edit_radius()), resuming where the last call stopped, even in the middle of
-  // a removed voxel's box, and advancing the queue by the voxels it finished. budget(T) =
-  // max(1, floor(rate T)) samples, rate = field_edit_rate() [samples/s], T the tick's length (the
+  // each contacts() call first subtracts queued ones from the field, spending about budget(T)
+  // units of work (edit_field_for_removed_voxels with this provider's cursor: at most
+  // max(budget(T) - 1, kFieldEditVoxelWeight) + field_edit_step_work(R), R =
+  // SampledField::edit_radius(); a unit is a sample read, and the
+  // octree queries, rows, voxels and re-measured cells are charged by their weights,
+  // field_contact.h), resuming where the last call stopped, even in the middle of a removed
+  // voxel's box, and advancing the queue by the voxels it finished. budget(T) = max(1, floor(rate
+  // T)) units, rate = field_edit_rate() [units/s], T the tick's length (the
   // last drill() call's), so the edit's share of a tick's time is the same at every servo rate:
   // a contact tick's edit stays within its stated bound whatever the tick removed and however
   // many samples a removed voxel's edit reads (docs/derivations/field_contact.md §5 "Per tick").
@@ -149,15 +152,19 @@ class ToothContactProvider : public ToothProviderBase {
   std::size_t field_edits_pending() const { return edit_count_; }
   long field_edit_shortfalls() const { return field_edit_shortfalls_; }
   bool field_edit_shortfall() const override { return field_edit_shortfalls_ > 0; }
-  // The default rate: 10 % of a tick's time at the fast twin's measured cost per sample read
-  // (docs/derivations/field_contact.md §5 "Per tick"): 500 samples a tick at 1 kHz, 62 at 8 kHz.
-  static constexpr double kFieldEditSamplesPerSecond = 5e5;
+  // The default rate, in units of work a second (the name predates the weights: a unit is a
+  // sample read, field_contact.h): 1000 units a tick at 1 kHz, 125 at 8 kHz, about 420 samples
+  // a tick (1 kHz) at the measured mix of 2.38 units a sample read, against the earlier budget's
+  // 500 samples; the queue keeps up with the drill scene's cutting as before
+  // (docs/derivations/field_contact.md §5 "Per tick", docs/benchmarks.md "The field edit's
+  // budget of work per tick").
+  static constexpr double kFieldEditSamplesPerSecond = 1e6;
   static constexpr std::size_t kFieldEditQueue = 8192;
   double field_edit_rate() const { return field_edit_rate_; }
-  // The samples the next contacts() call's edit may read, + 2R + 1 (budget(T) above).
+  // The work the next contacts() call's edit may spend (budget(T) above; the bound adds a step).
   long field_edit_budget() const { return field_edit_budget_; }
-  // Setup only (not in the tick). The edit's rate [samples/s]: > 0, +infinity for no budget (each
-  // call subtracts every queued voxel); InputError otherwise.
+  // Setup only (not in the tick). The edit's rate [units of work/s]: > 0, +infinity for no
+  // budget (each call subtracts every queued voxel); InputError otherwise.
   void set_field_edit_rate(double samples_per_second);
   // Setup only, with nothing queued: room for `capacity` >= 1 queued voxels (allocates; for tests
   // that force a full queue); InputError otherwise.

@@ -303,6 +303,9 @@ TEST(FastFieldProvider, EqualsTheReferenceProviderWhileDrillingEditsTheField) {
   EXPECT_EQ(a.samples_queried, b.samples_queried);
   EXPECT_EQ(a.samples_raised, b.samples_raised);
   EXPECT_EQ(a.samples_lost, b.samples_lost);
+  EXPECT_EQ(a.rows_read, b.rows_read);
+  EXPECT_EQ(a.cells_measured, b.cells_measured);
+  EXPECT_EQ(a.work, b.work);
   EXPECT_GT(a.samples_raised, 0);
   EXPECT_EQ(reference.field_edit_shortfalls(), fast_provider.field_edit_shortfalls());
   EXPECT_EQ(fast_provider.bricks().lipschitz(), field_r.lipschitz());
@@ -320,8 +323,9 @@ TEST(FastFieldProvider, EqualsTheReferenceProviderWhileDrillingEditsTheField) {
   EXPECT_EQ(tooth_r.grid().voxels, tooth_f.grid().voxels);
   EXPECT_GT(fast_provider.solid().certified(), kFree);  // free space read no sample
   const fast::VoxelDistanceCache& cache = fast_provider.distance_cache();
-  std::printf("edit queries: %ld answered by the kept distances, %ld asked\n", cache.hits(),
-              cache.misses());
+  std::printf("edit queries: %ld answered by the kept distances, %ld asked; %ld rows read, %ld "
+              "cells re-measured, %ld units of work (field_contact.h)\n",
+              cache.hits(), cache.misses(), b.rows_read, b.cells_measured, b.work);
   EXPECT_GT(cache.hits(), 0);
   EXPECT_EQ(a.samples_bounded, b.samples_bounded);
   EXPECT_EQ(cache.hits() + cache.misses(), b.samples_queried - b.samples_bounded);

@@ -258,7 +258,9 @@ TEST(FieldDrilling, AProbeInTheFreshHoleTouchesItsFloor) {
 // read; inside samples minus the distance to the removed cube, every outside candidate asked
 // with reach c_out) to a copy of
 // the field, call by call on the same tooth, ends with the copy equal to the edited field at
-// every sample, the same samples raised and the same Lipschitz constant.
+// every sample, the same samples raised and the same Lipschitz constant (the rule re-measures the
+// bounding box of a call's raises; the edit only the cells with a raised corner, the same maximum
+// since every other cell of the box was bounded by lipschitz() already).
 class RuleAsWritten final : public ToothContactProvider {
  public:
   RuleAsWritten(VoxelTooth& tooth, const DrillParams* drill, SampledField* field,
@@ -393,11 +395,13 @@ void edit_region(const SampledField& f, const VoxelGrid& grid,
 // A budgeted edit (field_edit_core.h FieldEditCursor) ends where the whole edit ends: a cap of the
 // sphere (the solid voxels within 0.45 mm of its top) is removed from the tooth at once, then
 // subtracted from one copy of the field in one call and from others in calls of a budget of 1
-// sample (one row a call), 97 and 300 samples, and no budget (LONG_MAX): every call reads at most
-// budget + 2R + 1 samples, lipschitz() bounds every cell after every call (brute force over the
+// unit of work (one row a call), 97 and 300, and no budget (LONG_MAX): every call spends at most
+// max(budget - 1, 4) + field_edit_step_work(R) units of work (field_contact.h) and reads at most
+// budget + 2R samples, lipschitz() bounds every cell after every call (brute force over the
 // cells the edit can change; the others are the build's, bounded before), and at the end every
-// sample, every count and the raised samples agree with the whole edit, and the budgeted copy's
-// Lipschitz constant is at least the whole edit's.
+// sample, every count (but the work: a resumed voxel's set-up is charged again) and the raised
+// samples agree with the whole edit, and the budgeted copy's Lipschitz constant is at least the
+// whole edit's.
 struct PlainAccess {
   SampledField* field;
   const VoxelTooth& tooth;
@@ -435,26 +439,36 @@ TEST(FieldDrilling, ABudgetedEditEndsWhereTheWholeEditEnds) {
   int lo[3], hi[3];
   edit_region(whole, grid, removed, lo, hi);
   const long row = 2 * whole.edit_radius() + 1;
+  const long step = field_edit_step_work(whole.edit_radius());
   for (const long budget : {1L, 97L, 300L, LONG_MAX}) {
     SampledField budgeted = built;
     budgeted.reserve_spare_bricks(256);
     FieldEditStats b;
     PlainAccess access_b{&budgeted, tooth};
     field_edit_detail::FieldEditCursor cursor;
-    long calls = 0, most = 0;
+    long calls = 0, most = 0, most_work = 0;
     double worst = 0.0;  // the largest cell bound over lipschitz() after any call
     while (cursor.next < removed.size()) {
-      const long before = b.samples_scanned;
+      const long before = b.samples_scanned, work_before = b.work;
       ASSERT_TRUE(field_edit_detail::edit_field(budgeted, tooth, removed, access_b, &b, &cursor,
                                                 budget));
       most = std::max(most, b.samples_scanned - before);
+      most_work = std::max(most_work, b.work - work_before);
       worst = std::max(worst, max_cell_lipschitz(budgeted, lo, hi) / budgeted.lipschitz());
       ASSERT_LT(++calls, 1000000);
     }
-    std::printf("%zu voxels removed at once, budget %ld: %ld calls, at most %ld samples read a "
-                "call (whole edit: %ld); largest cell bound / lipschitz() after a call %.4f\n",
-                removed.size(), budget, calls, most, a.samples_scanned, worst);
-    EXPECT_LE(most, budget == LONG_MAX ? a.samples_scanned : budget + row) << budget;
+    std::printf("%zu voxels removed at once, budget %ld: %ld calls, at most %ld samples read and "
+                "%ld work a call (whole edit: %ld, %ld); largest cell bound / lipschitz() after a "
+                "call %.4f\n",
+                removed.size(), budget, calls, most, most_work, a.samples_scanned, a.work, worst);
+    EXPECT_LE(most, budget == LONG_MAX ? a.samples_scanned : std::max(budget, 1L) + row - 1)
+        << budget;
+    // The work's bound (field_edit_core.h): a step is begun only below the budget, but for the
+    // call's first row, which may follow a voxel's set-up.
+    EXPECT_LE(most_work,
+              budget == LONG_MAX ? a.work : std::max(budget - 1, kFieldEditVoxelWeight) + step)
+        << budget;
+    EXPECT_GT(b.cells_measured, 0) << budget;
     EXPECT_LE(worst, 1.0) << budget;
     if (budget < 1000) {
       EXPECT_GT(calls, static_cast<long>(removed.size())) << budget;
@@ -463,6 +477,9 @@ TEST(FieldDrilling, ABudgetedEditEndsWhereTheWholeEditEnds) {
     EXPECT_EQ(a.samples_scanned, b.samples_scanned) << budget;
     EXPECT_EQ(a.samples_queried, b.samples_queried) << budget;
     EXPECT_EQ(a.samples_raised, b.samples_raised) << budget;
+    EXPECT_EQ(a.rows_read, b.rows_read) << budget;
+    EXPECT_EQ(a.cells_measured, b.cells_measured) << budget;
+    EXPECT_GE(b.work, a.work) << budget;  // a resumed voxel's set-up is charged again
     EXPECT_EQ(samples_differing(whole, budgeted), 0) << budget;
     EXPECT_GE(budgeted.lipschitz(), whole.lipschitz()) << budget;
   }
@@ -471,11 +488,12 @@ TEST(FieldDrilling, ABudgetedEditEndsWhereTheWholeEditEnds) {
   EXPECT_LE(max_cell_lipschitz(whole, all_lo, all_hi), whole.lipschitz());
 }
 
-// The provider's budget (ToothContactProvider::set_field_edit_rate: budget(T) = rate T samples a
-// contacts() call): the bur presses once into the sphere with a cutting coefficient that removes
-// every voxel it touches in that tick (a burst of removals), then waits away from the tooth while
-// the queue drains. At a budget of 1 sample (a row a call), 300 samples and none, every call reads
-// at most budget + 2R + 1 samples, lipschitz() bounds every cell after every call (brute force),
+// The provider's budget (ToothContactProvider::set_field_edit_rate: budget(T) = rate T units of
+// work a contacts() call): the bur presses once into the sphere with a cutting coefficient that
+// removes every voxel it touches in that tick (a burst of removals), then waits away from the
+// tooth while the queue drains. At a budget of 1 (a row a call), 300 and none, every call spends
+// at most max(budget - 1, 4) + field_edit_step_work(R) and reads at most budget + 2R samples,
+// lipschitz() bounds every cell after every call (brute force),
 // nothing allocates, and once the queue is empty every sample of the field equals the unbudgeted
 // run's, with the same counts: the grid no longer changes while the queue drains.
 TEST(FieldDrilling, TheProvidersBudgetedEditEndsWhereTheWholeEditEnds) {
@@ -487,7 +505,7 @@ TEST(FieldDrilling, TheProvidersBudgetedEditEndsWhereTheWholeEditEnds) {
   struct Run {
     SampledField field;
     FieldEditStats edits;
-    long removed = 0, calls = 0, most = 0, allocations = 0;
+    long removed = 0, calls = 0, most = 0, most_work = 0, allocations = 0;
     double worst = 0.0;
   };
   const auto run = [&](double rate) {
@@ -509,9 +527,11 @@ TEST(FieldDrilling, TheProvidersBudgetedEditEndsWhereTheWholeEditEnds) {
     int lo[3], hi[3];
     edit_region(out.field, grid, removed, lo, hi);
     const long row = 2 * out.field.edit_radius() + 1;
+    const long step = field_edit_step_work(out.field.edit_radius());
     pose.x = kTop + Vec3(0, 0, 3e-3);  // away: nothing more is drilled
     while (provider.field_edits_pending() > 0) {
       const long before = provider.field_edits().samples_scanned;
+      const long work_before = provider.field_edits().work;
       long allocations = 0;
       {
         testing::AllocationScope scope;
@@ -521,8 +541,11 @@ TEST(FieldDrilling, TheProvidersBudgetedEditEndsWhereTheWholeEditEnds) {
       out.allocations += allocations;
       const long read = provider.field_edits().samples_scanned - before;
       out.most = std::max(out.most, read);
-      if (provider.field_edit_budget() < LONG_MAX - row) {  // else no budget
-        EXPECT_LE(read, provider.field_edit_budget() + row);
+      const long work = provider.field_edits().work - work_before;
+      out.most_work = std::max(out.most_work, work);
+      if (provider.field_edit_budget() < LONG_MAX - step) {  // else no budget
+        EXPECT_LE(read, provider.field_edit_budget() + row - 1);
+        EXPECT_LE(work, std::max(provider.field_edit_budget() - 1, kFieldEditVoxelWeight) + step);
       }
       out.worst = std::max(out.worst, max_cell_lipschitz(out.field, lo, hi) / out.field.lipschitz());
       if (++out.calls > 1000000) break;
@@ -541,9 +564,9 @@ TEST(FieldDrilling, TheProvidersBudgetedEditEndsWhereTheWholeEditEnds) {
   EXPECT_EQ(whole.allocations, 0);
   for (const double samples : {1.0, 300.0}) {
     const Run b = run(samples / kT);  // budget(kT) = samples
-    std::printf("budget %.0f samples a call: %ld calls, at most %ld samples read a call; largest "
-                "cell bound / lipschitz() after a call %.4f\n",
-                samples, b.calls, b.most, b.worst);
+    std::printf("budget %.0f a call: %ld calls, at most %ld samples read and %ld work a call; "
+                "largest cell bound / lipschitz() after a call %.4f\n",
+                samples, b.calls, b.most, b.most_work, b.worst);
     EXPECT_EQ(b.removed, whole.removed);
     EXPECT_GT(b.calls, samples == 1.0 ? whole.removed : 1);
     EXPECT_LE(b.worst, 1.0);
@@ -552,6 +575,7 @@ TEST(FieldDrilling, TheProvidersBudgetedEditEndsWhereTheWholeEditEnds) {
     EXPECT_EQ(b.edits.samples_scanned, whole.edits.samples_scanned);
     EXPECT_EQ(b.edits.samples_queried, whole.edits.samples_queried);
     EXPECT_EQ(b.edits.samples_raised, whole.edits.samples_raised);
+    EXPECT_EQ(b.edits.cells_measured, whole.edits.cells_measured);
     EXPECT_EQ(samples_differing(b.field, whole.field), 0) << samples;
     EXPECT_GE(b.field.lipschitz(), whole.field.lipschitz());
   }
