@@ -40,6 +40,12 @@ Eigen::Matrix<typename A::Scalar, 3, 1> cross(const Eigen::MatrixBase<A>& a_in,
   return {a(1) * b(2) - a(2) * b(1), a(2) * b(0) - a(0) * b(2), a(0) * b(1) - a(1) * b(0)};
 }
 
+// The same for two plain vectors, read in place (no copies).
+template <typename T>
+Eigen::Matrix<T, 3, 1> cross(const Eigen::Matrix<T, 3, 1>& a, const Eigen::Matrix<T, 3, 1>& b) {
+  return {a(1) * b(2) - a(2) * b(1), a(2) * b(0) - a(0) * b(2), a(0) * b(1) - a(1) * b(0)};
+}
+
 // A symmetric 3x3 matrix by its 6 distinct entries.
 template <typename T>
 struct Sym3 {
@@ -47,8 +53,12 @@ struct Sym3 {
 
   // R diag(d) R^T
   static Sym3 rotated(const Eigen::Matrix<T, 3, 3>& R, const Eigen::Matrix<T, 3, 1>& d) {
+    T Rd[3][3];  // R diag(d), formed once for the six entries
+    for (int a = 0; a < 3; ++a) {
+      for (int c = 0; c < 3; ++c) Rd[a][c] = R(a, c) * d(c);
+    }
     auto e = [&](int a, int b) {
-      return R(a, 0) * d(0) * R(b, 0) + R(a, 1) * d(1) * R(b, 1) + R(a, 2) * d(2) * R(b, 2);
+      return Rd[a][0] * R(b, 0) + Rd[a][1] * R(b, 1) + Rd[a][2] * R(b, 2);
     };
     return {e(0, 0), e(1, 1), e(2, 2), e(0, 1), e(0, 2), e(1, 2)};
   }
