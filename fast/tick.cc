@@ -55,9 +55,9 @@ void unneeded_decomposition(const PipelineModel& m, PipelineData& d) {
 }
 
 // The decomposition's feed-forward on its block structure (fast/decomposition.h) when M_d and
-// D_d are diagonal; the reference's step otherwise.
+// D_d are diagonal (PipelineModel::tool_diagonal, decided at setup); the reference's step otherwise.
 bool pd_step(const PipelineModel& m, PipelineData& d) {
-  if (!pd_tool_is_diagonal(m.tool)) return reference::detail::pd_step(m, d);
+  if (!m.tool_diagonal) return reference::detail::pd_step(m, d);
   const TickResult& r = d.r;
   const Mat6 M_joint = reference::detail::model_joint_inertia(m, d, d.dev.M);
   Mat6 JM;

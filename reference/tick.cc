@@ -38,6 +38,7 @@ PipelineModel make_pipeline_model(const SixDofDeviceModel& device, const Pipelin
   }
   m.friction = config.friction;
   m.tool = config.tool;
+  m.tool_diagonal = config.tool.M_d.isDiagonal(0.0) && config.tool.D_d.isDiagonal(0.0);
   if (config.method == Method::kPmiPd) {
     m.tool_Md_llt.compute(config.tool.M_d);
     if (m.tool_Md_llt.info() != Eigen::Success || !config.tool.M_d.allFinite()) {
