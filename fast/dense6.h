@@ -132,6 +132,21 @@ inline bool cholesky6(const Mat6& A, Llt6* f) {
   return true;
 }
 
+// x = A^-1 b from A's factor (L y = b forward, L^T x = y backward; x may alias b).
+inline void cholesky6_solve(const Llt6& f, const Vec6& b, Vec6* x) {
+  const Mat6& l = f.l;
+  Vec6 y = b;
+  for (int k = 0; k < 6; ++k) {
+    y[k] *= f.inv_diag[k];
+    for (int i = k + 1; i < 6; ++i) y[i] -= l(i, k) * y[k];
+  }
+  for (int k = 5; k >= 0; --k) {
+    for (int j = k + 1; j < 6; ++j) y[k] -= l(j, k) * y[j];
+    y[k] *= f.inv_diag[k];
+  }
+  *x = y;
+}
+
 // B <- A^-1 B from A's factor (L Y = B forward, L^T X = Y backward), a row of all six right-hand
 // sides at a time on a row-major local, as lu6_inverse.
 inline void cholesky6_solve_in_place(const Llt6& f, Mat6* B) {

@@ -1,10 +1,12 @@
 #include "fast/tick.h"
 
 #include <limits>
+#include <typeinfo>
 
 #include "fast/contact.h"
 #include "fast/decomposition.h"
 #include "fast/dense6.h"
+#include "fast/phantom/phantom_model.h"
 #include "fast/pmi.h"
 #include "reference/decomposition.h"
 #include "reference/grip_detector.h"
@@ -53,9 +55,9 @@ void unneeded_decomposition(const PipelineModel& m, PipelineData& d) {
 }
 
 // The decomposition's feed-forward on its block structure (fast/decomposition.h) when M_d and
-// D_d are diagonal; the reference's step otherwise.
+// D_d are diagonal (PipelineModel::tool_diagonal, decided at setup); the reference's step otherwise.
 bool pd_step(const PipelineModel& m, PipelineData& d) {
-  if (!pd_tool_is_diagonal(m.tool)) return reference::detail::pd_step(m, d);
+  if (!m.tool_diagonal) return reference::detail::pd_step(m, d);
   const TickResult& r = d.r;
   const Mat6 M_joint = reference::detail::model_joint_inertia(m, d, d.dev.M);
   Mat6 JM;
@@ -72,9 +74,15 @@ bool pd_step(const PipelineModel& m, PipelineData& d) {
   return true;
 }
 
-// J1 = J_t^-1 by fast/dense6.h's LU; a singular J_t leaves a non-finite J1, which the stage reports
-// as the reference's does.
-void invert_jacobian(const Mat6& J_t, PipelineData& d) {
+// J1 = J_t^-1: on the Phantom's block structure when the device is fast::PhantomModel and its
+// gimbal's joints meet at a point (fast/phantom/phantom_model.h section 6), by fast/dense6.h's LU
+// otherwise; a singular J_t leaves a non-finite J1, which the stage reports as the reference's does.
+void invert_jacobian(const PipelineModel& m, const Mat6& J_t, PipelineData& d) {
+  const SixDofDeviceModel& device = *m.device;
+  if (typeid(device) == typeid(PhantomModel) &&
+      static_cast<const PhantomModel&>(device).jacobian_inverse(J_t, d.dev.pose.R, &d.J1)) {
+    return;
+  }
   Lu6 lu;
   if (!lu6(J_t, &lu)) {
     d.J1.setConstant(std::numeric_limits<double>::quiet_NaN());
@@ -83,12 +91,22 @@ void invert_jacobian(const Mat6& J_t, PipelineData& d) {
   lu6_inverse(lu, &d.J1);
 }
 
+// x = M^-1 b by fast/dense6.h's Cholesky (the model acceleration of the encoder Kalman filter and
+// the loop-lag compensation).
+bool solve_inertia(const Mat6& M, const Vec6& b, Vec6* x) {
+  Llt6 llt;
+  if (!cholesky6(M, &llt)) return false;
+  cholesky6_solve(llt, b, x);
+  return true;
+}
+
 }  // namespace
 
 // The device model does the work (fast::PhantomModel with the fast pipeline); the stage around it
-// (finite checks, V1, the hand's terms) is the reference's; J1 = J_t^-1 is fast/dense6.h's.
+// (finite checks, V1, the hand's terms) is the reference's; J1 = J_t^-1 and the inertia's solve
+// are fast/ kernels (above).
 TickStatus device_terms(const PipelineModel& m, PipelineData& d) {
-  return reference::detail::device_terms_with(m, d, invert_jacobian);
+  return reference::detail::device_terms_with(m, d, invert_jacobian, solve_inertia);
 }
 
 // Two 6-vector observer updates: already allocation-free and O(36) flops; shared. Skipped (by the

@@ -38,6 +38,7 @@ PipelineModel make_pipeline_model(const SixDofDeviceModel& device, const Pipelin
   }
   m.friction = config.friction;
   m.tool = config.tool;
+  m.tool_diagonal = config.tool.M_d.isDiagonal(0.0) && config.tool.D_d.isDiagonal(0.0);
   if (config.method == Method::kPmiPd) {
     m.tool_Md_llt.compute(config.tool.M_d);
     if (m.tool_Md_llt.info() != Eigen::Success || !config.tool.M_d.allFinite()) {
@@ -180,20 +181,18 @@ Vec6 model_joint_torque(const PipelineModel& m, const PipelineData& d, const Dev
 }
 
 Vec6 model_joint_acceleration(const PipelineModel& m, const PipelineData& d, const DeviceTerms& t,
-                              const Mat6& M, bool with_friction) {
-  const Eigen::LLT<Mat6> llt(M);
+                              const Mat6& M, bool with_friction, detail::SolveInertia solve) {
   Vec6 accel = Vec6::Zero();
   Vec6 b = model_joint_torque(m, d, t);
   if (with_friction) b -= t.tau_f;
-  if (llt.info() == Eigen::Success) accel = llt.solve(b);
-  if (!accel.allFinite()) accel.setZero();
+  if (!solve(M, b, &accel) || !accel.allFinite()) accel.setZero();
   return accel;
 }
 
 // The encoder Kalman filter's step (reference/encoder_kalman.h): predicts with the model terms of
 // the tick that just ended (d.dev, the hypothesis in force, the torque applied over it and the
 // observer's estimate), corrects with the sample, and puts the estimate in d.q, d.qd.
-void encoder_kalman_step(const PipelineModel& m, PipelineData& d) {
+void encoder_kalman_step(const PipelineModel& m, PipelineData& d, detail::SolveInertia solve) {
   if (!d.enc.ready) {
     encoder_kalman_reset(d.q, d.qd, m.encoder_quantum, d.enc);
   } else {
@@ -220,7 +219,7 @@ void encoder_kalman_step(const PipelineModel& m, PipelineData& d) {
       // Set-valued friction (8.7): the joints that stick predict no motion at all.
       accel = (v_plus - d.enc.qd) / T;
     } else {
-      accel = model_joint_acceleration(m, d, t, M, p.model_friction);
+      accel = model_joint_acceleration(m, d, t, M, p.model_friction, solve);
     }
     encoder_kalman_update(d.q, d.qd, m.encoder_quantum, accel, sigma_a, T, d.enc);
   }
@@ -268,20 +267,27 @@ void update_shape_control(const PipelineModel& m, PipelineData& d, const Vec6& t
 
 namespace {
 
-void invert_jacobian(const Mat6& J_t, PipelineData& d) {
+void invert_jacobian(const PipelineModel&, const Mat6& J_t, PipelineData& d) {
   d.J_t_lu.compute(J_t);
   d.J1 = d.J_t_lu.inverse();
+}
+
+bool solve_inertia(const Mat6& M, const Vec6& b, Vec6* x) {
+  const Eigen::LLT<Mat6> llt(M);
+  if (llt.info() != Eigen::Success) return false;
+  *x = llt.solve(b);
+  return true;
 }
 
 }  // namespace
 
 TickStatus device_terms(const PipelineModel& m, PipelineData& d) {
-  return detail::device_terms_with(m, d, invert_jacobian);
+  return detail::device_terms_with(m, d, invert_jacobian, solve_inertia);
 }
 
 TickStatus detail::device_terms_with(const PipelineModel& m, PipelineData& d,
-                                     InvertJacobian invert) {
-  if (m.encoder_kalman) encoder_kalman_step(m, d);
+                                     InvertJacobian invert, SolveInertia solve) {
+  if (m.encoder_kalman) encoder_kalman_step(m, d, solve);
   // One pass of the device model: x1, R1, J_t (V1 = J_t qd), M, C^T qd, g, tau_f   (2.1), (2.2)
   DeviceTerms& t = d.dev;
   m.device->terms(d.q, d.qd, m.grasp, t);
@@ -291,7 +297,7 @@ TickStatus detail::device_terms_with(const PipelineModel& m, PipelineData& d,
     return TickStatus::kDeviceModelFailure;
   }
   // J1 = J_t^-1 (2.2): the one inverse a tick needs (observer wrench, device inertia).
-  invert(t.J_t, d);
+  invert(m, t.J_t, d);
   if (!d.J1.allFinite()) return TickStatus::kDeviceModelFailure;
   d.r.device = t.pose;
   d.r.V1.noalias() = t.J_t * d.qd;  // V1 = J_t qd                                   (2.2)
@@ -301,7 +307,7 @@ TickStatus detail::device_terms_with(const PipelineModel& m, PipelineData& d,
     // at the midpoint of the coming tick; the observer and the hand's terms keep the measured one.
     const double T_last = d.t > d.t_prev ? d.t - d.t_prev : d.T;
     const Vec6 accel =
-        model_joint_acceleration(m, d, t, detail::model_joint_inertia(m, d, t.M), true);
+        model_joint_acceleration(m, d, t, detail::model_joint_inertia(m, d, t.M), true, solve);
     d.r.V1.noalias() = t.J_t * (d.qd + loop_velocity_lag(m.velocity_estimate, T_last, d.T) * accel);
   }
   return TickStatus::kOk;

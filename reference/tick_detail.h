@@ -15,12 +15,19 @@ inline Mat6 model_joint_inertia(const PipelineModel& m, const PipelineData& d, c
   return out;
 }
 
-// J1 = J_t^-1 (2.2) into d.J1 (the inverse a tick needs: observer wrench, device inertia); the
-// reference's with Eigen's partial-pivoting LU, the fast twin's with fast/dense6.h's.
-using InvertJacobian = void (*)(const Mat6& J_t, PipelineData& d);
+// J1 = J_t^-1 (2.2) into d.J1 (the inverse a tick needs: observer wrench, device inertia), with
+// d.dev the terms J_t came from; the reference's with Eigen's partial-pivoting LU, the fast
+// twin's on the device's block structure when it has one (fast/phantom) or fast/dense6.h's LU.
+using InvertJacobian = void (*)(const PipelineModel& m, const Mat6& J_t, PipelineData& d);
 
-// device_terms (reference/tick.h) with the Jacobian's inverse as a parameter.
-TickStatus device_terms_with(const PipelineModel& m, PipelineData& d, InvertJacobian invert);
+// x = M^-1 b for the device's joint inertia M (symmetric); false when M is not positive definite
+// (x then unspecified). The reference's with Eigen's LLT, the fast twin's with fast/dense6.h's.
+using SolveInertia = bool (*)(const Mat6& M, const Vec6& b, Vec6* x);
+
+// device_terms (reference/tick.h) with the Jacobian's inverse and the inertia's solve (the model
+// acceleration of the encoder Kalman filter and of the loop-lag compensation) as parameters.
+TickStatus device_terms_with(const PipelineModel& m, PipelineData& d, InvertJacobian invert,
+                             SolveInertia solve);
 
 // The passive decomposition's feed-forward (4.7) of a pmi-pd tick: fills d.pd_T1 and d.pd_T2 from
 // the device inertia under the hypothesis in force, the poses, r.V1, r.F1_hat and d.contact;

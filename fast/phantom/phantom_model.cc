@@ -3,6 +3,7 @@
 
 #include <Eigen/LU>
 #include <cmath>
+#include <limits>
 
 namespace dentsim::fast {
 
@@ -39,6 +40,12 @@ Eigen::Matrix<typename A::Scalar, 3, 1> cross(const Eigen::MatrixBase<A>& a_in,
   return {a(1) * b(2) - a(2) * b(1), a(2) * b(0) - a(0) * b(2), a(0) * b(1) - a(1) * b(0)};
 }
 
+// The same for two plain vectors, read in place (no copies).
+template <typename T>
+Eigen::Matrix<T, 3, 1> cross(const Eigen::Matrix<T, 3, 1>& a, const Eigen::Matrix<T, 3, 1>& b) {
+  return {a(1) * b(2) - a(2) * b(1), a(2) * b(0) - a(0) * b(2), a(0) * b(1) - a(1) * b(0)};
+}
+
 // A symmetric 3x3 matrix by its 6 distinct entries.
 template <typename T>
 struct Sym3 {
@@ -46,8 +53,12 @@ struct Sym3 {
 
   // R diag(d) R^T
   static Sym3 rotated(const Eigen::Matrix<T, 3, 3>& R, const Eigen::Matrix<T, 3, 1>& d) {
+    T Rd[3][3];  // R diag(d), formed once for the six entries
+    for (int a = 0; a < 3; ++a) {
+      for (int c = 0; c < 3; ++c) Rd[a][c] = R(a, c) * d(c);
+    }
     auto e = [&](int a, int b) {
-      return R(a, 0) * d(0) * R(b, 0) + R(a, 1) * d(1) * R(b, 1) + R(a, 2) * d(2) * R(b, 2);
+      return Rd[a][0] * R(b, 0) + Rd[a][1] * R(b, 1) + Rd[a][2] * R(b, 2);
     };
     return {e(0, 0), e(1, 1), e(2, 2), e(0, 1), e(0, 2), e(1, 2)};
   }
@@ -120,6 +131,8 @@ PhantomDynamics<T>::PhantomDynamics(const PhantomParams& params)
     b.at_parent_origin = tree.pos[i].isZero(0.0);
   }
   tip_ = tree.tip.cast<T>();
+  S_tip_ = phantom_detail::skew_t<double>(tree.tip);
+  gimbal_at_point_ = tree.pos[kGimbalPitch].isZero(0.0) && tree.pos[kGimbalRoll].isZero(0.0);
   armature_ = tree.armature.cast<T>();
   damping_ = tree.damping.cast<T>();
   coulomb_ = tree.coulomb.cast<T>();
@@ -311,6 +324,50 @@ void PhantomDynamics<T>::terms(const Vec6& q_in, const Vec6& qd_in, bool with_ja
   } else {
     out.J_t_dot.setZero();
   }
+}
+
+namespace {
+
+// A^-1 by the adjugate (cofactors over the determinant); a zero determinant gives a non-finite
+// inverse.
+Mat3 inverse3(const Mat3& a) {
+  Mat3 adj;  // adj(i, j) = cofactor (j, i)
+  adj(0, 0) = a(1, 1) * a(2, 2) - a(1, 2) * a(2, 1);
+  adj(1, 0) = a(1, 2) * a(2, 0) - a(1, 0) * a(2, 2);
+  adj(2, 0) = a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0);
+  adj(0, 1) = a(0, 2) * a(2, 1) - a(0, 1) * a(2, 2);
+  adj(1, 1) = a(0, 0) * a(2, 2) - a(0, 2) * a(2, 0);
+  adj(2, 1) = a(0, 1) * a(2, 0) - a(0, 0) * a(2, 1);
+  adj(0, 2) = a(0, 1) * a(1, 2) - a(0, 2) * a(1, 1);
+  adj(1, 2) = a(0, 2) * a(1, 0) - a(0, 0) * a(1, 2);
+  adj(2, 2) = a(0, 0) * a(1, 1) - a(0, 1) * a(1, 0);
+  const double det = a(0, 0) * adj(0, 0) + a(0, 1) * adj(1, 0) + a(0, 2) * adj(2, 0);
+  if (!(det != 0.0)) return Mat3::Constant(std::numeric_limits<double>::quiet_NaN());
+  return adj * (1.0 / det);
+}
+
+}  // namespace
+
+template <typename T>
+bool PhantomDynamics<T>::jacobian_inverse(const Mat6& J_t, const Mat3& R1, Mat6* J1) const {
+  if (!gimbal_at_point_) return false;
+  // Section 6 of the header.
+  Mat3 P;
+  P.noalias() = R1 * S_tip_;
+  const auto Aw = J_t.bottomLeftCorner<3, 3>();
+  Mat3 Vc = J_t.topLeftCorner<3, 3>();
+  Vc.noalias() += P * Aw;
+  const Mat3 X = inverse3(Vc);
+  const Mat3 Y = inverse3(J_t.bottomRightCorner<3, 3>());
+  Mat3 AwX, Z;
+  AwX.noalias() = Aw * X;
+  Z.noalias() = -Y * AwX;
+  J1->topLeftCorner<3, 3>() = X;
+  J1->topRightCorner<3, 3>().noalias() = X * P;
+  J1->bottomLeftCorner<3, 3>() = Z;
+  J1->bottomRightCorner<3, 3>() = Y;
+  J1->bottomRightCorner<3, 3>().noalias() += Z * P;
+  return true;
 }
 
 template <typename T>

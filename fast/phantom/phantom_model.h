@@ -55,6 +55,18 @@
 //
 // 5. tau_f: the reference's law, phantom_joint_friction (reference/phantom/phantom_model.h).
 //
+// 6. J1 = J_t^-1 on the Jacobian's block structure (jacobian_inverse), when the gimbal's three
+//    joints sit at one point p_c (pitch_pos = roll_pos = 0, as shipped). With r = x1 - p_c
+//    = R1 tip, every column of J_t = [Jv; Jw] (Jw in the tool frame) is the velocity vc of p_c
+//    plus the turn about it: Jv = vc + (R1 Jw) x r = vc - P Jw, P = S(r) R1 = R1 S(tip); the
+//    gimbal's columns move p_c not at all. In 3x3 blocks (arm q1..q3 | gimbal q4..q6):
+//        J_t = [I -P; 0 I] [Vc 0; Aw Gw],   Vc = Av + P Aw  (the velocity Jacobian of p_c),
+//        J1 = [X  X P; Z  Z P + Y],   X = Vc^-1, Y = Gw^-1, Z = -Y Aw X,
+//    two 3x3 inverses by their adjugates instead of a 6x6 LU (~200 multiplications, not ~300,
+//    and no pivot search). J_t is singular exactly when Vc (arm: stretched elbow, tip over the
+//    yaw axis) or Gw (gimbal lock) is; a zero determinant leaves J1 non-finite, as the LU's
+//    inverse of a singular J_t.
+//
 // Everything lives in fixed-size stack arrays: terms() neither allocates nor throws. The scalar
 // type T of the arithmetic is a template parameter: PhantomModel (double) is the model; a float
 // variant (PhantomModelFloat) exists only as a measured point on the time-vs-error curve.
@@ -82,6 +94,11 @@ class PhantomDynamics : public SixDofDeviceModel {
   // with_jacobian_rate (zero otherwise, as the reference). No allocation, no exception.
   void terms(const Vec6& q, const Vec6& qd, bool with_jacobian_rate,
              DeviceTerms& out) const override;
+
+  // J1 = J_t^-1 (section 6) from terms()' J_t and R1 (the pose's), when the gimbal's joints meet
+  // at a point; false (J1 untouched) otherwise, for the caller's general inverse. No allocation,
+  // no exception.
+  bool jacobian_inverse(const Mat6& J_t, const Mat3& R1, Mat6* J1) const;
 
   // The DeviceModel interface through terms(); q, qd must have 6 entries
   // (std::invalid_argument otherwise, as the reference adapter).
@@ -120,6 +137,8 @@ class PhantomDynamics : public SixDofDeviceModel {
   PhantomParams params_;
   std::array<Body, kPhantomTreeDof> body_;
   V3 tip_;
+  Mat3 S_tip_ = Mat3::Zero();     // S(tip) in double (section 6)
+  bool gimbal_at_point_ = false;  // pitch_pos = roll_pos = 0: section 6 applies
   V6 armature_, damping_, coulomb_;
   V6 coulomb_smoothing_;
   std::array<CoulombSign, 6> coulomb_sign_{};

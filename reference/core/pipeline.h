@@ -105,6 +105,9 @@ struct PipelineModel {
   // M_d = L L^T, factorised once (kPmiPd). Built on the identity so a model that never
   // factorises (every other method) still copies a defined info() (UBSan: Eigen leaves it unset).
   Eigen::LLT<Mat6> tool_Md_llt{Mat6::Identity()};
+  // M_d and D_d diagonal (every off-diagonal entry exactly zero), decided once with the tool: the
+  // fast twin's feed-forward then takes its block-structured path (fast/decomposition.h).
+  bool tool_diagonal = false;
   bool observe = false;               // an observer runs (gain set)
   Vec6 observer_gain = Vec6::Zero();  // L [1/s]
   ObserverInput observer_input;

@@ -17,8 +17,12 @@
 #include <cstdio>
 #include <random>
 #include <string>
+#include <vector>
 
+#include "fast/phantom/phantom_model.h"
 #include "reference/core/so3.h"
+#include "reference/phantom/phantom_params.h"
+#include "reference/tick.h"
 #include "reference/tools.h"
 #include "tests/support/random.h"
 
@@ -139,6 +143,32 @@ TEST(FastDecomposition, OnlyDiagonalToolsTakeTheSpecialisedPath) {
   tool = tool_preset("explorer");
   tool.D_d(5, 2) = 1e-6;
   EXPECT_FALSE(fast::pd_tool_is_diagonal(tool));
+}
+
+// The fast tick reads the check from PipelineModel::tool_diagonal, decided once at setup: it is
+// pd_tool_is_diagonal of the tool, for every preset and for tools off the diagonal in M_d or D_d
+// (one entry of 1e-300 is enough to leave the specialised path).
+TEST(FastDecomposition, SetupDecidesTheDiagonalToolOnceAsPdToolIsDiagonal) {
+  const fast::PhantomModel device(default_phantom_params());
+  std::vector<ToolDynamics> tools;
+  for (const std::string& name : tool_preset_names()) tools.push_back(tool_preset(name));
+  ToolDynamics t = tool_preset("handpiece");
+  t.M_d(2, 4) = t.M_d(4, 2) = 1e-300;
+  tools.push_back(t);
+  t = tool_preset("handpiece");
+  t.D_d(0, 3) = -1e-300;
+  tools.push_back(t);
+  int diagonal = 0;
+  for (const ToolDynamics& tool : tools) {
+    PipelineConfig config;
+    config.method = Method::kPmiPd;
+    config.observer_gain = Vec6::Constant(100.0);  // pmi-pd needs the observer
+    config.tool = tool;
+    const PipelineModel m = make_pipeline_model(device, config);
+    EXPECT_EQ(m.tool_diagonal, fast::pd_tool_is_diagonal(tool)) << tool.name;
+    diagonal += m.tool_diagonal ? 1 : 0;
+  }
+  EXPECT_EQ(diagonal, int(tools.size()) - 2);  // the presets are diagonal, the two changed not
 }
 
 }  // namespace

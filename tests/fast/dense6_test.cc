@@ -100,7 +100,7 @@ TEST(Dense6, LuRefusesASingularOrNonFiniteMatrix) {
 
 TEST(Dense6, CholeskySolveEqualsEigensToRoundOff) {
   std::mt19937 rng(11);
-  double worst_factor = 0.0, worst_solve = 0.0;
+  double worst_factor = 0.0, worst_solve = 0.0, worst_vector = 0.0;
   for (int trial = 0; trial < 500; ++trial) {
     const Mat6 A = random_spd(rng, trial < 250 ? 0.0 : 1.5);
     const Eigen::LLT<Mat6> ref(A);
@@ -114,9 +114,16 @@ TEST(Dense6, CholeskySolveEqualsEigensToRoundOff) {
     cholesky6_solve_in_place(L, &X);
     const double cond = A.norm() * ref.solve(Mat6::Identity()).norm();
     worst_solve = std::max(worst_solve, relative(X, Mat6(ref.solve(B))) / cond);
+    // The vector solve (the device inertia's, fast/tick.cc): the same forward and backward
+    // substitutions on one column, so equal to the matrix solve's column bitwise.
+    Vec6 x;
+    cholesky6_solve(L, B.col(2), &x);
+    EXPECT_EQ(x, X.col(2)) << trial;
+    worst_vector = std::max(worst_vector, relative(x, Vec6(ref.solve(B.col(2)))) / cond);
   }
   EXPECT_LE(worst_factor, 1e-12);
   EXPECT_LE(worst_solve, 1e-14);
+  EXPECT_LE(worst_vector, 1e-14);
 }
 
 TEST(Dense6, CholeskyOfADiagonalMatrixIsExact) {
@@ -128,6 +135,9 @@ TEST(Dense6, CholeskyOfADiagonalMatrixIsExact) {
   Mat6 X = Mat6::Identity();
   cholesky6_solve_in_place(L, &X);
   EXPECT_EQ(X, Mat6(dg.cwiseInverse().asDiagonal()));
+  Vec6 x;
+  cholesky6_solve(L, dg, &x);
+  EXPECT_EQ(x, Vec6::Ones());
 }
 
 TEST(Dense6, CholeskyRefusesWhatIsNotPositiveDefinite) {
