@@ -39,7 +39,7 @@ struct Structures {
     for (int k = 0; k < n; ++k) {
       for (int j = 0; j < n; ++j) {
         for (int i = 0; i < n; ++i) {
-          if (ref.codes.code[ref.grid().index(i, j, k)] == 0) continue;
+          if (ref.codes.code(ref.grid().index(i, j, k)) == 0) continue;
           acc.setValueOn(openvdb::Coord(i, j, k), true);
           octo->updateNode(octomap::OcTreeKey(static_cast<std::uint16_t>(32768 + i),
                                               static_cast<std::uint16_t>(32768 + j),

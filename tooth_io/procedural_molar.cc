@@ -178,7 +178,6 @@ CrownFrame molar_crown_frame(const MolarParams& params) {
 VoxelGrid voxelize_procedural_molar(const MolarParams& params, int resolution,
                                     VoxelizeReport* report) {
   VoxelGrid grid = make_grid(molar_bounds(params), resolution);
-  std::vector<std::uint8_t> pulp(grid.voxels.size(), 0);
   VoxelizeReport r;
   // Only the voxels whose centres may lie within the model's bounds are sampled.
   const Aabb b = molar_bounds(params);
@@ -194,15 +193,14 @@ VoxelGrid voxelize_procedural_molar(const MolarParams& params, int resolution,
       for (int i = lo[0]; i <= hi[0]; ++i) {
         const Vec3 c = grid.center(i, j, k);
         if (!molar_solid(params, c)) continue;
-        const std::size_t x = grid.index(i, j, k);
-        grid.voxels[x] = 1;
-        pulp[x] = molar_pulp(params, c) ? 1 : 0;
+        // Solid (any non-zero id); pulp marked kPulp, which assign_materials keeps.
+        grid.voxels[grid.index(i, j, k)] = molar_pulp(params, c) ? kPulp : kDentin;
         ++r.solid.interior_voxels;
       }
     }
   }
   r.crown = molar_crown_frame(params);
-  assign_materials(grid, pulp, r.crown, params.enamel_cusp_m * params.scale);
+  assign_materials(grid, {}, r.crown, params.enamel_cusp_m * params.scale);
   if (params.caries_lesion) {
     for (int k = lo[2]; k <= hi[2]; ++k) {
       for (int j = lo[1]; j <= hi[1]; ++j) {

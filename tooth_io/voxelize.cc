@@ -393,7 +393,8 @@ void assign_materials(VoxelGrid& grid, const std::vector<std::uint8_t>& pulp,
       for (int i = 0; i < n; ++i) {
         const std::size_t x = grid.index(i, j, k);
         if (grid.voxels[x] == 0) continue;
-        grid.voxels[x] = (!pulp.empty() && pulp[x] != 0) ? kPulp : kDentin;
+        grid.voxels[x] =
+            (grid.voxels[x] == kPulp || (!pulp.empty() && pulp[x] != 0)) ? kPulp : kDentin;
         const std::array<int, 3> p = {i, j, k};
         for (int d = 0; d < 3; ++d) {
           lo[d] = std::min(lo[d], p[d]);

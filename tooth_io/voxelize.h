@@ -83,7 +83,8 @@ CrownFrame estimate_crown_frame(const std::vector<std::uint8_t>& solid, const Vo
                                 double crown_fraction);
 
 // Stage 4: `grid.voxels` holds the solid (non-zero = solid) on entry and materials on exit.
-// `pulp` (N^3, may be empty) marks pulp voxels.
+// `pulp` (N^3, may be empty) marks pulp voxels; so does kPulp in `grid.voxels` on entry (the
+// procedural molar marks its pulp there: no second N^3 array, 128 MiB at 512^3; issue #30).
 // `enamel_cusp_m` is t_cusp above (t_top is unbounded when t_cusp >= H: the whole crown is enamel).
 void assign_materials(VoxelGrid& grid, const std::vector<std::uint8_t>& pulp,
                       const CrownFrame& crown, double enamel_cusp_m);

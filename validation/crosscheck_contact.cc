@@ -91,7 +91,7 @@ std::vector<Probe> draw_probes(const VoxelTooth& tooth, int count, double rho,
   const VoxelGrid& g = tooth.grid();
   std::vector<std::uint64_t> faces;
   for (std::size_t v = 0; v < g.voxels.size(); ++v) {
-    const std::uint8_t code = tooth.codes.code[v];
+    const std::uint8_t code = tooth.codes.code(v);
     for (int f = 0; f < 6; ++f) {
       if (code & (1u << f)) faces.push_back(8 * v + static_cast<std::uint64_t>(f));
     }

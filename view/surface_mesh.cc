@@ -13,7 +13,20 @@ SurfaceMesher::SurfaceMesher(const VoxelGrid& grid, int block_size, CutAway cut)
 
 SurfaceMesher::SurfaceMesher(const VoxelGrid& grid, const SampledField* field, int block_size,
                              CutAway cut)
-    : grid_(grid), block_size_(block_size), cut_(cut), field_(field) {
+    : SurfaceMesher(nullptr, grid, field, block_size, cut) {}
+
+SurfaceMesher SurfaceMesher::borrowing(const VoxelGrid& grid, const SampledField* field,
+                                       int block_size, CutAway cut) {
+  return SurfaceMesher(&grid, grid, field, block_size, cut);
+}
+
+SurfaceMesher::SurfaceMesher(const VoxelGrid* borrowed, const VoxelGrid& grid,
+                             const SampledField* field, int block_size, CutAway cut)
+    : own_(borrowed == nullptr ? grid : VoxelGrid()),
+      borrowed_(borrowed),
+      block_size_(block_size),
+      cut_(cut),
+      field_(field) {
   if (block_size < 4) throw std::invalid_argument("SurfaceMesher: block size must be >= 4");
   if (field_ != nullptr) {
     if (field_->padding() < 1 || field_->samples_per_axis() < grid.n + 2 * field_->padding() ||
@@ -31,7 +44,7 @@ SurfaceMesher::SurfaceMesher(const VoxelGrid& grid, const SampledField* field, i
 }
 
 bool SurfaceMesher::occupied(int i, int j, int k) const {
-  if (!grid_.solid(i, j, k)) return false;
+  if (!grid().solid(i, j, k)) return false;
   return !(cut_.enabled && i >= cut_.i && j >= cut_.j);
 }
 
@@ -65,16 +78,20 @@ std::vector<int> SurfaceMesher::blocks_touched_by(int i, int j, int k) const {
 
 std::vector<int> SurfaceMesher::update(const VoxelGrid& grid,
                                        std::span<const std::size_t> changed) {
-  if (grid.n != grid_.n) throw std::invalid_argument("SurfaceMesher::update: grid size changed");
+  if (borrowed_ != nullptr) {
+    throw std::logic_error("SurfaceMesher::update: a borrowing mesher (borrowing()) has no copy "
+                           "of the grid to update");
+  }
+  if (grid.n != own_.n) throw std::invalid_argument("SurfaceMesher::update: grid size changed");
   std::vector<int> dirty;
-  const std::size_t n = static_cast<std::size_t>(grid_.n);
+  const std::size_t n = static_cast<std::size_t>(own_.n);
   for (std::size_t idx : changed) {
-    if (idx >= grid_.voxels.size()) continue;
-    const bool was_solid = grid_.voxels[idx] != 0;
-    grid_.voxels[idx] = grid.voxels[idx];
+    if (idx >= own_.voxels.size()) continue;
+    const bool was_solid = own_.voxels[idx] != 0;
+    own_.voxels[idx] = grid.voxels[idx];
     const int i = static_cast<int>(idx % n), j = static_cast<int>((idx / n) % n),
               k = static_cast<int>(idx / (n * n));
-    if (!block_solid_.empty() && was_solid != (grid_.voxels[idx] != 0)) {
+    if (!block_solid_.empty() && was_solid != (own_.voxels[idx] != 0)) {
       const std::size_t b = static_cast<std::size_t>(i / block_size_) +
                             static_cast<std::size_t>(nb_) *
                                 (static_cast<std::size_t>(j / block_size_) +
@@ -91,13 +108,13 @@ std::vector<int> SurfaceMesher::update(const VoxelGrid& grid,
 
 void SurfaceMesher::count_block_solids() {
   block_solid_.assign(blocks_.size(), 0);
-  const std::size_t n = static_cast<std::size_t>(grid_.n);
+  const std::size_t n = static_cast<std::size_t>(grid().n);
   const int B = block_size_;
-  for (int k = 0; k < grid_.n; ++k) {
-    for (int j = 0; j < grid_.n; ++j) {
-      const std::uint8_t* row = grid_.voxels.data() + n * (static_cast<std::size_t>(j) + n * k);
+  for (int k = 0; k < grid().n; ++k) {
+    for (int j = 0; j < grid().n; ++j) {
+      const std::uint8_t* row = grid().voxels.data() + n * (static_cast<std::size_t>(j) + n * k);
       const std::size_t base = static_cast<std::size_t>(nb_) * (j / B + nb_ * (k / B));
-      for (int i = 0; i < grid_.n; ++i) block_solid_[base + i / B] += row[i] != 0 ? 1 : 0;
+      for (int i = 0; i < grid().n; ++i) block_solid_[base + i / B] += row[i] != 0 ? 1 : 0;
     }
   }
 }
@@ -119,8 +136,8 @@ bool SurfaceMesher::uniform_neighbourhood(const int b0[3]) const {
         const std::uint32_t solid = block_solid_[static_cast<std::size_t>(x) +
                                                  static_cast<std::size_t>(nb_) * (y + nb_ * z)];
         if (solid != 0) empty = false;
-        const int extent[3] = {std::min(B, grid_.n - x * B), std::min(B, grid_.n - y * B),
-                               std::min(B, grid_.n - z * B)};
+        const int extent[3] = {std::min(B, grid().n - x * B), std::min(B, grid().n - y * B),
+                               std::min(B, grid().n - z * B)};
         if (solid != static_cast<std::uint32_t>(extent[0] * extent[1] * extent[2])) full = false;
       }
     }
@@ -192,7 +209,7 @@ void SurfaceMesher::mesh_block(int block) {
   const int B = block_size_;
   const int b0[3] = {(block % nb_) * B, ((block / nb_) % nb_) * B, (block / (nb_ * nb_)) * B};
   int b1[3];
-  for (int a = 0; a < 3; ++a) b1[a] = std::min(grid_.n, b0[a] + B);
+  for (int a = 0; a < 3; ++a) b1[a] = std::min(grid().n, b0[a] + B);
   // s over the block + 1 voxel halo: local index (c - b0 + 1).
   const int L = B + 2;
   s_.assign(static_cast<std::size_t>(L) * L * L, 0.0f);
@@ -202,7 +219,7 @@ void SurfaceMesher::mesh_block(int block) {
                                           static_cast<std::size_t>(L) * (k - b0[2] + 1));
   };
   const int pad = field_ != nullptr ? field_->padding() : 0;
-  const float half_voxel = 0.5f * static_cast<float>(grid_.voxel_size);
+  const float half_voxel = 0.5f * static_cast<float>(grid().voxel_size);
   if (field_ != nullptr) {
     // Samples all at c_out (s = -c_out < 0, the cut only lowers s): no cell inside, no quad.
     const int lo[3] = {b0[0] - 1 + pad, b0[1] - 1 + pad, b0[2] - 1 + pad};
@@ -222,8 +239,8 @@ void SurfaceMesher::mesh_block(int block) {
     smooth_occupancy(b0, b1, L);
   }
   auto s_at = [&](int i, int j, int k) { return s_[sidx(i, j, k)]; };
-  const float h = static_cast<float>(grid_.voxel_size);
-  const Eigen::Vector3f origin = grid_.origin.cast<float>();
+  const float h = static_cast<float>(grid().voxel_size);
+  const Eigen::Vector3f origin = grid().origin.cast<float>();
 
   // The vertex of dual cell c (corners c + {0,1}^3, all within the halo region).
   auto cell_vertex = [&](int ci, int cj, int ck, MeshVertex* v) {
@@ -275,12 +292,12 @@ void SurfaceMesher::mesh_block(int block) {
   };
 
   auto material_of = [&](int i, int j, int k) -> float {
-    if (occupied(i, j, k)) return grid_.at(i, j, k);
+    if (occupied(i, j, k)) return grid().at(i, j, k);
     std::array<int, kMaterialCount> count{};
     for (int dz = -1; dz <= 1; ++dz) {
       for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
-          if (occupied(i + dx, j + dy, k + dz)) ++count[grid_.at(i + dx, j + dy, k + dz)];
+          if (occupied(i + dx, j + dy, k + dz)) ++count[grid().at(i + dx, j + dy, k + dz)];
         }
       }
     }
@@ -334,16 +351,22 @@ void SurfaceMesher::mesh_block(int block) {
 }
 
 CutAway centre_cut(const VoxelGrid& grid) {
+  // The solid's x and y extent, a row at a time (its first and last solid voxel): the same
+  // bounds as testing every voxel, without the per-voxel bounds checks (issue #30: 512^3).
   int lo[2] = {grid.n, grid.n}, hi[2] = {-1, -1};
-  for (int k = 0; k < grid.n; ++k) {
-    for (int j = 0; j < grid.n; ++j) {
-      for (int i = 0; i < grid.n; ++i) {
-        if (!grid.solid(i, j, k)) continue;
-        lo[0] = std::min(lo[0], i);
-        hi[0] = std::max(hi[0], i);
-        lo[1] = std::min(lo[1], j);
-        hi[1] = std::max(hi[1], j);
-      }
+  const std::size_t n = static_cast<std::size_t>(grid.n);
+  for (std::size_t k = 0; k < n; ++k) {
+    for (std::size_t j = 0; j < n; ++j) {
+      const std::uint8_t* row = grid.voxels.data() + n * (j + n * k);
+      std::size_t first = 0;
+      while (first < n && row[first] == 0) ++first;
+      if (first == n) continue;
+      std::size_t last = n - 1;
+      while (row[last] == 0) --last;
+      lo[0] = std::min(lo[0], static_cast<int>(first));
+      hi[0] = std::max(hi[0], static_cast<int>(last));
+      lo[1] = std::min(lo[1], static_cast<int>(j));
+      hi[1] = std::max(hi[1], static_cast<int>(j));
     }
   }
   CutAway c;

@@ -77,13 +77,20 @@ class SurfaceMesher {
   SurfaceMesher(const VoxelGrid& grid, const SampledField* field,
                 int block_size = kDefaultBlockSize, CutAway cut = {});
 
+  // Meshes `grid` as the constructor above does, but reads the caller's grid instead of copying
+  // it (a 512^3 tooth is 128 MiB; issue #30): `grid` must outlive the mesher and not change
+  // while it lives. Such a mesher cannot update() (it throws std::logic_error). The meshes are
+  // the same as a copying mesher's.
+  static SurfaceMesher borrowing(const VoxelGrid& grid, const SampledField* field = nullptr,
+                                 int block_size = kDefaultBlockSize, CutAway cut = {});
+
   // The grid changed at the flat voxel indices `changed` (the mesher's own copy is updated from
   // `grid`); re-meshes the dirty blocks and returns their ids, sorted.
   std::vector<int> update(const VoxelGrid& grid, std::span<const std::size_t> changed);
   // Changes the cut-away and re-meshes everything.
   void set_cut(CutAway cut);
 
-  const VoxelGrid& grid() const { return grid_; }
+  const VoxelGrid& grid() const { return borrowed_ != nullptr ? *borrowed_ : own_; }
   int block_size() const { return block_size_; }
   int blocks_per_axis() const { return nb_; }
   const std::vector<BlockMesh>& blocks() const { return blocks_; }
@@ -93,6 +100,9 @@ class SurfaceMesher {
   std::vector<int> blocks_touched_by(int i, int j, int k) const;
 
  private:
+  // borrowed: the grid read (not copied), else null and `grid` copied.
+  SurfaceMesher(const VoxelGrid* borrowed, const VoxelGrid& grid, const SampledField* field,
+                int block_size, CutAway cut);
   void mesh_block(int block);
   bool occupied(int i, int j, int k) const;
   // The voxels' path (no field): the solid voxels per block, the test that lets mesh_block skip
@@ -102,7 +112,8 @@ class SurfaceMesher {
   bool uniform_neighbourhood(const int b0[3]) const;
   void smooth_occupancy(const int b0[3], const int b1[3], int L);
 
-  VoxelGrid grid_;
+  VoxelGrid own_;                        // the mesher's copy (empty when borrowing)
+  const VoxelGrid* borrowed_ = nullptr;  // the caller's grid (borrowing())
   int block_size_;
   int nb_;
   CutAway cut_;

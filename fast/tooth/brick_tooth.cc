@@ -7,7 +7,7 @@ constexpr int kStep[6][3] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0
 
 }  // namespace
 
-BrickTooth::BrickTooth(const VoxelTooth& tooth) : grid_(tooth.grid()), codes_(tooth.codes) {
+BrickTooth::BrickTooth(const VoxelTooth& tooth) : grid_(tooth.grid()), codes_(tooth.codes.dense()) {
   const int n = grid_.n;
   bricks_ = n >= kBrick ? n / kBrick : 1;
   while ((1 << brick_levels_) < bricks_) ++brick_levels_;

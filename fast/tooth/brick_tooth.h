@@ -46,7 +46,8 @@ class BrickTooth {
   static constexpr int kBrick = 4;           // brick edge [voxels]
   static constexpr int kMaxBrickLevels = 8;  // N <= 1024 -> B <= 256
 
-  // Copies the grid and codes of a reference tooth (validated and encoded there).
+  // Copies the grid and codes of a reference tooth (validated and encoded there; the codes one
+  // byte a voxel, the layout fast::collide_tool_tip walks).
   explicit BrickTooth(const VoxelTooth& tooth);
   // Builds the reference tooth first (throws InputError as FullOctree does).
   explicit BrickTooth(VoxelGrid grid) : BrickTooth(VoxelTooth(std::move(grid))) {}

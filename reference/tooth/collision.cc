@@ -27,7 +27,7 @@ bool continues(const VoxelTooth& tooth, const int idx[3], int f, int axis, int s
   nb[axis] += s;
   const VoxelGrid& g = tooth.grid();
   if (!g.inside(nb[0], nb[1], nb[2])) return false;
-  return (tooth.codes.code[g.index(nb[0], nb[1], nb[2])] & (1u << f)) != 0;
+  return (tooth.codes.code(g.index(nb[0], nb[1], nb[2])) & (1u << f)) != 0;
 }
 
 // Bound of the run of coplanar exposed faces (face f) through voxel idx along s * e_axis: the
@@ -48,7 +48,7 @@ double patch_bound(const VoxelTooth& tooth, const int idx[3], int f, int axis, i
 }  // namespace
 
 VoxelTooth::VoxelTooth(VoxelGrid grid) : octree(std::move(grid)) {
-  codes = encode_neighbors(octree.grid());
+  codes = SparseNeighborCodes(octree.grid());
 }
 
 void validate_tool_tip(const ToolTip& tip) {
@@ -116,7 +116,7 @@ bool collide_tool_tip(const VoxelTooth& tooth, const Pose& proxy, const ToolTip&
   const int n = grid.n;
   const int reach = static_cast<int>(std::ceil(rho / h)) + 2;  // voxels within the sphere's reach
   for (const std::size_t v : scratch->candidates) {
-    const std::uint8_t code = tooth.codes.code[v];
+    const std::uint8_t code = tooth.codes.code(v);
     if (code == 0) continue;  // interior voxel: no exposed face
     const int idx[3] = {static_cast<int>(v % n), static_cast<int>((v / n) % n),
                         static_cast<int>(v / (static_cast<std::size_t>(n) * n))};

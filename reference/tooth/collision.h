@@ -45,11 +45,11 @@
 
 namespace dentsim {
 
-// The drillable tooth: octree (owning the grid) and neighbour codes, kept consistent by
-// reference/tooth/drilling.h.
+// The drillable tooth: octree (owning the grid) and neighbour codes (stored sparse: neighbors.h),
+// kept consistent by reference/tooth/drilling.h.
 struct VoxelTooth {
   FullOctree octree;
-  NeighborCodes codes;
+  SparseNeighborCodes codes;
 
   VoxelTooth() = default;
   explicit VoxelTooth(VoxelGrid grid);  // builds the octree and encodes every voxel

@@ -1,5 +1,8 @@
 #include "reference/tooth/neighbors.h"
 
+#include <stdexcept>
+#include <string>
+
 namespace dentsim {
 namespace {
 
@@ -30,6 +33,85 @@ NeighborCodes encode_neighbors(const VoxelGrid& grid) {
     }
   }
   return codes;
+}
+
+SparseNeighborCodes::SparseNeighborCodes(const VoxelGrid& grid) : n_(grid.n) {
+  if (grid.n < 1 || (grid.n & (grid.n - 1)) != 0) {
+    throw std::invalid_argument("SparseNeighborCodes: grid resolution " + std::to_string(grid.n) +
+                                ", expected a power of two");
+  }
+  while ((1 << bits_) < grid.n) ++bits_;
+  const std::size_t n = static_cast<std::size_t>(grid.n);
+  mask_ = n - 1;
+  nb_ = (n + kBrick - 1) / kBrick;
+  index_.assign(nb_ * nb_ * nb_, kNoRoom);
+  std::size_t solid_slots = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    for (std::size_t j = 0; j < n; ++j) {
+      const std::uint8_t* row = grid.voxels.data() + n * (j + n * k);
+      for (std::size_t i = 0; i < n; ++i) {
+        if (row[i] == 0) continue;
+        std::int32_t& id = index_[i / kBrick + nb_ * (j / kBrick + nb_ * (k / kBrick))];
+        if (id == kNoRoom) {
+          id = kNone;
+          ++solid_slots;
+        }
+      }
+    }
+  }
+  bricks_.reserve(solid_slots * kBrickVoxels);  // untouched until a brick is taken
+  for (int k = 0; k < grid.n; ++k) {
+    for (int j = 0; j < grid.n; ++j) {
+      for (int i = 0; i < grid.n; ++i) {
+        const std::uint8_t c = exposed_faces(grid, i, j, k);
+        if (c != 0) set(grid.index(i, j, k), c);
+      }
+    }
+  }
+}
+
+SparseNeighborCodes::SparseNeighborCodes(const SparseNeighborCodes& other)
+    : n_(other.n_), bits_(other.bits_), mask_(other.mask_), nb_(other.nb_), index_(other.index_) {
+  bricks_.reserve(other.bricks_.capacity());
+  bricks_.assign(other.bricks_.begin(), other.bricks_.end());
+}
+
+SparseNeighborCodes& SparseNeighborCodes::operator=(const SparseNeighborCodes& other) {
+  if (this != &other) *this = SparseNeighborCodes(other);
+  return *this;
+}
+
+bool SparseNeighborCodes::set(std::size_t v, std::uint8_t c) {
+  std::int32_t& id = index_[slot_of(v)];
+  if (id < 0) {
+    if (c == 0) return true;  // an absent brick reads 0 already
+    if (id == kNoRoom || bricks_.size() + kBrickVoxels > bricks_.capacity()) return false;
+    id = static_cast<std::int32_t>(bricks_.size() / kBrickVoxels);
+    bricks_.resize(bricks_.size() + kBrickVoxels, 0);  // within the reserve: no allocation
+  }
+  bricks_[static_cast<std::size_t>(id) * kBrickVoxels + local_of(v)] = c;
+  return true;
+}
+
+NeighborCodes SparseNeighborCodes::dense() const {
+  NeighborCodes out;
+  out.n = n_;
+  const std::size_t count = static_cast<std::size_t>(n_) * n_ * n_;
+  out.code.assign(count, 0);
+  for (std::size_t v = 0; v < count; ++v) out.code[v] = code(v);
+  return out;
+}
+
+bool reencode_local(const VoxelGrid& grid, int i, int j, int k, SparseNeighborCodes* codes) {
+  bool stored = true;
+  if (grid.inside(i, j, k)) stored = codes->set(grid.index(i, j, k), exposed_faces(grid, i, j, k));
+  for (int f = 0; f < 6; ++f) {
+    const int a = i + kStep[f][0], b = j + kStep[f][1], c = k + kStep[f][2];
+    if (grid.inside(a, b, c)) {
+      stored = codes->set(grid.index(a, b, c), exposed_faces(grid, a, b, c)) && stored;
+    }
+  }
+  return stored;
 }
 
 void reencode_local(const VoxelGrid& grid, int i, int j, int k, NeighborCodes* codes) {

@@ -2,6 +2,7 @@
 // thesis; derivation in docs/derivations/field_contact.md.
 #include "reference/tooth/sampled_field.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -253,22 +254,50 @@ SampledField build_sampled_field(const VoxelGrid& grid, const TriangleMesh& surf
 
   // Layer 0: exact distances within 2 h of each triangle (its box grown by 2 h): every sample
   // within 2 h > sqrt(3) h of the surface is exact (the no-tunnelling bound relies on it).
+  // A sample that already has a distance skips the exact one when a lower bound of it (the
+  // distance to the triangle's plane, or to its bounding box) exceeds the distance it has by
+  // more than `slack`: the exact distance could not be smaller, so it would change nothing (the
+  // update takes a strictly smaller one). `slack` (10^-6 h) dwarfs the bounds' rounding (~10^-16
+  // of the coordinates), so the stored values are the same, bit for bit, as without the test
+  // (tests/tooth/sampled_field_test.cc BuildSkipsOnlyDistancesThatCannotWin).
+  const double slack = 1e-6 * h;
   for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
     const auto& v = surface.triangles[t];
+    const Vec3& ta = surface.vertices[v[0]];
+    const Vec3& tb = surface.vertices[v[1]];
+    const Vec3& tc = surface.vertices[v[2]];
     int lo[3], hi[3];
+    Vec3 box_lo, box_hi;
     for (int a = 0; a < 3; ++a) {
-      const double mn = std::min({surface.vertices[v[0]][a], surface.vertices[v[1]][a],
-                                  surface.vertices[v[2]][a]}) - 2.0 * h;
-      const double mx = std::max({surface.vertices[v[0]][a], surface.vertices[v[1]][a],
-                                  surface.vertices[v[2]][a]}) + 2.0 * h;
+      box_lo[a] = std::min({ta[a], tb[a], tc[a]});
+      box_hi[a] = std::max({ta[a], tb[a], tc[a]});
+      const double mn = box_lo[a] - 2.0 * h;
+      const double mx = box_hi[a] + 2.0 * h;
       lo[a] = std::max(0, static_cast<int>(std::ceil((mn - f.origin_[a]) / h)));
       hi[a] = std::min(m - 1, static_cast<int>(std::floor((mx - f.origin_[a]) / h)));
     }
+    // The plane's unit normal (none for a degenerate triangle: the bound is then 0).
+    const Vec3 cross = (tb - ta).cross(tc - ta);
+    const double cross_norm = cross.norm();
+    const bool has_plane = cross_norm > 0.0 && std::isfinite(cross_norm);
+    const Vec3 unit = has_plane ? Vec3(cross / cross_norm) : Vec3::Zero();
+    const double offset = unit.dot(ta);
     for (int sz = lo[2]; sz <= hi[2]; ++sz) {
       for (int sy = lo[1]; sy <= hi[1]; ++sy) {
         for (int sx = lo[0]; sx <= hi[0]; ++sx) {
-          const double d = distance_to(static_cast<int>(t), sx, sy, sz);
           const std::int64_t r = sample_ref(sx, sy, sz, true);
+          if (tri[r] >= 0) {
+            const double beat = dist[r] + slack;
+            const Vec3 p = f.sample_position(sx, sy, sz);
+            if (std::abs(unit.dot(p) - offset) > beat) continue;
+            double box2 = 0.0;
+            for (int a = 0; a < 3; ++a) {
+              const double g = std::max({box_lo[a] - p[a], 0.0, p[a] - box_hi[a]});
+              box2 += g * g;
+            }
+            if (box2 > beat * beat) continue;
+          }
+          const double d = distance_to(static_cast<int>(t), sx, sy, sz);
           if (tri[r] < 0) frontier.push_back({sx, sy, sz});
           if (d < dist[r]) {
             dist[r] = d;
@@ -320,6 +349,7 @@ SampledField build_sampled_field(const VoxelGrid& grid, const TriangleMesh& surf
       for (const int v : surface.triangles[t]) star[fill[v]++] = static_cast<int>(t);
     }
   }
+  std::array<int, 96> seen{};  // a walk step's triangles so far (a full list only forgets)
   for (int bz = 0; bz < f.nb_; ++bz) {
     for (int by = 0; by < f.nb_; ++by) {
       for (int bx = 0; bx < f.nb_; ++bx) {
@@ -332,12 +362,22 @@ SampledField build_sampled_field(const VoxelGrid& grid, const TriangleMesh& surf
           if (tri[r] < 0 || dist[r] < 2.0 * h) continue;  // exact already (layer 0)
           for (int walk = 0; walk < 64; ++walk) {
             const std::int32_t at_t = tri[r];
+            // The stars' triangles, each once: at_t itself gives dist[r] (the pair was set
+            // together) and a repeat its first value again, neither strictly smaller, so
+            // skipping them changes nothing.
+            std::size_t seen_count = 0;
             for (const int v : surface.triangles[static_cast<std::size_t>(at_t)]) {
               for (int k = star_begin[v]; k < star_begin[v + 1]; ++k) {
-                const double d = distance_to(star[k], x, y, z);
+                const int cand = star[k];
+                if (cand == at_t) continue;
+                bool repeat = false;
+                for (std::size_t q = 0; q < seen_count && !repeat; ++q) repeat = seen[q] == cand;
+                if (repeat) continue;
+                if (seen_count < seen.size()) seen[seen_count++] = cand;
+                const double d = distance_to(cand, x, y, z);
                 if (d < dist[r]) {
                   dist[r] = d;
-                  tri[r] = star[k];
+                  tri[r] = cand;
                 }
               }
             }
@@ -474,18 +514,6 @@ TriangleMesh triangulate_voxel_signs(
     }
   }
   return mesh;
-}
-
-TriangleMesh triangulate_implicit(const VoxelGrid& grid,
-                                  const std::function<bool(const Vec3&)>& inside) {
-  return triangulate_voxel_signs(grid, [&](const Vec3& in, const Vec3& out) {
-    Vec3 p_in = in, p_out = out;
-    for (int it = 0; it < 40; ++it) {
-      const Vec3 mid = 0.5 * (p_in + p_out);
-      (inside(mid) ? p_in : p_out) = mid;
-    }
-    return Vec3(0.5 * (p_in + p_out));
-  });
 }
 
 }  // namespace dentsim

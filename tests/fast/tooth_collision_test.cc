@@ -52,7 +52,7 @@ DiffStats random_poses(const VoxelTooth& ref, const fast::BrickTooth& fst, long 
                        std::uint64_t seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> radius(0.1e-3, 1.2e-3), unit(-1.0, 1.0);
-  const std::vector<std::size_t> surface = surface_voxels_of(ref.codes);
+  const std::vector<std::size_t> surface = surface_voxels_of(ref.codes.dense());
   DiffStats stats;
   for (long p = 0; p < count; ++p) {
     ToolTip tip;
@@ -102,7 +102,7 @@ TEST(FastToothCollision, BricksHoldExactlyTheSurfaceVoxels) {
     EXPECT_EQ(v, ref.grid().index(i, j, k));
     visited.push_back(v);
   });
-  std::vector<std::size_t> expected = surface_voxels_of(ref.codes);
+  std::vector<std::size_t> expected = surface_voxels_of(ref.codes.dense());
   ASSERT_GT(expected.size(), 1000u);
   std::sort(visited.begin(), visited.end());
   EXPECT_EQ(visited, expected);
@@ -120,7 +120,7 @@ TEST(FastToothCollision, SurfaceOrderEqualsOctreeOrder) {
   ref.octree.query_sphere(mid, 2.0 * n * ref.grid().voxel_size, &octree);
   std::vector<std::size_t> expected;
   for (const std::size_t v : octree) {
-    if (ref.codes.code[v] != 0) expected.push_back(v);
+    if (ref.codes.code(v) != 0) expected.push_back(v);
   }
   std::vector<std::size_t> visited;
   const int lo[3] = {0, 0, 0}, hi[3] = {n - 1, n - 1, n - 1};
@@ -166,7 +166,7 @@ TEST(FastToothCollision, TipOnFacesEdgesAndCornersEqualsReference) {
   const fast::BrickTooth fst(ref);
   const VoxelGrid& g = ref.grid();
   const double h = g.voxel_size;
-  const std::vector<std::size_t> surface = surface_voxels_of(ref.codes);
+  const std::vector<std::size_t> surface = surface_voxels_of(ref.codes.dense());
   std::mt19937 rng(kSeed + 2);
   std::uniform_int_distribution<int> quarter(0, 4), pick_r(1, 8);
   long touching = 0, cases = 0;
@@ -282,7 +282,7 @@ TEST(FastToothCollision, EveryMaterialEqualsReference) {
   }
   const VoxelTooth ref(g);
   const fast::BrickTooth fst(ref);
-  const std::vector<std::size_t> surface = surface_voxels_of(ref.codes);
+  const std::vector<std::size_t> surface = surface_voxels_of(ref.codes.dense());
   std::array<long, kMaterialCount> seen{};
   std::uniform_real_distribution<double> radius(0.1e-3, 0.6e-3);
   for (int p = 0; p < 300; ++p) {
@@ -304,7 +304,7 @@ TEST(FastToothCollision, FullBufferStopsAtTheSameMember) {
   const VoxelTooth& ref = molar(128);
   const fast::BrickTooth fst(ref);
   std::mt19937 rng(kSeed + 3);
-  const std::vector<std::size_t> surface = surface_voxels_of(ref.codes);
+  const std::vector<std::size_t> surface = surface_voxels_of(ref.codes.dense());
   ToolTip tip;
   tip.radius = 1e-3;
   int truncated = 0;

@@ -54,7 +54,7 @@ TEST(FastToothContacts, ProviderEqualsReferenceTickByTick) {
     if (!a.empty()) ++touching;
   }
   EXPECT_EQ(ref.drill_state().removed_voxels, fst.drill_state().removed_voxels);
-  EXPECT_EQ(ref_tooth.codes.code, fast_tooth.codes().code);
+  EXPECT_EQ(ref_tooth.codes.dense().code, fast_tooth.codes().code);
   EXPECT_GT(removed, 100);
   EXPECT_GT(touching, 500);
 }

@@ -83,14 +83,15 @@ long drill_along_path(Twin& t, long ticks, double rho, std::uint64_t seed, int c
     const Pose& pose = path.next(t.ref.grid());
     if (!tick(t, pose, tip, 1e-3, "tick " + std::to_string(k), &removed)) return -1;
     if (check_every > 0 && k % check_every == 0) {
-      if (t.ref.codes.code != t.fst.codes().code || t.ref.grid().voxels != t.fst.grid().voxels) {
+      if (t.ref.codes.dense().code != t.fst.codes().code ||
+          t.ref.grid().voxels != t.fst.grid().voxels) {
         ADD_FAILURE() << "tick " << k << ": grids or codes differ";
         return -1;
       }
     }
   }
   EXPECT_EQ(t.ref.grid().voxels, t.fst.grid().voxels);
-  EXPECT_EQ(t.ref.codes.code, t.fst.codes().code);
+  EXPECT_EQ(t.ref.codes.dense().code, t.fst.codes().code);
   for (int m = kEnamel; m < kMaterialCount; ++m) {
     EXPECT_EQ(t.ref_state.removed_volume_m3(m), t.fast_state.removed_volume_m3(m));
   }
@@ -129,7 +130,7 @@ TEST(FastToothDrilling, OneVoxelWallAndPillarEqualReference) {
       }
     }
   }
-  ASSERT_EQ(t.ref.codes.code, t.fst.codes().code);
+  ASSERT_EQ(t.ref.codes.dense().code, t.fst.codes().code);
   expect_structures_rebuilt(t.fst);
   int thin = 0;  // voxels with both y faces exposed
   for (const std::uint8_t code : t.fst.codes().code) {

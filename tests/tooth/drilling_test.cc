@@ -118,7 +118,7 @@ int ticks_to_remove(std::uint8_t material, double* closed_form) {
       EXPECT_EQ(state.removed_voxels[material], 1);
       EXPECT_NEAR(state.removed_volume_m3(material), h * h * h, 1e-25);
       EXPECT_FALSE(tooth.octree.occupied(0, 0, 0, 0));  // the octree is empty up to the root
-      EXPECT_EQ(tooth.codes.code[tooth.grid().index(4, 4, 4)], 0);
+      EXPECT_EQ(tooth.codes.code(tooth.grid().index(4, 4, 4)), 0);
       // Charged the whole E_m: the missing E_m - W is the carry's debt, and the balance holds.
       EXPECT_EQ(state.delivered_j, acc);
       EXPECT_LT(state.carry_j, 0.0);
@@ -229,7 +229,7 @@ TEST(Drilling, InvariantsUnderRandomDrilling) {
     if (tick % 10 == 0 || !removed.empty()) {
       const FullOctree rebuilt(tooth.grid());
       ASSERT_EQ(tooth.octree.masks(), rebuilt.masks()) << "tick " << tick;
-      ASSERT_EQ(tooth.codes.code, encode_neighbors(tooth.grid()).code) << "tick " << tick;
+      ASSERT_EQ(tooth.codes.dense().code, encode_neighbors(tooth.grid()).code) << "tick " << tick;
     }
   }
   std::array<long, kMaterialCount> count{};

@@ -4,10 +4,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <random>
+#include <stdexcept>
 
 #include "reference/tooth/octree.h"
+#include "tooth_io/procedural_molar.h"
 
 namespace dentsim {
 namespace {
@@ -81,6 +84,129 @@ TEST(NeighborCodes, LocalReencodeEqualsFullReencodeAfterEveryRemoval) {
     ASSERT_EQ(codes.code, encode_neighbors(tree.grid()).code) << "after removal " << removals;
   }
   EXPECT_GT(removals, 1000);
+}
+
+
+// The sparse codes (issue #30) against the dense definition: the same code at every voxel after
+// construction and after every removal re-encoded locally, bricks taken only from the storage
+// reserved at construction (never more), and a brick only where a code is non-zero.
+TEST(NeighborCodes, SparseCodesEqualTheDenseOnesAfterEveryRemoval) {
+  std::printf("seed %llu\n", static_cast<unsigned long long>(kSeed));
+  std::mt19937_64 rng(kSeed);
+  for (const int n : {4, 16, 32}) {
+    VoxelGrid g(n, Vec3::Zero(), 1e-4);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    // A solid ball with random holes: bricks far from it hold no solid voxel.
+    for (int k = 0; k < n; ++k) {
+      for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) {
+          const double r2 = (i - 0.4 * n) * (i - 0.4 * n) + (j - 0.45 * n) * (j - 0.45 * n) +
+                            (k - 0.5 * n) * (k - 0.5 * n);
+          if (r2 < 0.1 * n * n && u(rng) < 0.9) g.set(i, j, k, kDentin);
+        }
+      }
+    }
+    FullOctree tree(g);
+    SparseNeighborCodes sparse(tree.grid());
+    ASSERT_EQ(sparse.dense().code, encode_neighbors(tree.grid()).code) << "n " << n;
+    const std::size_t reserved = sparse.reserved_bricks();
+    std::uniform_int_distribution<int> cell(0, n - 1);
+    int removals = 0;
+    for (int step = 0; step < 40 * n; ++step) {
+      const int i = cell(rng), j = cell(rng), k = cell(rng);
+      if (tree.remove_voxel(i, j, k) == kEmpty) continue;
+      ++removals;
+      ASSERT_TRUE(reencode_local(tree.grid(), i, j, k, &sparse));
+      const NeighborCodes dense = encode_neighbors(tree.grid());
+      for (std::size_t v = 0; v < dense.code.size(); ++v) {
+        ASSERT_EQ(sparse.code(v), dense.code[v]) << "n " << n << " removal " << removals;
+      }
+    }
+    EXPECT_GT(removals, n);
+    EXPECT_EQ(sparse.reserved_bricks(), reserved);
+    EXPECT_LE(sparse.brick_count(), reserved);
+    // Each brick in use holds or held a non-zero code: at most the bricks that ever had a
+    // surface voxel, here every brick with a solid voxel at most.
+    std::size_t with_solid = 0;
+    const int nb = (n + 7) / 8;
+    for (int bz = 0; bz < nb; ++bz) {
+      for (int by = 0; by < nb; ++by) {
+        for (int bx = 0; bx < nb; ++bx) {
+          bool any = false;
+          for (int k = 8 * bz; k < std::min(n, 8 * bz + 8); ++k) {
+            for (int j = 8 * by; j < std::min(n, 8 * by + 8); ++j) {
+              for (int i = 8 * bx; i < std::min(n, 8 * bx + 8); ++i) any = any || g.solid(i, j, k);
+            }
+          }
+          with_solid += any ? 1 : 0;
+        }
+      }
+    }
+    EXPECT_EQ(reserved, with_solid) << "n " << n;
+  }
+}
+
+// A slot without a solid voxel at construction has no room: a zero stores (reads 0), a non-zero
+// code is refused; a grid whose N is not a power of two is refused.
+TEST(NeighborCodes, SparseCodesRefuseWhatRemovalsCannotMake) {
+  VoxelGrid g(16, Vec3::Zero(), 1e-4);
+  g.set(2, 2, 2, kEnamel);
+  SparseNeighborCodes sparse(g);
+  EXPECT_EQ(sparse.code(g.index(2, 2, 2)), 0x3F);
+  EXPECT_EQ(sparse.brick_count(), 1u);
+  EXPECT_EQ(sparse.reserved_bricks(), 1u);
+  EXPECT_TRUE(sparse.set(g.index(12, 12, 12), 0));
+  EXPECT_FALSE(sparse.set(g.index(12, 12, 12), 1));
+  EXPECT_EQ(sparse.code(g.index(12, 12, 12)), 0);
+  EXPECT_THROW(SparseNeighborCodes(VoxelGrid(12, Vec3::Zero(), 1e-4)), std::invalid_argument);
+}
+
+// A copy keeps the reserve: drilling a copied tooth takes bricks as the original does.
+TEST(NeighborCodes, SparseCodesCopyKeepsTheReserve) {
+  VoxelGrid g(32, Vec3::Zero(), 1e-4);
+  for (int k = 0; k < 32; ++k) {
+    for (int j = 0; j < 32; ++j) {
+      for (int i = 0; i < 32; ++i) g.set(i, j, k, kDentin);
+    }
+  }
+  const SparseNeighborCodes original(g);
+  // The cube's surface lies in 56 of its 64 bricks; the 8 inner ones are reserved, not taken.
+  ASSERT_EQ(original.brick_count(), 56u);
+  SparseNeighborCodes copy = original;
+  SparseNeighborCodes assigned;
+  assigned = original;
+  EXPECT_EQ(copy.reserved_bricks(), 64u);
+  EXPECT_EQ(assigned.reserved_bricks(), 64u);
+  FullOctree tree(g);
+  for (int i = 10; i < 22; ++i) {  // a cavity in the middle: surface in the inner bricks
+    for (int j = 10; j < 22; ++j) {
+      tree.remove_voxel(i, j, 16);
+      ASSERT_TRUE(reencode_local(tree.grid(), i, j, 16, &copy));
+      ASSERT_TRUE(reencode_local(tree.grid(), i, j, 16, &assigned));
+    }
+  }
+  EXPECT_EQ(copy.brick_count(), 64u);
+  EXPECT_EQ(copy.dense().code, encode_neighbors(tree.grid()).code);
+  EXPECT_EQ(assigned.dense().code, encode_neighbors(tree.grid()).code);
+}
+
+// Memory: on the procedural molar only the bricks along the surface are taken, a small part of
+// the grid's bytes (the dense codes: one byte a voxel).
+TEST(NeighborCodes, SparseCodesHoldTheSurfaceNotTheGrid) {
+  const VoxelGrid g = voxelize_procedural_molar(MolarParams{}, 128);
+  const SparseNeighborCodes sparse(g);
+  const NeighborCodes dense = encode_neighbors(g);
+  ASSERT_EQ(sparse.dense().code, dense.code);
+  std::size_t surface = 0;
+  for (const std::uint8_t c : dense.code) surface += c != 0 ? 1 : 0;
+  EXPECT_GT(surface, 10000u);
+  // A taken brick holds at least one surface voxel.
+  EXPECT_LE(sparse.brick_count(), surface);
+  EXPECT_LT(sparse.memory_bytes(), dense.code.size() / 4);
+  std::printf("128^3 molar: %zu surface voxels, %zu bricks in use of %zu reserved, %zu bytes "
+              "(dense %zu)\n",
+              surface, sparse.brick_count(), sparse.reserved_bricks(), sparse.memory_bytes(),
+              dense.code.size());
 }
 
 }  // namespace

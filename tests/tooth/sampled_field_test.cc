@@ -8,8 +8,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
+#include <vector>
 
+#include "tooth_io/procedural_molar.h"
 #include "tooth_io/voxelize.h"
 #include "tests/tooth/field_shapes.h"
 
@@ -174,6 +177,134 @@ TEST(SampledField, BrickCountScalesWithTheSurfaceArea) {
               bricks[1], ratio);
   EXPECT_GT(ratio, 3.0);
   EXPECT_LT(ratio, 5.0);
+}
+
+
+// The build's definition (sampled_field.h "Build"), written plainly on dense arrays: every exact
+// distance of layer 0 computed, the band grown layer by layer, and each walk step evaluating
+// every triangle of the three stars, repeats and the current one included. The build skips
+// layer 0's distances whose lower bound cannot win and the walks' repeats (issue #30: the field
+// at 512^3); its stored values must be these, bit for bit (the samples the band reached; the
+// rest are the clamps of their sign).
+TEST(SampledField, BuildSkipsOnlyDistancesThatCannotWin) {
+  const MolarParams params;
+  const VoxelGrid grid = voxelize_procedural_molar(params, 64);
+  const TriangleMesh surface =
+      triangulate_implicit(grid, [&](const Vec3& p) { return molar_solid(params, p); });
+  const FieldBand band = field_band_for_tip(0.5e-3, grid.voxel_size);
+  const SampledField f = build_sampled_field(grid, surface, band);
+  const double h = grid.voxel_size;
+  const int m = f.samples_per_axis(), pad = f.padding();
+  const double c_out = f.outside_clamp(), c_in = f.inside_clamp();
+  const auto at = [m](int x, int y, int z) {
+    const std::size_t sm = static_cast<std::size_t>(m);
+    return static_cast<std::size_t>(x) +
+           sm * (static_cast<std::size_t>(y) + sm * static_cast<std::size_t>(z));
+  };
+  const std::size_t count = static_cast<std::size_t>(m) * m * m;
+  std::vector<double> dist(count, std::numeric_limits<double>::infinity());
+  std::vector<int> tri(count, -1);
+  const auto d_to = [&](int t, int x, int y, int z) {
+    const auto& corners = surface.triangles[static_cast<std::size_t>(t)];
+    const Vec3 p = f.sample_position(x, y, z);
+    return point_triangle_distance(p, surface.vertices[corners[0]], surface.vertices[corners[1]],
+                                   surface.vertices[corners[2]]);
+  };
+  struct Sample {
+    int x, y, z;
+  };
+  std::vector<Sample> frontier, next;
+  for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
+    const auto& v = surface.triangles[t];
+    int lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      const double mn = std::min({surface.vertices[v[0]][a], surface.vertices[v[1]][a],
+                                  surface.vertices[v[2]][a]}) - 2.0 * h;
+      const double mx = std::max({surface.vertices[v[0]][a], surface.vertices[v[1]][a],
+                                  surface.vertices[v[2]][a]}) + 2.0 * h;
+      const double o = f.sample_position(0, 0, 0)[a];
+      lo[a] = std::max(0, static_cast<int>(std::ceil((mn - o) / h)));
+      hi[a] = std::min(m - 1, static_cast<int>(std::floor((mx - o) / h)));
+    }
+    for (int z = lo[2]; z <= hi[2]; ++z) {
+      for (int y = lo[1]; y <= hi[1]; ++y) {
+        for (int x = lo[0]; x <= hi[0]; ++x) {
+          const double d = d_to(static_cast<int>(t), x, y, z);
+          const std::size_t r = at(x, y, z);
+          if (tri[r] < 0) frontier.push_back({x, y, z});
+          if (d < dist[r]) {
+            dist[r] = d;
+            tri[r] = static_cast<int>(t);
+          }
+        }
+      }
+    }
+  }
+  const auto sign = [&](int x, int y, int z) {
+    return grid.solid(x - pad, y - pad, z - pad) ? -1.0 : 1.0;
+  };
+  const int step[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  while (!frontier.empty()) {
+    next.clear();
+    for (const Sample& s : frontier) {
+      const int t = tri[at(s.x, s.y, s.z)];
+      for (const auto& o : step) {
+        const int x = s.x + o[0], y = s.y + o[1], z = s.z + o[2];
+        if (x < 0 || y < 0 || z < 0 || x >= m || y >= m || z >= m) continue;
+        const double d = d_to(t, x, y, z);
+        if (d >= (sign(x, y, z) < 0.0 ? c_in : c_out) + 2.0 * h) continue;
+        const std::size_t r = at(x, y, z);
+        if (tri[r] < 0) next.push_back({x, y, z});
+        if (d < dist[r]) {
+          dist[r] = d;
+          tri[r] = t;
+        }
+      }
+    }
+    frontier.swap(next);
+  }
+  std::vector<std::vector<int>> star(surface.vertices.size());
+  for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
+    for (const int v : surface.triangles[t]) {
+      star[static_cast<std::size_t>(v)].push_back(static_cast<int>(t));
+    }
+  }
+  long band_samples = 0, walked = 0;
+  for (int z = 0; z < m; ++z) {
+    for (int y = 0; y < m; ++y) {
+      for (int x = 0; x < m; ++x) {
+        const std::size_t r = at(x, y, z);
+        const double sg = sign(x, y, z);
+        if (tri[r] >= 0 && dist[r] >= 2.0 * h) {
+          ++walked;
+          for (int walk = 0; walk < 64; ++walk) {
+            const int at_t = tri[r];
+            for (const int v : surface.triangles[static_cast<std::size_t>(at_t)]) {
+              for (const int t : star[static_cast<std::size_t>(v)]) {
+                const double d = d_to(t, x, y, z);
+                if (d < dist[r]) {
+                  dist[r] = d;
+                  tri[r] = t;
+                }
+              }
+            }
+            if (tri[r] == at_t) break;
+          }
+        }
+        if (tri[r] < 0) {  // beyond the band: a clamp (its brick's side)
+          const float a = std::abs(f.at(x, y, z));
+          ASSERT_TRUE(a == static_cast<float>(c_in) || a == static_cast<float>(c_out))
+              << x << " " << y << " " << z;
+          continue;
+        }
+        ++band_samples;
+        const float expected = static_cast<float>(std::clamp(sg * dist[r], -c_in, c_out));
+        ASSERT_EQ(f.at(x, y, z), expected) << x << " " << y << " " << z;
+      }
+    }
+  }
+  EXPECT_GT(band_samples, 50000);
+  EXPECT_GT(walked, 10000);
 }
 
 }  // namespace

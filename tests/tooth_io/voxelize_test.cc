@@ -395,6 +395,35 @@ TEST(Materials, EnamelByDepthOnTheCrownOnly) {
   EXPECT_NEAR(column * h, t_cusp, h);
 }
 
+// Pulp marked kPulp in the grid on entry (the procedural molar's way, without an N^3 pulp array:
+// issue #30) gives the same materials as the same voxels marked in `pulp`.
+TEST(Materials, PulpMarkedInTheGridEqualsThePulpArray) {
+  const TriangleMesh b = box_mesh(Vec3(1e-3, 1e-3, 2e-3), Mat3::Identity(), Vec3::Zero());
+  VoxelGrid by_array = make_grid(mesh_bounds(b), 64);
+  by_array.voxels = voxelize_solid(b, by_array);
+  VoxelGrid in_grid = by_array;
+  std::vector<std::uint8_t> pulp(by_array.voxels.size(), 0);
+  long marked = 0;
+  for (int k = 24; k < 40; ++k) {  // a pulp column through the crown's enamel and the root
+    for (int j = 30; j < 34; ++j) {
+      for (int i = 30; i < 34; ++i) {
+        if (!by_array.solid(i, j, k)) continue;
+        pulp[by_array.index(i, j, k)] = 1;
+        in_grid.set(i, j, k, kPulp);
+        ++marked;
+      }
+    }
+  }
+  ASSERT_GT(marked, 100);
+  CrownFrame crown;
+  crown.axis = Vec3::UnitZ();
+  crown.crown_height = 2e-3;
+  assign_materials(by_array, pulp, crown, 0.5e-3);
+  assign_materials(in_grid, {}, crown, 0.5e-3);
+  EXPECT_EQ(in_grid.voxels, by_array.voxels);
+  EXPECT_EQ(count_materials(in_grid)[kPulp], marked);
+}
+
 // ---- real meshes --------------------------------------------------------------------------------
 
 std::string shared_data(const std::string& file) {

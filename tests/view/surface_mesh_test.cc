@@ -9,8 +9,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <numbers>
+#include <random>
 #include <set>
 #include <tuple>
 #include <vector>
@@ -404,6 +406,75 @@ TEST(SurfaceMesh, FieldBlocksSkippedOutsideKeepTheDefinitionsQuads) {
     const auto soup = triangle_soup(m8);
     EXPECT_EQ(triangle_soup(SurfaceMesher(g, &field, 4, cut)), soup) << "cut " << cut.enabled;
     EXPECT_EQ(triangle_soup(SurfaceMesher(g, &field, 16, cut)), soup) << "cut " << cut.enabled;
+  }
+}
+
+
+// The pictures' mesher reads the caller's grid instead of copying it (issue #30: 128 MiB at
+// 512^3): the same blocks, vertex for vertex and index for index, as the copying mesher's, on the
+// voxels and on the field, with and without the cut; and it refuses update() (it has no copy).
+TEST(SurfaceMesh, BorrowingMesherMeshesAsTheCopyingOne) {
+  VoxelGrid g = voxelize_procedural_molar(MolarParams{}, 64);
+  const auto same_blocks = [](const SurfaceMesher& a, const SurfaceMesher& b) {
+    if (a.blocks().size() != b.blocks().size()) return false;
+    for (std::size_t i = 0; i < a.blocks().size(); ++i) {
+      const BlockMesh& x = a.blocks()[i];
+      const BlockMesh& y = b.blocks()[i];
+      if (x.indices != y.indices || x.vertices.size() != y.vertices.size()) return false;
+      for (std::size_t v = 0; v < x.vertices.size(); ++v) {
+        if (std::memcmp(&x.vertices[v], &y.vertices[v], sizeof(MeshVertex)) != 0) return false;
+      }
+    }
+    return true;
+  };
+  FieldBand band;
+  band.outside_m = 3 * g.voxel_size;
+  const MolarParams params;
+  const SampledField field = build_sampled_field(
+      g, triangulate_implicit(g, [&](const Vec3& p) { return molar_solid(params, p); }), band);
+  for (const SampledField* f : {static_cast<const SampledField*>(nullptr), &field}) {
+    for (const CutAway cut : {CutAway{}, centre_cut(g)}) {
+      const SurfaceMesher copying(g, f, 8, cut);
+      SurfaceMesher borrowing = SurfaceMesher::borrowing(g, f, 8, cut);
+      ASSERT_GT(copying.triangle_count(), 1000u);
+      EXPECT_TRUE(same_blocks(copying, borrowing)) << "field " << (f != nullptr) << " cut "
+                                                   << cut.enabled;
+      EXPECT_EQ(&borrowing.grid(), &g);
+      const std::size_t changed[1] = {g.index(32, 32, 32)};
+      EXPECT_THROW(borrowing.update(g, changed), std::logic_error);
+    }
+  }
+}
+
+
+// centre_cut scans the grid a row at a time: the same cut as the definition (the middle of the
+// solid voxels' x and y extent, every voxel tested), on random sparse grids and an empty one.
+TEST(SurfaceMesh, CentreCutIsTheMiddleOfTheSolidsExtent) {
+  std::mt19937 rng(30);
+  for (int trial = 0; trial < 20; ++trial) {
+    VoxelGrid g(16, Vec3::Zero(), 1e-4);
+    const int count = trial == 0 ? 0 : 1 + static_cast<int>(rng() % 40);
+    for (int c = 0; c < count; ++c) {
+      g.set(static_cast<int>(rng() % 16), static_cast<int>(rng() % 16),
+            static_cast<int>(rng() % 16), kDentin);
+    }
+    int lo[2] = {16, 16}, hi[2] = {-1, -1};
+    for (int k = 0; k < 16; ++k) {
+      for (int j = 0; j < 16; ++j) {
+        for (int i = 0; i < 16; ++i) {
+          if (!g.solid(i, j, k)) continue;
+          lo[0] = std::min(lo[0], i);
+          hi[0] = std::max(hi[0], i);
+          lo[1] = std::min(lo[1], j);
+          hi[1] = std::max(hi[1], j);
+        }
+      }
+    }
+    const CutAway cut = centre_cut(g);
+    EXPECT_EQ(cut.enabled, hi[0] >= 0) << "trial " << trial;
+    if (hi[0] < 0) continue;
+    EXPECT_EQ(cut.i, (lo[0] + hi[0] + 1) / 2) << "trial " << trial;
+    EXPECT_EQ(cut.j, (lo[1] + hi[1] + 1) / 2) << "trial " << trial;
   }
 }
 

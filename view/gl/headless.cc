@@ -99,9 +99,14 @@ RgbImage render_offscreen(const VoxelGrid& tooth, const TickSnapshot* tick,
   {
     const Framebuffer fb(options.width, options.height);
     GlRenderer renderer;
-    const SurfaceMesher mesher(tooth, options.field, SurfaceMesher::kDefaultBlockSize,
-                               options.cutaway ? centre_cut(tooth) : CutAway{});
-    renderer.sync(mesher);
+    {
+      // Reads the caller's grid (no copy), and its meshes go once the GL holds them: issue #30's
+      // 512^3 tooth (128 MiB of grid, ~100 MiB of meshes).
+      const SurfaceMesher mesher = SurfaceMesher::borrowing(
+          tooth, options.field, SurfaceMesher::kDefaultBlockSize,
+          options.cutaway ? centre_cut(tooth) : CutAway{});
+      renderer.sync(mesher);
+    }
     OrbitCamera cam = camera_for(tooth, options);
     if (options.focus_tool && tick != nullptr && tick->tick >= 0) {
       cam.target = tick->proxy.x.cast<float>();
