@@ -19,13 +19,19 @@ namespace {
 
 const std::string kData = std::string(DENTSIM_SOURCE_DIR) + "/../shared/data";
 
-TEST(CrosscheckContact, ShortSweepSdfNeverPopsThroughFacesDo) {
+// A sweep at 128^3 with `probes` probes of `ticks` pressing and `ticks` sliding ticks.
+ContactCrosscheckOptions short_sweep(int probes, int ticks, const std::string& data_dir) {
   ContactCrosscheckOptions o;
   o.resolutions = {128};
-  o.probes = 60;
-  o.settle_ticks = 100;
-  o.slide_ticks = 100;
-  o.data_dir = kData;
+  o.probes = probes;
+  o.settle_ticks = ticks;
+  o.slide_ticks = ticks;
+  o.data_dir = data_dir;
+  return o;
+}
+
+TEST(CrosscheckContact, ShortSweepSdfNeverPopsThroughFacesDo) {
+  const ContactCrosscheckOptions o = short_sweep(60, 100, kData);
   const ContactCrosscheckResult r = crosscheck_contact(o);
   std::printf("%s\n", crosscheck_contact_json(r).dump(2).c_str());
   ASSERT_EQ(r.rows.size(), 2u);
@@ -50,13 +56,8 @@ TEST(CrosscheckContact, ShortSweepSdfNeverPopsThroughFacesDo) {
 // and meridian felt through the closed loop (the ideal device, pmi-pd, 1 kHz), at 1 N (the issue's
 // push) and 4 N; 8.5 N would put the tool 2.8 mm deep in the 5 mm sphere, past R / 3: not measured.
 TEST(CrosscheckContact, ClosedLoopRippleSplitsTheLoopFromTheShape) {
-  ContactCrosscheckOptions o;
-  o.resolutions = {128};
-  o.probes = 1;
-  o.settle_ticks = 20;
-  o.slide_ticks = 20;
+  ContactCrosscheckOptions o = short_sweep(1, 20, "");
   o.models = {"sdf", "field"};
-  o.data_dir = "";
   const ContactCrosscheckResult r = crosscheck_contact(o);
   ASSERT_EQ(r.rows.size(), 2u);
   for (const ContactSweepRow& row : r.rows) {
