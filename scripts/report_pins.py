@@ -155,6 +155,7 @@ def check(dentsim, pins):
             print(f"report_pins: {name}: long form, runs with DENTSIM_STRESS=full")
             continue
         report, cols = run_case(dentsim, case.get("kind", "run"), case["args"])
+        bad_before = bad
         if "report_groups_sha256" in case:
             got = groups({k: v for k, v in report.items() if k not in case["report_unpinned"]})
             for g, h in case["report_groups_sha256"].items():
@@ -175,6 +176,9 @@ def check(dentsim, pins):
                 bad += 1
                 if bad <= 40:
                     print(f"report_pins: {name}: timeseries.csv column {k} differs")
+        if bad - bad_before > 0:
+            # The first 40 differences are printed in full; every case says how many it has.
+            print(f"report_pins: {name}: {bad - bad_before} pinned values differ")
     print(f"report_pins: {checked} pinned values in {len(doc['cases'])} cases, {bad} differ")
     return 1 if bad else 0
 
