@@ -228,7 +228,7 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
   const auto& t = rd.object(doc, "", "tooth");
   rd.only_keys(t, "tooth", {"source", "mesh", "mesh_scale_m_per_unit", "size_mm", "resolution",
                             "k_tooth_n_per_m", "b_tooth_n_s_per_m", "anchor_offset_mm", "volume",
-                            "material_thresholds", "contact_model"});
+                            "material_thresholds", "contact_model", "field_spacing_mm"});
   s.tooth.source = rd.string(t, "tooth", "source", "procedural");
   if (s.tooth.source != "procedural" && s.tooth.source != "mesh" && s.tooth.source != "volume") {
     rd.fail("tooth.source", "expected \"procedural\", \"mesh\" or \"volume\", got \"" +
@@ -293,6 +293,13 @@ Scene parse_scene(const std::string& text, const std::string& origin) {
     rd.fail("tooth.contact_model", "expected \"sdf\" (the default), \"faces\" or \"field\" (got \"" +
                                        s.tooth.contact_model + "\")");
   }
+  // 0 or absent: automatic; not below the voxel size (checked when the tooth is built).
+  const double spacing_mm = rd.number(t, "tooth", "field_spacing_mm", 0.0);
+  if (!std::isfinite(spacing_mm)) {
+    rd.fail("tooth.field_spacing_mm", "must be finite (0 or absent: automatic)");
+  }
+  rd.non_negative("tooth.field_spacing_mm", spacing_mm);
+  s.tooth.field_spacing = 1e-3 * spacing_mm;
 
   // Tool.
   const auto& tl = rd.object(doc, "", "tool");

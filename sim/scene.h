@@ -38,6 +38,11 @@ struct SceneTooth {
   // "sdf" (surface proxy on the signed distance, reference/tooth/sdf.h: never tunnels; the
   // default) or "faces" (the thesis's face model, reference/tooth/collision.h).
   std::string contact_model = "sdf";
+  // The "field" model's sample spacing H [m] (tooth.field_spacing_mm; issue #30): 0 = automatic
+  // (the largest multiple of the voxel size within the tip's H_max, reference/tooth/
+  // sampled_field.h field_stride_for); else at least the voxel size (checked when the tooth is
+  // built: the voxel size is known then), the field then samples every floor(H / h)-th voxel.
+  double field_spacing = 0.0;
 };
 
 struct SceneTool {

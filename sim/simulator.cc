@@ -176,9 +176,18 @@ void place_tooth(const Scene& scene, SceneRig& g) {
   // The tooth's sampled field, built from its source (contact model "field"; tooth_io/
   // tooth_field.h), which every implementation's tooth reads.
   if (parse_contact_model(scene.tooth.contact_model) == ContactModel::kField) {
+    const double h = g.tooth->grid().voxel_size;
+    if (scene.tooth.field_spacing > 0.0 && scene.tooth.field_spacing < h * (1.0 - 1e-9)) {
+      throw InputError(scene.origin + ": tooth.field_spacing_mm: " +
+                       std::to_string(1e3 * scene.tooth.field_spacing) +
+                       " mm is below the voxel size " + std::to_string(1e3 * h) + " mm at " +
+                       std::to_string(scene.tooth.resolution) +
+                       "^3 (the field samples voxel centres; 0 or absent: automatic)");
+    }
+    const int stride = field_stride_for(g.tip.radius, h, scene.tooth.field_spacing);
     g.field = std::make_unique<SampledField>(
         build_tooth_field(tooth_source(scene.tooth), g.tooth->grid(), tooth_shift,
-                          field_band_for_tip(g.tip.radius, g.tooth->grid().voxel_size)));
+                          field_band_for_tip(g.tip.radius, h, stride)));
   }
 }
 

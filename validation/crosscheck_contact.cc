@@ -60,7 +60,7 @@ SweptTooth build_swept_tooth(const std::string& mesh_path, double size_mm, int r
       const VoxelGrid& grid = out.tooth.grid();
       out.field = std::make_unique<SampledField>(build_sampled_field(
           grid, triangulate_implicit(grid, [&](const Vec3& p) { return molar_solid(params, p); }),
-          field_band_for_tip(rho, grid.voxel_size)));
+          field_band_for_tip(rho, grid.voxel_size, field_stride_for(rho, grid.voxel_size))));
     }
     return out;
   }
@@ -70,8 +70,9 @@ SweptTooth build_swept_tooth(const std::string& mesh_path, double size_mm, int r
   opt.resolution = resolution;
   out.tooth = VoxelTooth(voxelize_mesh(loaded.mesh, opt));
   if (with_field) {
+    const double h = out.tooth.grid().voxel_size;
     out.field = std::make_unique<SampledField>(build_sampled_field(
-        out.tooth.grid(), loaded.mesh, field_band_for_tip(rho, out.tooth.grid().voxel_size)));
+        out.tooth.grid(), loaded.mesh, field_band_for_tip(rho, h, field_stride_for(rho, h))));
   }
   return out;
 }
@@ -390,6 +391,10 @@ ContactCrosscheckResult crosscheck_contact(const ContactCrosscheckOptions& o) {
   }
   const int teeth = static_cast<int>(result.teeth.size());
   const int per_tooth = (o.probes + teeth - 1) / teeth;
+  // The field's spacing on voxels of size h (the automatic rule; 0 for the other models).
+  const auto spacing_of = [&](const std::string& model, double h) {
+    return model == "field" ? field_stride_for(o.tip_radius_m, h) * h : 0.0;
+  };
   for (const int res : o.resolutions) {
     std::vector<ContactSweepRow> rows(models.size());
     for (std::size_t m = 0; m < models.size(); ++m) {
@@ -415,6 +420,7 @@ ContactCrosscheckResult crosscheck_contact(const ContactCrosscheckOptions& o) {
             for (ContactSweepRow& done : rows) {
               done.partial = true;
               done.voxel_size_m = h_molar;
+              done.field_spacing_m = spacing_of(done.model, h_molar);
               done.sliding_ripple_rms = std::numeric_limits<double>::quiet_NaN();
               result.rows.push_back(done);
             }
@@ -448,7 +454,8 @@ ContactCrosscheckResult crosscheck_contact(const ContactCrosscheckOptions& o) {
           sphere.grid(),
           triangulate_implicit(sphere.grid(),
                                [&](const Vec3& p) { return (p - centre).norm() < kSphereRadiusM; }),
-          field_band_for_tip(o.tip_radius_m, h_molar)));
+          field_band_for_tip(o.tip_radius_m, h_molar,
+                             field_stride_for(o.tip_radius_m, h_molar))));
     }
     // The loop on the exact sphere: the same for every model (no voxels, no field).
     constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -461,6 +468,7 @@ ContactCrosscheckResult crosscheck_contact(const ContactCrosscheckOptions& o) {
     }
     for (std::size_t m = 0; m < models.size(); ++m) {
       rows[m].voxel_size_m = h_molar;
+      rows[m].field_spacing_m = spacing_of(rows[m].model, h_molar);
       for (const double f : o.forces_n) {
         rows[m].ripple_per_force.push_back(
             sliding_ripple(sphere, sphere_field.get(), centre, models[m], f, o));
@@ -520,6 +528,7 @@ nlohmann::json crosscheck_contact_json(const ContactCrosscheckResult& r) {
     rows.push_back({{"model", row.model},
                     {"resolution", row.resolution},
                     {"voxel_size_mm", 1e3 * row.voxel_size_m},
+                    {"field_spacing_mm", 1e3 * row.field_spacing_m},
                     {"probes", row.probes},
                     {"runs", row.runs},
                     {"pop_throughs", row.pop_throughs},

@@ -86,6 +86,10 @@ struct ContactSweepRow {
   std::string model;
   int resolution = 0;
   double voxel_size_m = 0.0;  // the procedural molar's h at this resolution
+  // The "field" model's sample spacing H on the molar and the sphere at this resolution (the
+  // automatic rule, reference/tooth/sampled_field.h field_stride_for: k h, k the largest with
+  // k h <= H_max(tip)); 0 for the other models. JSON "field_spacing_mm".
+  double field_spacing_m = 0.0;
   long probes = 0;            // (point, direction) pairs
   long runs = 0;              // probes x forces
   long pop_throughs = 0;

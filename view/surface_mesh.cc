@@ -29,13 +29,17 @@ SurfaceMesher::SurfaceMesher(const VoxelGrid* borrowed, const VoxelGrid& grid,
       field_(field) {
   if (block_size < 4) throw std::invalid_argument("SurfaceMesher: block size must be >= 4");
   if (field_ != nullptr) {
-    if (field_->padding() < 1 || field_->samples_per_axis() < grid.n + 2 * field_->padding() ||
+    const int k = field_->stride();
+    if (field_->padding() < 1 || k < 1 ||
+        field_->samples_per_axis() < (grid.n - 1) / k + 1 + 2 * field_->padding() ||
         std::abs(field_->voxel_size() - grid.voxel_size) > 1e-12 * grid.voxel_size) {
       throw std::invalid_argument("SurfaceMesher: the field is not the grid's");
     }
     iso_ = 0.0f;
-    // edit_field_for_removed_voxels' radius R samples, plus the dual cells' reach.
-    halo_ = field_->edit_radius() + 2;
+    // edit_field_for_removed_voxels' radius R_v voxels, the k - 1 voxels over which a sample's
+    // cells reach the voxel centres read by interpolation (stride k > 1), and the dual cells'
+    // reach (2). At k = 1: R + 2.
+    halo_ = field_->edit_radius_voxels() + (k - 1) + 2;
   }
   nb_ = (grid.n + block_size - 1) / block_size;
   blocks_.resize(static_cast<std::size_t>(nb_) * nb_ * nb_);
@@ -222,13 +226,25 @@ void SurfaceMesher::mesh_block(int block) {
   const float half_voxel = 0.5f * static_cast<float>(grid().voxel_size);
   if (field_ != nullptr) {
     // Samples all at c_out (s = -c_out < 0, the cut only lowers s): no cell inside, no quad.
-    const int lo[3] = {b0[0] - 1 + pad, b0[1] - 1 + pad, b0[2] - 1 + pad};
-    const int hi[3] = {b1[0] + pad, b1[1] + pad, b1[2] + pad};
+    // At stride k the voxel centres c in [b0 - 1, b1] read the cells of samples floor(c / k) + P
+    // and the next (clamped to the lattice), by the field's interpolation.
+    const int stride = field_->stride();
+    const int last = field_->samples_per_axis() - 1;
+    const auto below = [&](int c) {  // floor(c / k) + P
+      return (c >= 0 ? c / stride : -((-c + stride - 1) / stride)) + pad;
+    };
+    int lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::clamp(below(b0[a] - 1), 0, last);
+      hi[a] = std::clamp(below(b1[a]) + (stride > 1 ? 1 : 0), 0, last);
+    }
     if (field_->all_outside(lo, hi)) return;
     for (int k = b0[2] - 1; k <= b1[2]; ++k) {
       for (int j = b0[1] - 1; j <= b1[1]; ++j) {
         for (int i = b0[0] - 1; i <= b1[0]; ++i) {
-          float s = -field_->at(i + pad, j + pad, k + pad);
+          // k = 1: the sample at the centre itself (bit for bit the field's); else phi there.
+          float s = stride == 1 ? -field_->at(i + pad, j + pad, k + pad)
+                                : -static_cast<float>(field_->value(grid().center(i, j, k)));
           if (cut_.enabled && i >= cut_.i && j >= cut_.j) s = std::min(s, -half_voxel);
           s_[sidx(i, j, k)] = s;
         }

@@ -27,7 +27,7 @@ FieldBricks::FieldBricks(const SampledField& field, std::size_t spare)
       nb_(field.samples_per_axis() / kFieldBrick),
       out_(static_cast<float>(field.outside_clamp())),
       in_(static_cast<float>(-field.inside_clamp())),
-      h_(field.voxel_size()),
+      h_(field.spacing()),
       lipschitz_(field.lipschitz()) {
   const std::size_t slots = static_cast<std::size_t>(nb_) * nb_ * nb_;
   index_.assign(slots, kAllOutside);
@@ -199,7 +199,7 @@ namespace {
   const int m = f.samples_per_axis();
   if (m < 2) return out;  // SampledField::sample's empty field (deep_inside false)
   const Vec3 origin = f.sample_position(0, 0, 0);
-  const double h = f.voxel_size();
+  const double h = f.spacing();
   int s[3];
   double t[3];
   for (int a = 0; a < 3; ++a) {  // the reference's locate()
@@ -265,7 +265,7 @@ const FieldSolid::Query& FieldSolid::query(const Vec3& x) const {
 SignedDistance FieldSolid::distance(const Vec3& x, double reach) const {
   SignedDistance out;
   if (have_exact_ && reach > 0.0) {  // the free-space certificate (header comment)
-    const double margin = 1e-9 * bricks_.field().voxel_size();
+    const double margin = 1e-9 * bricks_.field().spacing();
     if (phi0_ - bricks_.lipschitz() * (x - x0_).norm() >= reach + margin) {
       ++certified_;
       out.phi = reach;

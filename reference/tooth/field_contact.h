@@ -73,6 +73,12 @@ inline constexpr long kFieldEditVoxelWeight = 4;
 inline constexpr long kFieldEditRowWeight = 1;
 inline constexpr long kFieldEditQueryWeight = 4;
 inline constexpr long kFieldEditCellsPerUnit = 8;
+// The batch at stride k > 1 (field_edit_core.h): at most kFieldEditGroup consecutive removed
+// voxels with the same box centre floor(c / k) are subtracted in one visit of the box; each
+// sample read then also costs the least over the group's voxels (~12 instructions a voxel),
+// charged group / kFieldEditGroupPerUnit units (a unit ~600 instructions: field_contact.h above).
+inline constexpr int kFieldEditGroup = 64;
+inline constexpr long kFieldEditGroupPerUnit = 16;
 // The units charged for `cells` re-measured cells.
 inline constexpr long field_edit_cell_work(long cells) {
   return (cells + kFieldEditCellsPerUnit - 1) / kFieldEditCellsPerUnit;
@@ -80,9 +86,11 @@ inline constexpr long field_edit_cell_work(long cells) {
 // The most work one step of the edit adds between two of its budget checks (before a voxel's
 // set-up and before each row of its box): a voxel's set-up, or a row of 2R + 1 samples each read
 // and queried, and its raises' cells (x in [x_lo - 1, x_hi], two rows of cells in y and z).
-inline constexpr long field_edit_step_work(int reach) {
+// At stride k > 1 a sample read also carries its group's charge (kFieldEditGroupPerUnit).
+inline constexpr long field_edit_step_work(int reach, int stride = 1) {
   const long width = 2L * reach + 1;
-  const long row = kFieldEditRowWeight + width * (1 + kFieldEditQueryWeight) +
+  const long group = stride > 1 ? kFieldEditGroup / kFieldEditGroupPerUnit : 0;
+  const long row = kFieldEditRowWeight + width * (1 + kFieldEditQueryWeight + group) +
                    field_edit_cell_work(4 * (width + 1));
   return row > kFieldEditVoxelWeight ? row : kFieldEditVoxelWeight;
 }
@@ -94,12 +102,16 @@ inline constexpr long field_edit_step_work(int reach) {
 struct FieldEditCursor {
   std::size_t next = 0;
   int row = 0;
+  // At stride k > 1: the length of the group (batch) of `removed` from `next` being subtracted
+  // when row > 0 (field_edit_core.h), so that a resumed group is the one begun.
+  std::size_t group = 0;
 };
 
 // Drilling edits the field (docs/derivations/field_contact.md §5): `removed` are the flat indices
 // of voxels of `tooth` that drilling just removed (drill_tick; the octree already without them).
 // For each, every sample s with |s - p_v|_inf <= R = SampledField::edit_radius() = ceil(c_out / h
-// + 1) samples (p_v the voxel's centre) whose value v(s) < c_out and whose distance to the voxel's cube grown by h / 2
+// + 1) samples (p_v the voxel's centre; at stride k > 1, within R = ceil(R_v / k) samples of
+// floor(c / k) + P, the voxels edited in batches: field_edit_core.h) whose value v(s) < c_out and whose distance to the voxel's cube grown by h / 2
 // is <= |v(s)| (the cube, or the source's sub-voxel sliver next to it, held s's nearest surface,
 // so the removal may change v(s)) is set to
 //     v(s) <- max(v(s), -dist(p(s), C_v))                 if s's voxel is still solid,

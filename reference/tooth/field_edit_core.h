@@ -70,6 +70,20 @@
 // samples_bounded those of them answered without a voxel-distance query (inside samples by the
 // closed form, outside ones by a solid neighbour): the queries are the difference.
 //
+// Stride k > 1 (sampled_field.h; docs/derivations/field_contact.md §7): sample s sits at voxel
+// k (s - P), so its offset from a removed voxel c is D = k (s - P) - c voxels (integers) and every
+// closed form above holds with D for the sample offset; the box is the R = ceil(R_v / k) samples
+// around floor(c / k) + P. The batch: consecutive removed voxels with the same box centre (the
+// provider sorts each tick's voxels by it) are subtracted in one visit of the box, at most
+// kFieldEditGroup of them: a sample's test takes the least distance over the group (a voxel
+// whose -dist would raise an inside sample passes its own test, and an outside sample's query is
+// the same on the same grid), the inside value -h sqrt(min over the group), which is the max of
+// the voxels' one-by-one raises, bit for bit; the ball's and the row bounds' skips use the
+// distance to the group's bounding box (a lower bound of each voxel's), so they skip only
+// samples every voxel skips. A group lists no neighbours (U is then the 27 around the sample: a
+// subset, which the proof of the shorter reach allows). At k = 1 a group is one voxel: the
+// code above, bit for bit.
+//
 // Real-time: no allocation, no throw (the Access must not either).
 #pragma once
 
@@ -114,6 +128,9 @@ inline int nearest_listed4(const VoxelGrid& grid, const int c[3], const int (*ne
 
 // Where a budgeted edit stopped (reference/tooth/field_contact.h).
 using dentsim::FieldEditCursor;
+
+// floor(a / b) for b > 0 (C++ division truncates towards zero).
+inline int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
 // The edit (header comment). With a cursor, it resumes there and stops before the first row (or
 // the first voxel) at which it has spent `budget` units of work in this call, leaving the cursor
@@ -175,6 +192,11 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
   const float out_f = static_cast<float>(c_out);
   const float in_f = static_cast<float>(-field.inside_clamp());
   const int m = field.samples_per_axis(), pad = field.padding();
+  // Stride k (sampled_field.h): sample s sits at the centre of voxel k (s - P); the offsets below
+  // (the distances to the removed cube, the closed forms, the listed voxels) are in voxels, the
+  // box's rows in samples (reach = R, field samples). At k = 1 every expression is the one of
+  // one sample per voxel centre (D = s - P - c = d).
+  const int stride = field.stride();
   const int reach = field.edit_radius();
   const double slack = 1e-6 * h;  // float rounding of the stored values
   constexpr double kWide = 1.0 + 1e-9;  // a closed-form lattice distance over the computed one
@@ -204,16 +226,59 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
     changed_rows = 0;
   };
   bool paused = false;
+  std::size_t group = 1;  // the voxels edited together (the batch, header comment)
+  const auto voxel_of = [&](std::size_t v, int c[3]) {
+    c[0] = static_cast<int>(v % n);
+    c[1] = static_cast<int>((v / n) % n);
+    c[2] = static_cast<int>(v / (n * n));
+  };
   for (std::size_t at = cursor != nullptr ? cursor->next : 0; at < removed.size() && !paused;
-       ++at) {
-    const std::size_t v = removed[at];
-    const int s0[3] = {static_cast<int>(v % n) + pad, static_cast<int>((v / n) % n) + pad,
-                       static_cast<int>(v / (n * n)) + pad};
-    // The first row of this voxel's box this call takes (a resumed voxel's next row).
-    const int first_row = cursor != nullptr && at == cursor->next ? cursor->row : 0;
-    if (spent()) {  // the budget is spent before this voxel's next row: the next call's first
+       at += group) {
+    int cv[3];
+    voxel_of(removed[at], cv);
+    // The box's centre sample floor(c / k) + P: the samples within R_v voxels of c lie within R
+    // of it (SampledField::edit_radius).
+    const int s0[3] = {cv[0] / stride + pad, cv[1] / stride + pad, cv[2] / stride + pad};
+    // The first row of this group's box this call takes (a resumed group's next row).
+    const bool resumed = cursor != nullptr && at == cursor->next;
+    const int first_row = resumed ? cursor->row : 0;
+    // The batch (stride k > 1): the consecutive voxels with the same box centre, at most
+    // kFieldEditGroup; a group resumed inside its box keeps the length it was begun with.
+    group = 1;
+    if (resumed && first_row > 0 && cursor->group > 0) {
+      group = std::min(cursor->group, removed.size() - at);
+    } else if (stride > 1) {
+      while (at + group < removed.size() && group < static_cast<std::size_t>(kFieldEditGroup)) {
+        int c[3];
+        voxel_of(removed[at + group], c);
+        if (c[0] / stride + pad != s0[0] || c[1] / stride + pad != s0[1] ||
+            c[2] / stride + pad != s0[2]) {
+          break;
+        }
+        ++group;
+      }
+    }
+    // The group's voxels' bounds per axis (one voxel: cv itself).
+    int cl[3] = {cv[0], cv[1], cv[2]}, ch[3] = {cv[0], cv[1], cv[2]};
+    int gv[kFieldEditGroup][3];
+    for (std::size_t g = 0; g < group; ++g) {
+      voxel_of(removed[at + g], gv[g]);
+      for (int a = 0; a < 3; ++a) {
+        cl[a] = std::min(cl[a], gv[g][a]);
+        ch[a] = std::max(ch[a], gv[g][a]);
+      }
+    }
+    // The voxel offset of sample coordinate s_a from the group's voxels: |D_a| = |k (s_a - P) -
+    // c_a| for one voxel, the distance to [cl_a, ch_a] for a group (a lower bound of each
+    // voxel's, so the ball's and the row bounds' skips stay skips of every voxel's test).
+    const auto offset = [&](int a, int sa) {
+      const int q = stride * (sa - pad);
+      return q < cl[a] ? cl[a] - q : (q > ch[a] ? q - ch[a] : 0);
+    };
+    if (spent()) {  // the budget is spent before this group's next row: the next call's first
       cursor->next = at;
       cursor->row = first_row;
+      cursor->group = group;
       paused = true;
       break;
     }
@@ -221,8 +286,8 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
     stats->work += kFieldEditVoxelWeight;
     int near_lo[26][3] = {};
     int near_count = 0;
-    {
-      const int c[3] = {s0[0] - pad, s0[1] - pad, s0[2] - pad};
+    if (group == 1) {  // a group lists none (only the 27 around each sample: a subset of U)
+      const int* c = cv;
       for (int k = c[2] - 1; k <= c[2] + 1; ++k) {
         for (int j = c[1] - 1; j <= c[1] + 1; ++j) {
           for (int i = c[0] - 1; i <= c[0] + 1; ++i) {
@@ -238,7 +303,8 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
     for (int dz = -reach + first_row / width; dz <= reach && !paused; ++dz) {
       const int sz = s0[2] + dz;
       if (sz < 0 || sz >= m) continue;
-      const double ez = std::max(std::abs(dz) - 1.0, 0.0);
+      const int oz = offset(2, sz);
+      const double ez = std::max(std::abs(oz) - 1.0, 0.0);
       if (h * std::sqrt(ez * ez) > ball) continue;  // the plane misses the ball
       for (int dy = -reach; dy <= reach && !paused; ++dy) {
         const int row = (dz + reach) * width + dy + reach;
@@ -246,13 +312,15 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
         if (spent()) {
           cursor->next = at;  // the budget is spent: this row is the next call's first
           cursor->row = row;
+          cursor->group = group;
           paused = true;
           break;
         }
         began_row = true;
         const int sy = s0[1] + dy;
         if (sy < 0 || sy >= m) continue;
-        const double ey = std::max(std::abs(dy) - 1.0, 0.0);
+        const int oy = offset(1, sy);
+        const double ey = std::max(std::abs(oy) - 1.0, 0.0);
         if (h * std::sqrt(ey * ey + ez * ez) > ball) continue;  // the row misses the ball
         ++stats->rows_read;
         stats->work += kFieldEditRowWeight;
@@ -268,17 +336,41 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
           const double t = (static_cast<double>(bound) + slack) / h * kWide;
           const double q = t * t - (ey * ey + ez * ez);
           if (q < 0.0) continue;  // the segment's row misses the bound's ball
-          const int ex_max = static_cast<int>(std::sqrt(q));  // |dx| - 1 <= ex_max
-          const int x_lo = std::max({x_first, xb * kFieldBrick, s0[0] - ex_max - 1});
-          const int x_hi =
-              std::min({x_last, xb * kFieldBrick + kFieldBrick - 1, s0[0] + ex_max + 1});
+          const int ex_max = static_cast<int>(std::sqrt(q));  // |D_x| - 1 <= ex_max
+          // |k (sx - P) - c_x| <= ex_max + 1 (at k = 1: |sx - s0| <= ex_max + 1).
+          const int x_lo = std::max({x_first, xb * kFieldBrick,
+                                     pad - floor_div(ex_max + 1 - cl[0], stride)});
+          const int x_hi = std::min({x_last, xb * kFieldBrick + kFieldBrick - 1,
+                                     pad + floor_div(ch[0] + ex_max + 1, stride)});
           for (int sx = x_lo; sx <= x_hi; ++sx) {
-            const int dx = sx - s0[0];
+            const int dx = offset(0, sx);
             const double ex = std::max(std::abs(dx) - 1.0, 0.0);
             // Distance from s to the removed voxel's cube grown by h / 2 (the source's sub-voxel
             // slivers in the empty cubes next to it went with it): beyond |v(s)| that did not
-            // hold s's nearest surface point.
-            const double to_cube = h * std::sqrt(ex * ex + ey * ey + ez * ez);
+            // hold s's nearest surface point. A group: the least over its voxels, and the least
+            // distance to their cubes for the closed form (h sqrt(.) is monotone, so the least
+            // of the sums gives the least distance, the same double).
+            double grown2 = ex * ex + ey * ey + ez * ez, cube2 = 0.0;
+            if (group > 1) {
+              const int qx = stride * (sx - pad), qy = stride * (sy - pad),
+                        qz = stride * (sz - pad);
+              grown2 = INFINITY;
+              cube2 = INFINITY;
+              for (std::size_t g = 0; g < group; ++g) {
+                const int o[3] = {std::abs(qx - gv[g][0]), std::abs(qy - gv[g][1]),
+                                  std::abs(qz - gv[g][2])};
+                double e2 = 0.0, a2 = 0.0;
+                for (int a = 0; a < 3; ++a) {
+                  const double e = std::max(o[a] - 1.0, 0.0), c = std::max(o[a] - 0.5, 0.0);
+                  e2 += e * e;
+                  a2 += c * c;
+                }
+                grown2 = std::min(grown2, e2);
+                cube2 = std::min(cube2, a2);
+              }
+              stats->work += static_cast<long>(group) / kFieldEditGroupPerUnit;
+            }
+            const double to_cube = h * std::sqrt(grown2);
             if (to_cube > ball) continue;
             ++stats->samples_scanned;
             ++stats->work;
@@ -294,14 +386,19 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
             double d = 0.0;
             if (inside) {  // the closed form: minus the distance to the removed cube
               ++stats->samples_bounded;
-              const double ax = std::max(std::abs(dx) - 0.5, 0.0);
-              const double ay = std::max(std::abs(dy) - 0.5, 0.0);
-              const double az = std::max(std::abs(dz) - 0.5, 0.0);
-              d = -h * std::sqrt(ax * ax + ay * ay + az * az);
+              if (group > 1) {
+                d = -h * std::sqrt(cube2);
+              } else {
+                const double ax = std::max(std::abs(dx) - 0.5, 0.0);
+                const double ay = std::max(std::abs(oy) - 0.5, 0.0);
+                const double az = std::max(std::abs(oz) - 0.5, 0.0);
+                d = -h * std::sqrt(ax * ax + ay * ay + az * az);
+              }
             } else {
               // The nearest listed solid voxel (header comment): no query if it is within v(s),
               // else the query's reach cut down to it.
-              const int c[3] = {sx - pad, sy - pad, sz - pad};
+              const int c[3] = {field.voxel_of_sample(sx), field.voxel_of_sample(sy),
+                                field.voxel_of_sample(sz)};
               const auto to_listed = [&](int best4) {
                 return best4 == INT_MAX ? c_out
                                         : 0.5 * h * std::sqrt(static_cast<double>(best4)) * kWide;
@@ -351,11 +448,12 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
         }
       }
     }
-    if (!paused) ++stats->voxels;  // this voxel's box is done
+    if (!paused) stats->voxels += static_cast<long>(group);  // this group's box is done
   }
   if (cursor != nullptr && !paused) {  // every voxel whole
     cursor->next = removed.size();
     cursor->row = 0;
+    cursor->group = 0;
   }
   measure();
   return complete;

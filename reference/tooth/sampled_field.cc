@@ -11,11 +11,25 @@
 
 namespace dentsim {
 
-FieldBand field_band_for_tip(double rho, double voxel_size) {
+FieldBand field_band_for_tip(double rho, double voxel_size, int stride) {
   FieldBand band;
-  band.outside_m = 1.25 * rho + 2.0 * voxel_size;
-  band.inside_m = 2.0 * voxel_size;
+  const double spacing = stride * voxel_size;
+  band.outside_m = 1.25 * rho + 2.0 * spacing;
+  band.inside_m = 2.0 * spacing;
+  band.stride = stride;
   return band;
+}
+
+double field_max_spacing(double rho) {
+  const double wall = (1.0 - 1e-9) * 2.0 * (rho - 0.25 * rho) / std::sqrt(3.0);
+  const double ripple = rho * kFieldRippleAim / kFieldRipplePerSpacing;
+  return std::min(wall, ripple);
+}
+
+int field_stride_for(double rho, double voxel_size, double spacing_m) {
+  const double target = spacing_m > 0.0 ? spacing_m * (1.0 + 1e-9) : field_max_spacing(rho);
+  const double k = std::floor(target / voxel_size);
+  return k >= 1.0 ? static_cast<int>(std::min(k, 64.0)) : 1;
 }
 
 // Closest point on a triangle by its Voronoi regions (vertex, edge, face), then the distance.
@@ -214,15 +228,22 @@ bool SampledField::deep_inside(const Vec3& x) const {
 SampledField build_sampled_field(const VoxelGrid& grid, const TriangleMesh& surface,
                                  const FieldBand& band) {
   SampledField f;
-  const double h = grid.voxel_size;
+  // Stride (header comment): h below is the lattice's spacing H = k h_voxel; every length is in
+  // it except where a voxel is named. At k = 1 every expression is the one-sample-per-voxel one.
+  const int stride = std::max(1, band.stride);
+  const double h_voxel = grid.voxel_size;
+  const double h = stride * h_voxel;
   f.h_ = h;
+  f.voxel_h_ = h_voxel;
+  f.stride_ = stride;
   f.c_out_ = std::max(band.outside_m, 2.0 * h);
   f.c_in_ = band.inside_m > 0.0 ? std::max(band.inside_m, 2.0 * h) : 2.0 * h;
   f.pad_ = static_cast<int>(std::ceil(f.c_out_ / h)) + 2;
-  const int n = grid.n;
+  // Samples on the grid: the voxel centres k s', s' in [0, (n - 1) / k].
+  const int n = (grid.n - 1) / stride + 1;
   f.m_ = ((n + 2 * f.pad_ + kFieldBrick - 1) / kFieldBrick) * kFieldBrick;
   f.nb_ = f.m_ / kFieldBrick;
-  f.origin_ = grid.origin + (0.5 - f.pad_) * h * Vec3::Ones();
+  f.origin_ = grid.origin + (0.5 - static_cast<double>(stride) * f.pad_) * h_voxel * Vec3::Ones();
   const int m = f.m_, pad = f.pad_;
   const std::size_t slots = static_cast<std::size_t>(f.nb_) * f.nb_ * f.nb_;
   constexpr int kB = SampledField::kBrickSamples;
@@ -308,9 +329,9 @@ SampledField build_sampled_field(const VoxelGrid& grid, const TriangleMesh& surf
     }
   }
   // Grow the band: face neighbours take the nearest of their neighbours' triangles.
-  // The sign of sample s: the voxel s - P of the grid (outside the grid: outside).
+  // The sign of sample s: the voxel k (s - P) of the grid (outside the grid: outside).
   const auto sign = [&](int sx, int sy, int sz) {
-    return grid.solid(sx - pad, sy - pad, sz - pad) ? -1.0 : 1.0;
+    return grid.solid(stride * (sx - pad), stride * (sy - pad), stride * (sz - pad)) ? -1.0 : 1.0;
   };
   const double stop_out = f.c_out_ + 2.0 * h, stop_in = f.c_in_ + 2.0 * h;
   constexpr int kNeighbour[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0},

@@ -4,16 +4,19 @@
 // sparse bricks and interpolated trilinearly, so that the surface sits between the samples
 // (sub-voxel) instead of on the voxel staircase.
 //
-// Frames and units: world frame {O}, metres. Samples sit at the centres of the tooth grid's voxels
-// (voxel_grid.h) and continue P voxels beyond the grid on every side (so that the band around a
-// surface near the grid's edge is whole): sample s = (s_x, s_y, s_z), s_a in [0, M), is at
-//   p(s) = field_origin + h s,   field_origin = grid.origin + (0.5 - P) h,
-// i.e. the centre of voxel s - P. Its value is
+// Frames and units: world frame {O}, metres. Samples sit at the centres of every k-th voxel of
+// the tooth grid (voxel_grid.h; k >= 1 the stride, FieldBand::stride) and continue P samples
+// beyond the grid on every side (so that the band around a surface near the grid's edge is
+// whole): sample s = (s_x, s_y, s_z), s_a in [0, M), is at
+//   p(s) = field_origin + H s,   H = k h,   field_origin = grid.origin + (0.5 - k P) h,
+// i.e. the centre of voxel k (s - P) (Stride: every formula below holds with h read as H, the
+// lattice's spacing; the sign still comes from the voxel the sample sits in; k = 1 is the field
+// of one sample per voxel centre, bit for bit). Its value is
 //   v(s) = clamp(sigma(s) d(s), -c_in, c_out),
 // d(s) the exact (unsigned) distance from p(s) to the source surface (nearest triangle), sigma(s)
-// = -1 if voxel s - P is solid in the tooth grid, else +1 (the voxeliser's own inside test: the
-// mesh's winding number, the molar's implicit function or the scan's class at the voxel centre,
-// so the field's sign and the materials agree sample by sample). Clamping keeps the band narrow:
+// = -1 if voxel k (s - P) is solid in the tooth grid, else +1 (the voxeliser's own inside test:
+// the mesh's winding number, the molar's implicit function or the scan's class at the voxel
+// centre, so the field's sign and the materials agree sample by sample). Clamping keeps the band narrow:
 // only the outside within c_out matters to the tool (the surface proxy keeps its centre at
 // phi >= rho - s), the inside only down to c_in.
 //
@@ -68,12 +71,30 @@ inline constexpr int kFieldBrick = 8;  // samples per brick edge
 // 2 h at build.
 struct FieldBand {
   double outside_m = 1.0e-3;
-  double inside_m = 0.0;  // 0: 2 h
+  double inside_m = 0.0;  // 0: 2 H
+  // The stride k >= 1 (issue #30): samples at every k-th voxel centre, spacing H = k h (header
+  // comment "Stride"). 1: one sample per voxel centre.
+  int stride = 1;
 };
 
 // The band a surface proxy of tip radius rho needs: it reads phi where phi < rho + s (s <= rho/4)
-// and the gradient there; c_out = 1.25 rho + 2 h leaves two cells of margin.
-FieldBand field_band_for_tip(double rho, double voxel_size);
+// and the gradient there; c_out = 1.25 rho + 2 H leaves two cells of margin (H = stride h).
+FieldBand field_band_for_tip(double rho, double voxel_size, int stride = 1);
+
+// The spacing rule (docs/derivations/field_contact.md §7): the largest field spacing H_max a
+// tip of radius rho admits,
+//   H_max = min(H_wall, H_ripple),  H_wall = (1 - 1e-9) 2 (rho - rho/4) / sqrt(3) = 0.866 rho,
+//   H_ripple = rho eps_aim / c_ripple = 0.357 rho  (eps_aim = 0.02, c_ripple = 0.056),
+// H_wall from no tunnelling (every point of the source surface has phi <= sqrt(3) H / 2, which
+// must stay below the proxy's rho - s, s <= rho / 4), H_ripple from the sliding ripple (linear
+// in H / rho, measured coefficient c_ripple; the issue's aim eps_aim).
+inline constexpr double kFieldRippleAim = 0.02;
+inline constexpr double kFieldRipplePerSpacing = 0.056;  // ripple / (H / rho), §7
+double field_max_spacing(double rho);
+// The stride a field on voxels of size h gets for the smallest tip radius rho: the largest k >= 1
+// with k h <= H_max(rho) when spacing_m is 0 (automatic); else the largest k >= 1 with k h <=
+// spacing_m (1 + 1e-9). spacing_m must be 0 or finite and >= h (sim/scene.cc validates it).
+int field_stride_for(double rho, double voxel_size, double spacing_m = 0.0);
 
 struct FieldSample {
   double value = 0.0;  // phi(x) [m]
@@ -89,7 +110,10 @@ class SampledField {
   double value(const Vec3& x) const { return sample(x).value; }
   // The Lipschitz constant L of phi (header comment).
   double lipschitz() const { return lipschitz_; }
-  double voxel_size() const { return h_; }
+  // The tooth grid's voxel size h, and the field's spacing H = stride() h (the lattice's step).
+  double voxel_size() const { return voxel_h_; }
+  double spacing() const { return h_; }
+  int stride() const { return stride_; }
   double outside_clamp() const { return c_out_; }
   double inside_clamp() const { return c_in_; }
   // Whether phi at x is the inside clamp at all 8 corners (deep inside: no gradient there).
@@ -149,10 +173,17 @@ class SampledField {
   void include_cells(const int lo[3], const int hi[3]);
   // The cell bound L_cell of the cell with lower corner (x, y, z), each in [0, m - 2].
   double cell_lipschitz(int x, int y, int z) const;
-  // The drilling edit's radius in samples, R = ceil(c_out / h + 1): the samples a removed voxel
-  // may change lie within R of it (max norm; reference/tooth/field_contact.h). The one definition
-  // for the edit (both twins) and the view's re-mesh halo (view/surface_mesh.h).
-  int edit_radius() const { return static_cast<int>(std::ceil(c_out_ / h_ + 1.0)); }
+  // The drilling edit's radius in voxels, R_v = ceil(c_out / h + 1): the voxel centres a removed
+  // voxel's edit may concern lie within R_v voxels of it (max norm; reference/tooth/
+  // field_contact.h); the view's re-mesh halo (view/surface_mesh.h).
+  int edit_radius_voxels() const { return static_cast<int>(std::ceil(c_out_ / voxel_h_ + 1.0)); }
+  // The same in field samples, R = ceil(R_v / k): the samples s with |k (s - P) - c|_inf <= R_v
+  // (c the removed voxel) lie within R of floor(c / k) + P (max norm). At k = 1, R = R_v. The one
+  // definition for the edit (both twins).
+  int edit_radius() const { return (edit_radius_voxels() + stride_ - 1) / stride_; }
+  // The voxel whose centre sample s (one coordinate) sits at: k (s - P) (beyond the grid when
+  // outside [0, n)).
+  int voxel_of_sample(int s) const { return stride_ * (s - pad_); }
 
  private:
   friend SampledField build_sampled_field(const VoxelGrid&, const TriangleMesh&, const FieldBand&);
@@ -164,7 +195,9 @@ class SampledField {
   }
 
   Vec3 origin_ = Vec3::Zero();  // position of sample (0, 0, 0)
-  double h_ = 0.0;
+  double h_ = 0.0;        // the spacing H = k h
+  double voxel_h_ = 0.0;  // the grid's voxel size h
+  int stride_ = 1;        // k
   int m_ = 0;    // samples per axis (a multiple of kFieldBrick)
   int nb_ = 0;   // bricks per axis
   int pad_ = 0;  // P

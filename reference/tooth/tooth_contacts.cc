@@ -222,6 +222,7 @@ int ToothContactProvider::drill(std::span<const Contact> contacts, double T) {
       field_edit_budget_ = budget >= 1e15 ? std::numeric_limits<long>::max()
                                           : std::max(1L, static_cast<long>(budget));
       const std::size_t capacity = edit_queue_.size();
+      const std::size_t first = (edit_head_ + edit_count_) % capacity, count_before = edit_count_;
       for (const std::size_t v : removed_) {
         if (edit_count_ < capacity) {
           edit_queue_[(edit_head_ + edit_count_) % capacity] = v;
@@ -229,6 +230,26 @@ int ToothContactProvider::drill(std::span<const Contact> contacts, double T) {
         } else {
           ++field_edit_shortfalls_;  // never grow in the tick: that voxel stays in the field
         }
+      }
+      // At stride k > 1, this tick's voxels in the order of their boxes' centres floor(c / k),
+      // so that the edit subtracts the voxels of one coarse cell together (the batch,
+      // field_edit_core.h). In place (std::sort allocates nothing), each contiguous piece of
+      // the ring; the voxels queued before keep their order (a paused group among them).
+      const int k = edited_field_->stride();
+      if (k > 1 && edit_count_ > count_before) {
+        const std::size_t n = static_cast<std::size_t>(tooth_.grid().n);
+        const std::size_t nk = n / static_cast<std::size_t>(k) + 1;
+        const auto key = [n, nk, k](std::size_t v) {
+          const std::size_t kk = static_cast<std::size_t>(k);
+          return (v % n) / kk + nk * (((v / n) % n) / kk + nk * ((v / (n * n)) / kk));
+        };
+        const auto by_box = [&key](std::size_t a, std::size_t b) { return key(a) < key(b); };
+        const std::size_t added = edit_count_ - count_before;
+        const std::size_t piece = std::min(added, capacity - first);
+        std::sort(edit_queue_.begin() + static_cast<std::ptrdiff_t>(first),
+                  edit_queue_.begin() + static_cast<std::ptrdiff_t>(first + piece), by_box);
+        std::sort(edit_queue_.begin(),
+                  edit_queue_.begin() + static_cast<std::ptrdiff_t>(added - piece), by_box);
       }
     }
   } else {

@@ -43,9 +43,10 @@ bool in_sphere(const Vec3& p) { return (p - kCentre).norm() < kR; }
 
 VoxelGrid sphere_grid() { return test::solid_grid(kN, kSide, in_sphere); }
 
-SampledField sphere_field(const VoxelGrid& g) {
+// The sphere's field at `stride` (k = 2: a sample at every other voxel centre, H = 0.25 mm).
+SampledField sphere_field(const VoxelGrid& g, int stride = 1) {
   return build_sampled_field(g, triangulate_implicit(g, in_sphere),
-                             field_band_for_tip(kRho, g.voxel_size));
+                             field_band_for_tip(kRho, g.voxel_size, stride));
 }
 
 bool same(const SignedDistance& a, const SignedDistance& b) {
@@ -104,13 +105,19 @@ TEST(FastFieldBricks, HoldEverySampleAndTheCellCorners) {
 
 // The fast sample (value, gradient and the deep-inside flag from one gather) is the reference's
 // bitwise: the same arithmetic on the same samples.
-TEST(FastFieldBricks, SampleEqualsTheReferenceSampleBitwise) {
+void sample_equals_the_reference(int stride) {
   const VoxelGrid g = sphere_grid();
-  const SampledField field = sphere_field(g);
+  const SampledField field = sphere_field(g, stride);
+  ASSERT_EQ(field.stride(), stride);
   const fast::FieldBricks bricks(field, 0);
   long deep = 0;
   EXPECT_EQ(sample_mismatches(field, bricks, 41, 20000, &deep), 0);
   EXPECT_GT(deep, 100);  // the deep-inside flag was exercised both ways
+}
+TEST(FastFieldBricks, SampleEqualsTheReferenceSampleBitwise) { sample_equals_the_reference(1); }
+// The same at stride 2 (the spacing set by the tool, issue #30).
+TEST(FastFieldBricks, SampleEqualsTheReferenceSampleBitwiseAtStride2) {
+  sample_equals_the_reference(2);
 }
 
 TEST(FastFieldBricks, MirroredRaisesAndTheLipschitzUpdateEqualTheReference) {
@@ -161,10 +168,10 @@ TEST(FastFieldBricks, MirroredRaisesAndTheLipschitzUpdateEqualTheReference) {
   EXPECT_EQ(sample_mismatches(reference, bricks, 42, 20000, &deep), 0);
 }
 
-TEST(FastFieldSolid, EqualsTheReferenceQueryBitwise) {
+void query_equals_the_reference(int stride) {
   const VoxelGrid g = sphere_grid();
   const VoxelTooth tooth(g);
-  const SampledField field = sphere_field(g);
+  const SampledField field = sphere_field(g, stride);
   const dentsim::FieldSolid reference(tooth, field);
   const fast::FieldBricks bricks(field, 0);
   const fast::FieldSolid solid(tooth, bricks);
@@ -213,6 +220,8 @@ TEST(FastFieldSolid, EqualsTheReferenceQueryBitwise) {
   EXPECT_GT(found, 1000);
   EXPECT_GT(solid.certified(), 10000);  // free space answered without reading the field
 }
+TEST(FastFieldSolid, EqualsTheReferenceQueryBitwise) { query_equals_the_reference(1); }
+TEST(FastFieldSolid, EqualsTheReferenceQueryBitwiseAtStride2) { query_equals_the_reference(2); }
 
 // The bur's path: free space, down 1.1 mm into the sphere (drilling), sideways 0.6 mm, away.
 constexpr int kFree = 200, kDown = 900, kSideways = 600, kAway = 300;
@@ -236,10 +245,10 @@ bool same(const Contact& a, const Contact& b) {
          a.material == b.material;
 }
 
-TEST(FastFieldProvider, EqualsTheReferenceProviderWhileDrillingEditsTheField) {
+void provider_equals_the_reference(int stride) {
   const VoxelGrid g = sphere_grid();
   VoxelTooth tooth_r(g), tooth_f(g);
-  SampledField field_r = sphere_field(g);
+  SampledField field_r = sphere_field(g, stride);
   SampledField field_f = field_r;
   DrillParams drill;
   drill.cutting_coefficient = 10.0;  // cuts fast: hundreds of voxels on this path
@@ -330,6 +339,14 @@ TEST(FastFieldProvider, EqualsTheReferenceProviderWhileDrillingEditsTheField) {
   EXPECT_EQ(a.samples_bounded, b.samples_bounded);
   EXPECT_EQ(cache.hits() + cache.misses(), b.samples_queried - b.samples_bounded);
   EXPECT_EQ(allocations, 0);
+}
+TEST(FastFieldProvider, EqualsTheReferenceProviderWhileDrillingEditsTheField) {
+  provider_equals_the_reference(1);
+}
+// The same at stride 2 (a sample at every other voxel centre): the edit at stride k (reference/
+// tooth/field_edit_core.h) is one code for both twins, so the twins agree bit for bit again.
+TEST(FastFieldProvider, EqualsTheReferenceProviderWhileDrillingEditsTheFieldAtStride2) {
+  provider_equals_the_reference(2);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 
 #include "reference/core/io.h"
 #include "reference/phantom/phantom_params.h"
+#include "sim/simulator.h"
 #include "tests/support/cli.h"
 
 namespace dentsim {
@@ -94,6 +95,13 @@ TEST(Scene, BadFieldsAreNamed) {
   // The field model drills (issue #30): the drill scene's spinning bur is accepted with it.
   EXPECT_EQ(error_of("\"contact_model\": \"sdf\"", "\"contact_model\": \"field\""),
             "(no error)");
+  // The field's spacing (issue #30): 0 or absent automatic, a spacing in mm, never negative.
+  EXPECT_EQ(error_of("\"contact_model\": \"sdf\"",
+                     "\"contact_model\": \"field\", \"field_spacing_mm\": 0.12"),
+            "(no error)");
+  EXPECT_EQ(error_of("\"contact_model\": \"sdf\"",
+                     "\"contact_model\": \"field\", \"field_spacing_mm\": -0.1"),
+            "bad.json: tooth.field_spacing_mm: must be >= 0 (got -0.1)");
   EXPECT_NE(error_of("\"grasp_mass_scale\": 1.0", "\"grasp_mass_scale\": 0")
                 .find("method.grip_detector: needs name \"pmi-pd\" and grasp_mass_scale > 0"),
             std::string::npos);
@@ -102,6 +110,29 @@ TEST(Scene, BadFieldsAreNamed) {
   EXPECT_NE(error_of("\"duration_s\": 5.0", "\"duration_s\": \"long\"")
                 .find("duration_s: expected a number"),
             std::string::npos);
+}
+
+// tooth.field_spacing_mm (issue #30): the field's stride from the bur (0.5 mm: H_max = 0.179 mm,
+// k = 1 at the drill scene's h = 0.173 mm), from the key (0.35 mm: k = 2), and a spacing below
+// the voxel size refused with the key named when the tooth is built (the voxel size known).
+TEST(Scene, FieldSpacingSetsTheStrideAndBelowTheVoxelSizeIsNamed) {
+  Scene scene = load_scene("drill");
+  scene.tooth.contact_model = "field";
+  const auto automatic = build_scene_rig(scene);
+  ASSERT_NE(automatic->field, nullptr);
+  EXPECT_EQ(automatic->field->stride(),
+            field_stride_for(scene.tool.bur_radius, automatic->field->voxel_size()));
+  EXPECT_EQ(automatic->field->stride(), 1);
+  scene.tooth.field_spacing = 0.35e-3;
+  EXPECT_EQ(build_scene_rig(scene)->field->stride(), 2);
+  scene.tooth.field_spacing = 0.1e-3;
+  try {
+    build_scene_rig(scene);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("tooth.field_spacing_mm: 0.100000 mm is below the "
+                                             "voxel size"));
+  }
 }
 
 // Values that used to run to the end with null/inf in the report, or wrap silently (issue #18),

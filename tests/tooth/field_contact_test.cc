@@ -34,11 +34,12 @@ struct Rig {
   SampledField field;
 };
 
-Rig mesh_rig(const TriangleMesh& mesh, int n) {
+Rig mesh_rig(const TriangleMesh& mesh, int n, int stride = 1) {
   VoxelGrid grid(n, Vec3::Zero(), kSide / n);
   const std::vector<std::uint8_t> in = center_winding_inside(mesh, grid);
   for (std::size_t v = 0; v < in.size(); ++v) grid.voxels[v] = in[v] ? kEnamel : kEmpty;
-  SampledField f = build_sampled_field(grid, mesh, field_band_for_tip(kRho, grid.voxel_size));
+  SampledField f =
+      build_sampled_field(grid, mesh, field_band_for_tip(kRho, grid.voxel_size, stride));
   return {VoxelTooth(std::move(grid)), std::move(f)};
 }
 
@@ -76,14 +77,15 @@ TEST(FieldContact, NeverCrossesAWallOneVoxelThickWhateverTheStep) {
 // Pressed at the device's peak force (quasi-static, as `crosscheck contact`) into a wall one
 // voxel thick, axis-aligned and oblique: the rendered centre stays out of {phi < rho - s} and out
 // of the source solid, and at rest the wall pushes back the whole force.
-TEST(FieldContact, HoldsAWallOneVoxelThickAtThePeakForce) {
+void holds_a_thin_wall(int stride) {
   const double h = kSide / 64;
   const Vec3 pivot = Vec3::Constant(0.5 * kSide);
   for (const double angle : {0.0, 0.5, 0.9}) {
     const Mat3 R = Eigen::AngleAxisd(angle, Vec3(0.3, 1.0, 0.6).normalized()).toRotationMatrix();
     Rig rig = mesh_rig(box_mesh(pivot - Vec3(0.5 * h, 2.0e-3, 2.0e-3),
                                 pivot + Vec3(0.5 * h, 2.0e-3, 2.0e-3), R, pivot),
-                       64);
+                       64, stride);
+    ASSERT_EQ(rig.field.stride(), stride);
     const Wall wall{R * Vec3::UnitX(), pivot, 0.5 * h};
     ToothContactProvider provider(const_cast<VoxelTooth&>(rig.tooth), ToolTip{kRho, Vec3::Zero()},
                                   kK, 0.0, nullptr, ContactModel::kField, &signed_distance,
@@ -113,6 +115,29 @@ TEST(FieldContact, HoldsAWallOneVoxelThickAtThePeakForce) {
     EXPECT_NEAR(-f.dot(d), kPeakN, 0.01 * kPeakN) << "angle " << angle;
   }
 }
+TEST(FieldContact, HoldsAWallOneVoxelThickAtThePeakForce) { holds_a_thin_wall(1); }
+// The spacing rule's wall bound (docs/derivations/field_contact.md §7): every point of the
+// source surface has phi <= sqrt(3) H / 2, so a wall of any thickness holds while that is below
+// rho - s. At h = 0.1 mm and rho = 0.4 mm the bound admits H < 0.346 mm: stride 3 (H = 0.3 mm,
+// sqrt(3) H / 2 = 0.26 mm < rho - s = 0.35 mm), three voxels per sample and the wall one voxel
+// thick, so most of the wall holds no sample at all (the field's own solid misses it).
+TEST(FieldContact, HoldsAWallOneVoxelThickAtThePeakForceAtTheLargestStrideTheBoundAdmits) {
+  ASSERT_LT(3 * 0.1e-3, 2.0 * 0.75 * kRho / std::sqrt(3.0));  // H_wall (s <= rho / 4)
+  ASSERT_LT(std::sqrt(3.0) * 0.3e-3 / 2.0, kRho - 0.05e-3);
+  holds_a_thin_wall(3);
+}
+
+// The spacing rule itself: H_max = min(0.866 rho, 0.357 rho), and the strides it gives.
+TEST(FieldContact, SpacingRuleGivesTheLargestAdmissibleStride) {
+  EXPECT_NEAR(field_max_spacing(kRho), kRho * kFieldRippleAim / kFieldRipplePerSpacing, 1e-18);
+  EXPECT_NEAR(field_max_spacing(kRho) / kRho, 0.35714, 1e-5);
+  EXPECT_EQ(field_stride_for(kRho, 0.05e-3), 2);       // 0.143 mm / 0.05 mm
+  EXPECT_EQ(field_stride_for(kRho, 0.1734e-3), 1);     // never below one voxel
+  EXPECT_EQ(field_stride_for(0.5e-3, 0.02e-3), 8);     // 0.179 mm / 0.02 mm
+  EXPECT_EQ(field_stride_for(kRho, 0.05e-3, 0.15e-3), 3);  // an exact multiple, whatever rounding
+  EXPECT_EQ(field_stride_for(kRho, 0.05e-3, 0.149e-3), 2);
+  EXPECT_EQ(field_stride_for(kRho, 0.05e-3, 0.05e-3), 1);
+}
 
 TEST(FieldContact, ProxyFoundInsideLeavesAlongTheShortestWay) {
   const Rig rig = mesh_rig(box_mesh(Vec3(1e-3, 1e-3, 1e-3), Vec3(5e-3, 5e-3, 3e-3),
@@ -131,7 +156,8 @@ TEST(FieldContact, ProxyFoundInsideLeavesAlongTheShortestWay) {
 // along a meridian (as `crosscheck contact`'s sliding ripple): the force is the analytic sphere's
 // K (R + rho - |c|) u within 2 % RMS of F (measured 0.63 %; the sdf model's staircase gives
 // 17 % here).
-TEST(FieldContact, SlidingOnASmoothSphereHasLittleRipple) {
+// The sliding ripple on a sphere at 1 N (field and sdf) with the field at `stride`.
+void sphere_ripple(int stride, double ripple[2]) {
   const double r = 2.5e-3, h = 0.05e-3;
   const int n = 128;
   VoxelGrid grid(n, Vec3::Zero(), h);
@@ -145,9 +171,8 @@ TEST(FieldContact, SlidingOnASmoothSphereHasLittleRipple) {
     }
   }
   SampledField field = build_sampled_field(grid, triangulate_implicit(grid, inside),
-                                           field_band_for_tip(kRho, h));
+                                           field_band_for_tip(kRho, h, stride));
   VoxelTooth tooth(std::move(grid));
-  double ripple[2] = {0.0, 0.0};
   for (const ContactModel model : {ContactModel::kField, ContactModel::kSurfaceProxy}) {
     ToothContactProvider provider(tooth, ToolTip{kRho, Vec3::Zero()}, kK, 0.0, nullptr, model,
                                   &signed_distance, &field);
@@ -168,10 +193,32 @@ TEST(FieldContact, SlidingOnASmoothSphereHasLittleRipple) {
     }
     ripple[model == ContactModel::kField ? 0 : 1] = std::sqrt(sum2 / ticks);
   }
-  std::printf("sliding ripple at 1 N, R = 2.5 mm, h = 0.05 mm: field %.4f, sdf %.4f\n", ripple[0],
-              ripple[1]);
+  std::printf("sliding ripple at 1 N, R = 2.5 mm, h = 0.05 mm, stride %d: field %.4f, sdf %.4f\n",
+              stride, ripple[0], ripple[1]);
+}
+
+TEST(FieldContact, SlidingOnASmoothSphereHasLittleRipple) {
+  double ripple[2] = {0.0, 0.0};
+  sphere_ripple(1, ripple);
   EXPECT_LT(ripple[0], 0.02);
   EXPECT_LT(ripple[0], 0.25 * ripple[1]);
+}
+
+// The ripple bound of the spacing rule (docs/derivations/field_contact.md §7): ripple <=
+// c_ripple H / rho, at the automatic stride (2: H = 0.1 mm) and one beyond it (3), so the
+// automatic spacing keeps the aim of 2 %.
+TEST(FieldContact, SlidingRippleOnASphereStaysWithinTheSpacingRulesBound) {
+  const double h = 0.05e-3;
+  ASSERT_EQ(field_stride_for(kRho, h), 2);
+  for (const int stride : {2, 3}) {
+    double ripple[2] = {0.0, 0.0};
+    sphere_ripple(stride, ripple);
+    EXPECT_LT(ripple[0], kFieldRipplePerSpacing * stride * h / kRho) << "stride " << stride;
+    EXPECT_LT(ripple[0], 0.25 * ripple[1]) << "stride " << stride;
+    if (stride == 2) {
+      EXPECT_LT(ripple[0], kFieldRippleAim);
+    }
+  }
 }
 
 TEST(FieldContact, ModelNameAndRefusals) {
