@@ -369,7 +369,13 @@ void GlRenderer::draw(const OrbitCamera& camera, const TickSnapshot* tick,
   glUniformMatrix4fv(u_model, 1, GL_FALSE, identity.data());
   glUniform1i(u_use, 0);
   for (const GlMesh& m : d.blocks) m.draw();
-  for (const GlMesh& m : d.packed) m.draw();
+  for (const GlMesh& m : d.packed) {
+    m.draw();
+    // A software GL (llvmpipe) bins the triangles of everything drawn since the last flush: one
+    // buffer's worth at a time keeps its draw-time memory small (issue #30; the pixels are the
+    // same, as the flushed parts are drawn in order).
+    glFlush();
+  }
 
   if (tick != nullptr && tick->tick >= 0) {
     const float rho = static_cast<float>(tick->tool_radius_m);
