@@ -349,13 +349,16 @@ VoxelGrid voxelize_procedural_molar(const MolarParams& params, int resolution,
   // coordinates computed once (MolarSlices): the same operations on the same operands, so the
   // same bits (tests/tooth/procedural_molar_test.cc compares with the per-voxel definition).
   MolarSlices slices(params, grid, lo, hi);
+  long pulp_voxels = 0;
   for (int k = lo[2]; k <= hi[2]; ++k) {
     slices.start_slice(k);
     for (int j = lo[1]; j <= hi[1]; ++j) {
       for (int i = lo[0]; i <= hi[0]; ++i) {
         if (!slices.solid(i, j)) continue;
         // Solid (any non-zero id); pulp marked kPulp, which assign_materials keeps.
-        grid.voxels[grid.index(i, j, k)] = slices.pulp(i, j) ? kPulp : kDentin;
+        const bool pulp = slices.pulp(i, j);
+        grid.voxels[grid.index(i, j, k)] = pulp ? kPulp : kDentin;
+        pulp_voxels += pulp ? 1 : 0;
         ++r.solid.interior_voxels;
       }
     }
@@ -363,18 +366,29 @@ VoxelGrid voxelize_procedural_molar(const MolarParams& params, int resolution,
   r.crown = molar_crown_frame(params);
   assign_materials(grid, {}, r.crown, params.enamel_cusp_m * params.scale);
   if (params.caries_lesion) {
+    // molar_caries with its centre (the groove's height there) computed once: the same operands.
+    const Mm m = mm_of(params);
+    const double unit = kMm * params.scale;
+    const double cx = params.caries_x_m / kMm;
+    const Vec3 radii = params.caries_radii_m / kMm;
+    const Vec3 centre(cx, 0.0, occlusal_height(m, cx, 0.0) - radii.z());
     for (int k = lo[2]; k <= hi[2]; ++k) {
       for (int j = lo[1]; j <= hi[1]; ++j) {
         for (int i = lo[0]; i <= hi[0]; ++i) {
           const std::size_t x = grid.index(i, j, k);
           if (grid.voxels[x] == kEnamel || grid.voxels[x] == kDentin) {
-            if (molar_caries(params, grid.center(i, j, k))) grid.voxels[x] = kCaries;
+            const Vec3 q = grid.center(i, j, k) / unit - centre;
+            const double s = (q.x() * q.x()) / (radii.x() * radii.x()) +
+                             (q.y() * q.y()) / (radii.y() * radii.y()) +
+                             (q.z() * q.z()) / (radii.z() * radii.z());
+            if (s <= 1.0) grid.voxels[x] = kCaries;
           }
         }
       }
     }
   }
-  r.pulp_voxels = count_materials(grid)[kPulp];
+  // The pulp marked above: assign_materials keeps it, the lesion takes only enamel and dentin.
+  r.pulp_voxels = pulp_voxels;
   if (report != nullptr) *report = r;
   return grid;
 }

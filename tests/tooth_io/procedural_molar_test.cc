@@ -128,6 +128,7 @@ TEST(ProceduralMolar, SlicedVoxelisationIsThePlainDefinition) {
     EXPECT_EQ(report.solid.interior_voxels, solid);
     // Every material is there: the comparison covers the pulp, the enamel and the lesion.
     const std::vector<long> counts = count_materials(plain);
+    EXPECT_EQ(report.pulp_voxels, counts[kPulp]);
     for (int m = kEnamel; m <= kCaries; ++m) EXPECT_GT(counts[m], 0) << "material " << m;
   }
 }
