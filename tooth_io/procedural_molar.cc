@@ -278,34 +278,17 @@ class MolarSlices {
 
   // molar_solid at the centre (i, j, k) of the current slice.
   bool solid(int i, int j) const {
-    const int a = i - lo_[0], b = j - lo_[1];
-    const double x = coord_[0][a], y = coord_[1][b];
-    if (body_ && body_px_[a] + body_py_[b] <= 1 &&
-        z_ <= occlusal_[a + static_cast<std::size_t>(nx_) * b]) {
-      return true;
-    }
-    for (const RootSlice& s : root_) {
-      if (!s.in) continue;
-      const double dx = x - s.centre;
-      if ((dx * dx) / s.den_x + (y * y) / s.den_y <= 1) return true;
-    }
-    return false;
+    return inside(i, j, body_, body_px_, body_py_, occlusal_, root_,
+                  [](const RootSlice& s, double dx, double y) {
+                    return (dx * dx) / s.den_x + (y * y) / s.den_y <= 1;
+                  });
   }
 
   // molar_pulp at the centre (i, j, k) of the current slice.
   bool pulp(int i, int j) const {
-    const int a = i - lo_[0], b = j - lo_[1];
-    const double x = coord_[0][a], y = coord_[1][b];
-    if (chamber_ && pulp_px_[a] + pulp_py_[b] <= 1 &&
-        z_ <= pulp_top_[a + static_cast<std::size_t>(nx_) * b]) {
-      return true;
-    }
-    for (const CanalSlice& c : canal_) {
-      if (!c.in) continue;
-      const double dx = x - c.centre;
-      if (dx * dx + y * y <= c.rad2) return true;
-    }
-    return false;
+    return inside(
+        i, j, chamber_, pulp_px_, pulp_py_, pulp_top_, canal_,
+        [](const CanalSlice& c, double dx, double y) { return dx * dx + y * y <= c.rad2; });
   }
 
  private:
@@ -317,6 +300,23 @@ class MolarSlices {
     bool in = false;
     double centre = 0, rad2 = 0;
   };
+  // The body (chamber): inside its superellipse section, under its top; else inside one of the
+  // parts (roots, canals) that cross the slice, `in_part` given x minus the part's centreline.
+  template <class Part, class InPart>
+  bool inside(int i, int j, bool section, const std::vector<double>& px,
+              const std::vector<double>& py, const std::vector<double>& top,
+              const std::array<Part, 2>& parts, InPart in_part) const {
+    const int a = i - lo_[0], b = j - lo_[1];
+    if (section && px[a] + py[b] <= 1 && z_ <= top[a + static_cast<std::size_t>(nx_) * b]) {
+      return true;
+    }
+    const double x = coord_[0][a], y = coord_[1][b];
+    for (const Part& p : parts) {
+      if (p.in && in_part(p, x - p.centre, y)) return true;
+    }
+    return false;
+  }
+
   Mm m_;
   std::array<RootShape, 2> roots_;
   std::array<int, 3> lo_, hi_;

@@ -109,33 +109,29 @@ std::vector<std::uint16_t> edt_box(const VoxelGrid& grid, const std::array<int, 
   const int m = std::max({bx, by, bz});
   std::vector<double> f(m), d(m), z(m + 1);
   std::vector<int> v(m);
-  // A line of zeros (all empty) stays zeros, one all at the cap stays there (every parabola is
-  // >= cap): both are skipped.
+  // One line of `len` samples, the q-th at `cell(q)`. A line of zeros (all empty) stays zeros,
+  // one all at the cap stays there (every parabola is >= cap): both are skipped.
   const auto capped = static_cast<std::uint16_t>(cap);
+  auto transform_line = [&](int len, auto&& cell) {
+    bool zeros = true, at_cap = true;
+    for (int q = 0; q < len; ++q) {
+      const std::uint16_t c = cell(q);
+      f[q] = c;
+      zeros = zeros && c == 0;
+      at_cap = at_cap && c == capped;
+    }
+    if (zeros || at_cap) return;
+    distance_transform_1d(f, len, d, v, z);
+    for (int q = 0; q < len; ++q) cell(q) = static_cast<std::uint16_t>(std::min(d[q], cap));
+  };
   for (int k = 0; k < bz; ++k) {
     for (int i = 0; i < bx; ++i) {
-      bool zeros = true, at_cap = true;
-      for (int j = 0; j < by; ++j) {
-        f[j] = at(i, j, k);
-        zeros = zeros && at(i, j, k) == 0;
-        at_cap = at_cap && at(i, j, k) == capped;
-      }
-      if (zeros || at_cap) continue;
-      distance_transform_1d(f, by, d, v, z);
-      for (int j = 0; j < by; ++j) at(i, j, k) = static_cast<std::uint16_t>(std::min(d[j], cap));
+      transform_line(by, [&](int j) -> std::uint16_t& { return at(i, j, k); });
     }
   }
   for (int j = 0; j < by; ++j) {
     for (int i = 0; i < bx; ++i) {
-      bool zeros = true, at_cap = true;
-      for (int k = 0; k < bz; ++k) {
-        f[k] = at(i, j, k);
-        zeros = zeros && at(i, j, k) == 0;
-        at_cap = at_cap && at(i, j, k) == capped;
-      }
-      if (zeros || at_cap) continue;
-      distance_transform_1d(f, bz, d, v, z);
-      for (int k = 0; k < bz; ++k) at(i, j, k) = static_cast<std::uint16_t>(std::min(d[k], cap));
+      transform_line(bz, [&](int k) -> std::uint16_t& { return at(i, j, k); });
     }
   }
   return out;
