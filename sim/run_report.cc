@@ -21,6 +21,7 @@ nlohmann::json run_report_json(const Scene& scene, const RunResult& r) {
   j["tick_hz"] = scene.tick_hz;
   j["simulated_s"] = r.simulated_s;
   j["wall_s"] = r.wall_s;
+  j["setup_s"] = r.setup_s;
   j["ticks"] = r.ticks;
   j["contact_ticks"] = r.contact_ticks;
   j["max_contact_force_n"] = r.max_contact_force_n;

@@ -8,7 +8,7 @@
 // timing statistics per stage; the faults. Keys that only some runs have: `hd_loop` and
 // `callback_dropped_ticks` (hdapi), `realtime` (--realtime), `recorded_ticks` and
 // `record_dropped_ticks` (--record), `torque_after_fault_n_m` (a fault). Values that depend on
-// the wall clock: `wall_s`, `timing_us`, `realtime`.
+// the wall clock: `wall_s`, `setup_s`, `timing_us`, `realtime`.
 //
 // The time series: one row per logged tick (RunOptions::log_every), the columns of
 // run_series_columns() in order; every column is a number but `phase` (the script's label).

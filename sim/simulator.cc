@@ -774,6 +774,7 @@ void report_supervisor(const SceneRig& rig, RunResult& res) {
 }  // namespace
 
 RunResult run_scene(const Scene& scene, const RunOptions& options) {
+  const auto setup_start = std::chrono::steady_clock::now();
   RunResult res;
   res.scene = scene.name;
   const double duration =
@@ -790,6 +791,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   const long n_ticks = static_cast<long>(std::ceil(duration / T));
   RunMeasurements measurements(scene, options, *rig, res, n_ticks);
   const auto wall_start = std::chrono::steady_clock::now();
+  res.setup_s = std::chrono::duration<double>(wall_start - setup_start).count();
   measurements.recorder =
       make_session_recorder(scene, options, res, rig->device->dof(), duration, n_ticks);
   loop.start();

@@ -138,7 +138,10 @@ struct RunResult {
   std::vector<std::string> faults;
   double observer_rms_error_n = 0.0;  // |F1_hat - F_hand| (force part), RMS over the run
   double simulated_s = 0.0;
-  double wall_s = 0.0;
+  double wall_s = 0.0;   // the loop's wall time [s] (from the first tick to the last)
+  // Wall time of the setup before the first tick [s]: the scene rig (the tooth's voxelisation and
+  // structures, the device, the pipeline) and the run's measurements (issue #30's setup target).
+  double setup_s = 0.0;
   std::vector<RunSample> series;
   std::string hd_loop;                  // hdapi: "callback" or "caller" (empty for a simulated run)
   long callback_dropped_ticks = 0;      // hdapi callback loop: records the full ring dropped

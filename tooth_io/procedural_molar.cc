@@ -175,6 +175,163 @@ CrownFrame molar_crown_frame(const MolarParams& params) {
   return c;
 }
 
+namespace {
+
+// molar_solid and molar_pulp over the voxel centres of a box of the grid, slice k by slice k,
+// with every factor that depends on fewer than three coordinates computed once: x, y, z of the
+// centres per index; per slice the body's half widths, the roots' centrelines and tapers, the
+// canals; per slice and column (i) the body's superellipse term in x, per slice and row (j) the
+// one in y; per (i, j) the occlusal height and the pulp's roof, and the pulp's superellipse terms.
+// Each is the expression of molar_solid / molar_pulp on the same operands, so the answers are the
+// definitions' bit for bit (no reassociation: the compiler contracts nothing without -ffast-math,
+// and the build targets no FMA).
+class MolarSlices {
+ public:
+  MolarSlices(const MolarParams& params, const VoxelGrid& grid, const std::array<int, 3>& lo,
+              const std::array<int, 3>& hi)
+      : m_(mm_of(params)),
+        roots_(roots(m_)),
+        lo_(lo),
+        hi_(hi),
+        nx_(hi[0] - lo[0] + 1),
+        ny_(hi[1] - lo[1] + 1) {
+    const double unit = kMm * params.scale;
+    for (int d = 0; d < 3; ++d) {
+      coord_[d].resize(hi[d] - lo[d] + 1);
+      for (int i = lo[d]; i <= hi[d]; ++i) {
+        // The component d of grid.center(...): origin[d] + h (i + 1/2), then scaled as the
+        // definitions do.
+        const Vec3 c = grid.center(i, i, i);
+        coord_[d][i - lo[d]] = c[d] / unit;
+      }
+    }
+    sx_ = m_.md / 11.0;
+    sy_ = m_.bl / 10.5;
+    sz_ = m_.crown / 7.5;
+    body_px_.resize(nx_);
+    body_py_.resize(ny_);
+    occlusal_.resize(static_cast<std::size_t>(nx_) * ny_);
+    pulp_top_.resize(occlusal_.size());
+    pulp_px_.resize(nx_);
+    pulp_py_.resize(ny_);
+    const double pa = 2.6 * sx_, pb = 2.2 * sy_;
+    for (int i = 0; i < nx_; ++i)
+      pulp_px_[i] = std::pow(std::abs(coord_[0][i]) / pa, kSuperellipse);
+    for (int j = 0; j < ny_; ++j)
+      pulp_py_[j] = std::pow(std::abs(coord_[1][j]) / pb, kSuperellipse);
+    const double roof = 2.0 * sz_;
+    for (int j = 0; j < ny_; ++j) {
+      for (int i = 0; i < nx_; ++i) {
+        const double x = coord_[0][i], y = coord_[1][j];
+        occlusal_[i + static_cast<std::size_t>(nx_) * j] = occlusal_height(m_, x, y);
+        double top = roof;
+        for (int c : {0, 1, 3, 4}) {
+          const double dx = x - 0.6 * kCusps[c].x * sx_, dy = y - 0.6 * kCusps[c].y * sy_;
+          top = std::max(top, roof + 1.2 * sz_ - 0.8 * (dx * dx + dy * dy));
+        }
+        pulp_top_[i + static_cast<std::size_t>(nx_) * j] = top;
+      }
+    }
+  }
+
+  // Computes the factors of slice k (lo[2] <= k <= hi[2]).
+  void start_slice(int k) {
+    const double z = coord_[2][k - lo_[2]];
+    z_ = z;
+    body_ = false;
+    if (z >= -m_.trunk && z <= m_.crown) {
+      const auto [a, b] = body_half_widths(m_, z);
+      // in_superellipse's early exit.
+      body_ = a > 0 && b > 0;
+      if (body_) {
+        for (int i = 0; i < nx_; ++i)
+          body_px_[i] = std::pow(std::abs(coord_[0][i]) / a, kSuperellipse);
+        for (int j = 0; j < ny_; ++j)
+          body_py_[j] = std::pow(std::abs(coord_[1][j]) / b, kSuperellipse);
+      }
+    }
+    for (std::size_t r = 0; r < roots_.size(); ++r) {
+      const RootShape& root = roots_[r];
+      RootSlice& s = root_[r];
+      s.in = false;
+      if (!(z > 0 || -z >= root.length)) {
+        const double u = -z / root.length;
+        const double t = root_taper(u);
+        s.in = t > 0;
+        s.centre = root.x0 + root.bend * u * u;
+        s.den_x = root.wx * root.wx * t * t;
+        s.den_y = root.wy * root.wy * t * t;
+      }
+      CanalSlice& c = canal_[r];
+      c.in = !(z > 0 || -z >= 0.95 * root.length);
+      if (c.in) {
+        const double u = -z / root.length;
+        const double rad = 0.5 * sx_ * (1 - 0.7 * u);
+        c.centre = root.x0 + root.bend * u * u;
+        c.rad2 = rad * rad;
+      }
+    }
+    const double floor = -1.5 * sz_, roof = 2.0 * sz_;
+    // in_superellipse's early exit on the chamber's half widths.
+    chamber_ = z >= floor && z <= roof + 1.2 * sz_ && 2.6 * sx_ > 0 && 2.2 * sy_ > 0;
+  }
+
+  // molar_solid at the centre (i, j, k) of the current slice.
+  bool solid(int i, int j) const {
+    return inside(i, j, body_, body_px_, body_py_, occlusal_, root_,
+                  [](const RootSlice& s, double dx, double y) {
+                    return (dx * dx) / s.den_x + (y * y) / s.den_y <= 1;
+                  });
+  }
+
+  // molar_pulp at the centre (i, j, k) of the current slice.
+  bool pulp(int i, int j) const {
+    return inside(
+        i, j, chamber_, pulp_px_, pulp_py_, pulp_top_, canal_,
+        [](const CanalSlice& c, double dx, double y) { return dx * dx + y * y <= c.rad2; });
+  }
+
+ private:
+  struct RootSlice {
+    bool in = false;
+    double centre = 0, den_x = 1, den_y = 1;
+  };
+  struct CanalSlice {
+    bool in = false;
+    double centre = 0, rad2 = 0;
+  };
+  // The body (chamber): inside its superellipse section, under its top; else inside one of the
+  // parts (roots, canals) that cross the slice, `in_part` given x minus the part's centreline.
+  template <class Part, class InPart>
+  bool inside(int i, int j, bool section, const std::vector<double>& px,
+              const std::vector<double>& py, const std::vector<double>& top,
+              const std::array<Part, 2>& parts, InPart in_part) const {
+    const int a = i - lo_[0], b = j - lo_[1];
+    if (section && px[a] + py[b] <= 1 && z_ <= top[a + static_cast<std::size_t>(nx_) * b]) {
+      return true;
+    }
+    const double x = coord_[0][a], y = coord_[1][b];
+    for (const Part& p : parts) {
+      if (p.in && in_part(p, x - p.centre, y)) return true;
+    }
+    return false;
+  }
+
+  Mm m_;
+  std::array<RootShape, 2> roots_;
+  std::array<int, 3> lo_, hi_;
+  int nx_, ny_;
+  double sx_ = 1, sy_ = 1, sz_ = 1;
+  std::array<std::vector<double>, 3> coord_;
+  std::vector<double> body_px_, body_py_, occlusal_, pulp_top_, pulp_px_, pulp_py_;
+  double z_ = 0;
+  bool body_ = false, chamber_ = false;
+  std::array<RootSlice, 2> root_;
+  std::array<CanalSlice, 2> canal_;
+};
+
+}  // namespace
+
 VoxelGrid voxelize_procedural_molar(const MolarParams& params, int resolution,
                                     VoxelizeReport* report) {
   VoxelGrid grid = make_grid(molar_bounds(params), resolution);
@@ -188,13 +345,20 @@ VoxelGrid voxelize_procedural_molar(const MolarParams& params, int resolution,
     hi[d] = std::min(
         grid.n - 1, static_cast<int>(std::ceil((b.max[d] - grid.origin[d]) / grid.voxel_size)) + 1);
   }
+  // molar_solid and molar_pulp at every centre, their factors that depend on one or two of the
+  // coordinates computed once (MolarSlices): the same operations on the same operands, so the
+  // same bits (tests/tooth/procedural_molar_test.cc compares with the per-voxel definition).
+  MolarSlices slices(params, grid, lo, hi);
+  long pulp_voxels = 0;
   for (int k = lo[2]; k <= hi[2]; ++k) {
+    slices.start_slice(k);
     for (int j = lo[1]; j <= hi[1]; ++j) {
       for (int i = lo[0]; i <= hi[0]; ++i) {
-        const Vec3 c = grid.center(i, j, k);
-        if (!molar_solid(params, c)) continue;
+        if (!slices.solid(i, j)) continue;
         // Solid (any non-zero id); pulp marked kPulp, which assign_materials keeps.
-        grid.voxels[grid.index(i, j, k)] = molar_pulp(params, c) ? kPulp : kDentin;
+        const bool pulp = slices.pulp(i, j);
+        grid.voxels[grid.index(i, j, k)] = pulp ? kPulp : kDentin;
+        pulp_voxels += pulp ? 1 : 0;
         ++r.solid.interior_voxels;
       }
     }
@@ -202,18 +366,29 @@ VoxelGrid voxelize_procedural_molar(const MolarParams& params, int resolution,
   r.crown = molar_crown_frame(params);
   assign_materials(grid, {}, r.crown, params.enamel_cusp_m * params.scale);
   if (params.caries_lesion) {
+    // molar_caries with its centre (the groove's height there) computed once: the same operands.
+    const Mm m = mm_of(params);
+    const double unit = kMm * params.scale;
+    const double cx = params.caries_x_m / kMm;
+    const Vec3 radii = params.caries_radii_m / kMm;
+    const Vec3 centre(cx, 0.0, occlusal_height(m, cx, 0.0) - radii.z());
     for (int k = lo[2]; k <= hi[2]; ++k) {
       for (int j = lo[1]; j <= hi[1]; ++j) {
         for (int i = lo[0]; i <= hi[0]; ++i) {
           const std::size_t x = grid.index(i, j, k);
           if (grid.voxels[x] == kEnamel || grid.voxels[x] == kDentin) {
-            if (molar_caries(params, grid.center(i, j, k))) grid.voxels[x] = kCaries;
+            const Vec3 q = grid.center(i, j, k) / unit - centre;
+            const double s = (q.x() * q.x()) / (radii.x() * radii.x()) +
+                             (q.y() * q.y()) / (radii.y() * radii.y()) +
+                             (q.z() * q.z()) / (radii.z() * radii.z());
+            if (s <= 1.0) grid.voxels[x] = kCaries;
           }
         }
       }
     }
   }
-  r.pulp_voxels = count_materials(grid)[kPulp];
+  // The pulp marked above: assign_materials keeps it, the lesion takes only enamel and dentin.
+  r.pulp_voxels = pulp_voxels;
   if (report != nullptr) *report = r;
   return grid;
 }

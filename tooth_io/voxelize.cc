@@ -109,18 +109,29 @@ std::vector<std::uint16_t> edt_box(const VoxelGrid& grid, const std::array<int, 
   const int m = std::max({bx, by, bz});
   std::vector<double> f(m), d(m), z(m + 1);
   std::vector<int> v(m);
+  // One line of `len` samples, the q-th at `cell(q)`. A line of zeros (all empty) stays zeros,
+  // one all at the cap stays there (every parabola is >= cap): both are skipped.
+  const auto capped = static_cast<std::uint16_t>(cap);
+  auto transform_line = [&](int len, auto&& cell) {
+    bool zeros = true, at_cap = true;
+    for (int q = 0; q < len; ++q) {
+      const std::uint16_t c = cell(q);
+      f[q] = c;
+      zeros = zeros && c == 0;
+      at_cap = at_cap && c == capped;
+    }
+    if (zeros || at_cap) return;
+    distance_transform_1d(f, len, d, v, z);
+    for (int q = 0; q < len; ++q) cell(q) = static_cast<std::uint16_t>(std::min(d[q], cap));
+  };
   for (int k = 0; k < bz; ++k) {
     for (int i = 0; i < bx; ++i) {
-      for (int j = 0; j < by; ++j) f[j] = at(i, j, k);
-      distance_transform_1d(f, by, d, v, z);
-      for (int j = 0; j < by; ++j) at(i, j, k) = static_cast<std::uint16_t>(std::min(d[j], cap));
+      transform_line(by, [&](int j) -> std::uint16_t& { return at(i, j, k); });
     }
   }
   for (int j = 0; j < by; ++j) {
     for (int i = 0; i < bx; ++i) {
-      for (int k = 0; k < bz; ++k) f[k] = at(i, j, k);
-      distance_transform_1d(f, bz, d, v, z);
-      for (int k = 0; k < bz; ++k) at(i, j, k) = static_cast<std::uint16_t>(std::min(d[k], cap));
+      transform_line(bz, [&](int k) -> std::uint16_t& { return at(i, j, k); });
     }
   }
   return out;
@@ -388,6 +399,9 @@ void assign_materials(VoxelGrid& grid, const std::vector<std::uint8_t>& pulp,
   const int n = grid.n;
   const double h = grid.voxel_size;
   std::array<int, 3> lo = {n, n, n}, hi = {-1, -1, -1};
+  // The bounds of the dentin voxels at or above the CEJ (s >= 0 below): the only ones that can
+  // turn to enamel, so the only ones whose depth is needed.
+  std::array<int, 3> crown_lo = {n, n, n}, crown_hi = {-1, -1, -1};
   for (int k = 0; k < n; ++k) {
     for (int j = 0; j < n; ++j) {
       for (int i = 0; i < n; ++i) {
@@ -400,10 +414,17 @@ void assign_materials(VoxelGrid& grid, const std::vector<std::uint8_t>& pulp,
           lo[d] = std::min(lo[d], p[d]);
           hi[d] = std::max(hi[d], p[d]);
         }
+        // The test of the enamel loop below, on the same expression.
+        if (grid.voxels[x] == kDentin && !(crown.axis.dot(grid.center(i, j, k)) - crown.cej < 0)) {
+          for (int d = 0; d < 3; ++d) {
+            crown_lo[d] = std::min(crown_lo[d], p[d]);
+            crown_hi[d] = std::max(crown_hi[d], p[d]);
+          }
+        }
       }
     }
   }
-  if (hi[0] < 0 || !(enamel_cusp_m > 0)) return;
+  if (crown_hi[0] < 0 || !(enamel_cusp_m > 0)) return;
   const double height = crown.crown_height;
   const double t_top = enamel_cusp_m < height ? enamel_cusp_m * height / (height - enamel_cusp_m)
                                               : std::numeric_limits<double>::infinity();
@@ -413,6 +434,13 @@ void assign_materials(VoxelGrid& grid, const std::vector<std::uint8_t>& pulp,
   }
   const int clip =
       std::min(255, static_cast<int>(std::ceil(std::min(enamel_cusp_m, n * h) / h)) + 2);
+  // The distances over the crown's dentin and `clip` voxels around it (within the box above):
+  // a clipped distance sees only the empty voxels closer than `clip`, so at those voxels it is
+  // the whole box's, bit for bit (tests/tooth_io/voxelize_test.cc).
+  for (int d = 0; d < 3; ++d) {
+    lo[d] = std::max(lo[d], crown_lo[d] - clip);
+    hi[d] = std::min(hi[d], crown_hi[d] + clip);
+  }
   const auto d2 = edt_box(grid, lo, hi, clip);
   const int bx = hi[0] - lo[0] + 1, by = hi[1] - lo[1] + 1;
   for (int k = lo[2]; k <= hi[2]; ++k) {

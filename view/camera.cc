@@ -2,7 +2,9 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <iterator>
 #include <numbers>
 
 #include "view/view.h"
@@ -48,24 +50,36 @@ Eigen::Matrix4f OrbitCamera::projection(float aspect) const {
 }
 
 OrbitCamera camera_for(const VoxelGrid& grid) {
-  Eigen::Vector3f lo = Eigen::Vector3f::Constant(1e30f), hi = Eigen::Vector3f::Constant(-1e30f);
+  // The bounds of the solid voxels' centres: a centre's coordinate d grows with its index d alone
+  // (origin + h (i + 1/2), rounded, then cast: monotone), so the smallest and largest centres are
+  // those of the extreme solid indices. One pass over the rows, each scanned from both ends.
+  std::array<int, 3> lo_i = {grid.n, grid.n, grid.n}, hi_i = {-1, -1, -1};
+  const std::size_t n = static_cast<std::size_t>(std::max(grid.n, 0));
   for (int k = 0; k < grid.n; ++k) {
     for (int j = 0; j < grid.n; ++j) {
-      for (int i = 0; i < grid.n; ++i) {
-        if (!grid.solid(i, j, k)) continue;
-        const Eigen::Vector3f c = grid.center(i, j, k).cast<float>();
-        lo = lo.cwiseMin(c);
-        hi = hi.cwiseMax(c);
-      }
+      const std::uint8_t* row = grid.voxels.data() + grid.index(0, j, k);
+      const std::uint8_t* first = std::find_if(row, row + n, [](std::uint8_t m) { return m != 0; });
+      if (first == row + n) continue;
+      const std::uint8_t* last =
+          std::find_if(std::make_reverse_iterator(row + n), std::make_reverse_iterator(first),
+                       [](std::uint8_t m) { return m != 0; })
+              .base() -
+          1;
+      lo_i = {std::min(lo_i[0], static_cast<int>(first - row)), std::min(lo_i[1], j),
+              std::min(lo_i[2], k)};
+      hi_i = {std::max(hi_i[0], static_cast<int>(last - row)), std::max(hi_i[1], j),
+              std::max(hi_i[2], k)};
     }
   }
   OrbitCamera cam;
   const float h = static_cast<float>(grid.voxel_size);
-  if (lo.x() > hi.x()) {
+  if (hi_i[0] < 0) {
     cam.target = (grid.origin + 0.5 * grid.n * grid.voxel_size * Vec3::Ones()).cast<float>();
     cam.distance = std::max(1e-3f, 2.0f * h * grid.n);
     return cam;
   }
+  const Eigen::Vector3f lo = grid.center(lo_i[0], lo_i[1], lo_i[2]).cast<float>();
+  const Eigen::Vector3f hi = grid.center(hi_i[0], hi_i[1], hi_i[2]).cast<float>();
   cam.target = 0.5f * (lo + hi);
   const float radius = 0.5f * (hi - lo).norm() + h;
   cam.distance = radius / std::sin(0.5f * 0.8f * cam.fov_y_deg * kDeg);

@@ -94,6 +94,13 @@ class SurfaceMesher {
   int block_size() const { return block_size_; }
   int blocks_per_axis() const { return nb_; }
   const std::vector<BlockMesh>& blocks() const { return blocks_; }
+  // Hands the meshes over (a one-shot picture's renderer frees each once the GL holds it; issue
+  // #30). Afterwards blocks() is empty and the mesher is done: no update() or set_cut().
+  std::vector<BlockMesh> take_blocks() {
+    std::vector<BlockMesh> out;
+    out.swap(blocks_);
+    return out;
+  }
   const CutAway& cut() const { return cut_; }
   std::size_t triangle_count() const;
   // The blocks update() would re-mesh for a change of voxel (i, j, k), sorted.

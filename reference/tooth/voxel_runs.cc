@@ -1,5 +1,12 @@
 #include "reference/tooth/voxel_runs.h"
 
+#if defined(__linux__)
+#include <sys/mman.h>
+#include <unistd.h>
+#endif
+
+#include <cstdint>
+
 namespace dentsim {
 
 VoxelRuns::VoxelRuns(const VoxelGrid& grid)
@@ -24,6 +31,27 @@ VoxelRuns::VoxelRuns(const VoxelGrid& grid)
   }
 }
 
+namespace {
+
+// Hands the whole memory pages inside [begin, end) back to the system (Linux): the caller wrote
+// zeros there, which a private anonymous page reads as again once released (MADV_DONTNEED); a
+// failed madvise leaves them as they are.
+void release_zero_pages(const std::uint8_t* begin, const std::uint8_t* end) {
+#if defined(__linux__)
+  static const long page_size = sysconf(_SC_PAGESIZE);
+  if (page_size <= 0) return;
+  const auto page = static_cast<std::uintptr_t>(page_size);
+  const std::uintptr_t lo = (reinterpret_cast<std::uintptr_t>(begin) + page - 1) / page * page;
+  const std::uintptr_t hi = reinterpret_cast<std::uintptr_t>(end) / page * page;
+  if (hi > lo) madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_DONTNEED);
+#else
+  (void)begin;
+  (void)end;
+#endif
+}
+
+}  // namespace
+
 VoxelGrid VoxelRuns::unpack() const {
   VoxelGrid g;
   g.n = n_;
@@ -32,8 +60,13 @@ VoxelGrid VoxelRuns::unpack() const {
   std::size_t total = 0;
   for (const std::uint32_t l : length_) total += l;
   g.voxels.reserve(total);
+  // A run of empty voxels releases its whole pages as soon as it is written, so the grid never
+  // holds more than a page or two of them at once.
   for (std::size_t r = 0; r < material_.size(); ++r) {
+    const std::size_t from = g.voxels.size();
     g.voxels.insert(g.voxels.end(), length_[r], material_[r]);
+    if (material_[r] == 0)
+      release_zero_pages(g.voxels.data() + from, g.voxels.data() + g.voxels.size());
   }
   return g;
 }

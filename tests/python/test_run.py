@@ -16,7 +16,7 @@ import pytest
 import dentsim
 from conftest import PROBE_S
 
-WALL_CLOCK_KEYS = {"wall_s", "timing_us"}
+WALL_CLOCK_KEYS = {"wall_s", "setup_s", "timing_us"}
 
 
 @pytest.fixture(scope="module")

@@ -45,6 +45,32 @@ TEST(VoxelRuns, EmptyGridsAndSingleRuns) {
   EXPECT_EQ(one.unpack().voxels, empty.voxels);
 }
 
+// unpack() hands the grid's all-empty pages back to the system after writing them (Linux): the
+// grid still reads byte for byte as packed, read, written again and copied; on a 128^3 molar
+// (2 MiB, whole pages of empty rows) and a grid of long empty spans between single voxels
+// at page-straddling offsets.
+TEST(VoxelRuns, ReleasedEmptyPagesReadAsZerosAndStayWritable) {
+  VoxelGrid sparse(96, Vec3(0.0, 1e-3, 2e-3), 1e-4);
+  for (std::size_t x : {std::size_t{0}, std::size_t{4095}, std::size_t{4096}, std::size_t{12289},
+                        std::size_t{300000}, sparse.voxels.size() - 1}) {
+    sparse.voxels[x] = kDentin;
+  }
+  for (const VoxelGrid& g : {voxelize_procedural_molar(MolarParams{}, 128), sparse}) {
+    const VoxelRuns runs(g);
+    VoxelGrid back = runs.unpack();
+    EXPECT_EQ(back.voxels, g.voxels);
+    // Written after the release: the new values stay; a copy reads the same.
+    VoxelGrid edited = g;
+    for (std::size_t x = 0; x < g.voxels.size(); x += 4093) {
+      back.voxels[x] = kEnamel;
+      edited.voxels[x] = kEnamel;
+    }
+    EXPECT_EQ(back.voxels, edited.voxels);
+    const VoxelGrid copy = back;
+    EXPECT_EQ(copy.voxels, edited.voxels);
+  }
+}
+
 TEST(VoxelRuns, MolarStorageFollowsItsCrossingsNotTheVolume) {
   // The procedural molar at 64^3, whole and drilled (a column of voxels removed through the
   // crown): exact round trips, and runs = 1 + the id changes along the flat index, far below N^3.

@@ -77,6 +77,62 @@ TEST(ProceduralMolar, DeterministicAndScaleExact) {
   EXPECT_DOUBLE_EQ(c.voxel_size, 2 * a.voxel_size);
 }
 
+// The voxelisation's definition written plainly: molar_solid and molar_pulp at every voxel
+// centre of the grid, the enamel by depth, the lesion.
+VoxelGrid plain_procedural_molar(const MolarParams& params, int n) {
+  VoxelGrid grid = make_grid(molar_bounds(params), n);
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        const Vec3 c = grid.center(i, j, k);
+        if (molar_solid(params, c)) grid.set(i, j, k, molar_pulp(params, c) ? kPulp : kDentin);
+      }
+    }
+  }
+  assign_materials(grid, {}, molar_crown_frame(params), params.enamel_cusp_m * params.scale);
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        const std::uint8_t m = grid.at(i, j, k);
+        if ((m == kEnamel || m == kDentin) && molar_caries(params, grid.center(i, j, k))) {
+          grid.set(i, j, k, kCaries);
+        }
+      }
+    }
+  }
+  return grid;
+}
+
+// voxelize_procedural_molar computes the factors that depend on one or two coordinates once
+// (issue #30: the 512^3 tooth's setup): every voxel is the plain definition's, byte for byte,
+// for the default molar and for one whose proportions, scale and lesion differ.
+TEST(ProceduralMolar, SlicedVoxelisationIsThePlainDefinition) {
+  MolarParams other;
+  other.scale = 0.83;
+  other.crown_mesiodistal_m = 10.2e-3;
+  other.cervix_buccolingual_m = 8.1e-3;
+  other.distal_root_length_m = 12.1e-3;
+  other.caries_x_m = -1.5e-3;
+  for (const auto& [params, n] :
+       {std::pair{MolarParams{}, 64}, std::pair{MolarParams{}, 32}, std::pair{other, 64}}) {
+    VoxelizeReport report;
+    const VoxelGrid fast = voxelize_procedural_molar(params, n, &report);
+    const VoxelGrid plain = plain_procedural_molar(params, n);
+    ASSERT_EQ(fast.voxels.size(), plain.voxels.size());
+    long differ = 0, solid = 0;
+    for (std::size_t x = 0; x < plain.voxels.size(); ++x) {
+      differ += fast.voxels[x] != plain.voxels[x];
+      solid += plain.voxels[x] != 0;
+    }
+    EXPECT_EQ(differ, 0) << "n = " << n << ", scale " << params.scale;
+    EXPECT_EQ(report.solid.interior_voxels, solid);
+    // Every material is there: the comparison covers the pulp, the enamel and the lesion.
+    const std::vector<long> counts = count_materials(plain);
+    EXPECT_EQ(report.pulp_voxels, counts[kPulp]);
+    for (int m = kEnamel; m <= kCaries; ++m) EXPECT_GT(counts[m], 0) << "material " << m;
+  }
+}
+
 TEST(ProceduralMolar, DimensionsOfALowerFirstMolar) {
   const VoxelGrid& g = molar128();
   const double h = g.voxel_size;

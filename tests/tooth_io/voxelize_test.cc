@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <random>
 #include <sstream>
 
@@ -422,6 +423,72 @@ TEST(Materials, PulpMarkedInTheGridEqualsThePulpArray) {
   assign_materials(in_grid, {}, crown, 0.5e-3);
   EXPECT_EQ(in_grid.voxels, by_array.voxels);
   EXPECT_EQ(count_materials(in_grid)[kPulp], marked);
+}
+
+// assign_materials' definition written plainly: the depth of every crown dentin voxel from the
+// clipped distance transform of the whole grid (distance_to_empty_sq), the enamel where it is
+// under t(s).
+VoxelGrid plain_materials(VoxelGrid grid, const CrownFrame& crown, double t_cusp) {
+  for (std::uint8_t& m : grid.voxels) {
+    if (m != 0) m = m == kPulp ? kPulp : kDentin;
+  }
+  const double h = grid.voxel_size, height = crown.crown_height;
+  const double t_top = t_cusp < height ? t_cusp * height / (height - t_cusp)
+                                       : std::numeric_limits<double>::infinity();
+  const int clip = std::min(255, static_cast<int>(std::ceil(std::min(t_cusp, grid.n * h) / h)) + 2);
+  const std::vector<std::uint16_t> d2 = distance_to_empty_sq(grid, clip);
+  VoxelGrid out = grid;
+  for (int k = 0; k < grid.n; ++k) {
+    for (int j = 0; j < grid.n; ++j) {
+      for (int i = 0; i < grid.n; ++i) {
+        if (grid.at(i, j, k) != kDentin) continue;
+        const double s = crown.axis.dot(grid.center(i, j, k)) - crown.cej;
+        if (s < 0) continue;
+        const double t = std::min(t_cusp, t_top * s / height);
+        if ((std::sqrt(double(d2[grid.index(i, j, k)])) - 0.5) * h < t) out.set(i, j, k, kEnamel);
+      }
+    }
+  }
+  return out;
+}
+
+// assign_materials transforms only the box of the crown's dentin and `clip` voxels around it,
+// and skips the lines of the transform that are all empty or all at the clip (issue #30: the
+// 512^3 tooth's setup): the materials are the plain definition's, voxel for voxel, on a box
+// with a pulp column and its crown along +z, along a tilted axis with the CEJ moved, and with
+// enamel thicker than the clip's reach of the solid.
+TEST(Materials, CrownBoxDistancesAreTheWholeGridsDistances) {
+  const TriangleMesh b = box_mesh(Vec3(1e-3, 1.2e-3, 2e-3), Mat3::Identity(), Vec3::Zero());
+  VoxelGrid solid = make_grid(mesh_bounds(b), 64);
+  solid.voxels = voxelize_solid(b, solid);
+  for (int k = 20; k < 44; ++k) {
+    for (int j = 28; j < 34; ++j) {
+      for (int i = 29; i < 35; ++i) {
+        if (solid.solid(i, j, k)) solid.set(i, j, k, kPulp);
+      }
+    }
+  }
+  CrownFrame up;
+  up.crown_height = 1.5e-3;
+  up.cej = 0.3e-3;
+  CrownFrame tilted;
+  tilted.axis = Vec3(0.3, -0.2, 1.0).normalized();
+  tilted.cej = -0.4e-3;
+  tilted.crown_height = 1.8e-3;
+  for (const auto& [crown, t_cusp] :
+       {std::pair{up, 0.4e-3}, std::pair{tilted, 0.3e-3}, std::pair{up, 5e-3}}) {
+    VoxelGrid fast = solid;
+    assign_materials(fast, {}, crown, t_cusp);
+    const VoxelGrid plain = plain_materials(solid, crown, t_cusp);
+    long differ = 0;
+    for (std::size_t x = 0; x < plain.voxels.size(); ++x)
+      differ += fast.voxels[x] != plain.voxels[x];
+    EXPECT_EQ(differ, 0) << "t_cusp " << t_cusp;
+    const std::vector<long> counts = count_materials(plain);
+    EXPECT_GT(counts[kEnamel], 100);
+    EXPECT_GT(counts[kDentin], 100);
+    EXPECT_GT(counts[kPulp], 100);
+  }
 }
 
 // ---- real meshes --------------------------------------------------------------------------------

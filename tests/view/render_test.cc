@@ -5,11 +5,14 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
+#include <vector>
 
-#include "tooth_io/procedural_molar.h"
 #include "tests/view/picture_check.h"
+#include "tooth_io/procedural_molar.h"
 #include "view/view.h"
 
 namespace dentsim::view {
@@ -38,6 +41,54 @@ class Render : public ::testing::Test {
     return o;
   }
 };
+
+// camera_for's definition written plainly: the component-wise bounds of every solid voxel's
+// centre (as floats), the camera aimed at their middle.
+OrbitCamera plain_camera_for(const VoxelGrid& grid) {
+  Eigen::Vector3f lo = Eigen::Vector3f::Constant(1e30f), hi = Eigen::Vector3f::Constant(-1e30f);
+  for (int k = 0; k < grid.n; ++k) {
+    for (int j = 0; j < grid.n; ++j) {
+      for (int i = 0; i < grid.n; ++i) {
+        if (!grid.solid(i, j, k)) continue;
+        const Eigen::Vector3f c = grid.center(i, j, k).cast<float>();
+        lo = lo.cwiseMin(c);
+        hi = hi.cwiseMax(c);
+      }
+    }
+  }
+  OrbitCamera cam;
+  const float h = static_cast<float>(grid.voxel_size);
+  if (lo.x() > hi.x()) {
+    cam.target = (grid.origin + 0.5 * grid.n * grid.voxel_size * Vec3::Ones()).cast<float>();
+    cam.distance = std::max(1e-3f, 2.0f * h * grid.n);
+    return cam;
+  }
+  cam.target = 0.5f * (lo + hi);
+  const float radius = 0.5f * (hi - lo).norm() + h;
+  constexpr float kDeg = std::numbers::pi_v<float> / 180.0f;
+  cam.distance = radius / std::sin(0.5f * 0.8f * cam.fov_y_deg * kDeg);
+  return cam;
+}
+
+// camera_for scans each row from its ends for the extreme solid indices (issue #30: four
+// pictures of a 512^3 tooth): the same camera, bit for bit, as the plain bounds of every solid
+// centre, on the molar, on scattered voxels (one of them alone in its row, at a grid corner) and
+// on an empty grid.
+TEST(CameraFor, IsThePlainBoundsOfTheSolidCentres) {
+  std::vector<VoxelGrid> grids = {voxelize_procedural_molar(MolarParams{}, 64)};
+  VoxelGrid scattered(32, Vec3(-1.3e-3, 0.7e-3, 2.1e-3), 0.37e-3);
+  scattered.set(5, 9, 30, kDentin);
+  scattered.set(17, 0, 12, kEnamel);
+  scattered.set(31, 31, 31, kPulp);
+  scattered.set(3, 20, 4, kCaries);
+  grids.push_back(scattered);
+  grids.push_back(VoxelGrid(16, Vec3(1e-3, 2e-3, 3e-3), 1e-4));
+  for (const VoxelGrid& g : grids) {
+    const OrbitCamera a = camera_for(g), b = plain_camera_for(g);
+    EXPECT_EQ(a.target, b.target);
+    EXPECT_EQ(a.distance, b.distance);
+  }
+}
 
 TEST_F(Render, SilhouetteCoversTheProjectedVoxels) {
   const ViewOptions o = options();

@@ -100,12 +100,12 @@ RgbImage render_offscreen(const VoxelGrid& tooth, const TickSnapshot* tick,
     const Framebuffer fb(options.width, options.height);
     GlRenderer renderer;
     {
-      // Reads the caller's grid (no copy), and its meshes go once the GL holds them: issue #30's
-      // 512^3 tooth (128 MiB of grid, ~100 MiB of meshes).
-      const SurfaceMesher mesher = SurfaceMesher::borrowing(
-          tooth, options.field, SurfaceMesher::kDefaultBlockSize,
-          options.cutaway ? centre_cut(tooth) : CutAway{});
-      renderer.sync(mesher);
+      // Reads the caller's grid (no copy), and each block's mesh goes once the GL holds it:
+      // issue #30's 512^3 tooth (128 MiB of grid, ~100 MiB of meshes).
+      SurfaceMesher mesher =
+          SurfaceMesher::borrowing(tooth, options.field, SurfaceMesher::kDefaultBlockSize,
+                                   options.cutaway ? centre_cut(tooth) : CutAway{});
+      renderer.upload_once(mesher.take_blocks());
     }
     OrbitCamera cam = camera_for(tooth, options);
     if (options.focus_tool && tick != nullptr && tick->tick >= 0) {

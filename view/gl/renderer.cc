@@ -244,6 +244,7 @@ constexpr float kProxyGhostMinM = 2e-5f;  // draw the proxy when it is farther t
 struct GlRenderer::Impl {
   GLuint mesh_prog = 0, overlay_prog = 0;
   std::vector<GlMesh> blocks;
+  std::vector<GlMesh> packed;  // upload_once's buffers, in block order
   GlMesh sphere, cylinder, cone;
   GLuint quad_vao = 0, quad_vbo = 0, overlay_tex = 0;
   std::vector<std::uint8_t> text_pixels;
@@ -282,6 +283,7 @@ GlRenderer::GlRenderer() : impl_(std::make_unique<Impl>()) {
 
 GlRenderer::~GlRenderer() {
   for (GlMesh& m : impl_->blocks) m.release();
+  for (GlMesh& m : impl_->packed) m.release();
   impl_->sphere.release();
   impl_->cylinder.release();
   impl_->cone.release();
@@ -304,6 +306,28 @@ void GlRenderer::sync(const SurfaceMesher& mesher) {
     m.upload(blocks[b].vertices, blocks[b].indices);
     m.version = blocks[b].version;
   }
+}
+
+void GlRenderer::upload_once(std::vector<BlockMesh> blocks) {
+  // Buffers of about 2 MiB of vertices: few GL objects, and little staging beside them.
+  constexpr std::size_t kPackVertices = std::size_t{1} << 16;
+  std::vector<MeshVertex> v;
+  std::vector<std::uint32_t> idx;
+  auto flush = [&] {
+    if (idx.empty()) return;
+    impl_->packed.emplace_back();
+    impl_->packed.back().upload(v, idx);
+    v.clear();
+    idx.clear();
+  };
+  for (BlockMesh& b : blocks) {
+    if (!v.empty() && v.size() + b.vertices.size() > kPackVertices) flush();
+    const auto base = static_cast<std::uint32_t>(v.size());
+    v.insert(v.end(), b.vertices.begin(), b.vertices.end());
+    for (const std::uint32_t i : b.indices) idx.push_back(base + i);
+    b = BlockMesh{};  // frees the block's arrays
+  }
+  flush();
 }
 
 void GlRenderer::draw(const OrbitCamera& camera, const TickSnapshot* tick,
@@ -345,6 +369,13 @@ void GlRenderer::draw(const OrbitCamera& camera, const TickSnapshot* tick,
   glUniformMatrix4fv(u_model, 1, GL_FALSE, identity.data());
   glUniform1i(u_use, 0);
   for (const GlMesh& m : d.blocks) m.draw();
+  for (const GlMesh& m : d.packed) {
+    m.draw();
+    // A software GL (llvmpipe) bins the triangles of everything drawn since the last flush: one
+    // buffer's worth at a time keeps its draw-time memory small (issue #30; the pixels are the
+    // same, as the flushed parts are drawn in order).
+    glFlush();
+  }
 
   if (tick != nullptr && tick->tick >= 0) {
     const float rho = static_cast<float>(tick->tool_radius_m);

@@ -32,6 +32,12 @@ class GlRenderer {
 
   // Uploads the blocks whose version changed since the last call.
   void sync(const SurfaceMesher& mesher);
+  // Takes the meshes of a picture drawn once (SurfaceMesher::take_blocks; nothing to update
+  // later): packs their triangles, in block order, into a few large buffers and frees each
+  // block's arrays as soon as they are copied, so the mesh is held once, by the GL, and a
+  // software GL keeps no objects per block (issue #30: the 512^3 tooth). They are drawn after
+  // sync()'s blocks, in the same order as sync() would draw them, so the picture is the same.
+  void upload_once(std::vector<BlockMesh> blocks);
   // Draws one frame into the bound framebuffer of width x height pixels. tick: null = tooth only;
   // overlay: lines of text (empty = no overlay).
   void draw(const OrbitCamera& camera, const TickSnapshot* tick,
