@@ -80,6 +80,37 @@ bool accumulate_drill_work(std::span<const Contact> contacts,
   return true;
 }
 
+double cut_band_depth(const VoxelGrid& grid, int i, int j, int k, const Vec3& g, double rho,
+                      double band) {
+  // The gap between the bur's surface and the voxel, at the voxel's middle: its centre's distance
+  // from g less rho and half a voxel (0 for a voxel whose face the bur touches head-on).
+  const double gap = (grid.center(i, j, k) - g).norm() - rho - 0.5 * grid.voxel_size;
+  return std::max(0.0, band - std::max(0.0, gap));
+}
+
+void collect_cut_set(const VoxelTooth& tooth, const Contact& contact, const Vec3& g, double rho,
+                     std::vector<std::size_t>* candidates, std::vector<Contact>* shares,
+                     std::vector<std::size_t>* voxels) {
+  const VoxelGrid& grid = tooth.grid();
+  candidates->clear();
+  const double band = kCutBandFraction * rho;  // the bur's cutting band about g
+  tooth.octree.query_sphere(g, rho + band, candidates);  // the solid voxels the band meets
+  const std::size_t n = static_cast<std::size_t>(grid.n);
+  for (const std::size_t v : *candidates) {
+    if (tooth.codes.code(v) == 0) continue;  // no exposed face: under the cut surface
+    if (shares->size() >= shares->capacity() || voxels->size() >= voxels->capacity()) break;
+    const double depth =
+        cut_band_depth(grid, static_cast<int>(v % n), static_cast<int>((v / n) % n),
+                       static_cast<int>(v / (n * n)), g, rho, band);
+    if (!(depth > 0.0)) continue;
+    Contact share = contact;  // the contact's force K delta, shared by the band's depth
+    share.material = grid.voxels[v];
+    share.weight = depth;
+    shares->push_back(share);
+    voxels->push_back(v);
+  }
+}
+
 void validate_drill_params(const DrillParams& params) {
   if (!(params.bur_speed_rad_s >= 0.0) || !(params.cutting_coefficient >= 0.0) ||
       !std::isfinite(params.bur_speed_rad_s) || !std::isfinite(params.cutting_coefficient)) {

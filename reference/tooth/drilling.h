@@ -96,6 +96,34 @@ bool accumulate_drill_work(std::span<const Contact> contacts,
                            std::span<const std::size_t> contact_voxels, const ToolTip& tip,
                            const DrillParams& params, double T, DrillState* state);
 
+// The cut set of the surface-proxy contact models (sdf and field; docs/derivations/drilling.md §5):
+// the exposed solid voxels (a face toward empty space: the cut surface) within the bur's cutting
+// band, the shell of depth b = kCutBandFraction rho about the bur's sphere (g, rho) at the proxy,
+// each weighted by the band's depth at the voxel's middle (cut_band_depth). The power per unit of
+// cut surface is then P (b - gap(x)) / (integral of (b - gap) dA): a property of the bur (rho, b),
+// not of the grid, so the cut converges as h -> 0 (the voxels sample that density at their middles,
+// the midpoint rule). Before issue #30's third change the band was one voxel, b = h (every solid
+// voxel meeting the ball of radius rho + h about g, weighted by the cosine to the push): a
+// footprint of radius sqrt(2 rho h + h^2) on a flat floor, so the coarse cut was wider and
+// shallower, O(h) (§5). Appends one share of `contact` (weight = the band's depth, material = the
+// voxel's) and its flat voxel index per voxel, up to the vectors' capacity; `candidates` is
+// scratch. Never allocates beyond the vectors' capacity, never throws.
+void collect_cut_set(const VoxelTooth& tooth, const Contact& contact, const Vec3& g, double rho,
+                     std::vector<std::size_t>* candidates, std::vector<Contact>* shares,
+                     std::vector<std::size_t>* voxels);
+
+// The depth of the cutting band (g, rho, band) at voxel (i, j, k) of `grid`: band - gap, gap =
+// |centre - g| - rho - h / 2 (the bur's distance to the voxel at its middle, 0 if touching head-on,
+// taken as 0 if negative), 0 outside the band [m].
+double cut_band_depth(const VoxelGrid& grid, int i, int j, int k, const Vec3& g, double rho,
+                      double band);
+
+// The depth of the bur's cutting band as a fraction of its radius (collect_cut_set): a model
+// constant of the bur like mu_c, b = rho / 3 (0.167 mm for the 0.5 mm bur: the old band h at the
+// default 128^3 molar, h = 0.17 mm), so the default grid keeps its footprint and finer grids
+// converge to it.
+inline constexpr double kCutBandFraction = 1.0 / 3.0;
+
 // The removal law's fraction theta (docs/derivations/drilling.md §1): a voxel goes in the first
 // tick at whose end its work W satisfies W >= theta E_m, the cut front past its centre; it is
 // charged the whole E_m, the missing E_m - W carried as a debt (DrillState::carry_j).

@@ -98,25 +98,9 @@ bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out
   if (out.capacity() < 1) return false;
   out.push_back(contact);
   if (!drills_) return true;
-  // The voxels the bur at g cuts: solid voxels within rho + h of g on the pushed side.
-  scratch_.candidates.clear();
-  tooth_.octree.query_sphere(g, tip_.radius + tooth_.grid().voxel_size, &scratch_.candidates);
-  const VoxelGrid& grid = tooth_.grid();
-  const std::size_t n = static_cast<std::size_t>(grid.n);
-  for (const std::size_t v : scratch_.candidates) {
-    const Vec3 p = grid.center(static_cast<int>(v % n), static_cast<int>((v / n) % n),
-                               static_cast<int>(v / (n * n)));
-    const Vec3 to = p - g;
-    const double len = to.norm();
-    const double cosine = len > 0.0 ? -contact.n.dot(to) / len : 1.0;
-    if (!(cosine > 0.0)) continue;
-    if (drill_contacts_.size() >= drill_contacts_.capacity()) break;  // the nearest suffice
-    Contact share = contact;  // the contact's force K delta, shared with weight `cosine`
-    share.material = grid.voxels[v];
-    share.weight = cosine;
-    drill_contacts_.push_back(share);
-    drill_voxels_.push_back(v);
-  }
+  // The voxels in the bur's cutting band about g, by the band's depth (drilling.h collect_cut_set).
+  collect_cut_set(tooth_, contact, g, tip_.radius, &scratch_.candidates, &drill_contacts_,
+                  &drill_voxels_);
   return true;
 }
 
