@@ -95,6 +95,12 @@ class PhantomDynamics : public SixDofDeviceModel {
   void terms(const Vec6& q, const Vec6& qd, bool with_jacobian_rate,
              DeviceTerms& out) const override;
 
+  // True when the device file fits the closed form of docs/derivations/phantom_closed_form.md
+  // (decided once, at construction): terms() then takes it; otherwise the tree sweeps above.
+  bool closed_form() const { return closed_form_; }
+  // True when jacobian_inverse() applies (the gimbal's joints meet at a point; at construction).
+  bool block_jacobian_inverse() const { return gimbal_at_point_; }
+
   // J1 = J_t^-1 (section 6) from terms()' J_t and R1 (the pose's), when the gimbal's joints meet
   // at a point; false (J1 untouched) otherwise, for the caller's general inverse. No allocation,
   // no exception.
@@ -113,6 +119,11 @@ class PhantomDynamics : public SixDofDeviceModel {
 
  private:
   DeviceTerms terms_at(const VecX& q, const Vec6& qd) const;  // q size-checked, no dJ_t/dt
+  // Sections 1-5 on the tree (any device file).
+  void terms_tree(const Vec6& q, const Vec6& qd, bool with_jacobian_rate, DeviceTerms& out) const;
+  // The closed form (docs/derivations/phantom_closed_form.md), when closed_form_.
+  void terms_closed(const Vec6& q, const Vec6& qd, bool with_jacobian_rate,
+                    DeviceTerms& out) const;
 
   using V3 = Eigen::Matrix<T, 3, 1>;
   using M3 = Eigen::Matrix<T, 3, 3>;
@@ -139,6 +150,23 @@ class PhantomDynamics : public SixDofDeviceModel {
   V3 tip_;
   Mat3 S_tip_ = Mat3::Zero();     // S(tip) in double (section 6)
   bool gimbal_at_point_ = false;  // pitch_pos = roll_pos = 0: section 6 applies
+  // The closed form's constants (docs/derivations/phantom_closed_form.md §2), in the base frame
+  // {B} at q1 = 0. An arm body (upper arm, forearm, crank, parallel link) at its absolute angle
+  // phi: CoM offset r = Ry(-phi) rho from its pivot, inertia Ry(-phi) diag(d) Ry(-phi)^T.
+  struct ArmBody {
+    T m, rx, ry, rz;  // mass, rho
+    T dx, dy, dz;     // inertia about the CoM along {B}'s axes at phi = 0
+    T Kyy;            // dy + m (rho_x^2 + rho_z^2): the yy entry about the pivot, constant
+  };
+  bool closed_form_ = false;
+  std::array<ArmBody, 4> arm_{};  // upper arm, forearm, crank, parallel link
+  T base_zz_ = T(0);              // the base's zz inertia about the yaw axis
+  T E0x_ = T(0), E0z_ = T(0);     // elbow at q2 = 0
+  T P0x_ = T(0), P0z_ = T(0);     // crank's end (the parallel link's pivot) at q3 = 0
+  T F0x_ = T(0), F0z_ = T(0);     // elbow to gimbal centre at q3 = 0
+  T E0sq_ = T(0), P0sq_ = T(0), F0sq_ = T(0);  // their squared lengths
+  std::array<int, 3> fore_from_{};  // the forearm's {B} orientation at q3 = 0, a signed
+  std::array<T, 3> fore_sign_{};    // permutation: column c = fore_sign_[c] e_fore_from_[c]
   V6 armature_, damping_, coulomb_;
   V6 coulomb_smoothing_;
   std::array<CoulombSign, 6> coulomb_sign_{};

@@ -127,6 +127,41 @@ TEST(FastPhantomModel, MatchesReferenceWithPerturbedParamsFile) {
             kRoundOff);
 }
 
+// A file that keeps the closed form's structure (docs/derivations/phantom_closed_form.md §1) with
+// every other number perturbed: masses, inertias, CoMs off every axis, the tip in all three
+// directions, the armature; the gimbal's axes other signed coordinate axes than shipped.
+PhantomParams perturbed_fitting_params() {
+  PhantomParams p = perturbed_params();
+  p.pitch_pos_m = Vec3::Zero();
+  p.roll_pos_m = Vec3::Zero();
+  p.yaw_axis = -Vec3::UnitZ();
+  p.pitch_axis = Vec3::UnitY();
+  p.roll_axis = -Vec3::UnitX();
+  return parse_phantom_params(phantom_params_to_text(p), "perturbed, fitting");
+}
+
+// The fit is decided at construction: the shipped file and the fitting perturbed one take the
+// closed form, a gimbal joint off the centre or a tilted axis the tree sweeps.
+TEST(FastPhantomModel, ClosedFormFitIsDecidedAtSetup) {
+  EXPECT_TRUE(fast::PhantomModel(default_phantom_params()).closed_form());
+  EXPECT_TRUE(fast::PhantomModel(perturbed_fitting_params()).closed_form());
+  EXPECT_TRUE(fast::PhantomModelFloat(default_phantom_params()).closed_form());
+  EXPECT_FALSE(fast::PhantomModel(perturbed_params()).closed_form());
+  PhantomParams p = default_phantom_params();
+  p.roll_pos_m = Vec3(0.0, 0.0, 0.002);
+  EXPECT_FALSE(fast::PhantomModel(p).closed_form());
+  p = default_phantom_params();
+  p.pitch_axis = Vec3(1.0, 0.0, 1e-3).normalized();
+  EXPECT_FALSE(fast::PhantomModel(p).closed_form());
+}
+
+// The closed form on a file other than the shipped one (same bound, header).
+TEST(FastPhantomModel, ClosedFormMatchesReferenceWithAPerturbedFileThatFits) {
+  EXPECT_LT(
+      compare_random(perturbed_fitting_params(), kSeed + 40, 4000, "perturbed, fitting").max(),
+      kRoundOff);
+}
+
 // Gravity off: g is exactly zero in both (rel_err demands an exact 0 where the reference is 0).
 TEST(FastPhantomModel, GravityOff) {
   PhantomParams p = default_phantom_params();
