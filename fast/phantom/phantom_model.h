@@ -2,6 +2,13 @@
 // twin of reference/phantom/phantom_model.h (same PhantomParams, same tree, same quantities; it
 // differs from the reference only by round-off, tests/fast/phantom_model_test.cc).
 //
+// Two evaluations, chosen once at construction (closed_form()): the closed form of
+// docs/derivations/phantom_closed_form.md (the base frame at q1 = 0, the four arm bodies as
+// scalars turning about one axis, the gimbal as composites at its centre; no tree sweep, the
+// mass matrix's zero pairs never formed) for every file with that structure (the shipped one),
+// and the tree sweeps below (sections 1-5) for any other file. Both pinned against the reference
+// by tests/fast/phantom_model_test.cc; the closed form also against MuJoCo's model.
+//
 // Coordinates and tree as in the reference: q = (q1..q6) [rad], tree angles theta = G q with
 //     theta = (q1, q2, q3 - q2, q3, q2 - q3, q4, q5, q6),
 // bodies 0 base, 1 upper arm, 2 forearm, 3 crank, 4 parallel link, 5..7 gimbal yaw, pitch, roll,
