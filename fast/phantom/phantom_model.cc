@@ -86,6 +86,26 @@ struct Sym3 {
   }
 };
 
+// True when R is a signed permutation (column c = sign[c] e_from[c]; exact comparisons: the
+// shipped tree is built from exact 0 and +-1 entries); from and sign are then filled.
+template <typename T>
+bool signed_permutation(const Mat3& R, std::array<int, 3>& from, std::array<T, 3>& sign) {
+  bool ok = true;
+  for (int c = 0; c < 3; ++c) {
+    int nonzero = 0;
+    for (int rr = 0; rr < 3; ++rr) {
+      const double v = R(rr, c);
+      if (v == 0.0) continue;
+      ++nonzero;
+      ok = ok && (v == 1.0 || v == -1.0);
+      from[c] = rr;
+      sign[c] = T(v);
+    }
+    ok = ok && nonzero == 1;
+  }
+  return ok;
+}
+
 }  // namespace
 
 template <typename T>
@@ -103,21 +123,8 @@ PhantomDynamics<T>::PhantomDynamics(const PhantomParams& params)
     b.com = tree.com[i].cast<T>();
     b.inertia = tree.inertia[i].cast<T>();
     b.mass = T(tree.mass[i]);
-    // Signed permutation and coordinate axis? (exact comparisons: the shipped tree is built from
-    // exact 0 and +-1 entries; anything else takes the general formula.)
-    bool aligned = true;
-    for (int c = 0; c < 3; ++c) {
-      int nonzero = 0;
-      for (int rr = 0; rr < 3; ++rr) {
-        const double v = tree.rot0[i](rr, c);
-        if (v == 0.0) continue;
-        ++nonzero;
-        aligned = aligned && (v == 1.0 || v == -1.0);
-        b.col_from[c] = rr;
-        b.col_sign[c] = T(v);
-      }
-      aligned = aligned && nonzero == 1;
-    }
+    // Signed permutation and coordinate axis? (anything else takes the general formula.)
+    bool aligned = signed_permutation(tree.rot0[i], b.col_from, b.col_sign);
     int axis_nonzero = 0;
     for (int c = 0; c < 3; ++c) {
       const double v = tree.axis[i](c);
@@ -170,18 +177,7 @@ PhantomDynamics<T>::PhantomDynamics(const PhantomParams& params)
   E0x_ = T(E0(0)), E0z_ = T(E0(2)), P0x_ = T(P0(0)), P0z_ = T(P0(2));
   F0x_ = T(F0(0)), F0z_ = T(F0(2));
   E0sq_ = T(E0.squaredNorm()), P0sq_ = T(P0.squaredNorm()), F0sq_ = T(F0.squaredNorm());
-  for (int c = 0; c < 3; ++c) {
-    int nonzero = 0;
-    for (int rr = 0; rr < 3; ++rr) {
-      const double v = k0.R[kForearm](rr, c);
-      if (v == 0.0) continue;
-      ++nonzero;
-      fit = fit && (v == 1.0 || v == -1.0);
-      fore_from_[c] = rr;
-      fore_sign_[c] = T(v);
-    }
-    fit = fit && nonzero == 1;
-  }
+  fit = signed_permutation(k0.R[kForearm], fore_from_, fore_sign_) && fit;
   closed_form_ = fit;
 }
 
