@@ -86,6 +86,26 @@ struct Sym3 {
   }
 };
 
+// True when R is a signed permutation (column c = sign[c] e_from[c]; exact comparisons: the
+// shipped tree is built from exact 0 and +-1 entries); from and sign are then filled.
+template <typename T>
+bool signed_permutation(const Mat3& R, std::array<int, 3>& from, std::array<T, 3>& sign) {
+  bool ok = true;
+  for (int c = 0; c < 3; ++c) {
+    int nonzero = 0;
+    for (int rr = 0; rr < 3; ++rr) {
+      const double v = R(rr, c);
+      if (v == 0.0) continue;
+      ++nonzero;
+      ok = ok && (v == 1.0 || v == -1.0);
+      from[c] = rr;
+      sign[c] = T(v);
+    }
+    ok = ok && nonzero == 1;
+  }
+  return ok;
+}
+
 }  // namespace
 
 template <typename T>
@@ -103,21 +123,8 @@ PhantomDynamics<T>::PhantomDynamics(const PhantomParams& params)
     b.com = tree.com[i].cast<T>();
     b.inertia = tree.inertia[i].cast<T>();
     b.mass = T(tree.mass[i]);
-    // Signed permutation and coordinate axis? (exact comparisons: the shipped tree is built from
-    // exact 0 and +-1 entries; anything else takes the general formula.)
-    bool aligned = true;
-    for (int c = 0; c < 3; ++c) {
-      int nonzero = 0;
-      for (int rr = 0; rr < 3; ++rr) {
-        const double v = tree.rot0[i](rr, c);
-        if (v == 0.0) continue;
-        ++nonzero;
-        aligned = aligned && (v == 1.0 || v == -1.0);
-        b.col_from[c] = rr;
-        b.col_sign[c] = T(v);
-      }
-      aligned = aligned && nonzero == 1;
-    }
+    // Signed permutation and coordinate axis? (anything else takes the general formula.)
+    bool aligned = signed_permutation(tree.rot0[i], b.col_from, b.col_sign);
     int axis_nonzero = 0;
     for (int c = 0; c < 3; ++c) {
       const double v = tree.axis[i](c);
@@ -139,11 +146,54 @@ PhantomDynamics<T>::PhantomDynamics(const PhantomParams& params)
   coulomb_smoothing_ = tree.coulomb_smoothing.cast<T>();
   coulomb_sign_ = tree.coulomb_sign;
   gravity_ = T(tree.gravity);
+
+  // The closed form's fit and constants (docs/derivations/phantom_closed_form.md §1-2), from the
+  // reference's kinematics at q = 0: every body's rotation a signed column permutation turned
+  // about a coordinate axis, the four arm bodies turning about -y of {B} through points in
+  // {B}'s xz-plane, the base about z through the origin, the gimbal's joints at one point.
+  // Exact comparisons: the shipped tree is built from exact 0 and +-1.
+  const PhantomModelD::Kinematics k0 = reference_.kinematics(Vec6::Zero(), Vec6::Zero());
+  bool fit = gimbal_at_point_ && k0.a[kBase] == Vec3::UnitZ() && k0.p[kBase].isZero(0.0) &&
+             tree.com[kBase].allFinite();
+  for (int i = 0; i < kPhantomTreeDof; ++i) fit = fit && body_[i].axis_aligned;
+  constexpr std::array<int, 4> kArm = {kUpperArm, kForearm, kCrank, kParallelLink};
+  for (int j = 0; j < 4; ++j) {
+    const int i = kArm[j];
+    fit = fit && k0.a[i] == -Vec3::UnitY() && k0.p[i](1) == 0.0;
+    const Mat3 D = k0.R[i] * tree.inertia[i].asDiagonal() * k0.R[i].transpose();
+    fit = fit && D.isDiagonal(0.0);
+    const Vec3 rho = k0.R[i] * tree.com[i];
+    ArmBody& b = arm_[j];
+    b.m = T(tree.mass[i]);
+    b.rx = T(rho(0)), b.ry = T(rho(1)), b.rz = T(rho(2));
+    b.dx = T(D(0, 0)), b.dy = T(D(1, 1)), b.dz = T(D(2, 2));
+    b.Kyy = T(D(1, 1) + tree.mass[i] * (rho(0) * rho(0) + rho(2) * rho(2)));
+  }
+  fit = fit && k0.p[kUpperArm].isZero(0.0) && k0.p[kCrank].isZero(0.0) &&
+        k0.p[kGimbalYaw](1) == 0.0;
+  const Vec3& c0 = tree.com[kBase];
+  base_zz_ = T(tree.inertia[kBase](2) + tree.mass[kBase] * (c0(0) * c0(0) + c0(1) * c0(1)));
+  const Vec3 E0 = k0.p[kForearm], P0 = k0.p[kParallelLink], F0 = k0.p[kGimbalYaw] - E0;
+  E0x_ = T(E0(0)), E0z_ = T(E0(2)), P0x_ = T(P0(0)), P0z_ = T(P0(2));
+  F0x_ = T(F0(0)), F0z_ = T(F0(2));
+  E0sq_ = T(E0.squaredNorm()), P0sq_ = T(P0.squaredNorm()), F0sq_ = T(F0.squaredNorm());
+  fit = signed_permutation(k0.R[kForearm], fore_from_, fore_sign_) && fit;
+  closed_form_ = fit;
 }
 
 template <typename T>
-void PhantomDynamics<T>::terms(const Vec6& q_in, const Vec6& qd_in, bool with_jacobian_rate,
+void PhantomDynamics<T>::terms(const Vec6& q, const Vec6& qd, bool with_jacobian_rate,
                                DeviceTerms& out) const {
+  if (closed_form_) {
+    terms_closed(q, qd, with_jacobian_rate, out);
+  } else {
+    terms_tree(q, qd, with_jacobian_rate, out);
+  }
+}
+
+template <typename T>
+void PhantomDynamics<T>::terms_tree(const Vec6& q_in, const Vec6& qd_in, bool with_jacobian_rate,
+                                    DeviceTerms& out) const {
   constexpr int n = kPhantomTreeDof;
   const V6 q = q_in.cast<T>();
   const V6 qd = qd_in.cast<T>();
@@ -324,6 +374,229 @@ void PhantomDynamics<T>::terms(const Vec6& q_in, const Vec6& qd_in, bool with_ja
   } else {
     out.J_t_dot.setZero();
   }
+}
+
+// The closed form (docs/derivations/phantom_closed_form.md; the section numbers below are its).
+// Everything is evaluated in the base frame {B} at q1 = 0: M, C^T qd and g do not depend on q1
+// (the yaw turns about gravity's axis), and the world-frame rows of the pose, J_t and dJ_t/dt are
+// {B}'s turned by Rz(q1) (§6).
+template <typename T>
+void PhantomDynamics<T>::terms_closed(const Vec6& q_in, const Vec6& qd_in,
+                                      bool with_jacobian_rate, DeviceTerms& out) const {
+  using std::cos;
+  using std::sin;
+  const V6 q = q_in.cast<T>();
+  const V6 qd = qd_in.cast<T>();
+  const T s1 = sin(q(0)), c1 = cos(q(0)), s2 = sin(q(1)), c2 = cos(q(1)), s3 = sin(q(2)),
+          c3 = cos(q(2));
+  const T qd1 = qd(0), qd2 = qd(1), qd3 = qd(2);
+
+  // §2 The arm's points: rot(phi) (x, z) = (c x - s z, s x + c z); d/dphi of it = (-z', x').
+  const T Ex = c2 * E0x_ - s2 * E0z_, Ez = s2 * E0x_ + c2 * E0z_;  // elbow
+  const T Px = c3 * P0x_ - s3 * P0z_, Pz = s3 * P0x_ + c3 * P0z_;  // parallel link's pivot
+  const T fx = c3 * F0x_ - s3 * F0z_, fz = s3 * F0x_ + c3 * F0z_;  // elbow to gimbal centre
+  const T Cx = Ex + fx, Cz = Ez + fz;                               // gimbal centre
+  // §3 Velocities: Omega_A = (0, -qd2, qd1) (upper arm, parallel link), Omega_B = (0, -qd3, qd1)
+  // (forearm, crank, and the gimbal's carrier).
+  const V3 vE(-qd2 * Ez, qd1 * Ex, qd2 * Ex);
+  const V3 vP(-qd3 * Pz, qd1 * Px, qd3 * Px);
+  const V3 vC(vE(0) - qd3 * fz, vE(1) + qd1 * fx, vE(2) + qd3 * fx);
+
+  // §2-3 One arm body at angle (c, s), pivot velocity vo, angular velocity (0, wy, qd1): its
+  // first moment h about the pivot, the zz and yz entries of its inertia K about the pivot, its
+  // momentum P and the x component of its angular momentum about the pivot.
+  struct Arm {
+    T hx, hy, hz, Kzz, Kyz, Px, Py, Pz, Lx;
+  };
+  auto arm = [qd1](const ArmBody& b, T c, T s, const V3& vo, T wy) {
+    const T rx = c * b.rx - s * b.rz, rz = s * b.rx + c * b.rz;
+    const T Izz = s * s * b.dx + c * c * b.dz, Ixz = c * s * (b.dx - b.dz);
+    Arm a;
+    a.hx = b.m * rx, a.hy = b.m * b.ry, a.hz = b.m * rz;
+    a.Kzz = Izz + b.m * (rx * rx + b.ry * b.ry);
+    a.Kyz = -a.hy * rz;
+    a.Px = b.m * vo(0) + (wy * a.hz - qd1 * a.hy);  // m (vo + w x r)
+    a.Py = b.m * vo(1) + qd1 * a.hx;
+    a.Pz = b.m * vo(2) - wy * a.hx;
+    a.Lx = b.ry * a.Pz - rz * a.Py + Ixz * qd1;  // (r x P + I w)_x
+    return a;
+  };
+  const V3 zero = V3::Zero();
+  const Arm A1 = arm(arm_[0], c2, s2, zero, -qd2);  // upper arm, pivot O
+  const Arm A2 = arm(arm_[1], c3, s3, vE, -qd3);    // forearm, pivot E
+  const Arm A3 = arm(arm_[2], c3, s3, zero, -qd3);  // crank, pivot O
+  const Arm A4 = arm(arm_[3], c2, s2, vP, -qd2);    // parallel link, pivot P
+
+  // §4 The gimbal about its centre C: rotations by column turns from the forearm's, composites
+  // (mass, first moment h, inertia K) and momenta of the subtrees of yaw, pitch and roll.
+  M3 R[3];
+  V3 a[3], w[3];
+  {
+    M3 RB;  // the forearm's orientation Ry(-q3) F, F a signed permutation
+    for (int c = 0; c < 3; ++c) {
+      const int from = fore_from_[c];
+      const T sg = fore_sign_[c];
+      if (from == 0) {
+        RB.col(c) = V3(sg * c3, T(0), sg * s3);
+      } else if (from == 1) {
+        RB.col(c) = V3(T(0), sg, T(0));
+      } else {
+        RB.col(c) = V3(-sg * s3, T(0), sg * c3);
+      }
+    }
+    V3 wpar(T(0), -qd3, qd1);
+    for (int g = 0; g < 3; ++g) {
+      const Body& b = body_[kGimbalYaw + g];
+      const M3& Rp = g == 0 ? RB : R[g - 1];
+      M3& Ri = R[g];
+      for (int c = 0; c < 3; ++c) Ri.col(c) = b.col_sign[c] * Rp.col(b.col_from[c]);
+      a[g] = b.axis_sign * Ri.col(b.k);
+      const int ci = (b.k + 1) % 3, cj = (b.k + 2) % 3;
+      const T sn = sin(q(3 + g)), cs = cos(q(3 + g));
+      const T st = b.axis_sign * sn;
+      const V3 col_i = Ri.col(ci);
+      Ri.col(ci) = cs * col_i + st * Ri.col(cj);
+      Ri.col(cj) = cs * Ri.col(cj) - st * col_i;
+      w[g] = wpar + a[g] * qd(3 + g);
+      wpar = w[g];
+    }
+  }
+  T mg[3];
+  V3 h[3], P[3], L[3];
+  Sym3<T> K[3];
+  for (int g = 2; g >= 0; --g) {  // roll, pitch, yaw: a subtree is its body and the one below
+    const Body& b = body_[kGimbalYaw + g];
+    const V3 r = R[g] * b.com;
+    const Sym3<T> I = Sym3<T>::rotated(R[g], b.inertia);
+    const V3 Pi = b.mass * (vC + cross(w[g], r));
+    K[g] = I;
+    K[g].add_shift(b.mass, V3::Zero(), r);
+    mg[g] = b.mass;
+    h[g] = b.mass * r;
+    P[g] = Pi;
+    L[g] = cross(r, Pi) + I * w[g];
+    if (g < 2) {
+      K[g] += K[g + 1];
+      mg[g] += mg[g + 1];
+      h[g] += h[g + 1];
+      P[g] += P[g + 1];
+      L[g] += L[g + 1];
+    }
+  }
+
+  // §5 M: the arm block from the four arm bodies, the base and the gimbal as one body at C; the
+  // gimbal's rows from its subtrees (F_j = K_j a_j, u_j = a_j x h_j).
+  const Sym3<T>& KG = K[0];
+  const V3& hG = h[0];
+  const T m00 = base_zz_ + A1.Kzz + A3.Kzz + arm_[1].m * Ex * Ex + T(2) * Ex * A2.hx + A2.Kzz +
+                arm_[3].m * Px * Px + T(2) * Px * A4.hx + A4.Kzz + mg[0] * Cx * Cx +
+                T(2) * Cx * hG(0) + KG.zz;
+  const T m10 = -A1.Kyz + Ez * A2.hy - A4.Kyz + Ez * hG(1);
+  const T m20 = -A3.Kyz - A2.Kyz + Pz * A4.hy + fz * hG(1) - KG.yz;
+  const T m11 = arm_[0].Kyy + arm_[1].m * E0sq_ + arm_[3].Kyy + mg[0] * E0sq_;
+  const T m21 = Ez * A2.hz + Ex * A2.hx + Pz * A4.hz + Px * A4.hx +
+                mg[0] * (Ez * fz + Ex * fx) + Ez * hG(2) + Ex * hG(0);
+  const T m22 = arm_[2].Kyy + arm_[1].Kyy + arm_[3].m * P0sq_ + mg[0] * F0sq_ +
+                T(2) * (fz * hG(2) + fx * hG(0)) + KG.yy;
+  out.M(0, 0) = double(m00);
+  out.M(1, 0) = double(m10);
+  out.M(2, 0) = double(m20);
+  out.M(1, 1) = double(m11);
+  out.M(2, 1) = double(m21);
+  out.M(2, 2) = double(m22);
+  V3 F[3], u[3];
+  for (int j = 0; j < 3; ++j) {
+    F[j] = K[j] * a[j];
+    u[j] = cross(a[j], h[j]);
+    out.M(3 + j, 0) = double(Cx * u[j](1) + F[j](2));
+    out.M(3 + j, 1) = double(Ex * u[j](2) - Ez * u[j](0));
+    out.M(3 + j, 2) = double(fx * u[j](2) - fz * u[j](0) - F[j](1));
+    for (int k = 0; k <= j; ++k) out.M(3 + j, 3 + k) = double(a[k].dot(F[j]));
+  }
+  for (int c = 0; c < 6; ++c) {
+    for (int rr = c + 1; rr < 6; ++rr) out.M(c, rr) = out.M(rr, c);
+    out.M(c, c) += double(armature_(c));
+  }
+
+  // §5 g = dV/dq, V = |g| sum m z_c.
+  out.g(0) = 0.0;
+  out.g(1) = double(gravity_ * (A1.hx + arm_[1].m * Ex + A4.hx + mg[0] * Ex));
+  out.g(2) = double(gravity_ * (A3.hx + A2.hx + arm_[3].m * Px + mg[0] * fx + hG(0)));
+  for (int j = 0; j < 3; ++j) out.g(3 + j) = double(gravity_ * u[j](2));
+
+  // §5 C^T qd = dT/dq by the subtrees' momenta (header section 3's tree formula).
+  const T P2x = A2.Px + P[0](0), P2y = A2.Py + P[0](1), P2z = A2.Pz + P[0](2);
+  const T L2x = A2.Lx + L[0](0) - fz * P[0](1);  // forearm's subtree about E
+  const T ct2 = qd1 * L2x + (vE(2) * P2x - vE(0) * P2z);
+  const T ct1 = qd1 * (A1.Lx + L2x - Ez * P2y);
+  const T ct4 = qd1 * A4.Lx + (vP(2) * A4.Px - vP(0) * A4.Pz);
+  const T ct3 = qd1 * (A3.Lx + A4.Lx - Pz * A4.Py);
+  out.CTqd(0) = 0.0;
+  out.CTqd(1) = double(ct1 - ct2 + ct4);
+  out.CTqd(2) = double(ct2 + ct3 - ct4);
+  for (int j = 0; j < 3; ++j) {
+    out.CTqd(3 + j) = double(cross(w[j], a[j]).dot(L[j]) - a[j].dot(cross(vC, P[j])));
+  }
+  for (int j = 0; j < 6; ++j) {
+    out.tau_f(j) =
+        double(phantom_joint_friction(damping_(j), coulomb_(j), coulomb_smoothing_(j), qd(j),
+                                      coulomb_sign_[j]));
+  }
+
+  // §6 Pose and J_t in {B}; the world rows turned by Rz(q1).
+  const M3& R1 = R[2];
+  const V3 rt = R1 * tip_;  // C to the tip
+  const V3 x1(Cx + rt(0), rt(1), Cz + rt(2));
+  auto yaw = [c1, s1](T x, T y) { return std::array<double, 2>{double(c1 * x - s1 * y),
+                                                              double(s1 * x + c1 * y)}; };
+  {
+    const auto xy = yaw(x1(0), x1(1));
+    out.pose.x = Vec3(xy[0], xy[1], double(x1(2)));
+    for (int c = 0; c < 3; ++c) {
+      const auto rc = yaw(R1(0, c), R1(1, c));
+      out.pose.R(0, c) = rc[0], out.pose.R(1, c) = rc[1], out.pose.R(2, c) = double(R1(2, c));
+    }
+  }
+  Eigen::Matrix<T, 6, 6> Jb;
+  Jb.col(0) << -x1(1), x1(0), T(0), R1.row(2).transpose();       // z x x1, R1^T z
+  Jb.col(1) << -Ez, T(0), Ex, T(0), T(0), T(0);                  // dE/dq2
+  Jb.col(2) << -(x1(2) - Ez), T(0), x1(0) - Ex, -R1.row(1).transpose();  // -y x (x1 - E)
+  for (int j = 0; j < 3; ++j) {
+    const V3 v = cross(a[j], rt);
+    Jb.col(3 + j) << v(0), v(1), v(2), R1.col(0).dot(a[j]), R1.col(1).dot(a[j]),
+        R1.col(2).dot(a[j]);
+  }
+  auto to_world = [&](const Eigen::Matrix<T, 6, 6>& Jin, Mat6& J) {
+    for (int c = 0; c < 6; ++c) {
+      const auto xy = yaw(Jin(0, c), Jin(1, c));
+      J(0, c) = xy[0], J(1, c) = xy[1];
+      for (int rr = 2; rr < 6; ++rr) J(rr, c) = double(Jin(rr, c));
+    }
+  };
+  to_world(Jb, out.J_t);
+  if (!with_jacobian_rate) {
+    out.J_t_dot.setZero();
+    return;
+  }
+  // dJ_t/dt: header section 4's columns at q1 = 0, then turned (§6).
+  const V3& w1 = w[2];
+  const V3 xd1 = vC + cross(w1, rt);
+  const V3 ey(T(0), T(1), T(0)), ez(T(0), T(0), T(1));
+  const V3 OA(T(0), -qd2, qd1), OB(T(0), -qd3, qd1), E(Ex, T(0), Ez), C(Cx, T(0), Cz);
+  auto col = [&](const V3& aj, const V3& wj, const V3& pj, const V3& voj) {
+    const V3 da = cross(wj, aj);
+    const V3 xp = x1 - pj, xv = xd1 - voj, dv = cross(da, xp), av = cross(aj, xv);
+    const V3 dw = da - cross(w1, aj);
+    Eigen::Matrix<T, 6, 1> v;
+    v << dv(0) + av(0), dv(1) + av(1), dv(2) + av(2), R1.col(0).dot(dw), R1.col(1).dot(dw),
+        R1.col(2).dot(dw);
+    return v;
+  };
+  Jb.col(0) = col(ez, V3(T(0), T(0), qd1), zero, zero);
+  Jb.col(1) = col(-ey, OA, zero, zero) - col(-ey, OB, E, vE);
+  Jb.col(2) = col(-ey, OB, E, vE);
+  for (int j = 0; j < 3; ++j) Jb.col(3 + j) = col(a[j], w[j], C, vC);
+  to_world(Jb, out.J_t_dot);
 }
 
 namespace {

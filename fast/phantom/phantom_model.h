@@ -2,6 +2,13 @@
 // twin of reference/phantom/phantom_model.h (same PhantomParams, same tree, same quantities; it
 // differs from the reference only by round-off, tests/fast/phantom_model_test.cc).
 //
+// Two evaluations, chosen once at construction (closed_form()): the closed form of
+// docs/derivations/phantom_closed_form.md (the base frame at q1 = 0, the four arm bodies as
+// scalars turning about one axis, the gimbal as composites at its centre; no tree sweep, the
+// mass matrix's zero pairs never formed) for every file with that structure (the shipped one),
+// and the tree sweeps below (sections 1-5) for any other file. Both pinned against the reference
+// by tests/fast/phantom_model_test.cc; the closed form also against MuJoCo's model.
+//
 // Coordinates and tree as in the reference: q = (q1..q6) [rad], tree angles theta = G q with
 //     theta = (q1, q2, q3 - q2, q3, q2 - q3, q4, q5, q6),
 // bodies 0 base, 1 upper arm, 2 forearm, 3 crank, 4 parallel link, 5..7 gimbal yaw, pitch, roll,
@@ -95,6 +102,12 @@ class PhantomDynamics : public SixDofDeviceModel {
   void terms(const Vec6& q, const Vec6& qd, bool with_jacobian_rate,
              DeviceTerms& out) const override;
 
+  // True when the device file fits the closed form of docs/derivations/phantom_closed_form.md
+  // (decided once, at construction): terms() then takes it; otherwise the tree sweeps above.
+  bool closed_form() const { return closed_form_; }
+  // True when jacobian_inverse() applies (the gimbal's joints meet at a point; at construction).
+  bool block_jacobian_inverse() const { return gimbal_at_point_; }
+
   // J1 = J_t^-1 (section 6) from terms()' J_t and R1 (the pose's), when the gimbal's joints meet
   // at a point; false (J1 untouched) otherwise, for the caller's general inverse. No allocation,
   // no exception.
@@ -113,6 +126,11 @@ class PhantomDynamics : public SixDofDeviceModel {
 
  private:
   DeviceTerms terms_at(const VecX& q, const Vec6& qd) const;  // q size-checked, no dJ_t/dt
+  // Sections 1-5 on the tree (any device file).
+  void terms_tree(const Vec6& q, const Vec6& qd, bool with_jacobian_rate, DeviceTerms& out) const;
+  // The closed form (docs/derivations/phantom_closed_form.md), when closed_form_.
+  void terms_closed(const Vec6& q, const Vec6& qd, bool with_jacobian_rate,
+                    DeviceTerms& out) const;
 
   using V3 = Eigen::Matrix<T, 3, 1>;
   using M3 = Eigen::Matrix<T, 3, 3>;
@@ -139,6 +157,23 @@ class PhantomDynamics : public SixDofDeviceModel {
   V3 tip_;
   Mat3 S_tip_ = Mat3::Zero();     // S(tip) in double (section 6)
   bool gimbal_at_point_ = false;  // pitch_pos = roll_pos = 0: section 6 applies
+  // The closed form's constants (docs/derivations/phantom_closed_form.md §2), in the base frame
+  // {B} at q1 = 0. An arm body (upper arm, forearm, crank, parallel link) at its absolute angle
+  // phi: CoM offset r = Ry(-phi) rho from its pivot, inertia Ry(-phi) diag(d) Ry(-phi)^T.
+  struct ArmBody {
+    T m, rx, ry, rz;  // mass, rho
+    T dx, dy, dz;     // inertia about the CoM along {B}'s axes at phi = 0
+    T Kyy;            // dy + m (rho_x^2 + rho_z^2): the yy entry about the pivot, constant
+  };
+  bool closed_form_ = false;
+  std::array<ArmBody, 4> arm_{};  // upper arm, forearm, crank, parallel link
+  T base_zz_ = T(0);              // the base's zz inertia about the yaw axis
+  T E0x_ = T(0), E0z_ = T(0);     // elbow at q2 = 0
+  T P0x_ = T(0), P0z_ = T(0);     // crank's end (the parallel link's pivot) at q3 = 0
+  T F0x_ = T(0), F0z_ = T(0);     // elbow to gimbal centre at q3 = 0
+  T E0sq_ = T(0), P0sq_ = T(0), F0sq_ = T(0);  // their squared lengths
+  std::array<int, 3> fore_from_{};  // the forearm's {B} orientation at q3 = 0, a signed
+  std::array<T, 3> fore_sign_{};    // permutation: column c = fore_sign_[c] e_fore_from_[c]
   V6 armature_, damping_, coulomb_;
   V6 coulomb_smoothing_;
   std::array<CoulombSign, 6> coulomb_sign_{};

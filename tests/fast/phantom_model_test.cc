@@ -23,6 +23,7 @@
 #include <numbers>
 #include <string>
 
+#include "plant/mujoco_phantom.h"
 #include "reference/phantom/phantom_model.h"
 #include "reference/phantom/phantom_params.h"
 #include "tests/support/alloc_counter.h"
@@ -125,6 +126,92 @@ PhantomParams perturbed_params() {
 TEST(FastPhantomModel, MatchesReferenceWithPerturbedParamsFile) {
   EXPECT_LT(compare_random(perturbed_params(), kSeed + 1, 2000, "perturbed params").max(),
             kRoundOff);
+}
+
+// A file that keeps the closed form's structure (docs/derivations/phantom_closed_form.md §1) with
+// every other number perturbed: masses, inertias, CoMs off every axis, the tip in all three
+// directions, the armature; the gimbal's axes other signed coordinate axes than shipped.
+PhantomParams perturbed_fitting_params() {
+  PhantomParams p = perturbed_params();
+  p.pitch_pos_m = Vec3::Zero();
+  p.roll_pos_m = Vec3::Zero();
+  p.yaw_axis = -Vec3::UnitZ();
+  p.pitch_axis = Vec3::UnitY();
+  p.roll_axis = -Vec3::UnitX();
+  return parse_phantom_params(phantom_params_to_text(p), "perturbed, fitting");
+}
+
+// The fit is decided at construction: the shipped file and the fitting perturbed one take the
+// closed form, a gimbal joint off the centre or a tilted axis the tree sweeps.
+TEST(FastPhantomModel, ClosedFormFitIsDecidedAtSetup) {
+  EXPECT_TRUE(fast::PhantomModel(default_phantom_params()).closed_form());
+  EXPECT_TRUE(fast::PhantomModel(perturbed_fitting_params()).closed_form());
+  EXPECT_TRUE(fast::PhantomModelFloat(default_phantom_params()).closed_form());
+  EXPECT_FALSE(fast::PhantomModel(perturbed_params()).closed_form());
+  PhantomParams p = default_phantom_params();
+  p.roll_pos_m = Vec3(0.0, 0.0, 0.002);
+  EXPECT_FALSE(fast::PhantomModel(p).closed_form());
+  p = default_phantom_params();
+  p.pitch_axis = Vec3(1.0, 0.0, 1e-3).normalized();
+  EXPECT_FALSE(fast::PhantomModel(p).closed_form());
+}
+
+// The closed form on a file other than the shipped one (same bound, header).
+TEST(FastPhantomModel, ClosedFormMatchesReferenceWithAPerturbedFileThatFits) {
+  EXPECT_LT(
+      compare_random(perturbed_fitting_params(), kSeed + 40, 4000, "perturbed, fitting").max(),
+      kRoundOff);
+}
+
+// The closed form against MuJoCo's model of the same file (plant/mujoco_phantom.h), as
+// validation/crosscheck_device.h checks the reference: M, g, the pose and J_t to 1e-9 of the
+// max-norm (that check's bound; two independent evaluations, measured ~1e-14). MuJoCo gives
+// C qd, not C^T qd: C^T qd = dT/dq is held against the central difference of MuJoCo's M,
+// 1/2 qd^T (M(q + h e_k) - M(q - h e_k)) / (2 h) qd, h = 1e-5: truncation ~h^2 |d^3 M| ~1e-10,
+// round-off eps |M| / h ~2e-11 relative; bound 1e-7 as CTransposeQdIsLagrangian. Guards: the
+// quantities carry signal.
+TEST(FastPhantomModel, ClosedFormAgreesWithMujoco) {
+  for (const PhantomParams& p : {default_phantom_params(), perturbed_fitting_params()}) {
+    const fast::PhantomModel f(p);
+    ASSERT_TRUE(f.closed_form());
+    PhantomMjcfOptions o;
+    o.joint_limits = false;
+    MujocoPhantom mj(p, o);
+    States s(p, kSeed + 41);
+    double worst = 0.0, worst_ct = 0.0, ct_signal = 0.0;
+    for (int k = 0; k < 300; ++k) {
+      const Vec6 q = s.q(0.0), qd = s.qd(3.0);
+      DeviceTerms t;
+      f.terms(q, qd, false, t);
+      mj.set_state(q, qd);
+      worst = std::max(worst, rel_err(t.M, mj.reduced_mass_matrix()));
+      worst = std::max(worst, rel_err(t.g, mj.reduced_gravity()));
+      const Pose pose = mj.tip_pose();
+      worst = std::max(worst, rel_err(t.pose.x, pose.x));
+      worst = std::max(worst, rel_err(t.pose.R, pose.R));
+      worst = std::max(worst, rel_err(t.J_t, mj.tip_jacobian()));
+      Vec6 dT;
+      constexpr double h = 1e-5;
+      for (int j = 0; j < 6; ++j) {
+        Vec6 qp = q, qm = q;
+        qp(j) += h;
+        qm(j) -= h;
+        mj.set_state(qp, qd);
+        const Mat6 Mp = mj.reduced_mass_matrix();
+        mj.set_state(qm, qd);
+        const Mat6 Mm = mj.reduced_mass_matrix();
+        dT(j) = 0.5 * qd.dot((Mp - Mm) * qd) / (2.0 * h);
+      }
+      worst_ct = std::max(worst_ct, rel_err(t.CTqd, dT));
+      ct_signal = std::max(ct_signal, dT.cwiseAbs().maxCoeff());
+    }
+    std::printf("closed form vs MuJoCo: M, g, pose, J_t max rel %.2e; C^T qd vs MuJoCo's dT/dq "
+                "%.2e (max |dT/dq| %.3g N m)\n",
+                worst, worst_ct, ct_signal);
+    EXPECT_LT(worst, 1e-9);
+    EXPECT_LT(worst_ct, 1e-7);
+    EXPECT_GT(ct_signal, 1e-2);  // N m at |qd| <= 3 rad/s
+  }
 }
 
 // Gravity off: g is exactly zero in both (rel_err demands an exact 0 where the reference is 0).
