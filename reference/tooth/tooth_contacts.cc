@@ -75,6 +75,19 @@ ToothContactProvider::ToothContactProvider(VoxelTooth& tooth, ToolTip tip, doubl
   }
   drill_contacts_.reserve(kContactCapacity);
   drill_voxels_.reserve(kContactCapacity);
+  if (drill != nullptr && model_ != ContactModel::kFaces) {
+    // collect_cut_set's query lists every solid voxel whose cube meets the ball of radius
+    // r = rho (1 + kCutBandFraction) about g: their centres lie within r + h sqrt(3) / 2 of g, so
+    // at most (2 floor(r / h + sqrt(3) / 2) + 1)^3 of them (and no more than the grid's). Room for
+    // all, so that the query never grows the vector in the tick (a wide bur on a fine grid holds
+    // far more than the scratch's default 4096: ~8 000 solid voxels for the 0.5 mm bur at 512^3).
+    const double h = tooth.grid().voxel_size;
+    const double r = tip.radius * (1.0 + kCutBandFraction);
+    const double across = 2.0 * std::floor(r / h + 0.5 * std::sqrt(3.0)) + 1.0;
+    const double n = static_cast<double>(tooth.grid().n);
+    scratch_.candidates.reserve(
+        static_cast<std::size_t>(std::min(across * across * across, n * n * n)));
+  }
 }
 
 bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out) {

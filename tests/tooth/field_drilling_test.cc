@@ -581,5 +581,48 @@ TEST(FieldDrilling, TheProvidersBudgetedEditEndsWhereTheWholeEditEnds) {
   }
 }
 
+// The cut set's query (drilling.h collect_cut_set) lists every solid voxel the bur's band meets:
+// inside a cavity (the solid all around the bur) ~5.7 (rho / h)^3 of them, far more than the
+// collision scratch's default room (4096) once rho / h >= 10 (the 0.5 mm bur at 512^3: 12). The
+// provider reserves room for the ball's bound at construction, so pressing and drilling there
+// allocates nothing (before, the query's vector grew inside the tick). A block with a bore just
+// wider than the bur, h = 0.125 mm, a 1.5 mm bur (rho / h = 12) pressed onto the bore's floor:
+// the band's ball (r = 2 mm) holds ~8 000 solid voxels.
+TEST(FieldDrilling, WideBurOnAFineGridCutsWithoutAllocating) {
+  constexpr int n = 64;
+  constexpr double side = 8e-3, rho = 1.5e-3, surface = 4e-3;
+  constexpr double floor = 2e-3, bore = rho + 0.05e-3;  // the bore: radius, and its floor's z
+  const VoxelGrid grid = test::solid_grid(n, side, [](const Vec3& p) {
+    const bool in_bore = p.z() > floor && std::hypot(p.x() - 4e-3, p.y() - 4e-3) < bore;
+    return p.z() < surface && !in_bore;
+  });
+  DrillParams drill;
+  drill.cutting_coefficient = 1e6;  // every voxel the band reaches goes in its first tick
+  {  // the sdf model (the field model shares collect_cut_set and the reserve)
+    const ContactModel model = ContactModel::kSurfaceProxy;
+    VoxelTooth tooth(grid);
+    ToothContactProvider provider(tooth, ToolTip{rho, Vec3::Zero()}, kK, 0.0, &drill, model,
+                                  &signed_distance, nullptr);
+    std::vector<Contact> contacts;
+    contacts.reserve(kContactCapacity);
+    Pose pose;
+    pose.x = Vec3(4e-3, 4e-3, surface + rho + 0.5e-3);  // above the surface
+    provider.contacts(pose, contacts);
+    EXPECT_TRUE(contacts.empty());
+    long allocations = 0, removed = 0;
+    {
+      testing::AllocationScope scope;
+      pose.x.z() = floor + rho - 0.2e-3;  // down the bore, pressed 0.2 mm into its floor
+      provider.contacts(pose, contacts);
+      removed = provider.drill(contacts, kT);
+      allocations = scope.count();
+    }
+    std::printf("wide bur: %ld voxels removed, %ld allocations\n", removed, allocations);
+    EXPECT_EQ(contacts.size(), 1u);
+    EXPECT_GT(removed, 100);  // signal: the wide band cut a disc of many voxels
+    EXPECT_EQ(allocations, 0);
+  }
+}
+
 }  // namespace
 }  // namespace dentsim
