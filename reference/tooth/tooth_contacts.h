@@ -6,9 +6,10 @@
 // The constructor defaults to kFaces (validation/zwidth.cc renders its wall with it); scenes
 // default to "sdf" (sim/scene.h).
 // It keeps the voxels of the last query so that drilling (reference/tooth/drilling.h) can run on
-// the same set after the solve: for kFaces the voxel of every contact; for kSurfaceProxy the solid
-// voxels within rho + h of the proxy centre g that face the push (docs/derivations/sdf_contact.md
-// "Drilling"), each sharing the contact's force with weight cos(angle to -n).
+// the same set after the solve: for kFaces the voxel of every contact; for kSurfaceProxy and
+// kField the exposed solid voxels in the bur's cutting band about the proxy centre g (drilling.h
+// collect_cut_set; docs/derivations/drilling.md §5), each sharing the contact's force by the
+// band's depth at its middle.
 #pragma once
 
 #include <array>
