@@ -175,7 +175,7 @@ step(out "dentsim run ${scene}" ${dentsim} run ${scene} --duration 0.05 --out ${
 foreach(what builtin file)
   file(READ ${runs}/${what}/report.json report_${what})
   file(READ ${runs}/${what}/timeseries.csv series_${what})
-  foreach(key scene_origin timing_us wall_s)
+  foreach(key scene_origin timing_us wall_s setup_s)
     string(JSON report_${what} REMOVE "${report_${what}}" ${key})
   endforeach()
 endforeach()
