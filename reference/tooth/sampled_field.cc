@@ -7,7 +7,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <unordered_map>
+#include <bit>
 
 namespace dentsim {
 
@@ -480,59 +480,111 @@ TriangleMesh triangulate_voxel_signs(
   // boundary layer meets the empty centres beyond it) and that step (1..7).
   constexpr int kAxisBit[3] = {1, 2, 4};
   constexpr int kOrders[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
-  const std::uint64_t span = static_cast<std::uint64_t>(n) + 2;
-  std::unordered_map<std::uint64_t, int> edge_vertex;
+  if (n <= 0) return mesh;
+  // Samples per axis with the layer beyond the grid on each side, and 64-bit words a row of them
+  // takes as bits (bit i + 1 is sample i; one spare bit so that a cell's upper corner is in range).
+  const int span = n + 2;
+  const int words = (span + 1 + 63) / 64;
+  // The edges' vertices, by the lower sample's z layer (the cells of slab k reach layers k and
+  // k + 1): two tables of span^2 x 8 slots (vertex id or -1), the upper one becoming the lower one
+  // as k advances; only the slots written are cleared (issue #30: no hash map of every edge).
+  std::vector<std::int32_t> layer_vertex[2];
+  std::vector<std::size_t> layer_written[2];
+  for (auto& t : layer_vertex) t.assign(static_cast<std::size_t>(span) * span * 8, -1);
+  int lower = 0;  // layer_vertex[lower] holds sample layer k (+1 shift: ck = k + 1)
   const auto corner_position = [&](int i, int j, int k, int c) {
     return grid.center(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
   };
   const auto vertex_on = [&](int i, int j, int k, int c0, int c1, bool in0) {
-    // c0 < c1; the key names the lower corner's sample and the step.
-    const std::uint64_t ci = static_cast<std::uint64_t>(i + (c0 & 1) + 1),
-                        cj = static_cast<std::uint64_t>(j + ((c0 >> 1) & 1) + 1),
-                        ck = static_cast<std::uint64_t>(k + ((c0 >> 2) & 1) + 1);
-    const std::uint64_t key = ((ci + span * (cj + span * ck)) << 3) | static_cast<unsigned>(c1 - c0);
-    const auto it = edge_vertex.find(key);
-    if (it != edge_vertex.end()) return it->second;
-    const int v = static_cast<int>(mesh.vertices.size());
+    // c0 < c1; the slot names the lower corner's sample and the step.
+    const int up = (c0 >> 2) & 1;  // the lower corner's layer: k or k + 1
+    const std::size_t ci = static_cast<std::size_t>(i + (c0 & 1) + 1),
+                      cj = static_cast<std::size_t>(j + ((c0 >> 1) & 1) + 1);
+    const int table = up == 0 ? lower : 1 - lower;
+    const std::size_t slot = (ci + static_cast<std::size_t>(span) * cj) * 8 +
+                             static_cast<std::size_t>(c1 - c0);
+    std::int32_t& v = layer_vertex[table][slot];
+    if (v >= 0) return static_cast<int>(v);
+    v = static_cast<std::int32_t>(mesh.vertices.size());
+    layer_written[table].push_back(slot);
     mesh.vertices.push_back(place(corner_position(i, j, k, in0 ? c0 : c1),
                                   corner_position(i, j, k, in0 ? c1 : c0)));
-    edge_vertex.emplace(key, v);
-    return v;
+    return static_cast<int>(v);
   };
+  // The solid flags of sample layer z (in [-1, n]) as bit rows: row j + 1 for sample row j.
+  const auto fill_bits = [&](int z, std::vector<std::uint64_t>& bits) {
+    bits.assign(static_cast<std::size_t>(span) * words, 0);
+    if (z < 0 || z >= n) return;
+    for (int j = 0; j < n; ++j) {
+      std::uint64_t* row = &bits[static_cast<std::size_t>(j + 1) * words];
+      const std::uint8_t* v = &grid.voxels[grid.index(0, j, z)];
+      for (int i = 0; i < n; ++i) {
+        if (v[i] != 0) row[(i + 1) >> 6] |= std::uint64_t{1} << ((i + 1) & 63);
+      }
+    }
+  };
+  std::vector<std::uint64_t> bits_lo, bits_hi, any(static_cast<std::size_t>(words)),
+      all(static_cast<std::size_t>(words));
+  fill_bits(-1, bits_hi);
   for (int k = -1; k < n; ++k) {
+    bits_lo.swap(bits_hi);
+    fill_bits(k + 1, bits_hi);
     for (int j = -1; j < n; ++j) {
-      for (int i = -1; i < n; ++i) {
-        bool s[8];
-        int count = 0;
-        for (int c = 0; c < 8; ++c) {
-          s[c] = grid.solid(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
-          count += s[c] ? 1 : 0;
-        }
-        if (count == 0 || count == 8) continue;
-        for (const auto& order : kOrders) {
-          const int tv[4] = {0, kAxisBit[order[0]], kAxisBit[order[0]] + kAxisBit[order[1]], 7};
-          int in[4], out[4], ni = 0, no = 0;
-          for (const int c : tv) (s[c] ? in[ni++] : out[no++]) = c;
-          if (ni == 0 || no == 0) continue;
-          const auto cross = [&](int a, int b) {
-            return a < b ? vertex_on(i, j, k, a, b, s[a]) : vertex_on(i, j, k, b, a, s[b]);
-          };
-          if (ni == 1 || no == 1) {
-            const int lone = ni == 1 ? in[0] : out[0];
-            const int* others = ni == 1 ? out : in;
-            mesh.triangles.push_back(
-                {cross(lone, others[0]), cross(lone, others[1]), cross(lone, others[2])});
-          } else {
-            const int a = cross(in[0], out[0]), b = cross(in[0], out[1]);
-            const int c = cross(in[1], out[1]), d = cross(in[1], out[0]);
-            mesh.triangles.push_back({a, b, c});
-            mesh.triangles.push_back({a, c, d});
+      // Cell c = i + 1 (i in [-1, n - 1]) has the bits c and c + 1 of its four sample rows; it
+      // has a surface iff some corner is solid and not all are.
+      const std::uint64_t* r[4] = {&bits_lo[static_cast<std::size_t>(j + 1) * words],
+                                   &bits_lo[static_cast<std::size_t>(j + 2) * words],
+                                   &bits_hi[static_cast<std::size_t>(j + 1) * words],
+                                   &bits_hi[static_cast<std::size_t>(j + 2) * words]};
+      bool some = false;
+      for (int w = 0; w < words; ++w) {
+        any[w] = r[0][w] | r[1][w] | r[2][w] | r[3][w];
+        all[w] = r[0][w] & r[1][w] & r[2][w] & r[3][w];
+        some = some || any[w] != 0;
+      }
+      if (!some) continue;
+      for (int w = 0; w < words; ++w) {
+        const std::uint64_t any_next = (any[w] >> 1) | (w + 1 < words ? any[w + 1] << 63 : 0);
+        const std::uint64_t all_next = (all[w] >> 1) | (w + 1 < words ? all[w + 1] << 63 : 0);
+        std::uint64_t mixed = (any[w] | any_next) & ~(all[w] & all_next);
+        while (mixed != 0) {
+          const int c = 64 * w + std::countr_zero(mixed);
+          mixed &= mixed - 1;
+          if (c > n) break;  // cells run to i = n - 1
+          const int i = c - 1;
+          bool s[8];
+          for (int q = 0; q < 8; ++q) {
+            s[q] = grid.solid(i + (q & 1), j + ((q >> 1) & 1), k + ((q >> 2) & 1));
           }
-          mesh.triangle_group.push_back(0);
-          if (ni == 2) mesh.triangle_group.push_back(0);
+          for (const auto& order : kOrders) {
+            const int tv[4] = {0, kAxisBit[order[0]], kAxisBit[order[0]] + kAxisBit[order[1]], 7};
+            int in[4], out[4], ni = 0, no = 0;
+            for (const int q : tv) (s[q] ? in[ni++] : out[no++]) = q;
+            if (ni == 0 || no == 0) continue;
+            const auto cross = [&](int a, int b) {
+              return a < b ? vertex_on(i, j, k, a, b, s[a]) : vertex_on(i, j, k, b, a, s[b]);
+            };
+            if (ni == 1 || no == 1) {
+              const int lone = ni == 1 ? in[0] : out[0];
+              const int* others = ni == 1 ? out : in;
+              mesh.triangles.push_back(
+                  {cross(lone, others[0]), cross(lone, others[1]), cross(lone, others[2])});
+            } else {
+              const int a = cross(in[0], out[0]), b = cross(in[0], out[1]);
+              const int cc = cross(in[1], out[1]), d = cross(in[1], out[0]);
+              mesh.triangles.push_back({a, b, cc});
+              mesh.triangles.push_back({a, cc, d});
+            }
+            mesh.triangle_group.push_back(0);
+            if (ni == 2) mesh.triangle_group.push_back(0);
+          }
         }
       }
     }
+    // Layer k is done: its table takes layer k + 2.
+    for (const std::size_t slot : layer_written[lower]) layer_vertex[lower][slot] = -1;
+    layer_written[lower].clear();
+    lower = 1 - lower;
   }
   return mesh;
 }

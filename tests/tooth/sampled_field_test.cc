@@ -8,8 +8,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <random>
+#include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "tooth_io/procedural_molar.h"
@@ -179,6 +182,120 @@ TEST(SampledField, BrickCountScalesWithTheSurfaceArea) {
   EXPECT_LT(ratio, 5.0);
 }
 
+
+// triangulate_voxel_signs as it was written first (issue #30 made it scan only the cells with a
+// surface, from bit rows, and keep the edges' vertices in two layer tables): every cell of
+// [-1, n - 1]^3 visited, its 8 signs read, the edges' vertices in one hash map. The fast one must
+// give the same mesh: the same vertices (bit for bit) in the same order, the same triangles.
+TriangleMesh plain_triangulation(const VoxelGrid& grid,
+                                 const std::function<Vec3(const Vec3&, const Vec3&)>& place) {
+  TriangleMesh mesh;
+  mesh.groups.push_back("");
+  const int n = grid.n;
+  constexpr int kAxisBit[3] = {1, 2, 4};
+  constexpr int kOrders[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  const std::uint64_t span = static_cast<std::uint64_t>(n) + 2;
+  std::unordered_map<std::uint64_t, int> edge_vertex;
+  const auto corner = [&](int i, int j, int k, int c) {
+    return grid.center(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
+  };
+  const auto vertex_on = [&](int i, int j, int k, int c0, int c1, bool in0) {
+    const std::uint64_t ci = static_cast<std::uint64_t>(i + (c0 & 1) + 1),
+                        cj = static_cast<std::uint64_t>(j + ((c0 >> 1) & 1) + 1),
+                        ck = static_cast<std::uint64_t>(k + ((c0 >> 2) & 1) + 1);
+    const std::uint64_t key = ((ci + span * (cj + span * ck)) << 3) | static_cast<unsigned>(c1 - c0);
+    const auto it = edge_vertex.find(key);
+    if (it != edge_vertex.end()) return it->second;
+    const int v = static_cast<int>(mesh.vertices.size());
+    mesh.vertices.push_back(
+        place(corner(i, j, k, in0 ? c0 : c1), corner(i, j, k, in0 ? c1 : c0)));
+    edge_vertex.emplace(key, v);
+    return v;
+  };
+  for (int k = -1; k < n; ++k) {
+    for (int j = -1; j < n; ++j) {
+      for (int i = -1; i < n; ++i) {
+        bool s[8];
+        int count = 0;
+        for (int c = 0; c < 8; ++c) {
+          s[c] = grid.solid(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
+          count += s[c] ? 1 : 0;
+        }
+        if (count == 0 || count == 8) continue;
+        for (const auto& order : kOrders) {
+          const int tv[4] = {0, kAxisBit[order[0]], kAxisBit[order[0]] + kAxisBit[order[1]], 7};
+          int in[4], out[4], ni = 0, no = 0;
+          for (const int c : tv) (s[c] ? in[ni++] : out[no++]) = c;
+          if (ni == 0 || no == 0) continue;
+          const auto cross = [&](int a, int b) {
+            return a < b ? vertex_on(i, j, k, a, b, s[a]) : vertex_on(i, j, k, b, a, s[b]);
+          };
+          if (ni == 1 || no == 1) {
+            const int lone = ni == 1 ? in[0] : out[0];
+            const int* others = ni == 1 ? out : in;
+            mesh.triangles.push_back(
+                {cross(lone, others[0]), cross(lone, others[1]), cross(lone, others[2])});
+          } else {
+            const int a = cross(in[0], out[0]), b = cross(in[0], out[1]);
+            const int c = cross(in[1], out[1]), d = cross(in[1], out[0]);
+            mesh.triangles.push_back({a, b, c});
+            mesh.triangles.push_back({a, c, d});
+          }
+          mesh.triangle_group.push_back(0);
+          if (ni == 2) mesh.triangle_group.push_back(0);
+        }
+      }
+    }
+  }
+  return mesh;
+}
+
+void expect_same_mesh(const TriangleMesh& a, const TriangleMesh& b, const std::string& what) {
+  ASSERT_EQ(a.vertices.size(), b.vertices.size()) << what;
+  ASSERT_EQ(a.triangles.size(), b.triangles.size()) << what;
+  ASSERT_EQ(a.triangle_group.size(), b.triangle_group.size()) << what;
+  for (std::size_t v = 0; v < a.vertices.size(); ++v) {
+    for (int c = 0; c < 3; ++c) ASSERT_EQ(a.vertices[v][c], b.vertices[v][c]) << what << " " << v;
+  }
+  for (std::size_t t = 0; t < a.triangles.size(); ++t) {
+    ASSERT_EQ(a.triangles[t], b.triangles[t]) << what << " " << t;
+  }
+}
+
+// The procedural molar (the drill scene's surface, bisected onto molar_solid), and random grids
+// of every size 1..9 and 63..66 (rows across one and two 64-bit words) at several densities,
+// solids on the grid's boundary layer included (the surface closes beyond it).
+TEST(SampledField, TriangulationScansOnlyTheSurfaceCellsAndMeshesAsEveryCell) {
+  const MolarParams params;
+  const VoxelGrid molar = voxelize_procedural_molar(params, 32);
+  const auto on_molar = [&](const Vec3& in, const Vec3& out) {
+    Vec3 p_in = in, p_out = out;
+    for (int it = 0; it < 40; ++it) {
+      const Vec3 mid = 0.5 * (p_in + p_out);
+      (molar_solid(params, mid) ? p_in : p_out) = mid;
+    }
+    return Vec3(0.5 * (p_in + p_out));
+  };
+  const TriangleMesh fast_molar =
+      triangulate_implicit(molar, [&](const Vec3& p) { return molar_solid(params, p); });
+  EXPECT_GT(fast_molar.triangles.size(), 5000u);
+  expect_same_mesh(fast_molar, plain_triangulation(molar, on_molar), "molar 32^3");
+  std::mt19937_64 rng(kSeed);
+  const auto midpoint = [](const Vec3& in, const Vec3& out) { return Vec3(0.25 * in + 0.75 * out); };
+  long triangles = 0;
+  for (const int n : {1, 2, 3, 4, 5, 7, 9, 63, 64, 65, 66}) {
+    for (const double density : {0.05, 0.5, 0.95}) {
+      VoxelGrid g(n, Vec3(0.1, -0.2, 0.3), 0.5e-3);
+      std::bernoulli_distribution solid(density);
+      for (std::uint8_t& v : g.voxels) v = solid(rng) ? kDentin : 0;
+      const TriangleMesh fast = triangulate_voxel_signs(g, midpoint);
+      triangles += static_cast<long>(fast.triangles.size());
+      expect_same_mesh(fast, plain_triangulation(g, midpoint),
+                       "n " + std::to_string(n) + " density " + std::to_string(density));
+    }
+  }
+  EXPECT_GT(triangles, 100000);
+}
 
 // The build's definition (sampled_field.h "Build"), written plainly on dense arrays: every exact
 // distance of layer 0 computed, the band grown layer by layer, and each walk step evaluating
