@@ -109,6 +109,61 @@ bool molar_solid(const MolarParams& params, const Vec3& p) {
   return false;
 }
 
+MolarSolidTest::MolarSolidTest(const MolarParams& params) : params_(params) {
+  unit_ = kMm * params.scale;
+  const Mm m = mm_of(params);
+  const double l[8] = {m.md, m.bl, m.cmd, m.cbl, m.crown, m.mesial, m.distal, m.trunk};
+  std::copy(l, l + 8, lengths_);
+  const std::array<RootShape, 2> r = roots(m);
+  for (int i = 0; i < 2; ++i) {
+    const double v[5] = {r[i].x0, r[i].bend, r[i].wx, r[i].wy, r[i].length};
+    std::copy(v, v + 5, roots_[i]);
+  }
+}
+
+// The margins. The products' values differ from std::pow's by a relative error below 10^-15
+// (t^2.5 as t t sqrt(t): three correctly rounded operations, against pow's < 1 ulp; u^6 as
+// ((u u) (u u)) (u u): five products, absolute error below 10^-15 for u in [0, 1]).
+//  - Cross-section: S = |x/a|^2.5 + |y/b|^2.5 <= 1. The products' sum is within 10^-15 S of
+//    pow's (plus the sum's own rounding, the same in both), so it decides when it is below
+//    1 - 10^-12 or above 1 + 10^-12, margins 1000 times that error at S ~ 1.
+//  - Root: Q = dx^2 / (wx^2 s^2) + y^2 / (wy^2 s^2) <= 1 with s = (1 - 0.6 u) sqrt(1 - u^6). With
+//    w = 1 - u^6 >= 10^-6, w's relative error is below 10^-15 / 10^-6 = 10^-9, so s^2's and Q's
+//    below ~3 x 10^-9 (plus rounding): Q decides when below 1 - 10^-7 or above 1 + 10^-7; a
+//    smaller w (the apex's last 10^-6 of the root's length) goes to pow.
+bool MolarSolidTest::operator()(const Vec3& p) const {
+  const Mm m{lengths_[0], lengths_[1], lengths_[2], lengths_[3],
+             lengths_[4], lengths_[5], lengths_[6], lengths_[7]};
+  const double x = p.x() / unit_, y = p.y() / unit_, z = p.z() / unit_;
+  if (z >= -m.trunk && z <= m.crown) {
+    const auto [a, b] = body_half_widths(m, z);
+    bool in = false;
+    if (a > 0 && b > 0) {
+      const double tx = std::abs(x) / a, ty = std::abs(y) / b;
+      const double s = tx * tx * std::sqrt(tx) + ty * ty * std::sqrt(ty);
+      in = s < 1.0 - 1e-12 ? true : s > 1.0 + 1e-12 ? false : in_superellipse(x, y, a, b);
+    }
+    if (in && z <= occlusal_height(m, x, y)) return true;
+  }
+  for (const auto& rv : roots_) {
+    const RootShape r{rv[0], rv[1], rv[2], rv[3], rv[4]};
+    if (z > 0 || -z >= r.length) continue;
+    const double u = -z / r.length;
+    const double u2 = u * u;
+    const double w = 1.0 - (u2 * u2) * u2;
+    if (w < 1e-6) {
+      if (in_root(r, x, y, z)) return true;
+      continue;
+    }
+    const double s = (1 - 0.6 * u) * std::sqrt(w);
+    const double dx = x - (r.x0 + r.bend * u * u);
+    const double q = (dx * dx) / (r.wx * r.wx * s * s) + (y * y) / (r.wy * r.wy * s * s);
+    if (q < 1.0 - 1e-7) return true;
+    if (q <= 1.0 + 1e-7 && in_root(r, x, y, z)) return true;
+  }
+  return false;
+}
+
 bool molar_pulp(const MolarParams& params, const Vec3& p) {
   const Mm m = mm_of(params);
   const double x = p.x() / (kMm * params.scale), y = p.y() / (kMm * params.scale),

@@ -8,11 +8,13 @@
 
 #include <cmath>
 #include <cstdio>
+#include <random>
 #include <set>
 #include <tuple>
 
 #include "reference/tooth/materials.h"
 #include "reference/tooth/neighbors.h"
+#include "reference/tooth/sampled_field.h"
 #include "tooth_io/render_png.h"
 
 namespace dentsim {
@@ -130,6 +132,52 @@ TEST(ProceduralMolar, SlicedVoxelisationIsThePlainDefinition) {
     const std::vector<long> counts = count_materials(plain);
     EXPECT_EQ(report.pulp_voxels, counts[kPulp]);
     for (int m = kEnamel; m <= kCaries; ++m) EXPECT_GT(counts[m], 0) << "material " << m;
+  }
+}
+
+// MolarSolidTest answers as molar_solid (issue #30: the field's 40 bisections per surface edge)
+// wherever it is asked: at random points of the molar's box and around it, and along the
+// bisections themselves, whose last steps lie within 2^-40 of an edge of the surface, where the
+// products' margins hand the decision to pow (the surface's vertices at 64^3, bit for bit, for
+// the default molar and an altered one).
+TEST(ProceduralMolar, SolidTestAnswersAsTheDefinition) {
+  MolarParams other;
+  other.scale = 0.83;
+  other.crown_mesiodistal_m = 10.2e-3;
+  other.cervix_buccolingual_m = 8.1e-3;
+  other.distal_root_length_m = 12.1e-3;
+  for (const MolarParams& params : {MolarParams{}, other}) {
+    const MolarSolidTest test(params);
+    const Aabb box = molar_bounds(params);
+    std::mt19937_64 rng(30);
+    long inside = 0;
+    for (int trial = 0; trial < 200000; ++trial) {
+      Vec3 p;
+      for (int a = 0; a < 3; ++a) {
+        const double span = box.max[a] - box.min[a];
+        p[a] = std::uniform_real_distribution<double>(box.min[a] - 0.1 * span,
+                                                      box.max[a] + 0.1 * span)(rng);
+      }
+      const bool expected = molar_solid(params, p);
+      inside += expected ? 1 : 0;
+      ASSERT_EQ(test(p), expected) << p.transpose();
+    }
+    EXPECT_GT(inside, 20000);
+    const VoxelGrid grid = voxelize_procedural_molar(params, 64);
+    long asked = 0, differ = 0;
+    triangulate_voxel_signs(grid, [&](const Vec3& in, const Vec3& out) {
+      Vec3 p_in = in, p_out = out;
+      for (int it = 0; it < 40; ++it) {
+        const Vec3 mid = 0.5 * (p_in + p_out);
+        const bool solid = test(mid);
+        ++asked;
+        differ += solid != molar_solid(params, mid) ? 1 : 0;
+        (solid ? p_in : p_out) = mid;
+      }
+      return Vec3(0.5 * (p_in + p_out));
+    });
+    EXPECT_EQ(differ, 0);
+    EXPECT_GT(asked, 500000);
   }
 }
 
