@@ -105,16 +105,22 @@ VoxelGrid plain_procedural_molar(const MolarParams& params, int n) {
   return grid;
 }
 
-// voxelize_procedural_molar computes the factors that depend on one or two coordinates once
-// (issue #30: the 512^3 tooth's setup): every voxel is the plain definition's, byte for byte,
-// for the default molar and for one whose proportions, scale and lesion differ.
-TEST(ProceduralMolar, SlicedVoxelisationIsThePlainDefinition) {
+// A molar whose proportions, scale and lesion differ from the default's.
+MolarParams altered_molar() {
   MolarParams other;
   other.scale = 0.83;
   other.crown_mesiodistal_m = 10.2e-3;
   other.cervix_buccolingual_m = 8.1e-3;
   other.distal_root_length_m = 12.1e-3;
   other.caries_x_m = -1.5e-3;
+  return other;
+}
+
+// voxelize_procedural_molar computes the factors that depend on one or two coordinates once
+// (issue #30: the 512^3 tooth's setup): every voxel is the plain definition's, byte for byte,
+// for the default molar and for one whose proportions, scale and lesion differ.
+TEST(ProceduralMolar, SlicedVoxelisationIsThePlainDefinition) {
+  const MolarParams other = altered_molar();
   for (const auto& [params, n] :
        {std::pair{MolarParams{}, 64}, std::pair{MolarParams{}, 32}, std::pair{other, 64}}) {
     VoxelizeReport report;
@@ -141,12 +147,7 @@ TEST(ProceduralMolar, SlicedVoxelisationIsThePlainDefinition) {
 // products' margins hand the decision to pow (the surface's vertices at 64^3, bit for bit, for
 // the default molar and an altered one).
 TEST(ProceduralMolar, SolidTestAnswersAsTheDefinition) {
-  MolarParams other;
-  other.scale = 0.83;
-  other.crown_mesiodistal_m = 10.2e-3;
-  other.cervix_buccolingual_m = 8.1e-3;
-  other.distal_root_length_m = 12.1e-3;
-  for (const MolarParams& params : {MolarParams{}, other}) {
+  for (const MolarParams& params : {MolarParams{}, altered_molar()}) {
     const MolarSolidTest test(params);
     const Aabb box = molar_bounds(params);
     std::mt19937_64 rng(30);
