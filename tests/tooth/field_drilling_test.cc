@@ -624,5 +624,77 @@ TEST(FieldDrilling, WideBurOnAFineGridCutsWithoutAllocating) {
   }
 }
 
+// The field model removes what the sdf model removes (issue #30; docs/derivations/drilling.md §6):
+// the sphere drilled along the path (the tool's centre scripted, the force K |g - c| the model's)
+// by each model's provider, at h = 0.125 and 0.0625 mm (stride 1 and 2 for the 0.4 mm bur). Both
+// models share the cut set and the law (drilling.h collect_cut_set, drill_tick); the field's proxy
+// stands on the field, which follows the removed voxels through the edit. When the edit keeps up
+// (no budget: each tick's removals are in the field by the next tick), the field's surface lies
+// within a fraction of a voxel of the voxels' (field_contact.md §7: 3 H^2 / (8 rho) in a drilled
+// hole, 0.005 mm here) against the cut band's b = rho / 3 = 0.13 mm, so the two models cut the same
+// band and their removed volumes agree within the issue's 10 % at each resolution. With the
+// default budget (kFieldEditSamplesPerSecond) the edit keeps up at h = 0.125 mm (the same 10 %);
+// at 0.0625 mm its queue grows to thousands of voxels, the proxy stands on material the voxels
+// have lost, the band empties and the field model removes less (printed, not asserted: the
+// budget's throughput, not the cut, is what fails there; drilling.md §6 measures it at 512^3).
+struct PathRun {
+  double volume_m3 = 0.0, delivered_j = 0.0;
+  std::size_t most_pending = 0;
+  long shortfalls = 0;
+};
+
+PathRun drill_the_path(int n, ContactModel model, double edit_rate) {
+  const VoxelGrid grid = test::solid_grid(n, kSide, in_sphere);
+  VoxelTooth tooth{VoxelGrid(grid)};
+  SampledField field;
+  if (model == ContactModel::kField) {
+    field = build_sampled_field(grid, triangulate_implicit(grid, in_sphere),
+                                field_band_for_tip(kRho, grid.voxel_size));
+  }
+  const DrillParams drill;
+  ToothContactProvider provider(tooth, ToolTip{kRho, Vec3::Zero()}, kK, 0.0, &drill, model,
+                                &signed_distance,
+                                model == ContactModel::kField ? &field : nullptr);
+  provider.set_field_edit_rate(edit_rate);
+  std::vector<Contact> contacts;
+  contacts.reserve(kContactCapacity);
+  Pose pose;
+  PathRun run;
+  for (int tick = 0; tick < kDown + kSideways; ++tick) {
+    pose.x = path(tick);
+    provider.contacts(pose, contacts);  // the edit first: the voxels still queued after it
+    run.most_pending = std::max(run.most_pending, provider.field_edits_pending());
+    provider.drill(contacts, kT);
+  }
+  const DrillState& state = provider.drill_state();
+  for (int m = kEnamel; m < kMaterialCount; ++m) run.volume_m3 += state.removed_volume_m3(m);
+  run.delivered_j = state.delivered_j;
+  run.shortfalls = provider.field_edit_shortfalls();
+  return run;
+}
+
+TEST(FieldDrilling, TheFieldModelRemovesWhatTheSdfModelRemovesAtTwoResolutions) {
+  const int ns[2] = {kN, 2 * kN};
+  const double unbounded = std::numeric_limits<double>::infinity();
+  const double budgeted = ToothContactProvider::kFieldEditSamplesPerSecond;
+  for (int r = 0; r < 2; ++r) {
+    const PathRun sdf = drill_the_path(ns[r], ContactModel::kSurfaceProxy, budgeted);
+    const PathRun whole = drill_the_path(ns[r], ContactModel::kField, unbounded);
+    const PathRun paced = drill_the_path(ns[r], ContactModel::kField, budgeted);
+    std::printf("h %.4f mm: removed sdf %.4f mm^3 (E %.4f J); field, edit unbounded %.4f mm^3 "
+                "(E %.4f J); field, default budget %.4f mm^3 (E %.4f J, queue at most %zu "
+                "voxels)\n",
+                1e3 * kSide / ns[r], 1e9 * sdf.volume_m3, sdf.delivered_j, 1e9 * whole.volume_m3,
+                whole.delivered_j, 1e9 * paced.volume_m3, paced.delivered_j, paced.most_pending);
+    ASSERT_GT(sdf.volume_m3, 0.0);
+    EXPECT_EQ(whole.most_pending, 0u);  // each tick's removals in the field by the next tick
+    EXPECT_EQ(whole.shortfalls + paced.shortfalls, 0);
+    EXPECT_NEAR(whole.volume_m3, sdf.volume_m3, 0.1 * sdf.volume_m3) << "n " << ns[r];
+    if (r == 0) {
+      EXPECT_NEAR(paced.volume_m3, sdf.volume_m3, 0.1 * sdf.volume_m3);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace dentsim
