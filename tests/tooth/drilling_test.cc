@@ -424,21 +424,6 @@ GrooveResult groove(int n, double h, int ticks, double force, double length = 4e
   double most = 0.0;
   state.work_j.for_each([&](std::size_t, double w) { most = std::max(most, w); });
   EXPECT_LT(most, due);
-  {  // EXPERIMENT: profile of the groove at its middle x
-    const int im = static_cast<int>((1.2e-3 + length / 2) / h), jm = static_cast<int>(3.23e-3 / h);
-    double deepest = 0.0;
-    for (int i = 0; i < n; ++i) {
-      int k = n / 2 - 1;
-      while (k >= 0 && tooth.grid().at(i, jm, k) == kEmpty) --k;
-      deepest = std::max(deepest, (n / 2 - 1 - k) * h);
-    }
-    double width = 0.0;
-    for (int j = 0; j < n; ++j) if (tooth.grid().at(im, j, n / 2 - 1) == kEmpty) width += h;
-    int k = n / 2 - 1;
-    while (k >= 0 && tooth.grid().at(im, jm, k) == kEmpty) --k;
-    std::printf("EXP h %.4f L %.1f: deepest %.3f mm, mid depth %.3f mm, top width %.3f mm, V %.3f\n", h * 1e3, length*1e3,
-                deepest * 1e3, (n / 2 - 1 - k) * h * 1e3, width * 1e3, state.removed_volume_m3(kEnamel)*1e9);
-  }
   const int im = static_cast<int>((1.2e-3 + length / 2) / h);
   const int jm = static_cast<int>(3.23e-3 / h);
   double deepest = 0.0, width = 0.0;
