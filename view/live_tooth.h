@@ -12,8 +12,8 @@
 // (reference/tooth/field_contact.h edit_field_for_removed_voxels, unbudgeted: all of the
 // frame's voxels), reads which samples the edit changed (the brick slots within the edit's
 // radius, before and after) and SurfaceMesher::update re-meshes only the blocks that read
-// those samples or the removed voxels. Nothing is shared with the servo thread beyond what the channel hands over; the servo's
-// tick does nothing more than it did.
+// those samples or the removed voxels. Nothing is shared with the servo thread beyond what the
+// channel hands over; the servo's tick does nothing more than it did.
 //
 // Why the copy ends equal to the servo's field, sample by sample, although the servo edits each
 // tick's voxels (queued, with a budget of work per tick, fast or reference twin) against the
