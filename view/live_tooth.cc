@@ -12,6 +12,20 @@ namespace dentsim::view {
 namespace {
 
 // This thread's CPU time [s] (not the wall clock: the machine may be shared).
+// Calls f(x, y, z) for every sample of the brick slots `slots` (ns slots per axis), in order.
+template <class F>
+void for_each_slot_sample(const std::vector<int>& slots, int ns, F f) {
+  for (const int slot : slots) {
+    const int x0 = kFieldBrick * (slot % ns), y0 = kFieldBrick * ((slot / ns) % ns),
+              z0 = kFieldBrick * (slot / (ns * ns));
+    for (int z = z0; z < z0 + kFieldBrick; ++z) {
+      for (int y = y0; y < y0 + kFieldBrick; ++y) {
+        for (int x = x0; x < x0 + kFieldBrick; ++x) f(x, y, z);
+      }
+    }
+  }
+}
+
 double thread_seconds() {
   timespec t{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
@@ -154,32 +168,16 @@ void LiveTooth::read_edit_slots() {
   });
   slot_samples_.resize(slots_.size() * static_cast<std::size_t>(SampledField::kBrickSamples));
   std::size_t at = 0;
-  for (const int slot : slots_) {
-    const int x0 = kFieldBrick * (slot % ns), y0 = kFieldBrick * ((slot / ns) % ns),
-              z0 = kFieldBrick * (slot / (ns * ns));
-    for (int z = z0; z < z0 + kFieldBrick; ++z) {
-      for (int y = y0; y < y0 + kFieldBrick; ++y) {
-        for (int x = x0; x < x0 + kFieldBrick; ++x) slot_samples_[at++] = field_->at(x, y, z);
-      }
-    }
-  }
+  for_each_slot_sample(slots_, ns,
+                       [&](int x, int y, int z) { slot_samples_[at++] = field_->at(x, y, z); });
 }
 
 void LiveTooth::diff_edit_slots() {
-  const int ns = field_->samples_per_axis() / kFieldBrick;
   std::size_t at = 0;
-  for (const int slot : slots_) {
-    const int x0 = kFieldBrick * (slot % ns), y0 = kFieldBrick * ((slot / ns) % ns),
-              z0 = kFieldBrick * (slot / (ns * ns));
-    for (int z = z0; z < z0 + kFieldBrick; ++z) {
-      for (int y = y0; y < y0 + kFieldBrick; ++y) {
-        for (int x = x0; x < x0 + kFieldBrick; ++x) {
-          // Values only rise (SampledField::raise): a changed sample compares greater.
-          if (field_->at(x, y, z) != slot_samples_[at++]) samples_.push_back({x, y, z});
-        }
-      }
-    }
-  }
+  // Values only rise (SampledField::raise): a changed sample compares greater.
+  for_each_slot_sample(slots_, field_->samples_per_axis() / kFieldBrick, [&](int x, int y, int z) {
+    if (field_->at(x, y, z) != slot_samples_[at++]) samples_.push_back({x, y, z});
+  });
 }
 
 }  // namespace dentsim::view

@@ -73,6 +73,26 @@ int differing_blocks(const SurfaceMesher& a, const SurfaceMesher& b) {
   return differ;
 }
 
+// Runs `scene` on a thread with `observer` (which feeds `channel`) while `live` reads `channel`
+// every `frame_ms` (as the window does), then once more after the run (the window's last frame).
+RunResult run_followed(const Scene& scene, RunOptions options, TickObserver* observer,
+                       SnapshotChannel& channel, LiveTooth& live, int frame_ms) {
+  options.observer = observer;
+  std::atomic<bool> done{false};
+  RunResult r;
+  std::thread servo([&] {
+    r = run_scene(scene, options);
+    done.store(true, std::memory_order_release);
+  });
+  while (!done.load(std::memory_order_acquire)) {
+    live.sync(channel);
+    std::this_thread::sleep_for(std::chrono::milliseconds(frame_ms));
+  }
+  servo.join();
+  live.sync(channel);
+  return r;
+}
+
 struct FieldRun {
   RunResult result;
   long frames_with_removal = 0;  // the live reader's
@@ -89,20 +109,9 @@ FieldRun check_live_field(const nlohmann::json& patch, int frame_ms) {
   FanOut both(&live_channel, &late_channel);
   RunOptions options;
   options.pipeline = "fast";  // `dentsim run`'s default
-  options.observer = &both;
-  std::atomic<bool> done{false};
   FieldRun out;
-  std::thread servo([&] {
-    out.result = run_scene(scene, options);
-    done.store(true, std::memory_order_release);
-  });
   LiveTooth live;
-  while (!done.load(std::memory_order_acquire)) {
-    live.sync(live_channel);
-    std::this_thread::sleep_for(std::chrono::milliseconds(frame_ms));
-  }
-  servo.join();
-  live.sync(live_channel);  // the frame after the run (the window's last.png)
+  out.result = run_followed(scene, options, &both, live_channel, live, frame_ms);
   LiveTooth late;
   EXPECT_TRUE(late.sync(late_channel));
   const RunResult& r = out.result;
@@ -182,20 +191,8 @@ TEST(LiveToothField, TheReaderChangesNothingInTheRun) {
   plain.duration_override = 2.5;  // a second of drilling
   const RunResult a = run_scene(scene, plain);
   SnapshotChannel channel(scene.tooth.resolution);
-  RunOptions observed = plain;
-  observed.observer = &channel;
-  std::atomic<bool> done{false};
-  RunResult b;
-  std::thread servo([&] {
-    b = run_scene(scene, observed);
-    done.store(true);
-  });
   LiveTooth live;
-  while (!done.load()) {
-    live.sync(channel);
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  servo.join();
+  const RunResult b = run_followed(scene, plain, &channel, channel, live, 5);
   ASSERT_GT(a.removed_volume_total_mm3, 0.0);
   EXPECT_EQ(a.removed_volume_mm3, b.removed_volume_mm3);
   EXPECT_EQ(a.tooth_after.unpack().voxels, b.tooth_after.unpack().voxels);
@@ -217,20 +214,8 @@ TEST(LiveToothVoxels, MeshesTheVoxelsWithoutTheFieldModel) {
   RunOptions options;
   options.pipeline = "fast";
   options.duration_override = 2.0;
-  options.observer = &channel;
-  std::atomic<bool> done{false};
-  RunResult r;
-  std::thread servo([&] {
-    r = run_scene(scene, options);
-    done.store(true);
-  });
   LiveTooth live;
-  while (!done.load()) {
-    live.sync(channel);
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  servo.join();
-  live.sync(channel);
+  const RunResult r = run_followed(scene, options, &channel, channel, live, 5);
   ASSERT_TRUE(live.ready());
   EXPECT_EQ(live.field(), nullptr);
   EXPECT_EQ(channel.field_before(), nullptr);

@@ -110,20 +110,39 @@ TEST(SurfaceMesh, BallIsClosedOutwardAndEnclosesItsVolume) {
 // diagonal; together < 0.1 h here), while the voxel mesh's are off by up to a quarter voxel and
 // more (the blurred staircase). Closed and outward like the voxel mesh. Measured: 0.037 h
 // against 0.42 h.
-TEST(SurfaceMesh, FieldMeshLiesOnTheSourceSurfaceNotOnTheVoxels) {
-  const int n = 32;
-  const double h = 1e-4, r = 10.3 * h;
-  VoxelGrid g(n, Vec3(0.01, -0.02, 0.03), h);
-  const Vec3 centre = g.origin + Vec3(16.21, 15.87, 16.43) * h;
-  const auto inside = [&](const Vec3& p) { return (p - centre).norm() < r; };
-  for (int k = 0; k < n; ++k) {
-    for (int j = 0; j < n; ++j) {
-      for (int i = 0; i < n; ++i) {
-        if (inside(g.center(i, j, k))) g.set(i, j, k, kEnamel);
+// The field tests' solid: a ball of radius 10.3 voxels, its centre off the voxel centres, in a
+// 32^3 grid of 0.1 mm voxels (enamel), and its source surface (the sphere, triangulated).
+struct FieldBall {
+  int n = 32;
+  double h = 1e-4, r = 10.3e-4;
+  VoxelGrid grid;
+  Vec3 centre;
+  TriangleMesh surface;
+};
+
+FieldBall field_ball() {
+  FieldBall b;
+  b.grid = VoxelGrid(b.n, Vec3(0.01, -0.02, 0.03), b.h);
+  b.centre = b.grid.origin + Vec3(16.21, 15.87, 16.43) * b.h;
+  const auto inside = [&b](const Vec3& p) { return (p - b.centre).norm() < b.r; };
+  for (int k = 0; k < b.n; ++k) {
+    for (int j = 0; j < b.n; ++j) {
+      for (int i = 0; i < b.n; ++i) {
+        if (inside(b.grid.center(i, j, k))) b.grid.set(i, j, k, kEnamel);
       }
     }
   }
-  const TriangleMesh surface = triangulate_implicit(g, inside);
+  b.surface = triangulate_implicit(b.grid, inside);
+  return b;
+}
+
+TEST(SurfaceMesh, FieldMeshLiesOnTheSourceSurfaceNotOnTheVoxels) {
+  const FieldBall ball = field_ball();
+  const int n = ball.n;
+  const double h = ball.h, r = ball.r;
+  const VoxelGrid& g = ball.grid;
+  const Vec3& centre = ball.centre;
+  const TriangleMesh& surface = ball.surface;
   FieldBand band;
   band.outside_m = 3 * h;
   const SampledField field = build_sampled_field(g, surface, band);
@@ -205,19 +224,10 @@ TEST(SurfaceMesh, FieldMeshLiesOnTheSourceSurfaceNotOnTheVoxels) {
 // Brute force: samples near the ball's surface raised one at a time, each followed by the update
 // and compared with a whole re-mesh.
 TEST(SurfaceMesh, FieldUpdateByChangedSamplesEqualsAFullRemesh) {
-  const int n = 32;
-  const double h = 1e-4, r = 10.3 * h;
-  VoxelGrid g(n, Vec3(0.01, -0.02, 0.03), h);
-  const Vec3 centre = g.origin + Vec3(16.21, 15.87, 16.43) * h;
-  const auto inside = [&](const Vec3& p) { return (p - centre).norm() < r; };
-  for (int k = 0; k < n; ++k) {
-    for (int j = 0; j < n; ++j) {
-      for (int i = 0; i < n; ++i) {
-        if (inside(g.center(i, j, k))) g.set(i, j, k, kEnamel);
-      }
-    }
-  }
-  const TriangleMesh surface = triangulate_implicit(g, inside);
+  const FieldBall ball = field_ball();
+  const double h = ball.h;
+  const VoxelGrid& g = ball.grid;
+  const TriangleMesh& surface = ball.surface;
   for (const int stride : {1, 2}) {
     FieldBand band;
     band.outside_m = 3 * h;

@@ -126,6 +126,15 @@ ScopedEnv no_leak_check_for_the_window() {
   return ScopedEnv("ASAN_OPTIONS", keep.empty() ? "detect_leaks=0" : keep + ":detect_leaks=0");
 }
 
+// Why the window can't be compared with the headless renderer here ("" when it can); *xvfb
+// receives the Xvfb binary.
+std::string why_no_window_and_render(std::string* xvfb) {
+  std::string why;
+  if (!window_available(&why) || !headless_available(&why)) return why;
+  *xvfb = find_in_path("Xvfb");
+  return xvfb->empty() ? "Xvfb is not installed (scripts/setup.sh installs xvfb)" : "";
+}
+
 bool in_overlay(int x, int y) { return x < kOverlayWidth && y < kOverlayHeight; }
 
 // The fraction of the pixels outside the overlay (whose timing numbers differ) that differ by more
@@ -148,10 +157,9 @@ double fraction_differing(const RgbImage& a, const RgbImage& b) {
 }
 
 TEST(ViewerXvfb, WindowShowsTheDrillingAndMatchesTheHeadlessRender) {
-  std::string why;
-  if (!window_available(&why) || !headless_available(&why)) GTEST_SKIP() << why;
-  const std::string xvfb = find_in_path("Xvfb");
-  if (xvfb.empty()) GTEST_SKIP() << "Xvfb is not installed (scripts/setup.sh installs xvfb)";
+  std::string xvfb;
+  const std::string why = why_no_window_and_render(&xvfb);
+  if (!why.empty()) GTEST_SKIP() << why;
   const Xvfb server(xvfb);
   ASSERT_GE(server.display(), 0) << "could not start Xvfb on a free display";
 
@@ -249,10 +257,9 @@ TEST(ViewerXvfb, WindowShowsTheDrillingAndMatchesTheHeadlessRender) {
 // window before this change: see docs/view.md). The window's own field copy against field_after,
 // sample by sample, and its mesh, bit for bit: tests/view/live_tooth_test.cc.
 TEST(ViewerXvfb, WindowMeshesTheFieldWithTheFieldModel) {
-  std::string why;
-  if (!window_available(&why) || !headless_available(&why)) GTEST_SKIP() << why;
-  const std::string xvfb = find_in_path("Xvfb");
-  if (xvfb.empty()) GTEST_SKIP() << "Xvfb is not installed (scripts/setup.sh installs xvfb)";
+  std::string xvfb;
+  const std::string why = why_no_window_and_render(&xvfb);
+  if (!why.empty()) GTEST_SKIP() << why;
   const Xvfb server(xvfb);
   ASSERT_GE(server.display(), 0) << "could not start Xvfb on a free display";
 
