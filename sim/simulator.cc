@@ -783,6 +783,12 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   const std::unique_ptr<SceneRig> rig = build_scene_rig(scene, scene_rig_options(options));
   const double T = rig->tick;
   describe_run(scene, options, *rig, res);
+  if (options.observer != nullptr) {  // the view's setup, before the first tick (tick_observer.h)
+    RunStartView start;
+    start.field = res.field_before;
+    start.tooth_before = &res.tooth_before;
+    options.observer->on_start(start);
+  }
   const bool truth = rig->backend == nullptr;
   // With HDAPI the tick runs inside the vendor's scheduler callback (RunOptions::hd_loop).
   const bool callback = !truth && options.hd_loop == "callback";

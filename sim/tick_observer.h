@@ -12,11 +12,14 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <span>
 
 #include "reference/core/types.h"
 #include "reference/tooth/materials.h"
+#include "reference/tooth/sampled_field.h"
 #include "reference/tooth/voxel_grid.h"
+#include "reference/tooth/voxel_runs.h"
 
 namespace dentsim {
 
@@ -39,9 +42,24 @@ struct TickSnapshotView {
   std::span<const std::size_t> touched_voxels;
 };
 
+// The run as it starts (TickObserver::on_start; issue #30): what the view needs once, before the
+// first tick, beyond the ticks' views.
+struct RunStartView {
+  // The tooth's sampled field before the first tick (contact model "field"; RunResult::
+  // field_before, the same immutable object: shared, never edited), null for the other models.
+  // The live view copies it on its own thread and edits its copy as drilling removes voxels.
+  std::shared_ptr<const SampledField> field;
+  // The placed tooth before the first tick (RunResult::tooth_before), valid during the call: with
+  // a field, the view's edit starts from it (every voxel removed since is subtracted).
+  const VoxelRuns* tooth_before = nullptr;
+};
+
 class TickObserver {
  public:
   virtual ~TickObserver() = default;
+  // Once, before the first tick, on the thread that runs the loop but outside the loop (it may
+  // allocate; it should return quickly). Default: nothing.
+  virtual void on_start(const RunStartView& start) { (void)start; }
   virtual void on_tick(const TickSnapshotView& tick) = 0;
 };
 

@@ -15,6 +15,12 @@ SnapshotChannel::SnapshotChannel(int resolution)
   histogram_ = std::make_unique<std::atomic<std::uint32_t>[]>(kBins);
 }
 
+void SnapshotChannel::on_start(const RunStartView& start) {
+  if (start.field == nullptr || start.tooth_before == nullptr) return;
+  field_before_ = start.field;
+  tooth_before_ = *start.tooth_before;
+}
+
 void SnapshotChannel::on_tick(const TickSnapshotView& v) {
   TickSnapshot& s = slots_[back_];
   s.tick = v.tick;

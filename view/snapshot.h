@@ -15,6 +15,11 @@
 //    (release). The reader polls the generations (acquire) and re-reads changed blocks. Voxels
 //    only go from solid to empty, so a block read while being written is simply read again when
 //    its generation moves on: the reader's copy converges to the writer's.
+//  - The tooth's field (contact model "field"; issue #30): on_start, before the loop, keeps the
+//    run's field before the first tick (RunResult::field_before: immutable, shared, not copied
+//    on the servo thread) and the tooth before it (as runs); tick 0's release of the tooth
+//    publishes them. The reader copies the field and edits its copy by the voxels removed since
+//    (view/live_tooth.h): the servo's own field is never shared.
 //  - Tick time statistics: a histogram of std::atomic<uint32_t> counters (0.25 us bins up to
 //    2 ms, the last bin collects the rest), from which the reader takes median and p99.
 #pragma once
@@ -27,7 +32,9 @@
 #include <vector>
 
 #include "sim/tick_observer.h"
+#include "reference/tooth/sampled_field.h"
 #include "reference/tooth/voxel_grid.h"
+#include "reference/tooth/voxel_runs.h"
 
 namespace dentsim::view {
 
@@ -56,6 +63,10 @@ class SnapshotChannel : public TickObserver {
   // `resolution`: the scene's tooth resolution N (voxels per axis).
   explicit SnapshotChannel(int resolution);
 
+  // Writer side (the servo thread, before its loop): with the field model, keeps the run's field
+  // before the first tick (an immutable shared object: not copied) and the tooth before it (its
+  // runs, copied: a few bytes per row crossing the tooth).
+  void on_start(const RunStartView& start) override;
   // Writer side (servo thread): publish one tick.
   void on_tick(const TickSnapshotView& tick) override;
 
@@ -67,6 +78,12 @@ class SnapshotChannel : public TickObserver {
   // call, and `changed` the flat indices whose material differs from *grid's previous content.
   // The first call copies the whole tooth. Returns false (and does nothing) before tick 0.
   bool sync_tooth(VoxelGrid* grid, std::vector<std::size_t>* changed);
+  // The tooth's sampled field before the first tick (contact model "field"), else null. Read it
+  // only once sync_tooth returned true (on_start wrote it before tick 0's publication, which
+  // sync_tooth acquired). Immutable: the reader copies it to edit (view/live_tooth.h).
+  const std::shared_ptr<const SampledField>& field_before() const { return field_before_; }
+  // With field_before(): the tooth before the first tick (the voxels field_before() is of).
+  const VoxelRuns& tooth_before() const { return tooth_before_; }
   // Median and 99th percentile of the tick time over all published ticks [us] (bin centres).
   void tick_time_stats(double* median_us, double* p99_us) const;
   long ticks_published() const { return published_.load(std::memory_order_acquire); }
@@ -88,6 +105,9 @@ class SnapshotChannel : public TickObserver {
   std::vector<std::uint32_t> seen_generation_;  // reader's
   std::atomic<bool> tooth_ready_{false};
   std::atomic<bool> mismatch_{false};
+  // on_start's, published by tooth_ready_ (field model; else null and empty).
+  std::shared_ptr<const SampledField> field_before_;
+  VoxelRuns tooth_before_;
   Mat3 device_R0_ = Mat3::Identity();  // writer's, set at tick 0
   Vec3 origin_ = Vec3::Zero();         // written before tooth_ready_ (release)
   double h_ = 0.0;

@@ -63,51 +63,92 @@ std::size_t SurfaceMesher::triangle_count() const {
   return n;
 }
 
-std::vector<int> SurfaceMesher::blocks_touched_by(int i, int j, int k) const {
-  std::vector<int> out;
-  const int v[3] = {i, j, k};
-  int lo[3], hi[3];
+void SurfaceMesher::append_blocks(const int lo[3], const int hi[3], std::vector<int>* out) const {
+  int blo[3], bhi[3];
   for (int a = 0; a < 3; ++a) {
-    lo[a] = std::max(0, (v[a] - halo_) / block_size_);
-    if (v[a] - halo_ < 0) lo[a] = 0;
-    hi[a] = std::min(nb_ - 1, (v[a] + halo_) / block_size_);
+    if (hi[a] < 0 || lo[a] >= grid().n) return;  // the box misses the grid
+    blo[a] = std::max(0, lo[a]) / block_size_;
+    bhi[a] = std::min(nb_ - 1, hi[a] / block_size_);
   }
-  for (int bz = lo[2]; bz <= hi[2]; ++bz) {
-    for (int by = lo[1]; by <= hi[1]; ++by) {
-      for (int bx = lo[0]; bx <= hi[0]; ++bx) out.push_back(bx + nb_ * (by + nb_ * bz));
+  for (int bz = blo[2]; bz <= bhi[2]; ++bz) {
+    for (int by = blo[1]; by <= bhi[1]; ++by) {
+      for (int bx = blo[0]; bx <= bhi[0]; ++bx) out->push_back(bx + nb_ * (by + nb_ * bz));
     }
   }
+}
+
+std::vector<int> SurfaceMesher::blocks_touched_by(int i, int j, int k) const {
+  std::vector<int> out;
+  const int lo[3] = {i - halo_, j - halo_, k - halo_}, hi[3] = {i + halo_, j + halo_, k + halo_};
+  append_blocks(lo, hi, &out);
   return out;  // already sorted (z, y, x nesting matches the id order)
 }
 
-std::vector<int> SurfaceMesher::update(const VoxelGrid& grid,
-                                       std::span<const std::size_t> changed) {
+void SurfaceMesher::copy_voxels(const VoxelGrid& grid, std::span<const std::size_t> changed) {
   if (borrowed_ != nullptr) {
     throw std::logic_error("SurfaceMesher::update: a borrowing mesher (borrowing()) has no copy "
                            "of the grid to update");
   }
   if (grid.n != own_.n) throw std::invalid_argument("SurfaceMesher::update: grid size changed");
-  std::vector<int> dirty;
   const std::size_t n = static_cast<std::size_t>(own_.n);
+  const std::size_t B = static_cast<std::size_t>(block_size_), nb = static_cast<std::size_t>(nb_);
   for (std::size_t idx : changed) {
     if (idx >= own_.voxels.size()) continue;
     const bool was_solid = own_.voxels[idx] != 0;
     own_.voxels[idx] = grid.voxels[idx];
-    const int i = static_cast<int>(idx % n), j = static_cast<int>((idx / n) % n),
-              k = static_cast<int>(idx / (n * n));
     if (!block_solid_.empty() && was_solid != (own_.voxels[idx] != 0)) {
-      const std::size_t b = static_cast<std::size_t>(i / block_size_) +
-                            static_cast<std::size_t>(nb_) *
-                                (static_cast<std::size_t>(j / block_size_) +
-                                 static_cast<std::size_t>(nb_) * (k / block_size_));
+      const std::size_t b = (idx % n) / B + nb * (((idx / n) % n) / B + nb * ((idx / (n * n)) / B));
       block_solid_[b] = was_solid ? block_solid_[b] - 1 : block_solid_[b] + 1;
     }
-    for (int b : blocks_touched_by(i, j, k)) dirty.push_back(b);
   }
+}
+
+std::vector<int> SurfaceMesher::remesh(std::vector<int> dirty) {
   std::sort(dirty.begin(), dirty.end());
   dirty.erase(std::unique(dirty.begin(), dirty.end()), dirty.end());
   for (int b : dirty) mesh_block(b);
   return dirty;
+}
+
+std::vector<int> SurfaceMesher::update(const VoxelGrid& grid,
+                                       std::span<const std::size_t> changed) {
+  return update_voxels(grid, changed, halo_, {});
+}
+
+std::vector<int> SurfaceMesher::update(const VoxelGrid& grid, std::span<const std::size_t> changed,
+                                       std::span<const std::array<int, 3>> samples) {
+  if (field_ == nullptr) {
+    throw std::logic_error("SurfaceMesher::update: changed samples given to a mesher of voxels");
+  }
+  return update_voxels(grid, changed, kHalo, samples);
+}
+
+std::vector<int> SurfaceMesher::update_voxels(const VoxelGrid& grid,
+                                              std::span<const std::size_t> changed, int halo,
+                                              std::span<const std::array<int, 3>> samples) {
+  copy_voxels(grid, changed);
+  std::vector<int> dirty;
+  const std::size_t n = static_cast<std::size_t>(own_.n);
+  for (std::size_t idx : changed) {
+    if (idx >= own_.voxels.size()) continue;
+    const int v[3] = {static_cast<int>(idx % n), static_cast<int>((idx / n) % n),
+                      static_cast<int>(idx / (n * n))};
+    const int lo[3] = {v[0] - halo, v[1] - halo, v[2] - halo};
+    const int hi[3] = {v[0] + halo, v[1] + halo, v[2] + halo};
+    append_blocks(lo, hi, &dirty);
+  }
+  const int k = field_ != nullptr ? field_->stride() : 1;
+  const int pad = field_ != nullptr ? field_->padding() : 0;
+  for (const std::array<int, 3>& s : samples) {
+    int lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      // The centres whose value reads sample s (header), widened by the dual cells' reach of 1.
+      lo[a] = (k == 1 ? s[a] - pad : k * (s[a] - pad - 1)) - 1;
+      hi[a] = (k == 1 ? s[a] - pad : k * (s[a] - pad) + k - 1) + 1;
+    }
+    append_blocks(lo, hi, &dirty);
+  }
+  return remesh(std::move(dirty));
 }
 
 void SurfaceMesher::count_block_solids() {

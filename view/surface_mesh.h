@@ -35,6 +35,7 @@
 // (tests/view/surface_mesh_test.cc).
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -87,6 +88,17 @@ class SurfaceMesher {
   // The grid changed at the flat voxel indices `changed` (the mesher's own copy is updated from
   // `grid`); re-meshes the dirty blocks and returns their ids, sorted.
   std::vector<int> update(const VoxelGrid& grid, std::span<const std::size_t> changed);
+  // With a field, when the caller knows which of its samples changed (the live view diffs them
+  // around the edit: view/live_tooth.h): the grid changed at the voxels `changed` and the field
+  // at the samples `samples` (lattice coordinates, each in [0, samples_per_axis())). Re-meshes
+  // only the blocks that read them: a voxel's within kHalo of it (its occupancy: the quads'
+  // materials; the field's samples carry the surface), a sample's those with a voxel within 1
+  // (the dual cells' reach) of a voxel centre whose value reads it (stride 1: the centre
+  // s - P; stride k: every centre c with floor(c / k) + P in {s - 1, s}, the interpolation's
+  // cell). Returns their ids, sorted. The mesh is the one update() makes (which assumes every
+  // sample within the edit radius of a voxel changed), bit for bit, from fewer blocks.
+  std::vector<int> update(const VoxelGrid& grid, std::span<const std::size_t> changed,
+                          std::span<const std::array<int, 3>> samples);
   // Changes the cut-away and re-meshes everything.
   void set_cut(CutAway cut);
 
@@ -111,6 +123,16 @@ class SurfaceMesher {
   SurfaceMesher(const VoxelGrid* borrowed, const VoxelGrid& grid, const SampledField* field,
                 int block_size, CutAway cut);
   void mesh_block(int block);
+  // Copies the changed voxels from `grid` (the per-block solid counts follow).
+  void copy_voxels(const VoxelGrid& grid, std::span<const std::size_t> changed);
+  // Appends the blocks that hold a voxel of the box [lo, hi] (inclusive, clamped to the grid).
+  void append_blocks(const int lo[3], const int hi[3], std::vector<int>* out) const;
+  // Sorts and de-duplicates `dirty`, re-meshes those blocks and returns them.
+  std::vector<int> remesh(std::vector<int> dirty);
+  // The two update()s: the voxels `changed` dirty the blocks within `halo` of them, the samples
+  // `samples` those that read them.
+  std::vector<int> update_voxels(const VoxelGrid& grid, std::span<const std::size_t> changed,
+                                 int halo, std::span<const std::array<int, 3>> samples);
   bool occupied(int i, int j, int k) const;
   // The voxels' path (no field): the solid voxels per block, the test that lets mesh_block skip
   // a block whose +-1 block neighbourhood is all empty or all solid (it has no quad), and s over

@@ -110,20 +110,39 @@ TEST(SurfaceMesh, BallIsClosedOutwardAndEnclosesItsVolume) {
 // diagonal; together < 0.1 h here), while the voxel mesh's are off by up to a quarter voxel and
 // more (the blurred staircase). Closed and outward like the voxel mesh. Measured: 0.037 h
 // against 0.42 h.
-TEST(SurfaceMesh, FieldMeshLiesOnTheSourceSurfaceNotOnTheVoxels) {
-  const int n = 32;
-  const double h = 1e-4, r = 10.3 * h;
-  VoxelGrid g(n, Vec3(0.01, -0.02, 0.03), h);
-  const Vec3 centre = g.origin + Vec3(16.21, 15.87, 16.43) * h;
-  const auto inside = [&](const Vec3& p) { return (p - centre).norm() < r; };
-  for (int k = 0; k < n; ++k) {
-    for (int j = 0; j < n; ++j) {
-      for (int i = 0; i < n; ++i) {
-        if (inside(g.center(i, j, k))) g.set(i, j, k, kEnamel);
+// The field tests' solid: a ball of radius 10.3 voxels, its centre off the voxel centres, in a
+// 32^3 grid of 0.1 mm voxels (enamel), and its source surface (the sphere, triangulated).
+struct FieldBall {
+  int n = 32;
+  double h = 1e-4, r = 10.3e-4;
+  VoxelGrid grid;
+  Vec3 centre;
+  TriangleMesh surface;
+};
+
+FieldBall field_ball() {
+  FieldBall b;
+  b.grid = VoxelGrid(b.n, Vec3(0.01, -0.02, 0.03), b.h);
+  b.centre = b.grid.origin + Vec3(16.21, 15.87, 16.43) * b.h;
+  const auto inside = [&b](const Vec3& p) { return (p - b.centre).norm() < b.r; };
+  for (int k = 0; k < b.n; ++k) {
+    for (int j = 0; j < b.n; ++j) {
+      for (int i = 0; i < b.n; ++i) {
+        if (inside(b.grid.center(i, j, k))) b.grid.set(i, j, k, kEnamel);
       }
     }
   }
-  const TriangleMesh surface = triangulate_implicit(g, inside);
+  b.surface = triangulate_implicit(b.grid, inside);
+  return b;
+}
+
+TEST(SurfaceMesh, FieldMeshLiesOnTheSourceSurfaceNotOnTheVoxels) {
+  const FieldBall ball = field_ball();
+  const int n = ball.n;
+  const double h = ball.h, r = ball.r;
+  const VoxelGrid& g = ball.grid;
+  const Vec3& centre = ball.centre;
+  const TriangleMesh& surface = ball.surface;
   FieldBand band;
   band.outside_m = 3 * h;
   const SampledField field = build_sampled_field(g, surface, band);
@@ -197,6 +216,56 @@ TEST(SurfaceMesh, FieldMeshLiesOnTheSourceSurfaceNotOnTheVoxels) {
     }
   }
   EXPECT_LT(stats(whole, centre).volume, s.volume);  // the edit removed material
+}
+
+// The live view's update (view/live_tooth.h): given the samples an edit changed, update()
+// re-meshes only the blocks that read them, and the mesh equals meshing the edited field whole,
+// bit for bit, at stride 1 (the sample at each voxel centre) and stride 2 (interpolated).
+// Brute force: samples near the ball's surface raised one at a time, each followed by the update
+// and compared with a whole re-mesh.
+TEST(SurfaceMesh, FieldUpdateByChangedSamplesEqualsAFullRemesh) {
+  const FieldBall ball = field_ball();
+  const double h = ball.h;
+  const VoxelGrid& g = ball.grid;
+  const TriangleMesh& surface = ball.surface;
+  for (const int stride : {1, 2}) {
+    FieldBand band;
+    band.outside_m = 3 * h;
+    band.stride = stride;
+    SampledField field = build_sampled_field(g, surface, band);
+    ASSERT_EQ(field.stride(), stride);
+    field.reserve_spare_bricks(64);
+    SurfaceMesher live(g, &field, 8);
+    std::mt19937 rng(7 + stride);
+    const int m = field.samples_per_axis();
+    std::uniform_int_distribution<int> pick(0, m - 1);
+    int raised = 0;
+    long remeshed = 0;
+    for (int tries = 0; raised < 60 && tries < 200000; ++tries) {
+      const std::array<int, 3> s = {pick(rng), pick(rng), pick(rng)};
+      const float v = field.at(s[0], s[1], s[2]);
+      if (!(std::abs(v) < 1.5 * stride * h)) continue;  // near the surface: the mesh moves
+      ASSERT_TRUE(field.raise(s[0], s[1], s[2], v + 0.7 * stride * h));
+      ++raised;
+      const std::vector<int> blocks =
+          live.update(g, std::span<const std::size_t>(), std::span<const std::array<int, 3>>(&s, 1));
+      remeshed += static_cast<long>(blocks.size());
+      const SurfaceMesher whole(g, &field, 8);
+      for (std::size_t b = 0; b < whole.blocks().size(); ++b) {
+        const BlockMesh &x = live.blocks()[b], &y = whole.blocks()[b];
+        ASSERT_EQ(x.vertices.size(), y.vertices.size()) << "stride " << stride << " block " << b;
+        ASSERT_EQ(x.indices, y.indices) << "stride " << stride << " block " << b;
+        for (std::size_t q = 0; q < x.vertices.size(); ++q) {
+          ASSERT_EQ(std::memcmp(&x.vertices[q], &y.vertices[q], sizeof(MeshVertex)), 0)
+              << "stride " << stride << " block " << b;
+        }
+      }
+    }
+    ASSERT_EQ(raised, 60);
+    // One sample reaches the centres within k of it (+1): at most 2 blocks a side.
+    EXPECT_LE(remeshed, 8L * raised);
+    std::printf("stride %d: %d samples raised, %ld blocks re-meshed\n", stride, raised, remeshed);
+  }
 }
 
 TEST(SurfaceMesh, DrilledRegionRemeshesOnlyItsBlocksAndEqualsAFullRemesh) {

@@ -2,20 +2,21 @@
 // at most 60 frames per second where the swap does not wait).
 // Each frame: take the newest tick snapshot and the tooth's changed blocks from the
 // SnapshotChannel (lock-free, view/snapshot.h), re-mesh only the affected surface blocks
-// (view/surface_mesh.h), upload them, draw (view/gl/renderer.h). The servo loop never waits for
-// this thread.
+// (view/live_tooth.h: with the contact model "field" this thread's copy of the field is edited
+// first, so the window shows the field's surface as the pictures do), upload them, draw
+// (view/gl/renderer.h). The servo loop never waits for this thread.
 #include <GLFW/glfw3.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <memory>
-#include <optional>
 #include <thread>
 
 #include "reference/core/io.h"
 #include "view/gl/gl.h"
 #include "view/gl/renderer.h"
+#include "view/live_tooth.h"
 #include "view/view.h"
 
 namespace dentsim::view {
@@ -94,6 +95,22 @@ struct Glfw {
   ~Glfw() { glfwTerminate(); }
 };
 
+// What the field surface's updates cost this thread (stderr; docs/view.md "On the smooth
+// tooth"). Nothing without the field model.
+void report_updates(const LiveTooth& tooth) {
+  const LiveToothStats& s = tooth.stats();
+  if (tooth.field() == nullptr || s.frames_with_removal == 0) return;
+  const double per_frame_ms =
+      1e3 * (s.edit_s + s.mesh_s) / static_cast<double>(s.frames_with_removal);
+  std::fprintf(stderr,
+               "view: field surface: set up in %.0f ms of CPU; %ld voxels removed over %ld of "
+               "%ld frames, %ld blocks re-meshed: %.2f ms of CPU per frame on the mean (field "
+               "edit %.2f, re-mesh %.2f), %.2f ms at most\n",
+               1e3 * s.setup_s, s.voxels, s.frames_with_removal, s.frames, s.blocks, per_frame_ms,
+               1e3 * s.edit_s / static_cast<double>(s.frames_with_removal),
+               1e3 * s.mesh_s / static_cast<double>(s.frames_with_removal), 1e3 * s.frame_max_s);
+}
+
 }  // namespace
 
 bool window_available(std::string* why) {
@@ -128,9 +145,7 @@ void run_viewer(SnapshotChannel& channel, const std::atomic<bool>& run_done,
 
   {
     GlRenderer renderer;
-    std::optional<SurfaceMesher> mesher;
-    VoxelGrid grid;
-    std::vector<std::size_t> changed;
+    LiveTooth tooth;
     TickSnapshot tick;
     int shot = 0;
     bool wrote_first = false, wrote_last = false;
@@ -146,17 +161,14 @@ void run_viewer(SnapshotChannel& channel, const std::atomic<bool>& run_done,
       const bool done = run_done.load(std::memory_order_acquire);
       if (!state.frozen) {
         channel.latest(&tick);
-        if (channel.sync_tooth(&grid, &changed)) {
-          if (!mesher) {
-            mesher.emplace(grid, SurfaceMesher::kDefaultBlockSize,
-                           state.cut ? centre_cut(grid) : CutAway{});
-            state.camera = state.home = camera_for(grid, options.view);
-            state.have_camera = true;
-          } else if (!changed.empty()) {
-            mesher->update(grid, changed);
-          }
+        const bool first = !tooth.ready();
+        tooth.sync(channel, state.cut);
+        if (first && tooth.ready()) {
+          state.camera = state.home = camera_for(tooth.grid(), options.view);
+          state.have_camera = true;
         }
       }
+      SurfaceMesher* mesher = tooth.ready() ? &tooth.mesher() : nullptr;
       if (mesher && state.cut_changed) {
         mesher->set_cut(state.cut ? centre_cut(mesher->grid()) : CutAway{});
         state.cut_changed = false;
@@ -203,6 +215,7 @@ void run_viewer(SnapshotChannel& channel, const std::atomic<bool>& run_done,
       if (done && options.close_when_done && (wrote_last || !options.capture_first_last)) break;
       if (options.stop != nullptr && options.stop->load(std::memory_order_relaxed)) break;
     }
+    report_updates(tooth);
   }
   glfwDestroyWindow(window);
 }
