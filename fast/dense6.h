@@ -4,7 +4,12 @@
 // through their generic paths (the blocked LU on a strided reference, and for a matrix right-hand
 // side the level-3 triangular solve with its packing): callgrind gave ~12k of a free-space tick's
 // 36k instructions to them; 8k of it is saved here (docs/benchmarks.md "Dense 6x6 kernels").
-// These are the textbook algorithms with loops of compile-time length, which the compiler unrolls:
+// These are the textbook algorithms with loops of at most six trips. Every loop carries `#pragma
+// GCC unroll 6`: without it GCC unrolled only the loops of constant length, not the inner ones
+// whose bounds depend on the outer index (k + 1..5, 0..k-1), which stayed loops with their
+// counters and branches; unrolled, the pmi-pd free-space tick's three factorisations and solves
+// take 1.5 k instructions fewer (docs/benchmarks.md "The tick's own arithmetic"). The order of
+// every operation is unchanged, so the results are bitwise those of the loops:
 //
 //   LU with partial pivoting (Golub & Van Loan, Alg. 3.4.1): for k = 0..5, the row p >= k with
 //   the largest |A(p,k)| (the first of equals, as Eigen) is swapped into row k, then
@@ -46,10 +51,13 @@ struct Lu6 {
 inline bool lu6(const Mat6& A, Lu6* f) {
   Mat6& a = f->lu;
   a = A;
+  #pragma GCC unroll 6
   for (int i = 0; i < 6; ++i) f->perm[i] = i;
+  #pragma GCC unroll 6
   for (int k = 0; k < 6; ++k) {
     int p = k;
     double best = std::abs(a(k, k));
+    #pragma GCC unroll 6
     for (int i = k + 1; i < 6; ++i) {
       const double v = std::abs(a(i, k));
       if (v > best) {
@@ -59,14 +67,18 @@ inline bool lu6(const Mat6& A, Lu6* f) {
     }
     if (!(best > 0.0) || !std::isfinite(best)) return false;
     if (p != k) {
+      #pragma GCC unroll 6
       for (int j = 0; j < 6; ++j) std::swap(a(k, j), a(p, j));
       std::swap(f->perm[k], f->perm[p]);
     }
     const double inv = 1.0 / a(k, k);
     f->inv_u[k] = inv;
+    #pragma GCC unroll 6
     for (int i = k + 1; i < 6; ++i) a(i, k) *= inv;
+    #pragma GCC unroll 6
     for (int j = k + 1; j < 6; ++j) {
       const double akj = a(k, j);
+      #pragma GCC unroll 6
       for (int i = k + 1; i < 6; ++i) a(i, j) -= a(i, k) * akj;
     }
   }
@@ -77,12 +89,17 @@ inline bool lu6(const Mat6& A, Lu6* f) {
 inline void lu6_solve(const Lu6& f, const Vec6& b, Vec6* x) {
   const Mat6& a = f.lu;
   Vec6& y = *x;
+  #pragma GCC unroll 6
   for (int i = 0; i < 6; ++i) y[i] = b[f.perm[i]];
+  #pragma GCC unroll 6
   for (int k = 0; k < 6; ++k) {  // L y = P b, L unit lower
+    #pragma GCC unroll 6
     for (int i = k + 1; i < 6; ++i) y[i] -= a(i, k) * y[k];
   }
+  #pragma GCC unroll 6
   for (int k = 5; k >= 0; --k) {  // U x = y
     y[k] *= f.inv_u[k];
+    #pragma GCC unroll 6
     for (int i = 0; i < k; ++i) y[i] -= a(i, k) * y[k];
   }
 }
@@ -94,12 +111,17 @@ inline void lu6_inverse(const Lu6& f, Mat6* inv) {
   const Mat6& a = f.lu;
   using RowMajor6 = Eigen::Matrix<double, 6, 6, Eigen::RowMajor>;
   RowMajor6 x = RowMajor6::Zero();
+  #pragma GCC unroll 6
   for (int i = 0; i < 6; ++i) x(i, f.perm[i]) = 1.0;  // P
+  #pragma GCC unroll 6
   for (int k = 0; k < 6; ++k) {  // L Y = P
+    #pragma GCC unroll 6
     for (int i = k + 1; i < 6; ++i) x.row(i) -= a(i, k) * x.row(k);
   }
+  #pragma GCC unroll 6
   for (int k = 5; k >= 0; --k) {  // U X = Y
     x.row(k) *= f.inv_u[k];
+    #pragma GCC unroll 6
     for (int i = 0; i < k; ++i) x.row(i) -= a(i, k) * x.row(k);
   }
   *inv = x;
@@ -115,16 +137,20 @@ struct Llt6 {
 inline bool cholesky6(const Mat6& A, Llt6* f) {
   Mat6& l = f->l;
   l.setZero();
+  #pragma GCC unroll 6
   for (int k = 0; k < 6; ++k) {
     double s = A(k, k);
+    #pragma GCC unroll 6
     for (int j = 0; j < k; ++j) s -= l(k, j) * l(k, j);
     if (!(s > 0.0) || !std::isfinite(s)) return false;
     const double lkk = std::sqrt(s);
     const double inv = 1.0 / lkk;
     l(k, k) = lkk;
     f->inv_diag[k] = inv;
+    #pragma GCC unroll 6
     for (int i = k + 1; i < 6; ++i) {
       double t = A(i, k);
+      #pragma GCC unroll 6
       for (int j = 0; j < k; ++j) t -= l(i, j) * l(k, j);
       l(i, k) = t * inv;
     }
@@ -136,11 +162,15 @@ inline bool cholesky6(const Mat6& A, Llt6* f) {
 inline void cholesky6_solve(const Llt6& f, const Vec6& b, Vec6* x) {
   const Mat6& l = f.l;
   Vec6 y = b;
+  #pragma GCC unroll 6
   for (int k = 0; k < 6; ++k) {
     y[k] *= f.inv_diag[k];
+    #pragma GCC unroll 6
     for (int i = k + 1; i < 6; ++i) y[i] -= l(i, k) * y[k];
   }
+  #pragma GCC unroll 6
   for (int k = 5; k >= 0; --k) {
+    #pragma GCC unroll 6
     for (int j = k + 1; j < 6; ++j) y[k] -= l(j, k) * y[j];
     y[k] *= f.inv_diag[k];
   }
@@ -152,11 +182,15 @@ inline void cholesky6_solve(const Llt6& f, const Vec6& b, Vec6* x) {
 inline void cholesky6_solve_in_place(const Llt6& f, Mat6* B) {
   const Mat6& l = f.l;
   Eigen::Matrix<double, 6, 6, Eigen::RowMajor> x = *B;
+  #pragma GCC unroll 6
   for (int k = 0; k < 6; ++k) {
     x.row(k) *= f.inv_diag[k];
+    #pragma GCC unroll 6
     for (int i = k + 1; i < 6; ++i) x.row(i) -= l(i, k) * x.row(k);
   }
+  #pragma GCC unroll 6
   for (int k = 5; k >= 0; --k) {
+    #pragma GCC unroll 6
     for (int j = k + 1; j < 6; ++j) x.row(k) -= l(j, k) * x.row(j);
     x.row(k) *= f.inv_diag[k];
   }
