@@ -129,6 +129,8 @@ class FieldBricks {
  private:
   // The worst squared cell slope over the cells include_cells measures, on `table`.
   double worst_cells(const std::int32_t* table, const int lo[3], const int hi[3]) const;
+  // The stored value of sample s on `table`.
+  float value_on(const std::int32_t* table, int sx, int sy, int sz) const;
   // The 8 corners of cell s on `table` (no kept brick).
   void corners_on(const std::int32_t* table, const int s[3], float c[8]) const;
   // The bricks holding sample s (up to 8: its own and those whose apron holds it), as slots and
@@ -257,10 +259,11 @@ bool edit_field_for_removed_voxels(SampledField* field, FieldBricks* bricks,
 // the reference's, bitwise, and repeatable); in real time it publishes a batch at the first tick
 // it is done and counts the late ones. Retired bricks return to the pool at the publish after
 // the one that retired them.
-// Handoff: single producer (the servo), single consumer (the worker), a ring of batches and three
-// counters (submitted, done, published; release/acquire); the waits are futex waits on 32-bit
-// atomics (std::atomic<int>::wait: no mutex). Nothing on the servo's side allocates, throws or
-// locks; the worker neither allocates nor throws. The thread is joined by the destructor.
+// Handoff: single producer (the servo), single consumer (the worker), a ring of L + 64 batches
+// and three counters (submitted, done, published; release/acquire); the waits are futex waits on
+// 32-bit atomics (std::atomic<int>::wait: no mutex). Nothing on the servo's side allocates,
+// throws or locks; the worker neither allocates nor throws. The thread is joined by the
+// destructor.
 class FieldEditWorker {
  public:
   // `field` and `bricks` (copy-on-write enabled here) must outlive it; `tooth` is copied.

@@ -217,7 +217,8 @@ void ToothContactProvider::prepare_field_latency(int ticks) {
 }
 
 void ToothContactProvider::hand_off_field_batch(std::span<const std::size_t> removed, long tick) {
-  if (field_batch_count_ == field_batches_.size()) {  // never grow in the tick: the field keeps them
+  if (field_batch_count_ == field_batches_.size()) {  // never grow in the tick: the field
+                                                      // keeps them
     field_edit_shortfalls_ += static_cast<long>(removed.size());
     return;
   }
@@ -234,7 +235,8 @@ void ToothContactProvider::hand_off_field_batch(std::span<const std::size_t> rem
 void ToothContactProvider::publish_field_edits(long tick) {
   // Every batch of tick <= tick - L, in tick order (one, the batch of tick - L, when contacts()
   // runs every tick).
-  while (field_batch_count_ > 0 && field_batches_[field_batch_head_].tick <= tick - field_edit_latency_) {
+  while (field_batch_count_ > 0 &&
+         field_batches_[field_batch_head_].tick <= tick - field_edit_latency_) {
     const FieldBatch& b = field_batches_[field_batch_head_];
     // The grid right after that tick's drilling: the copy loses the batch's voxels (the batches
     // are applied in tick order, and drilling is the only thing that changes the grid).

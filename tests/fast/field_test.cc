@@ -277,7 +277,9 @@ void provider_equals_the_reference(int stride, int latency = 0) {
     long differ = 0;
     for (int z = 0; z < m; ++z) {
       for (int y = 0; y < m; ++y) {
-        for (int x = 0; x < m; ++x) differ += fast_provider.bricks().at(x, y, z) != field_r.at(x, y, z);
+        for (int x = 0; x < m; ++x) {
+          differ += fast_provider.bricks().at(x, y, z) != field_r.at(x, y, z);
+        }
       }
     }
     return differ;
