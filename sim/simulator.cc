@@ -123,7 +123,12 @@ constexpr double kMaxSaturationS = 2.0;
 
 double SceneRig::tip_depth(const Pose& pose) {
   if (field) {  // the "field" model: the tip sphere's overlap with the field's own solid
-    return std::max(0.0, tip.radius - field->value(pose.x + pose.R * tip.offset_body));
+    // As the provider reads it (the fast pipeline's published bricks: the field itself may be
+    // mid-edit on the provider's worker thread).
+    const auto* provider = dynamic_cast<const ToothContactProvider*>(contacts);
+    const Vec3 c = pose.x + pose.R * tip.offset_body;
+    return std::max(0.0, tip.radius - (provider != nullptr ? provider->field_value(c)
+                                                           : field->value(c)));
   }
   tip_contacts(pose, &measure_contacts);
   double d = 0.0;
@@ -193,7 +198,7 @@ void place_tooth(const Scene& scene, SceneRig& g) {
 
 // The implementation's tooth on the placed tooth: its contacts and, if the tool drills, drilling.
 void make_pipeline_tooth(const Scene& scene, const SceneRigOptions& options,
-                         const Implementation& impl, SceneRig& g) {
+                         const Implementation& impl, bool hdapi, SceneRig& g) {
   DrillParams drill;
   drill.bur_speed_rad_s = scene.tool.bur_speed_rpm * 2.0 * std::numbers::pi / 60.0;
   drill.cutting_coefficient = scene.tool.cutting_coefficient;
@@ -207,6 +212,9 @@ void make_pipeline_tooth(const Scene& scene, const SceneRigOptions& options,
   tooth_setup.contact_model = contact_model;
   tooth_setup.skip_unneeded = options.skip_unneeded;
   tooth_setup.field = g.field.get();
+  // A loop paced by a clock (an HDAPI device, --realtime) never waits for the field edit's
+  // worker (fast/tooth/field.h).
+  tooth_setup.real_time = hdapi || options.realtime;
   g.pipeline_tooth = impl.tooth(*g.tooth, tooth_setup);
   g.contacts = &g.pipeline_tooth->provider();
 }
@@ -356,7 +364,7 @@ std::unique_ptr<SceneRig> build_scene_rig(const Scene& scene, const SceneRigOpti
   place_tooth(scene, g);
   // The implementation of the tick (fast/registry.h): its tooth and its device model.
   const Implementation& impl = implementation(options.pipeline);
-  make_pipeline_tooth(scene, options, impl, g);
+  make_pipeline_tooth(scene, options, impl, backend == DeviceBackend::kHdapi, g);
   script_hand(scene, g);
   make_scene_pipeline(scene, options, impl, g);
   make_safety_chain(backend, g);
@@ -395,6 +403,7 @@ SceneRigOptions scene_rig_options(const RunOptions& options) {
   rig_options.skip_unneeded = options.skip_unneeded;
   rig_options.device = options.device;
   rig_options.hd_library = options.hd_library;
+  rig_options.realtime = options.realtime;
   return rig_options;
 }
 
@@ -754,6 +763,9 @@ void report_tooth(const SceneRig& rig, RunResult& res) {
   }
   if (contacts.pulp_exposed_tick() > 0) {
     res.pulp_exposed_at_s = contacts.pulp_exposed_tick() * rig.tick;
+  }
+  if (const auto* tooth = dynamic_cast<const ToothContactProvider*>(rig.contacts)) {
+    res.field_edit_late_publishes = tooth->field_edit_late_publishes();
   }
   res.drill_log = contacts.drill_log();
   res.tooth_after = VoxelRuns(rig.tooth_grid());

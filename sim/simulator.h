@@ -132,6 +132,10 @@ struct RunResult {
   // Scene time at the end of the tick whose drilling first opened the pulp (nominal ticks of
   // 1/tick_hz); empty if it never did.
   std::optional<double> pulp_exposed_at_s;
+  // Contact model "field", fast pipeline: field edits published after their tick t + L (a
+  // real-time loop whose edit worker was late; 0 in simulation). report.json
+  // field_edit_late_publishes.
+  long field_edit_late_publishes = 0;
   std::vector<DrillRecord> drill_log;  // every drilling tick (reference/tooth/tooth_contacts.h)
   double tick_s = 0.0;                 // nominal tick 1/tick_hz [s]
   std::vector<std::pair<std::string, StageStats>> timing;  // stages, "tick", "device_simulation"
@@ -186,6 +190,9 @@ struct SceneRigOptions {
   InjectedFault fault;
   bool float_device_terms = false;  // RunOptions::float_device_terms
   bool skip_unneeded = true;        // RunOptions::skip_unneeded
+  // The loop is paced by a clock (RunOptions::realtime; an hdapi device is real time anyway):
+  // the field edit's worker is never waited for (PipelineToothSetup::real_time).
+  bool realtime = false;
   // Adjusts the pipeline's configuration after the scene has set it (tests and benchmarks:
   // variants no scene file expresses, e.g. a method without an observer). Null: none.
   std::function<void(PipelineConfig&)> configure_pipeline;

@@ -43,11 +43,14 @@
 // Real-time: queries, mirror() and the edit neither allocate nor throw.
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <memory>
 #include <span>
+#include <thread>
+#include <utility>
 #include <vector>
 
 #include "reference/tooth/field_contact.h"
@@ -89,7 +92,51 @@ class FieldBricks {
   std::size_t brick_count() const { return bricks_.size() / kSamples; }
   std::size_t spare_bricks() const { return (bricks_.capacity() - bricks_.size()) / kSamples; }
 
+  // Copy-on-write (the edit on the worker thread, FieldEditWorker below). The servo reads the
+  // published table (index_: corners(), at(), sample(), lipschitz()); the worker reads and writes
+  // its own table, which names, for every brick a batch changed, a copy taken from a pool
+  // reserved here (a brick is copied once per batch; the published brick is only read); a batch
+  // ends with the list of its swaps (slot, copy, retired brick), which publish() writes into the
+  // published table (brick pointers, no sample copied). A retired brick goes back to the pool by
+  // recycle() (the worker, once the servo can no longer hold a pointer to it).
+  struct Swap {
+    std::size_t slot = 0;
+    std::int32_t brick = 0;    // the batch's copy
+    std::int32_t retired = 0;  // the brick it replaces (< 0: an all-outside or all-inside slot)
+  };
+  // Setup only (allocates): `pool` bricks for the copies (with the spare room of the
+  // constructor); the copy then takes its bricks from the pool only (no read-through slot).
+  void enable_copy_on_write(std::size_t pool);
+  bool copy_on_write() const { return cow_; }
+  // The worker's side (COW only, one thread; no allocation, no throw): the stored value of s in
+  // the worker's table; whether every brick holding s is a copy of this batch (taking the copies
+  // from the pool; false: the pool is empty, nothing written); after SampledField::raise of s,
+  // its value into those copies (worker_prepare first); the Lipschitz update on the worker's
+  // table; the batch's swaps; the end of a batch (its copies become ordinary bricks of the
+  // worker's table); a retired brick back to the pool.
+  float worker_at(int sx, int sy, int sz) const;
+  bool worker_prepare(int sx, int sy, int sz);
+  void worker_mirror(int sx, int sy, int sz);
+  void worker_include_cells(const int lo[3], const int hi[3]);
+  double worker_lipschitz() const { return worker_lipschitz_; }
+  std::span<const Swap> worker_swaps() const { return swaps_; }
+  void worker_end_batch();
+  void recycle(std::int32_t brick) { free_.push_back(brick); }  // within the pool's capacity
+  std::size_t pool_free() const { return free_.size(); }
+  // The servo's side: the batch's swaps into the published table and its Lipschitz constant.
+  void publish(std::span<const Swap> swaps, double lipschitz);
+
  private:
+  // The worst squared cell slope over the cells include_cells measures, on `table`.
+  double worst_cells(const std::int32_t* table, const int lo[3], const int hi[3]) const;
+  // The stored value of sample s on `table`.
+  float value_on(const std::int32_t* table, int sx, int sy, int sz) const;
+  // The 8 corners of cell s on `table` (no kept brick).
+  void corners_on(const std::int32_t* table, const int s[3], float c[8]) const;
+  // The bricks holding sample s (up to 8: its own and those whose apron holds it), as slots and
+  // local offsets; returns how many.
+  int holders(int sx, int sy, int sz, std::size_t sl[8], int local[8]) const;
+
   std::size_t slot(int bx, int by, int bz) const {
     return static_cast<std::size_t>(bx) +
            static_cast<std::size_t>(nb_) *
@@ -107,6 +154,14 @@ class FieldBricks {
   // The last brick read (temporal coherence): its slot and first sample.
   mutable std::size_t last_slot_ = std::numeric_limits<std::size_t>::max();
   mutable const float* last_brick_ = nullptr;
+  // Copy-on-write (above): the worker's table, its Lipschitz constant, which bricks are copies of
+  // the current batch, the batch's swaps, and the pool's free bricks.
+  bool cow_ = false;
+  std::vector<std::int32_t> worker_index_;
+  double worker_lipschitz_ = 1.0;
+  std::vector<std::uint8_t> fresh_;
+  std::vector<Swap> swaps_;
+  std::vector<std::int32_t> free_;
 };
 
 // The twin of dentsim::FieldSolid on FieldBricks (header comment). `tooth` and `bricks` must
@@ -193,26 +248,111 @@ bool edit_field_for_removed_voxels(SampledField* field, FieldBricks* bricks,
                                    VoxelDistanceCache* cache = nullptr,
                                    FieldEditCursor* cursor = nullptr, long budget = 0);
 
+// The field edit at a fixed latency L on a worker thread (the reference's specification:
+// dentsim::ToothContactProvider::set_field_edit_latency; docs/derivations/field_contact.md §8).
+// The servo hands each tick's removed voxels over (submit, from drill()); the worker, started
+// here, takes the batches in order: it removes the batch's voxels from its own copy of the tooth
+// (the grid right after that tick's drilling), subtracts them from `field` and from the bricks'
+// copies (FieldBricks copy-on-write: the servo keeps reading the published bricks), and marks
+// the batch done. publish(t), at the start of tick t's contacts(), swaps in the bricks of every
+// batch of tick <= t - L: in simulation it waits for the worker if it is not done (the run is
+// the reference's, bitwise, and repeatable); in real time it publishes a batch at the first tick
+// it is done and counts the late ones. Retired bricks return to the pool at the publish after
+// the one that retired them.
+// Handoff: single producer (the servo), single consumer (the worker), a ring of L + 64 batches
+// and three counters (submitted, done, published; release/acquire); the waits are futex waits on
+// 32-bit atomics (std::atomic<int>::wait: no mutex). Nothing on the servo's side allocates,
+// throws or locks; the worker neither allocates nor throws. The thread is joined by the
+// destructor.
+class FieldEditWorker {
+ public:
+  // `field` and `bricks` (copy-on-write enabled here) must outlive it; `tooth` is copied.
+  // `batch_capacity`: the most voxels a batch holds.
+  FieldEditWorker(SampledField* field, FieldBricks* bricks, const VoxelTooth& tooth, int latency,
+                  bool real_time, std::size_t batch_capacity);
+  ~FieldEditWorker();
+  FieldEditWorker(const FieldEditWorker&) = delete;
+  FieldEditWorker& operator=(const FieldEditWorker&) = delete;
+
+  // Servo: the batch of tick `tick`, to be filled (within its capacity) and then handed over by
+  // submit(); null when every slot of the ring holds an unpublished batch (a late real-time
+  // worker: the field keeps those voxels).
+  std::vector<std::size_t>* next_batch(long tick);
+  void submit();
+  // Servo, at the start of tick `tick`: publishes the due batches; adds their edit stats to
+  // `stats`, their incomplete edits to `*shortfalls`, the late publishes to `*late`.
+  void publish(long tick, FieldEditStats* stats, long* shortfalls, long* late);
+  int latency() const { return latency_; }
+  bool real_time() const { return real_time_; }
+  const VoxelDistanceCache& distance_cache() const { return cache_; }
+
+ private:
+  struct Batch {
+    long tick = 0;
+    std::vector<std::size_t> voxels;
+    std::vector<FieldBricks::Swap> swaps;
+    FieldEditStats stats;  // the edit's counts for this batch
+    double lipschitz = 1.0;
+    bool complete = true;
+  };
+  void run();  // the worker thread
+  void edit(Batch& b, int number);
+
+  SampledField* field_;
+  FieldBricks* bricks_;
+  VoxelTooth tooth_;  // the worker's: the grid after the batches it has edited
+  VoxelDistanceCache cache_;
+  FieldEditStats worker_stats_;  // the worker's running counts
+  int latency_;
+  bool real_time_;
+  std::vector<Batch> ring_;
+  // Retired bricks waiting for the publish after the one that retired them: (brick, batch).
+  std::vector<std::pair<std::int32_t, int>> retired_;
+  std::size_t retired_head_ = 0;
+  int submitted_here_ = 0, published_here_ = 0;  // the servo's copies of the counters
+  std::atomic<int> submitted_{0}, done_{0}, published_{0};
+  std::atomic<int> signal_{0};  // bumped by submit() and the destructor (wakes the worker)
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
 // The fast pipeline's provider of the field model: dentsim::ToothContactProvider with the field
 // steps replaced by their twins (everything else, the contact, the drilled voxels, the edit
-// queue, is the reference's code). Throws what the reference provider throws.
+// queue, is the reference's code). With setup.field_edit_latency > 0 and drilling, the edit runs
+// on a FieldEditWorker at that latency (bitwise the reference provider with
+// set_field_edit_latency(L)); 0: the reference's budget path on the servo thread. Throws what
+// the reference provider throws.
 class FieldContactProvider final : public dentsim::ToothContactProvider {
  public:
   FieldContactProvider(VoxelTooth& tooth, const PipelineToothSetup& setup);
+  ~FieldContactProvider() override;
   const FieldBricks& bricks() const { return bricks_; }
   const FieldSolid& solid() const { return solid_; }
-  const VoxelDistanceCache& distance_cache() const { return cache_; }
+  // The edit's kept voxel distances (the worker's when there is one: read them only with every
+  // batch published, e.g. after L ticks without drilling).
+  const VoxelDistanceCache& distance_cache() const {
+    return worker_ != nullptr ? worker_->distance_cache() : cache_;
+  }
+  double field_value(const Vec3& x) const override;
+  // The worker's thread, if any (tests).
+  const FieldEditWorker* worker() const { return worker_.get(); }
 
  protected:
   const Vec3& update_field_proxy(SurfaceProxy* proxy, const Vec3& c) override;
   bool edit_field(SampledField* field, std::span<const std::size_t> removed,
                   FieldEditStats* stats, FieldEditCursor* cursor, long budget) override;
+  void prepare_field_latency(int ticks) override;
+  void hand_off_field_batch(std::span<const std::size_t> removed, long tick) override;
+  void publish_field_edits(long tick) override;
 
  private:
   VoxelTooth& tooth_;
+  SampledField* field_;
+  bool real_time_;
   FieldBricks bricks_;
   FieldSolid solid_;
   VoxelDistanceCache cache_;
+  std::unique_ptr<FieldEditWorker> worker_;  // last: joined before the bricks go
 };
 
 // The fast pipeline's tooth for the field model (fast::make_fast_tooth). Throws InputError

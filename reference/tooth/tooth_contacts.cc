@@ -72,6 +72,7 @@ ToothContactProvider::ToothContactProvider(VoxelTooth& tooth, ToolTip tip, doubl
       edit_queue_.assign(kFieldEditQueue, 0);
     }
     field_ = std::make_unique<FieldSolid>(tooth, *field);
+    sampled_field_ = field;
   }
   drill_contacts_.reserve(kContactCapacity);
   drill_voxels_.reserve(kContactCapacity);
@@ -98,7 +99,11 @@ bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out
   }
   drill_contacts_.clear();
   drill_voxels_.clear();
-  if (edit_count_ > 0) edit_queued_voxels();  // the field follows the last ticks' cuts (bounded)
+  if (field_edit_latency_ > 0) {
+    publish_field_edits(ticks_);  // the batch of tick ticks_ - L (fixed latency)
+  } else if (edit_count_ > 0) {
+    edit_queued_voxels();  // the field follows the last ticks' cuts (bounded)
+  }
   const Vec3 c = proxy.x + proxy.R * tip_.offset_body;
   const Vec3& g = model_ == ContactModel::kField ? update_field_proxy(&surface_, c)
                                                  : update_sdf_proxy(&surface_, c);
@@ -175,6 +180,83 @@ void ToothContactProvider::set_field_edit_queue(std::size_t capacity) {
   }
   if (edited_field_ != nullptr) edit_queue_.assign(capacity, 0);
   edit_head_ = 0;
+  field_batch_limit_ = capacity;
+}
+
+void ToothContactProvider::sort_field_batch(std::size_t* first, std::size_t* last) const {
+  // At stride k > 1, a tick's voxels in the order of their boxes' centres floor(c / k), so that
+  // the edit subtracts the voxels of one coarse cell together (the batch, field_edit_core.h). In
+  // place: std::sort allocates nothing.
+  const int k = edited_field_ != nullptr ? edited_field_->stride() : 1;
+  if (k <= 1 || last - first < 2) return;
+  const std::size_t n = static_cast<std::size_t>(tooth_.grid().n);
+  const std::size_t nk = n / static_cast<std::size_t>(k) + 1;
+  const auto key = [n, nk, k](std::size_t v) {
+    const std::size_t kk = static_cast<std::size_t>(k);
+    return (v % n) / kk + nk * (((v / n) % n) / kk + nk * ((v / (n * n)) / kk));
+  };
+  std::sort(first, last, [&key](std::size_t a, std::size_t b) { return key(a) < key(b); });
+}
+
+void ToothContactProvider::set_field_edit_latency(int ticks) {
+  if (ticks < 0 || ticks_ > 0 || edit_count_ > 0) {
+    throw InputError("field edit latency of " + std::to_string(ticks) +
+                     " ticks: expected >= 0 (0: the budget path), set before the first tick");
+  }
+  if (edited_field_ == nullptr) return;  // no kField drilling: nothing is edited
+  field_edit_latency_ = ticks;
+  if (ticks > 0) prepare_field_latency(ticks);
+}
+
+void ToothContactProvider::prepare_field_latency(int ticks) {
+  // The batches not yet applied, oldest first: L of them when contacts() runs every tick (one
+  // more of room).
+  field_batches_.assign(static_cast<std::size_t>(ticks) + 1, FieldBatch{});
+  for (FieldBatch& b : field_batches_) b.voxels.reserve(kFieldEditQueue);
+  field_tooth_ = std::make_unique<VoxelTooth>(tooth_);  // the grid before the first cut
+}
+
+void ToothContactProvider::hand_off_field_batch(std::span<const std::size_t> removed, long tick) {
+  if (field_batch_count_ == field_batches_.size()) {  // never grow in the tick: the field
+                                                      // keeps them
+    field_edit_shortfalls_ += static_cast<long>(removed.size());
+    return;
+  }
+  FieldBatch& b =
+      field_batches_[(field_batch_head_ + field_batch_count_) % field_batches_.size()];
+  const std::size_t fit = std::min({removed.size(), field_batch_limit_, b.voxels.capacity()});
+  b.tick = tick;
+  b.voxels.assign(removed.begin(), removed.begin() + static_cast<std::ptrdiff_t>(fit));
+  field_edit_shortfalls_ += static_cast<long>(removed.size() - fit);
+  sort_field_batch(b.voxels.data(), b.voxels.data() + b.voxels.size());
+  ++field_batch_count_;
+}
+
+void ToothContactProvider::publish_field_edits(long tick) {
+  // Every batch of tick <= tick - L, in tick order (one, the batch of tick - L, when contacts()
+  // runs every tick).
+  while (field_batch_count_ > 0 &&
+         field_batches_[field_batch_head_].tick <= tick - field_edit_latency_) {
+    const FieldBatch& b = field_batches_[field_batch_head_];
+    // The grid right after that tick's drilling: the copy loses the batch's voxels (the batches
+    // are applied in tick order, and drilling is the only thing that changes the grid).
+    const std::size_t n = static_cast<std::size_t>(field_tooth_->grid().n);
+    for (const std::size_t v : b.voxels) {
+      field_tooth_->octree.remove_voxel(static_cast<int>(v % n), static_cast<int>((v / n) % n),
+                                        static_cast<int>(v / (n * n)));
+    }
+    if (!edit_field_for_removed_voxels(edited_field_, *field_tooth_, b.voxels, sd_,
+                                       &field_edits_)) {
+      ++field_edit_shortfalls_;
+    }
+    if (b.tick < tick - field_edit_latency_) ++field_edit_late_publishes_;
+    field_batch_head_ = (field_batch_head_ + 1) % field_batches_.size();
+    --field_batch_count_;
+  }
+}
+
+double ToothContactProvider::field_value(const Vec3& x) const {
+  return sampled_field_ != nullptr ? sampled_field_->value(x) : 0.0;
 }
 
 void ToothContactProvider::measure_anchor(const Vec3& c, const Vec3& g, bool in_contact) {
@@ -213,7 +295,9 @@ int ToothContactProvider::drill(std::span<const Contact> contacts, double T) {
                          &drill_state_, &removed_);
     drill_contacts_.clear();
     drill_voxels_.clear();
-    if (edited_field_ != nullptr) {  // queued for the next contacts() calls
+    if (edited_field_ != nullptr && field_edit_latency_ > 0) {
+      if (!removed_.empty()) hand_off_field_batch(removed_, ticks_);  // applied at ticks_ + L
+    } else if (edited_field_ != nullptr) {  // queued for the next contacts() calls
       // The next calls' budget, from this tick's length (header: budget(T)).
       const double budget = field_edit_rate_ * T;
       field_edit_budget_ = budget >= 1e15 ? std::numeric_limits<long>::max()
@@ -232,21 +316,11 @@ int ToothContactProvider::drill(std::span<const Contact> contacts, double T) {
       // so that the edit subtracts the voxels of one coarse cell together (the batch,
       // field_edit_core.h). In place (std::sort allocates nothing), each contiguous piece of
       // the ring; the voxels queued before keep their order (a paused group among them).
-      const int k = edited_field_->stride();
-      if (k > 1 && edit_count_ > count_before) {
-        const std::size_t n = static_cast<std::size_t>(tooth_.grid().n);
-        const std::size_t nk = n / static_cast<std::size_t>(k) + 1;
-        const auto key = [n, nk, k](std::size_t v) {
-          const std::size_t kk = static_cast<std::size_t>(k);
-          return (v % n) / kk + nk * (((v / n) % n) / kk + nk * ((v / (n * n)) / kk));
-        };
-        const auto by_box = [&key](std::size_t a, std::size_t b) { return key(a) < key(b); };
+      if (edit_count_ > count_before) {
         const std::size_t added = edit_count_ - count_before;
         const std::size_t piece = std::min(added, capacity - first);
-        std::sort(edit_queue_.begin() + static_cast<std::ptrdiff_t>(first),
-                  edit_queue_.begin() + static_cast<std::ptrdiff_t>(first + piece), by_box);
-        std::sort(edit_queue_.begin(),
-                  edit_queue_.begin() + static_cast<std::ptrdiff_t>(added - piece), by_box);
+        sort_field_batch(edit_queue_.data() + first, edit_queue_.data() + first + piece);
+        sort_field_batch(edit_queue_.data(), edit_queue_.data() + (added - piece));
       }
     }
   } else {

@@ -15,6 +15,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <span>
 #include <string>
@@ -168,8 +169,34 @@ class ToothContactProvider : public ToothProviderBase {
   // budget (each call subtracts every queued voxel); InputError otherwise.
   void set_field_edit_rate(double samples_per_second);
   // Setup only, with nothing queued: room for `capacity` >= 1 queued voxels (allocates; for tests
-  // that force a full queue); InputError otherwise.
+  // that force a full queue); InputError otherwise. With a latency (below), at most `capacity` of
+  // a tick's removed voxels enter its batch (the rest: shortfalls).
   void set_field_edit_queue(std::size_t capacity);
+
+  // The edit at a fixed latency (docs/derivations/field_contact.md §8), the alternative to the
+  // budget above: the voxels drill() removes at tick t (the batch of t, sorted by box as the queue
+  // sorts them) are subtracted, all of them, from the field that tick t + L's contacts() reads,
+  // evaluated on the grid as it was right after tick t's drilling (a copy of the tooth that loses
+  // each batch's voxels when its batch is applied: the same grid whatever the ticks between did).
+  // The field lags the voxels by L ticks, on the safe side (material the voxels lost, never a
+  // tunnel). Here (the specification) the batch is applied at the start of tick t + L's
+  // contacts(); the fast pipeline's provider computes it on a worker thread and publishes it then
+  // (fast/tooth/field.h). kFieldEditLatency: the fast pipeline's default L (the least that lets
+  // the worker overlap a servo tick: L = 1 would publish at the start of the tick after the
+  // drilling, before the worker could run).
+  static constexpr int kFieldEditLatency = 2;
+  // Setup only (before the first contacts() call; allocates: a copy of the tooth and L batches
+  // of kFieldEditQueue voxels): L >= 1 ticks, or 0 for the budget path (the default). Ignored
+  // without kField drilling. InputError for L < 0 or after the first tick.
+  void set_field_edit_latency(int ticks);
+  int field_edit_latency() const { return field_edit_latency_; }
+  // Batches published after their tick t + L (a real-time loop whose worker was not done: the
+  // fast provider publishes at the first tick it is; 0 in simulation when contacts() runs every
+  // tick).
+  long field_edit_late_publishes() const { return field_edit_late_publishes_; }
+  // phi(x) of the field as contacts() reads it (the sampled field here; the fast twin's published
+  // bricks: the same doubles, and no read of a field the worker is editing). kField only.
+  virtual double field_value(const Vec3& x) const;
 
  protected:
   // The field model's two steps on the field, which a twin with the same results may replace
@@ -184,6 +211,23 @@ class ToothContactProvider : public ToothProviderBase {
   // The edit takes `cursor` and `budget` as edit_field_for_removed_voxels does.
   virtual bool edit_field(SampledField* field, std::span<const std::size_t> removed,
                           FieldEditStats* stats, FieldEditCursor* cursor, long budget);
+  // The fixed latency (above): set_field_edit_latency's set-up (here: the batches and the copy of
+  // the tooth), drill()'s hand-off of tick `tick`'s removed voxels (nonempty), and the start of
+  // contacts() at tick `tick` (here: applies the batch of tick - L, if any). A twin may replace
+  // the three together (the fast provider's worker); the tick's two may not allocate or throw.
+  virtual void prepare_field_latency(int ticks);
+  virtual void hand_off_field_batch(std::span<const std::size_t> removed, long tick);
+  virtual void publish_field_edits(long tick);
+  // Sorts a tick's removed voxels in place by their boxes' centres at the field's stride (the
+  // batch, field_edit_core.h; nothing at stride 1). No allocation.
+  void sort_field_batch(std::size_t* first, std::size_t* last) const;
+  // At most this many of a tick's removed voxels in its batch (set_field_edit_queue).
+  std::size_t field_batch_limit() const { return field_batch_limit_; }
+  const VoxelTooth& voxel_tooth() const { return tooth_; }
+
+  FieldEditStats field_edits_;
+  long field_edit_shortfalls_ = 0;
+  long field_edit_late_publishes_ = 0;
 
  private:
   void measure_anchor(const Vec3& c, const Vec3& g, bool in_contact);
@@ -196,6 +240,7 @@ class ToothContactProvider : public ToothProviderBase {
   SurfaceProxy surface_;
   SignedDistanceFn sd_;
   std::unique_ptr<FieldSolid> field_;  // kField
+  const SampledField* sampled_field_ = nullptr;  // kField: the field field_ reads
   SampledField* edited_field_ = nullptr;  // kField with drilling: the field drill() edits
   // Removed voxels not yet subtracted: a ring, edit_count_ of them from [edit_head_]; the first
   // is subtracted in part when edit_cursor_.row > 0 (edit_cursor_.next is 0 between calls).
@@ -204,8 +249,17 @@ class ToothContactProvider : public ToothProviderBase {
   FieldEditCursor edit_cursor_;
   double field_edit_rate_ = kFieldEditSamplesPerSecond;
   long field_edit_budget_ = 1;
-  FieldEditStats field_edits_;
-  long field_edit_shortfalls_ = 0;
+  // The fixed latency (0: the budget path), the batches not yet applied (a ring, oldest at
+  // field_batch_head_), and the tooth as the applied batches left it.
+  int field_edit_latency_ = 0;
+  std::size_t field_batch_limit_ = kFieldEditQueue;
+  struct FieldBatch {
+    long tick = std::numeric_limits<long>::min();
+    std::vector<std::size_t> voxels;
+  };
+  std::vector<FieldBatch> field_batches_;
+  std::size_t field_batch_head_ = 0, field_batch_count_ = 0;
+  std::unique_ptr<VoxelTooth> field_tooth_;
   std::vector<Contact> drill_contacts_;  // kSurfaceProxy: the drilled voxels' force shares
   std::vector<std::size_t> drill_voxels_;
   AnchoredSpring anchored_;   // the held fraction of the last contacts() call
@@ -240,6 +294,13 @@ struct PipelineToothSetup {
   // The tooth's sampled field (contact model "field"; must outlive the tooth; drilling edits it),
   // else null.
   SampledField* field = nullptr;
+  // Contact model "field" with drilling, the fast pipeline: the edit's latency in ticks on the
+  // worker thread (ToothContactProvider::set_field_edit_latency; 0: the budget path on the servo
+  // thread). The reference pipeline keeps the budget path.
+  int field_edit_latency = ToothContactProvider::kFieldEditLatency;
+  // The loop runs in real time (an HDAPI device, --realtime): a late field edit is published at
+  // the first tick it is done instead of waited for (fast/tooth/field.h FieldEditWorker).
+  bool real_time = false;
 };
 
 // A PipelineTooth around a contact provider of type Provider, built in place from

@@ -245,7 +245,12 @@ bool same(const Contact& a, const Contact& b) {
          a.material == b.material;
 }
 
-void provider_equals_the_reference(int stride) {
+// latency 0: the budget path on the servo thread (both providers); L > 0: the reference's
+// synchronous edit at latency L against the fast provider's worker thread, with the reference
+// field and the fast provider's published bricks compared at every sample every
+// kCompareEvery ticks (the servo's view, while the worker may be editing the next batches).
+constexpr int kCompareEvery = 250;
+void provider_equals_the_reference(int stride, int latency = 0) {
   const VoxelGrid g = sphere_grid();
   VoxelTooth tooth_r(g), tooth_f(g);
   SampledField field_r = sphere_field(g, stride);
@@ -262,7 +267,24 @@ void provider_equals_the_reference(int stride) {
   setup.drilling = &drill;
   setup.contact_model = ContactModel::kField;
   setup.field = &field_f;
+  setup.field_edit_latency = latency;
+  if (latency > 0) reference.set_field_edit_latency(latency);
   fast::FieldContactProvider fast_provider(tooth_f, setup);
+  ASSERT_EQ(fast_provider.worker() != nullptr, latency > 0);
+  const int m = field_r.samples_per_axis();
+  // How many samples of the fast provider's published bricks differ from the reference field's.
+  const auto published_differ = [&] {
+    long differ = 0;
+    for (int z = 0; z < m; ++z) {
+      for (int y = 0; y < m; ++y) {
+        for (int x = 0; x < m; ++x) {
+          differ += fast_provider.bricks().at(x, y, z) != field_r.at(x, y, z);
+        }
+      }
+    }
+    return differ;
+  };
+  int compared = 0;
   std::vector<Contact> out_r, out_f;
   out_r.reserve(kContactCapacity);
   out_f.reserve(kContactCapacity);
@@ -286,11 +308,16 @@ void provider_equals_the_reference(int stride) {
       ASSERT_EQ(rr, fast_provider.drill(out_f, kT)) << "tick " << tick;
       contact_ticks += out_r.empty() ? 0 : 1;
       removed += rr;
+      if (latency > 0 && tick % kCompareEvery == kCompareEvery - 1) {
+        ASSERT_EQ(published_differ(), 0) << "tick " << tick;
+        ASSERT_EQ(fast_provider.bricks().lipschitz(), field_r.lipschitz()) << "tick " << tick;
+        ++compared;
+      }
     }
-    // Away until both fields have followed every cut.
+    // Away until both fields have followed every cut (L more ticks at a latency).
     Pose away;
     away.x = kTop + Vec3(0, 0, 4e-3);
-    while (reference.field_edits_pending() > 0) {
+    for (int k = 0; k < latency || reference.field_edits_pending() > 0; ++k) {
       reference.contacts(away, out_r);
       fast_provider.contacts(away, out_f);
     }
@@ -317,8 +344,11 @@ void provider_equals_the_reference(int stride) {
   EXPECT_EQ(a.work, b.work);
   EXPECT_GT(a.samples_raised, 0);
   EXPECT_EQ(reference.field_edit_shortfalls(), fast_provider.field_edit_shortfalls());
+  EXPECT_EQ(reference.field_edit_shortfalls(), 0);
+  EXPECT_EQ(reference.field_edit_late_publishes(), 0);
+  EXPECT_EQ(fast_provider.field_edit_late_publishes(), 0);  // simulation: waited for
+  EXPECT_EQ(compared, latency > 0 ? ticks / kCompareEvery : 0);
   EXPECT_EQ(fast_provider.bricks().lipschitz(), field_r.lipschitz());
-  const int m = field_r.samples_per_axis();
   long differ = 0;
   for (int z = 0; z < m; ++z) {
     for (int y = 0; y < m; ++y) {
@@ -342,6 +372,19 @@ void provider_equals_the_reference(int stride) {
 }
 TEST(FastFieldProvider, EqualsTheReferenceProviderWhileDrillingEditsTheField) {
   provider_equals_the_reference(1);
+}
+// The edit at a fixed latency (reference/tooth/tooth_contacts.h set_field_edit_latency): the
+// fast provider's worker thread against the reference's synchronous edit at the same L, the
+// published bricks equal to the reference field at every sample every 250 ticks, every tick's
+// contact and g bitwise equal, no allocation on either thread.
+TEST(FastFieldProvider, TheWorkerAtLatencyLEqualsTheReferenceEditAtL) {
+  provider_equals_the_reference(1, ToothContactProvider::kFieldEditLatency);
+}
+TEST(FastFieldProvider, TheWorkerAtLatencyLEqualsTheReferenceEditAtLAtStride2) {
+  provider_equals_the_reference(2, ToothContactProvider::kFieldEditLatency);
+}
+TEST(FastFieldProvider, TheWorkerAtLatency5EqualsTheReferenceEditAt5) {
+  provider_equals_the_reference(1, 5);
 }
 // The same at stride 2 (a sample at every other voxel centre): the edit at stride k (reference/
 // tooth/field_edit_core.h) is one code for both twins, so the twins agree bit for bit again.
