@@ -4,6 +4,7 @@
 #define EGL_EGLEXT_PROTOTYPES 1
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
+#include <stdlib.h>
 
 #include "reference/core/io.h"
 #include "view/gl/gl.h"
@@ -17,6 +18,12 @@ namespace {
 class EglContext {
  public:
   EglContext() {
+    // Mesa's llvmpipe rasterises on worker threads by default, keeping a second scene's bins
+    // alive while the first is drawn: at 512^3 the drill scene's pictures (the mesher's ~2 MiB
+    // buffers, flushed one at a time) peaked 40-80 MB higher that way (dentsim run's max RSS
+    // 382-420 MB against 337-345 MB with LP_NUM_THREADS=0, the same wall time and the same PNGs
+    // byte for byte; docs/benchmarks.md, stop 44). Drawn on this thread unless the user set it.
+    setenv("LP_NUM_THREADS", "0", /*overwrite=*/0);
     display_ = eglGetPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
     if (display_ == EGL_NO_DISPLAY || !eglInitialize(display_, nullptr, nullptr)) {
       throw InputError(
