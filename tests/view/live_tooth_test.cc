@@ -72,9 +72,11 @@ int differing_blocks(const SurfaceMesher& a, const SurfaceMesher& b) {
   for (std::size_t i = 0; i < std::min(a.blocks().size(), b.blocks().size()); ++i) {
     const BlockMesh& x = a.blocks()[i];
     const BlockMesh& y = b.blocks()[i];
+    // An empty block's data() may be null, which memcmp must not get (UBSan), even for 0 bytes.
     const bool same = x.vertices.size() == y.vertices.size() && x.indices == y.indices &&
-                      std::memcmp(x.vertices.data(), y.vertices.data(),
-                                  x.vertices.size() * sizeof(MeshVertex)) == 0;
+                      (x.vertices.empty() ||
+                       std::memcmp(x.vertices.data(), y.vertices.data(),
+                                   x.vertices.size() * sizeof(MeshVertex)) == 0);
     differ += !same;
   }
   return differ;
