@@ -127,6 +127,10 @@ void setup_bench(CLI::App& app) {
                   "REQUIRED unless --list: write DIR/pareto.png and DIR/time_vs_error.md");
   sub->add_option("--scene", o->config.scene, "Built-in scene or scene file")
       ->capture_default_str();
+  sub->add_option("--contact-model", o->config.contact_model,
+                  "Run every variant and the finest run with this tooth contact model (sdf, field, "
+                  "faces; default: the scene's)")
+      ->check(CLI::IsMember({"sdf", "field", "faces"}));
   sub->add_option("--duration", o->config.duration_s,
                   "Simulate this long instead of the scene's duration [s] (0 = the scene's)")
       ->check(finite_range(0.0, 3600.0));
@@ -159,6 +163,9 @@ void setup_bench(CLI::App& app) {
                   o->config.duration_s, o->config.finest.tick_hz, o->config.finest.resolution,
                   o->smooth_ms);
     o->command_line = "dentsim bench --scene " + o->config.scene + b;
+    if (!o->config.contact_model.empty()) {
+      o->command_line += " --contact-model " + o->config.contact_model;
+    }
     if (o->config.base.resolution != BenchSettings{}.resolution) {
       o->command_line += " --base-resolution " + std::to_string(o->config.base.resolution);
     }

@@ -89,7 +89,8 @@ struct Run {
 };
 
 Run simulate(const TimeVsErrorConfig& c, const BenchSettings& s) {
-  const nlohmann::json patch = {{"tick_hz", s.tick_hz}, {"tooth", {{"resolution", s.resolution}}}};
+  nlohmann::json patch = {{"tick_hz", s.tick_hz}, {"tooth", {{"resolution", s.resolution}}}};
+  if (!c.contact_model.empty()) patch["tooth"]["contact_model"] = c.contact_model;
   const Scene scene = load_scene_patched(c.scene, patch, "(" + name_of(s) + ")");
   RunOptions ro;
   ro.pipeline = s.pipeline;
@@ -330,6 +331,7 @@ TimeVsErrorResult run_time_vs_error(
 nlohmann::json time_vs_error_json(const TimeVsErrorResult& r) {
   nlohmann::json j;
   j["scene"] = r.config.scene;
+  j["contact_model"] = r.config.contact_model;  // "" = the scene's own
   j["duration_s"] = r.config.duration_s;
   j["compare_dt_s"] = r.config.compare_dt_s;
   j["smooth_s"] = r.config.smooth_s;

@@ -42,6 +42,9 @@ struct BenchSettings {
 struct TimeVsErrorConfig {
   std::string scene = "drill";  // built-in scene or scene file
   double duration_s = 0.0;      // > 0: instead of the scene's duration
+  // Non-empty: every run (the finest too) with the scene's tooth.contact_model set to this ("sdf",
+  // "field", "faces"; docs/scenes.md); empty: the scene's own.
+  std::string contact_model;
   BenchSettings base;           // the variants vary this one setting at a time
   BenchSettings finest{"reference", 8000.0, 512, false};  // the error's yardstick
   // Names of the variants to run (see time_vs_error_variant_names); empty = all. The finest

@@ -366,9 +366,17 @@ void ToothProviderBase::record_drill(std::span<const Contact> contacts, std::uin
 
 std::unique_ptr<PipelineTooth> make_reference_tooth(VoxelTooth& tooth,
                                                     const PipelineToothSetup& setup) {
-  return std::make_unique<ProviderTooth<ToothContactProvider>>(
+  auto t = std::make_unique<ProviderTooth<ToothContactProvider>>(
       tooth, setup, tooth, setup.tip, setup.k_tooth, setup.b_tooth, setup.drilling,
       setup.contact_model, &signed_distance, setup.field);
+  // The field model's edit at the same fixed latency as the fast pipeline's (applied here in one
+  // step at the start of tick t + L; ignored without field drilling), so that both pipelines run
+  // the same model and the reference's edit never falls behind a fine grid's cut.
+  if (setup.field_edit_latency > 0) {
+    static_cast<ToothContactProvider&>(t->provider())
+        .set_field_edit_latency(setup.field_edit_latency);
+  }
+  return t;
 }
 
 const AnchoredSpring* anchored_spring(const ContactProvider* env) {

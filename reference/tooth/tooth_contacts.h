@@ -294,9 +294,10 @@ struct PipelineToothSetup {
   // The tooth's sampled field (contact model "field"; must outlive the tooth; drilling edits it),
   // else null.
   SampledField* field = nullptr;
-  // Contact model "field" with drilling, the fast pipeline: the edit's latency in ticks on the
-  // worker thread (ToothContactProvider::set_field_edit_latency; 0: the budget path on the servo
-  // thread). The reference pipeline keeps the budget path.
+  // Contact model "field" with drilling: the edit's latency in ticks
+  // (ToothContactProvider::set_field_edit_latency; 0: the budget path on the servo thread). The
+  // fast pipeline edits on a worker thread; the reference applies each batch in one step at the
+  // start of tick t + L (make_reference_tooth), so both pipelines run the same model.
   int field_edit_latency = ToothContactProvider::kFieldEditLatency;
   // The loop runs in real time (an HDAPI device, --realtime): a late field edit is published at
   // the first tick it is done instead of waited for (fast/tooth/field.h FieldEditWorker).

@@ -51,6 +51,30 @@ TEST(TimeVsError, FastAgreesWithTheReferenceAtTheSameSettingsUntilTheCutDiverges
   EXPECT_LE(fast.removed_volume_error_mm3, 1e-12);
 }
 
+// The same with the field model (`--contact-model field`): both pipelines edit the field at the
+// same fixed latency (make_reference_tooth, fast/tooth/field.h), so they render the same contact
+// while the tool touches the tooth, and the finest run is the reference's at the same model.
+TEST(TimeVsError, FastAgreesWithTheReferenceOnTheFieldModel) {
+  TimeVsErrorConfig c;
+  c.duration_s = 1.2;
+  c.contact_model = "field";
+  c.finest = BenchSettings{"reference", 1000.0, 128, false};
+  c.only = {"fast@1kHz/r128"};
+  const TimeVsErrorResult r = run_time_vs_error(c);
+  ASSERT_EQ(r.variants.size(), 2u);
+  const BenchVariant& ref = variant(r, "reference@1kHz/r128");
+  const BenchVariant& fast = variant(r, "fast@1kHz/r128");
+  EXPECT_EQ(fast.ticks, ref.ticks);
+  EXPECT_GT(ref.max_force_n, 0.3);  // in contact
+  EXPECT_LT(fast.force_max_error_raw_n, 1e-9);
+  EXPECT_LE(fast.removed_volume_error_mm3, 1e-12);
+  EXPECT_EQ(time_vs_error_json(r)["contact_model"], "field");
+  // An unknown model is the scene loader's input error, naming the run.
+  TimeVsErrorConfig bad = c;
+  bad.contact_model = "voxels";
+  EXPECT_THROW(run_time_vs_error(bad), InputError);
+}
+
 TEST(TimeVsError, ForceErrorFallsAsTheServoRateRisesTowardTheFinest) {
   // Free space before the tool reaches the tooth (no discrete event): the hand-felt force
   // (10 ms mean) converges with the rate; the finest run at 8 kHz.
