@@ -115,7 +115,7 @@ ServoTimingStats ServoPacer::stats() const {
 void request_realtime(bool* sched_fifo, bool* memory_locked, std::string* warning) {
   std::string w;
   sched_param p{};
-  p.sched_priority = 80;
+  p.sched_priority = kRealtimePriority;
   const int rc = pthread_setschedparam(pthread_self(), SCHED_FIFO, &p);
   *sched_fifo = rc == 0;
   if (rc != 0) {

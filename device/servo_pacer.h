@@ -78,7 +78,11 @@ class ServoPacer {
   std::string warning_;
 };
 
-// Asks for SCHED_FIFO (priority 80) for the calling thread and locks the process's memory.
+// The servo thread's SCHED_FIFO priority (request_realtime); helper threads of the loop run
+// below it.
+inline constexpr int kRealtimePriority = 80;
+// Asks for SCHED_FIFO (priority kRealtimePriority) for the calling thread and locks the
+// process's memory.
 // Returns what was granted; `warning` says what was not and why (empty when everything was).
 void request_realtime(bool* sched_fifo, bool* memory_locked, std::string* warning);
 // Back to SCHED_OTHER and unlocked memory (what request_realtime granted).

@@ -125,10 +125,9 @@ double SceneRig::tip_depth(const Pose& pose) {
   if (field) {  // the "field" model: the tip sphere's overlap with the field's own solid
     // As the provider reads it (the fast pipeline's published bricks: the field itself may be
     // mid-edit on the provider's worker thread).
-    const auto* provider = dynamic_cast<const ToothContactProvider*>(contacts);
     const Vec3 c = pose.x + pose.R * tip.offset_body;
-    return std::max(0.0, tip.radius - (provider != nullptr ? provider->field_value(c)
-                                                           : field->value(c)));
+    return std::max(0.0, tip.radius - (tooth_provider != nullptr ? tooth_provider->field_value(c)
+                                                                 : field->value(c)));
   }
   tip_contacts(pose, &measure_contacts);
   double d = 0.0;
@@ -217,6 +216,7 @@ void make_pipeline_tooth(const Scene& scene, const SceneRigOptions& options,
   tooth_setup.real_time = hdapi || options.realtime;
   g.pipeline_tooth = impl.tooth(*g.tooth, tooth_setup);
   g.contacts = &g.pipeline_tooth->provider();
+  g.tooth_provider = dynamic_cast<ToothContactProvider*>(g.contacts);
 }
 
 // The scripted hand, its keyframes relative to the tooth's anchor.
@@ -446,12 +446,18 @@ struct RealtimePacing {
   std::unique_ptr<ServoPacer> pacer;
   bool fifo = false, locked = false;
 
-  void start(const RunOptions& options, double T) {
+  // `provider` (may be null): its helper thread (the field edit's worker) runs just below the
+  // servo's SCHED_FIFO priority where permitted, a warning where not.
+  void start(const RunOptions& options, double T, ToothContactProvider* provider) {
     if (!options.realtime) return;
     pacer = std::make_unique<ServoPacer>(T);
     std::string warning;
     if (options.realtime_priority) {
       request_realtime(&fifo, &locked, &warning);
+      if (fifo && provider != nullptr) {
+        const std::string worker = provider->set_worker_priority(kRealtimePriority - 1);
+        if (!worker.empty()) warning += (warning.empty() ? "" : "; ") + worker;
+      }
       if (!warning.empty()) std::fprintf(stderr, "dentsim run: warning: %s\n", warning.c_str());
     }
     pacer->set_privileges(fifo, locked, warning);
@@ -764,8 +770,9 @@ void report_tooth(const SceneRig& rig, RunResult& res) {
   if (contacts.pulp_exposed_tick() > 0) {
     res.pulp_exposed_at_s = contacts.pulp_exposed_tick() * rig.tick;
   }
-  if (const auto* tooth = dynamic_cast<const ToothContactProvider*>(rig.contacts)) {
+  if (const ToothContactProvider* tooth = rig.tooth_provider) {
     res.field_edit_late_publishes = tooth->field_edit_late_publishes();
+    res.field_edit_servo_takeovers = tooth->field_edit_servo_takeovers();
   }
   res.drill_log = contacts.drill_log();
   res.tooth_after = VoxelRuns(rig.tooth_grid());
@@ -818,7 +825,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
                          " at t = " + std::to_string(loop.fault_time()) + " s");
   }
   RealtimePacing pacing;
-  pacing.start(options, T);
+  pacing.start(options, T, rig->tooth_provider);
   // A device with its own clock (hdapi) runs until its clock has covered the duration (its ticks
   // need not be the nominal ones); the simulated device for the nominal number of ticks.
   RunSpan span;

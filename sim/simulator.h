@@ -136,6 +136,10 @@ struct RunResult {
   // real-time loop whose edit worker was late; 0 in simulation). report.json
   // field_edit_late_publishes.
   long field_edit_late_publishes = 0;
+  // Contact model "field", fast pipeline, simulation: field edits the servo did itself at their
+  // tick t + L because the worker had not started them (docs/derivations/field_contact.md §8).
+  // report.json field_edit_servo_takeovers.
+  long field_edit_servo_takeovers = 0;
   std::vector<DrillRecord> drill_log;  // every drilling tick (reference/tooth/tooth_contacts.h)
   double tick_s = 0.0;                 // nominal tick 1/tick_hz [s]
   std::vector<std::pair<std::string, StageStats>> timing;  // stages, "tick", "device_simulation"
@@ -220,6 +224,9 @@ struct SceneRig {
   ToolTip tip;
   double k_tooth = 0.0, b_tooth = 0.0;
   ToothProviderBase* contacts = nullptr;  // pipeline_tooth's provider
+  // The same provider as a ToothContactProvider (the surface proxy and field models, both
+  // pipelines), else null: resolved once at setup.
+  ToothContactProvider* tooth_provider = nullptr;
   std::unique_ptr<ScriptedHand> hand;
   std::unique_ptr<GraspMassModel> grasp;
   std::unique_ptr<Pipeline> pipeline;

@@ -1,10 +1,14 @@
 // The fast twin of the "field" contact model (fast/tooth/field.h).
 #include "fast/tooth/field.h"
 
+#include <pthread.h>
+#include <sched.h>
+
 #include <algorithm>
 #include <climits>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 
 #include "fast/tooth/sdf.h"
 #include "reference/core/io.h"
@@ -551,16 +555,32 @@ void FieldEditWorker::submit() {
   signal_.notify_one();
 }
 
-void FieldEditWorker::publish(long tick, FieldEditStats* stats, long* shortfalls, long* late) {
+void FieldEditWorker::publish(long tick, FieldEditStats* stats, long* shortfalls, long* late,
+                              long* takeovers) {
+  bool took_over = false;  // at most one batch's edit in this tick
   while (published_here_ < submitted_here_) {
     Batch& b = ring_[static_cast<std::size_t>(published_here_) % ring_.size()];
     if (b.tick > tick - latency_) return;  // not due yet (the later ones neither)
     int done = done_.load(std::memory_order_acquire);
     if (done <= published_here_) {
       if (real_time_) return;  // published at the first tick it is done (counted late then)
-      while (done <= published_here_) {  // simulation: wait for it (the only blocking)
-        done_.wait(done, std::memory_order_acquire);
-        done = done_.load(std::memory_order_acquire);
+      // Simulation. done == published_here_: every earlier batch is done (and published), so
+      // whoever claims this one edits it on the state they left.
+      int unclaimed = published_here_;
+      if (!took_over &&
+          claimed_.compare_exchange_strong(unclaimed, published_here_ + 1,
+                                           std::memory_order_acq_rel,
+                                           std::memory_order_acquire)) {
+        edit(b, published_here_);  // the worker has not started it: the servo does it
+        done_.store(published_here_ + 1, std::memory_order_release);
+        done_.notify_all();  // the worker waits for it when it lost the claim
+        took_over = true;
+        ++*takeovers;
+      } else {
+        while (done <= published_here_) {  // the worker is on it: the rest of one batch
+          done_.wait(done, std::memory_order_acquire);
+          done = done_.load(std::memory_order_acquire);
+        }
       }
     }
     bricks_->publish(b.swaps, b.lipschitz);
@@ -573,18 +593,47 @@ void FieldEditWorker::publish(long tick, FieldEditStats* stats, long* shortfalls
 }
 
 void FieldEditWorker::run() {
-  int next = 0;
   for (;;) {
     const int seen = signal_.load(std::memory_order_acquire);
     if (stop_.load(std::memory_order_acquire)) return;
-    if (submitted_.load(std::memory_order_acquire) == next) {
+    const int next = done_.load(std::memory_order_acquire);  // every earlier batch is done
+    if (submitted_.load(std::memory_order_acquire) <= next ||
+        held_.load(std::memory_order_acquire)) {
       signal_.wait(seen, std::memory_order_acquire);
       continue;
     }
+    int unclaimed = next;
+    if (!claimed_.compare_exchange_strong(unclaimed, next + 1, std::memory_order_acq_rel,
+                                          std::memory_order_acquire)) {
+      done_.wait(next, std::memory_order_acquire);  // the servo took it over: until it is done
+      continue;
+    }
     edit(ring_[static_cast<std::size_t>(next) % ring_.size()], next);
-    ++next;
-    done_.store(next, std::memory_order_release);
-    done_.notify_one();
+    worker_batches_.fetch_add(1, std::memory_order_relaxed);
+    done_.store(next + 1, std::memory_order_release);
+    done_.notify_all();
+  }
+}
+
+std::string FieldEditWorker::set_fifo_priority(int priority) {
+  sched_param p{};
+  p.sched_priority = priority;
+  const int rc = pthread_setschedparam(thread_.native_handle(), SCHED_FIFO, &p);
+  if (rc == 0) return {};
+  return "the field edit's worker thread: SCHED_FIFO " + std::to_string(priority) + " refused (" +
+         std::strerror(rc) + "): it runs at normal priority";
+}
+
+void FieldEditWorker::hold(bool held) {
+  held_.store(held, std::memory_order_release);
+  signal_.fetch_add(1, std::memory_order_release);
+  signal_.notify_one();
+}
+
+void FieldEditWorker::wait_until_done() const {
+  for (int done = done_.load(std::memory_order_acquire); done < submitted_here_;
+       done = done_.load(std::memory_order_acquire)) {
+    done_.wait(done, std::memory_order_acquire);
   }
 }
 
@@ -674,7 +723,12 @@ void FieldContactProvider::hand_off_field_batch(std::span<const std::size_t> rem
 }
 
 void FieldContactProvider::publish_field_edits(long tick) {
-  worker_->publish(tick, &field_edits_, &field_edit_shortfalls_, &field_edit_late_publishes_);
+  worker_->publish(tick, &field_edits_, &field_edit_shortfalls_, &field_edit_late_publishes_,
+                   &field_edit_servo_takeovers_);
+}
+
+std::string FieldContactProvider::set_worker_priority(int priority) {
+  return worker_ != nullptr ? worker_->set_fifo_priority(priority) : std::string();
 }
 
 std::unique_ptr<PipelineTooth> make_fast_field_tooth(VoxelTooth& tooth,

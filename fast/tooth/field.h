@@ -49,6 +49,7 @@
 #include <limits>
 #include <memory>
 #include <span>
+#include <string>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -255,14 +256,20 @@ bool edit_field_for_removed_voxels(SampledField* field, FieldBricks* bricks,
 // (the grid right after that tick's drilling), subtracts them from `field` and from the bricks'
 // copies (FieldBricks copy-on-write: the servo keeps reading the published bricks), and marks
 // the batch done. publish(t), at the start of tick t's contacts(), swaps in the bricks of every
-// batch of tick <= t - L: in simulation it waits for the worker if it is not done (the run is
-// the reference's, bitwise, and repeatable); in real time it publishes a batch at the first tick
-// it is done and counts the late ones. Retired bricks return to the pool at the publish after
-// the one that retired them.
-// Handoff: single producer (the servo), single consumer (the worker), a ring of L + 64 batches
-// and three counters (submitted, done, published; release/acquire); the waits are futex waits on
-// 32-bit atomics (std::atomic<int>::wait: no mutex). Nothing on the servo's side allocates,
-// throws or locks; the worker neither allocates nor throws. The thread is joined by the
+// batch of tick <= t - L. In simulation a due batch that is not done is the servo's to finish:
+// if the worker has not started it, the servo does it itself (the same edit on the same state,
+// so the run is the reference's, bitwise, and repeatable; counted as a takeover, at most one a
+// publish), else it waits for the worker to finish it (the rest of one batch). In real time it
+// publishes a batch at the first tick it is done and counts the late ones. Retired bricks return
+// to the pool at the publish after the one that retired them.
+// Handoff: single producer (the servo), a ring of L + 64 batches and four counters (submitted,
+// claimed, done, published; release/acquire). Exactly one thread edits each batch: it claims
+// batch k by moving `claimed` from k to k + 1 (compare-and-swap) while done == k, so the batches'
+// edits run one at a time, in order, each on the state the last one left (the tooth's copy, the
+// field, the bricks' pool and table, the kept distances), whichever thread did it; the worker
+// that loses a claim waits for done to pass k. The waits are futex waits on 32-bit atomics
+// (std::atomic<int>::wait: no mutex). Nothing on the servo's side allocates, throws or locks
+// (a takeover included); the worker neither allocates nor throws. The thread is joined by the
 // destructor.
 class FieldEditWorker {
  public:
@@ -280,11 +287,22 @@ class FieldEditWorker {
   std::vector<std::size_t>* next_batch(long tick);
   void submit();
   // Servo, at the start of tick `tick`: publishes the due batches; adds their edit stats to
-  // `stats`, their incomplete edits to `*shortfalls`, the late publishes to `*late`.
-  void publish(long tick, FieldEditStats* stats, long* shortfalls, long* late);
+  // `stats`, their incomplete edits to `*shortfalls`, the late publishes to `*late` (real time),
+  // the batches the servo edited itself to `*takeovers` (simulation).
+  void publish(long tick, FieldEditStats* stats, long* shortfalls, long* late, long* takeovers);
   int latency() const { return latency_; }
   bool real_time() const { return real_time_; }
   const VoxelDistanceCache& distance_cache() const { return cache_; }
+  // Setup (a real-time loop): the worker thread at SCHED_FIFO `priority` (just below its
+  // servo's). Returns "" when granted, else why not (the thread keeps its policy).
+  std::string set_fifo_priority(int priority);
+  // The batches the worker thread edited (the rest of the published ones the servo did); read
+  // them with every batch published.
+  int worker_batches() const { return worker_batches_.load(std::memory_order_acquire); }
+  // Tests: while held, the worker claims no batch (the servo does each when it is due);
+  // wait_until_done() blocks until every submitted batch is done (not while held).
+  void hold(bool held);
+  void wait_until_done() const;
 
  private:
   struct Batch {
@@ -296,13 +314,15 @@ class FieldEditWorker {
     bool complete = true;
   };
   void run();  // the worker thread
+  // Batch `number`'s edit, by whichever thread claimed it (the state it edits is one batch's at a
+  // time: the claims are in order, each after the last batch is done).
   void edit(Batch& b, int number);
 
   SampledField* field_;
   FieldBricks* bricks_;
-  VoxelTooth tooth_;  // the worker's: the grid after the batches it has edited
+  VoxelTooth tooth_;  // the edit's: the grid after the batches edited so far
   VoxelDistanceCache cache_;
-  FieldEditStats worker_stats_;  // the worker's running counts
+  FieldEditStats worker_stats_;  // the edit's running counts
   int latency_;
   bool real_time_;
   std::vector<Batch> ring_;
@@ -310,9 +330,10 @@ class FieldEditWorker {
   std::vector<std::pair<std::int32_t, int>> retired_;
   std::size_t retired_head_ = 0;
   int submitted_here_ = 0, published_here_ = 0;  // the servo's copies of the counters
-  std::atomic<int> submitted_{0}, done_{0}, published_{0};
-  std::atomic<int> signal_{0};  // bumped by submit() and the destructor (wakes the worker)
-  std::atomic<bool> stop_{false};
+  std::atomic<int> submitted_{0}, claimed_{0}, done_{0}, published_{0};
+  std::atomic<int> signal_{0};  // bumped by submit(), hold() and the destructor (wakes the worker)
+  std::atomic<int> worker_batches_{0};
+  std::atomic<bool> stop_{false}, held_{false};
   std::thread thread_;
 };
 
@@ -334,8 +355,10 @@ class FieldContactProvider final : public dentsim::ToothContactProvider {
     return worker_ != nullptr ? worker_->distance_cache() : cache_;
   }
   double field_value(const Vec3& x) const override;
+  std::string set_worker_priority(int priority) override;
   // The worker's thread, if any (tests).
   const FieldEditWorker* worker() const { return worker_.get(); }
+  FieldEditWorker* worker() { return worker_.get(); }
 
  protected:
   const Vec3& update_field_proxy(SurfaceProxy* proxy, const Vec3& c) override;

@@ -194,6 +194,13 @@ class ToothContactProvider : public ToothProviderBase {
   // fast provider publishes at the first tick it is; 0 in simulation when contacts() runs every
   // tick).
   long field_edit_late_publishes() const { return field_edit_late_publishes_; }
+  // Batches the servo edited itself because the fast provider's worker had not started them at
+  // tick t + L (simulation; 0 here, where the servo applies every batch).
+  long field_edit_servo_takeovers() const { return field_edit_servo_takeovers_; }
+  // Setup, a real-time loop: the provider's helper thread (the fast provider's field edit
+  // worker; none here) at SCHED_FIFO `priority`. Returns "" when granted or when there is no such
+  // thread, else why not.
+  virtual std::string set_worker_priority(int /*priority*/) { return {}; }
   // phi(x) of the field as contacts() reads it (the sampled field here; the fast twin's published
   // bricks: the same doubles, and no read of a field the worker is editing). kField only.
   virtual double field_value(const Vec3& x) const;
@@ -228,6 +235,7 @@ class ToothContactProvider : public ToothProviderBase {
   FieldEditStats field_edits_;
   long field_edit_shortfalls_ = 0;
   long field_edit_late_publishes_ = 0;
+  long field_edit_servo_takeovers_ = 0;
 
  private:
   void measure_anchor(const Vec3& c, const Vec3& g, bool in_contact);

@@ -249,8 +249,14 @@ bool same(const Contact& a, const Contact& b) {
 // synchronous edit at latency L against the fast provider's worker thread, with the reference
 // field and the fast provider's published bricks compared at every sample every
 // kCompareEvery ticks (the servo's view, while the worker may be editing the next batches).
+// `worker` (L > 0): kRuns, the worker runs as it may (the servo takes over the batches it has
+// not started when they are due); kHeld, the worker never claims a batch (the servo does every
+// one: all takeovers); kMixed, held for kMixedSpan ticks, then let go for kMixedSpan ticks and
+// waited for after each drilling tick (it does those ticks' batches), and so on: both kinds.
+enum class Worker { kRuns, kHeld, kMixed };
 constexpr int kCompareEvery = 250;
-void provider_equals_the_reference(int stride, int latency = 0) {
+constexpr int kMixedSpan = 7;
+void provider_equals_the_reference(int stride, int latency = 0, Worker worker = Worker::kRuns) {
   const VoxelGrid g = sphere_grid();
   VoxelTooth tooth_r(g), tooth_f(g);
   SampledField field_r = sphere_field(g, stride);
@@ -271,6 +277,7 @@ void provider_equals_the_reference(int stride, int latency = 0) {
   if (latency > 0) reference.set_field_edit_latency(latency);
   fast::FieldContactProvider fast_provider(tooth_f, setup);
   ASSERT_EQ(fast_provider.worker() != nullptr, latency > 0);
+  if (worker == Worker::kHeld) fast_provider.worker()->hold(true);
   const int m = field_r.samples_per_axis();
   // How many samples of the fast provider's published bricks differ from the reference field's.
   const auto published_differ = [&] {
@@ -288,11 +295,13 @@ void provider_equals_the_reference(int stride, int latency = 0) {
   std::vector<Contact> out_r, out_f;
   out_r.reserve(kContactCapacity);
   out_f.reserve(kContactCapacity);
-  long contact_ticks = 0, removed = 0, allocations = 0;
+  long contact_ticks = 0, removed = 0, allocations = 0, batches = 0;
   const int ticks = kFree + kDown + kSideways + kAway;
   {
     testing::AllocationScope scope;
     for (int tick = 0; tick < ticks; ++tick) {
+      const bool held = worker == Worker::kMixed && (tick / kMixedSpan) % 2 == 0;
+      if (worker == Worker::kMixed) fast_provider.worker()->hold(held);
       Pose pose;
       pose.x = bur(tick);
       const bool ok_r = reference.contacts(pose, out_r);
@@ -308,6 +317,8 @@ void provider_equals_the_reference(int stride, int latency = 0) {
       ASSERT_EQ(rr, fast_provider.drill(out_f, kT)) << "tick " << tick;
       contact_ticks += out_r.empty() ? 0 : 1;
       removed += rr;
+      batches += rr > 0 ? 1 : 0;  // a batch handed over
+      if (worker == Worker::kMixed && !held) fast_provider.worker()->wait_until_done();
       if (latency > 0 && tick % kCompareEvery == kCompareEvery - 1) {
         ASSERT_EQ(published_differ(), 0) << "tick " << tick;
         ASSERT_EQ(fast_provider.bricks().lipschitz(), field_r.lipschitz()) << "tick " << tick;
@@ -347,6 +358,25 @@ void provider_equals_the_reference(int stride, int latency = 0) {
   EXPECT_EQ(reference.field_edit_shortfalls(), 0);
   EXPECT_EQ(reference.field_edit_late_publishes(), 0);
   EXPECT_EQ(fast_provider.field_edit_late_publishes(), 0);  // simulation: waited for
+  EXPECT_EQ(reference.field_edit_servo_takeovers(), 0);
+  if (latency > 0) {
+    // Exactly once: each batch edited by one thread (and its edit counted once: the counts above
+    // equal the reference's).
+    const long takeovers = fast_provider.field_edit_servo_takeovers();
+    const long by_worker = fast_provider.worker()->worker_batches();
+    std::printf("%ld batches: %ld edited by the worker, %ld taken over by the servo\n", batches,
+                by_worker, takeovers);
+    EXPECT_EQ(takeovers + by_worker, batches);
+    if (worker == Worker::kHeld) {
+      EXPECT_EQ(takeovers, batches);
+    }
+    if (worker == Worker::kMixed) {
+      EXPECT_GT(takeovers, 0);
+      EXPECT_GT(by_worker, 0);
+    }
+  } else {
+    EXPECT_EQ(fast_provider.field_edit_servo_takeovers(), 0);
+  }
   EXPECT_EQ(compared, latency > 0 ? ticks / kCompareEvery : 0);
   EXPECT_EQ(fast_provider.bricks().lipschitz(), field_r.lipschitz());
   long differ = 0;
@@ -385,6 +415,25 @@ TEST(FastFieldProvider, TheWorkerAtLatencyLEqualsTheReferenceEditAtLAtStride2) {
 }
 TEST(FastFieldProvider, TheWorkerAtLatency5EqualsTheReferenceEditAt5) {
   provider_equals_the_reference(1, 5);
+}
+// The servo takes over a late batch (fast/tooth/field.h FieldEditWorker::publish): the worker
+// held back, the servo edits every batch at its tick t + L itself; and a mix of the servo's and
+// the worker's batches. Every tick's contact, g and removed voxels, the published bricks and the
+// final field bitwise the reference's, each batch edited once, no allocation on either thread.
+TEST(FastFieldProvider, TheServoTakingOverEveryBatchEqualsTheReferenceEditAtL) {
+  provider_equals_the_reference(1, ToothContactProvider::kFieldEditLatency, Worker::kHeld);
+}
+TEST(FastFieldProvider, TheServoTakingOverEveryBatchEqualsTheReferenceEditAt5) {
+  provider_equals_the_reference(1, 5, Worker::kHeld);
+}
+TEST(FastFieldProvider, TakeoversMixedWithWorkerBatchesEqualTheReferenceEditAtL) {
+  provider_equals_the_reference(1, ToothContactProvider::kFieldEditLatency, Worker::kMixed);
+}
+TEST(FastFieldProvider, TakeoversMixedWithWorkerBatchesEqualTheReferenceEditAt5) {
+  provider_equals_the_reference(1, 5, Worker::kMixed);
+}
+TEST(FastFieldProvider, TakeoversMixedWithWorkerBatchesEqualTheReferenceAtStride2) {
+  provider_equals_the_reference(2, ToothContactProvider::kFieldEditLatency, Worker::kMixed);
 }
 // The same at stride 2 (a sample at every other voxel centre): the edit at stride k (reference/
 // tooth/field_edit_core.h) is one code for both twins, so the twins agree bit for bit again.

@@ -1,7 +1,8 @@
 // Heap-allocation counter for the no-allocation tests (Drake's LimitMalloc idea): replaces the
 // global operator new/delete of the test executable and, outside the sanitizer build, malloc
 // itself, since Eigen's dynamic matrices call std::malloc directly (glibc's __libc_malloc does the
-// work; ASan intercepts malloc, so there only operator new is counted: kCountsMalloc says which).
+// work; ASan and TSan intercept malloc, so there only operator new is counted: kCountsMalloc says
+// which).
 // Include it in ONE translation unit of a test executable (each tests/<area>/<name>_test.cc is its
 // own executable).
 //
@@ -24,7 +25,7 @@ namespace dentsim::testing {
 inline std::atomic<bool> g_count_allocs{false};
 inline std::atomic<long> g_allocs{0};
 
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 inline constexpr bool kCountsMalloc = false;
 #else
 inline constexpr bool kCountsMalloc = true;
@@ -47,7 +48,7 @@ using dentsim::testing::g_allocs;
 using dentsim::testing::g_count_allocs;
 using dentsim::testing::kCountsMalloc;
 
-#if !defined(__SANITIZE_ADDRESS__)
+#if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
 extern "C" void* __libc_malloc(std::size_t n);
 extern "C" void* malloc(std::size_t n) noexcept {
   if (dentsim::testing::g_count_allocs.load(std::memory_order_relaxed)) {
