@@ -99,6 +99,21 @@ TEST(FastSignedDistance, TiesAreDecidedAlike) {
 
 // RecallingVoxelSolid answers a point asked again from what it remembers: with every reach,
 // shorter or longer than the remembered one's, found or not, its answer is the reference's.
+// One query of `solid` against the reference's: everything bitwise equal, counted.
+void check_query(const VoxelTooth& tooth, const fast::RecallingVoxelSolid& solid, const Vec3& x,
+                 double r, long* asked, long* found, long* mismatches) {
+  const SignedDistance want = signed_distance(tooth, x, r);
+  const SignedDistance got = solid.distance(x, r);
+  ++*asked;
+  if (want.found) ++*found;
+  if (want.phi != got.phi || want.found != got.found || want.nearest != got.nearest ||
+      want.voxel != got.voxel) {
+    ++*mismatches;
+    ADD_FAILURE() << "phi " << want.phi << " vs " << got.phi << " at " << x.transpose()
+                  << " reach " << r;
+  }
+}
+
 TEST(FastSignedDistance, RememberedAnswersAreTheQuerysOwn) {
   auto rig = molar_rig();
   const VoxelTooth& tooth = *rig->tooth;
@@ -114,16 +129,7 @@ TEST(FastSignedDistance, RememberedAnswersAreTheQuerysOwn) {
     for (int k = 0; k < 24; ++k) {  // the same few points, every reach in turn
       const Vec3& x = points[k % 3];
       const double r = reach(rng);
-      const SignedDistance want = signed_distance(tooth, x, r);
-      const SignedDistance got = solid.distance(x, r);
-      ++asked;
-      if (want.found) ++found;
-      if (want.phi != got.phi || want.found != got.found || want.nearest != got.nearest ||
-          want.voxel != got.voxel) {
-        ++mismatches;
-        ADD_FAILURE() << "phi " << want.phi << " vs " << got.phi << " at " << x.transpose()
-                      << " reach " << r;
-      }
+      check_query(tooth, solid, x, r, &asked, &found, &mismatches);
     }
   }
   EXPECT_EQ(mismatches, 0);
@@ -200,16 +206,7 @@ TEST(FastSignedDistance, CertifiedAnswersAreTheQuerysOwn) {
     for (int k = 0; k < 4; ++k) {
       x += Vec3(walk(rng), walk(rng), walk(rng));
       const double r = reach(rng);
-      const SignedDistance want = signed_distance(tooth, x, r);
-      const SignedDistance got = solid.distance(x, r);
-      ++asked;
-      if (want.found) ++found;
-      if (want.phi != got.phi || want.found != got.found || want.nearest != got.nearest ||
-          want.voxel != got.voxel) {
-        ++mismatches;
-        ADD_FAILURE() << "phi " << want.phi << " vs " << got.phi << " at " << x.transpose()
-                      << " reach " << r;
-      }
+      check_query(tooth, solid, x, r, &asked, &found, &mismatches);
     }
   }
   std::printf("%ld queries, %ld found, %ld certified, %ld searched\n", asked, found,
