@@ -21,7 +21,9 @@ SignedDistance outside_distance(const FullOctree& octree, const Vec3& x, double 
   const VoxelGrid& grid = octree.grid();
   const int n = grid.n;
   const int L = octree.levels();
-  if (n == 0 || !octree.occupied(0, 0, 0, 0)) return out;
+  // The root's occupancy (L > 0 here: the callers take the reference's descent for L = 0) is its
+  // child mask, read directly (FullOctree::occupied computes the node index, ~170 instructions).
+  if (n == 0 || octree.masks()[0] == 0) return out;
   double best2 = reach * reach;
   const int root_lo[3] = {0, 0, 0}, root_hi[3] = {n, n, n};
   const double root2 = sdf_detail::box_distance2(grid, root_lo, root_hi, x, nullptr);
@@ -114,7 +116,34 @@ SignedDistance signed_distance(const VoxelTooth& tooth, const Vec3& x, double re
   return signed_distance(tooth, x, reach, &best2);
 }
 
+void RecallingVoxelSolid::remember(const Vec3& x, double reach, double best2,
+                                   const SignedDistance& sd) const {
+  memo_[next_] = {x, reach, best2, sd};
+  next_ = (next_ + 1) % kEntries;
+  count_ = std::max(count_, next_ == 0 ? kEntries : next_);
+}
+
+SignedDistance RecallingVoxelSolid::certified_search(const Vec3& x, double reach) const {
+  const VoxelGrid& grid = tooth_.grid();
+  const double wide = FreeSpaceCertificate::widened(reach, grid.voxel_size);
+  double best2;
+  const SignedDistance sd = outside_distance(tooth_.octree, x, wide, &best2);
+  certificate_->record(x, sd.found ? sd.phi : wide, grid.voxel_size);
+  remember(x, wide, best2, sd);
+  // The answer within `reach` from the answer within wide >= reach (the memo's rule, below).
+  if (best2 < reach * reach) return sd;
+  SignedDistance none;
+  none.phi = reach;
+  return none;
+}
+
 SignedDistance RecallingVoxelSolid::distance(const Vec3& x, double reach) const {
+  if (certificate_ != nullptr && certificate_->certifies(x, reach)) {
+    certificate_->count(true);
+    SignedDistance none;
+    none.phi = reach;
+    return none;
+  }
   for (int i = 0; i < count_; ++i) {
     const Entry& e = memo_[i];
     if (!(e.x == x)) continue;
@@ -131,13 +160,18 @@ SignedDistance RecallingVoxelSolid::distance(const Vec3& x, double reach) const 
       return none;
     }
   }
+  if (certificate_ != nullptr && reach > 0.0 && tooth_.octree.levels() > 0) {
+    const VoxelGrid& grid = tooth_.grid();
+    int idx[3];
+    if (!sdf_detail::voxel_of(grid, x, idx) ||
+        grid.voxels[grid.index(idx[0], idx[1], idx[2])] == kEmpty) {
+      certificate_->count(false);
+      return certified_search(x, reach);
+    }
+  }
   double best2;
   const SignedDistance sd = signed_distance(tooth_, x, reach, &best2);
-  if (best2 >= 0.0) {  // outside: remembered (the oldest entry makes room)
-    memo_[next_] = {x, reach, best2, sd};
-    next_ = (next_ + 1) % kEntries;
-    count_ = std::max(count_, next_ == 0 ? kEntries : next_);
-  }
+  if (best2 >= 0.0) remember(x, reach, best2, sd);  // outside (the oldest entry makes room)
   return sd;
 }
 

@@ -36,6 +36,60 @@ SignedDistance signed_distance(const VoxelTooth& tooth, const Vec3& x, double re
 SignedDistance signed_distance(const VoxelTooth& tooth, const Vec3& x, double reach,
                                double* outside_best2);
 
+// The sdf model's free-space certificate (issue #30; the field model's is in fast/tooth/field.h):
+// a lower bound on the distance from the tip to the solid kept across ticks, so that while the
+// tip is farther from the tooth than its travel since the last exact query, no query reads the
+// octree. It lives as long as the provider that owns it; the tooth it is used with may only lose
+// voxels (drilling) while it lives.
+// Claim: let D_t(x) be the Euclidean distance from x to the union of the solid voxels' boxes at
+// time t, each box with the corners box_distance2 computes (origin + h i, rounded). If an outside
+// query at x0 found its answer at squared distance best2 (lower = sqrt(best2)), or found nothing
+// within reach R' (lower = R'), and later
+//     lower - |x - x0| >= reach + margin,   margin = 1e-9 h + 1e-12 lower,
+// then signed_distance(tooth, x, reach) returns {phi = reach, found = false} (bitwise: every other
+// field its default). Proof: (1) D_then(x0) >= lower (1 - 10 u) (u = 2^-53): each leaf's computed
+// d2 is its exact square within 5 u relative (a rounded difference, square and two sums of
+// non-negative terms), the search's pruning by node boxes that contain their children loses no
+// leaf by more than that, and sqrt rounds within u. (2) Drilling only removes boxes, so D_now >=
+// D_then, and D is 1-Lipschitz: D_now(x) >= lower (1 - 10 u) - |x - x0| (the computed norm within
+// 3 u of the exact); with the test's own two roundings, D_now(x) >= reach + margin - 16 u
+// (lower + |x - x0|) > reach (1 + 3 u) (|x - x0| <= lower when the test passes; margin >= 32 u
+// lower). (3) Then every leaf's computed d2 at x is >= fl(reach^2) (5 u and u again), so the outside
+// search accepts none and returns reach, not found; and x is not in a solid voxel by voxel_of's
+// floor((x - origin) / h) either, which differs from the boxes by a few ulps of the coordinates,
+// far below 1e-9 h > 0 of clearance. So the certified answer is the query's own.
+class FreeSpaceCertificate {
+ public:
+  // True when (x, reach > 0) is answered {phi = reach, found = false} by the claim above.
+  bool certifies(const Vec3& x, double reach) const {
+    if (!have_ || !(reach > 0.0)) return false;
+    return lower_ - (x - x0_).norm() >= reach + margin_;
+  }
+  // An exact outside query at x0 found nothing nearer than `lower` (claim above); h the voxel size.
+  void record(const Vec3& x0, double lower, double h) {
+    have_ = true;
+    x0_ = x0;
+    lower_ = lower;
+    margin_ = 1e-9 * h + 1e-12 * lower;
+  }
+  // The reach of the exact query a certificate is taken from: the query's, widened by
+  // kWidenVoxels voxels, so that "nothing within reach" still certifies the next ticks' queries
+  // while the tip travels less than that.
+  static double widened(double reach, double h) { return reach + kWidenVoxels * h; }
+  static constexpr double kWidenVoxels = 8.0;
+  // Counters for tests and benchmarks: queries answered by the certificate, and exact ones.
+  long certified() const { return certified_; }
+  long evaluated() const { return evaluated_; }
+  void count(bool certified) const { ++(certified ? certified_ : evaluated_); }
+
+ private:
+  bool have_ = false;
+  Vec3 x0_ = Vec3::Zero();
+  double lower_ = 0.0;
+  double margin_ = 0.0;
+  mutable long certified_ = 0, evaluated_ = 0;
+};
+
 // The surface proxy's Solid (reference/tooth/surface_proxy_core.h) on fast::signed_distance for
 // one update of the proxy (the tooth must not change while it lives): it remembers its last
 // kEntries outside answers and answers a query at the same point (bitwise) from them where the
@@ -43,9 +97,13 @@ SignedDistance signed_distance(const VoxelTooth& tooth, const Vec3& x, double re
 // square exceeds its d2; "nothing within R" is the answer within every shorter reach), so its
 // answers are the query's own. The proxy asks the same point again and again within a tick: the
 // swept test starts where the push-out ended, a slide asks at the g the push-out left.
+// With a certificate (the provider's, kept across ticks): a query it certifies reads nothing; an
+// outside query it does not is searched within FreeSpaceCertificate::widened(reach), answered
+// at `reach` by the same rule as a remembered answer, and renews the certificate.
 class RecallingVoxelSolid {
  public:
-  explicit RecallingVoxelSolid(const VoxelTooth& tooth) : tooth_(tooth) {}
+  explicit RecallingVoxelSolid(const VoxelTooth& tooth, FreeSpaceCertificate* certificate = nullptr)
+      : tooth_(tooth), certificate_(certificate) {}
   const VoxelTooth& tooth() const { return tooth_; }
   SignedDistance distance(const Vec3& x, double reach) const;
   Vec3 normal(const Vec3& x, const SignedDistance& sd) const {
@@ -61,7 +119,12 @@ class RecallingVoxelSolid {
     SignedDistance sd;
   };
   static constexpr int kEntries = 16;
+  // The search at x (not in a solid voxel) within the certificate's widened reach, renewing it.
+  SignedDistance certified_search(const Vec3& x, double reach) const;
+  void remember(const Vec3& x, double reach, double best2, const SignedDistance& sd) const;
+
   const VoxelTooth& tooth_;
+  FreeSpaceCertificate* certificate_;
   mutable std::array<Entry, kEntries> memo_{};
   mutable int count_ = 0;
   mutable int next_ = 0;

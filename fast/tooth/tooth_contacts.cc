@@ -38,10 +38,13 @@ SdfContactProvider::SdfContactProvider(VoxelTooth& tooth, const PipelineToothSet
     : dentsim::ToothContactProvider(tooth, setup.tip, setup.k_tooth, setup.b_tooth,
                                     setup.drilling, ContactModel::kSurfaceProxy,
                                     &fast::signed_distance),
-      tooth_(tooth) {}
+      tooth_(tooth),
+      certify_(setup.skip_unneeded) {}
 
 const Vec3& SdfContactProvider::update_sdf_proxy(SurfaceProxy* proxy, const Vec3& c) {
-  const RecallingVoxelSolid solid(tooth_);  // one update: the tooth does not change within it
+  // One update: the tooth does not change within it (the certificate outlives it: drilling only
+  // removes voxels).
+  const RecallingVoxelSolid solid(tooth_, certify_ ? &certificate_ : nullptr);
   return proxy->update_on(solid, c);
 }
 

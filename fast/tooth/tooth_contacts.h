@@ -13,6 +13,7 @@
 #include "fast/tooth/brick_tooth.h"
 #include "fast/tooth/collision.h"
 #include "fast/tooth/drilling.h"
+#include "fast/tooth/sdf.h"
 #include "reference/tooth/tooth_contacts.h"
 
 namespace dentsim::fast {
@@ -35,16 +36,22 @@ class ToothContactProvider : public ToothProviderBase {
 
 // The surface-proxy contact ("sdf") of the fast pipeline: the reference's provider with
 // fast::signed_distance, whose proxy update runs on RecallingVoxelSolid (fast/tooth/sdf.h: the
-// same answers, the repeated ones remembered), so g is bitwise the reference's.
+// same answers, the repeated ones remembered), so g is bitwise the reference's. With skips on
+// (PipelineToothSetup::skip_unneeded) the solid keeps a free-space certificate across ticks
+// (fast/tooth/sdf.h FreeSpaceCertificate: no octree query while the tip is farther from the tooth
+// than its travel since the last exact one).
 class SdfContactProvider final : public dentsim::ToothContactProvider {
  public:
   SdfContactProvider(VoxelTooth& tooth, const PipelineToothSetup& setup);
+  const FreeSpaceCertificate& certificate() const { return certificate_; }
 
  protected:
   const Vec3& update_sdf_proxy(SurfaceProxy* proxy, const Vec3& c) override;
 
  private:
   const VoxelTooth& tooth_;
+  FreeSpaceCertificate certificate_;
+  bool certify_;
 };
 
 // The fast pipeline's tooth (fast/registry.h): for the face model the brick tooth, built from

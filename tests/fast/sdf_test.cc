@@ -3,14 +3,19 @@
 // and after drilling: phi, the nearest point and its voxel bitwise equal on every query (boxes
 // exactly as near are decided by the same order-free rule, sdf_detail::sdf_nearer), on grid-aligned
 // ties too; and the surface proxy driven by either along the same tool path stays on the same g,
-// step by step.
+// step by step. The free-space certificate (FreeSpaceCertificate): every answer bitwise the
+// reference's on random query sequences and on a scripted approach, press, drill and retreat, and
+// every certified query checked against brute force (no solid voxel within its reach).
 #include "fast/tooth/sdf.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <random>
+#include <vector>
 
 #include "reference/tooth/surface_proxy_core.h"
 
@@ -94,6 +99,21 @@ TEST(FastSignedDistance, TiesAreDecidedAlike) {
 
 // RecallingVoxelSolid answers a point asked again from what it remembers: with every reach,
 // shorter or longer than the remembered one's, found or not, its answer is the reference's.
+// One query of `solid` against the reference's: everything bitwise equal, counted.
+void check_query(const VoxelTooth& tooth, const fast::RecallingVoxelSolid& solid, const Vec3& x,
+                 double r, long* asked, long* found, long* mismatches) {
+  const SignedDistance want = signed_distance(tooth, x, r);
+  const SignedDistance got = solid.distance(x, r);
+  ++*asked;
+  if (want.found) ++*found;
+  if (want.phi != got.phi || want.found != got.found || want.nearest != got.nearest ||
+      want.voxel != got.voxel) {
+    ++*mismatches;
+    ADD_FAILURE() << "phi " << want.phi << " vs " << got.phi << " at " << x.transpose()
+                  << " reach " << r;
+  }
+}
+
 TEST(FastSignedDistance, RememberedAnswersAreTheQuerysOwn) {
   auto rig = molar_rig();
   const VoxelTooth& tooth = *rig->tooth;
@@ -109,16 +129,7 @@ TEST(FastSignedDistance, RememberedAnswersAreTheQuerysOwn) {
     for (int k = 0; k < 24; ++k) {  // the same few points, every reach in turn
       const Vec3& x = points[k % 3];
       const double r = reach(rng);
-      const SignedDistance want = signed_distance(tooth, x, r);
-      const SignedDistance got = solid.distance(x, r);
-      ++asked;
-      if (want.found) ++found;
-      if (want.phi != got.phi || want.found != got.found || want.nearest != got.nearest ||
-          want.voxel != got.voxel) {
-        ++mismatches;
-        ADD_FAILURE() << "phi " << want.phi << " vs " << got.phi << " at " << x.transpose()
-                      << " reach " << r;
-      }
+      check_query(tooth, solid, x, r, &asked, &found, &mismatches);
     }
   }
   EXPECT_EQ(mismatches, 0);
@@ -173,6 +184,195 @@ TEST(FastSignedDistance, SurfaceProxyFollowsTheSamePathAfterDrilling) {
   }
   std::printf("%ld steps, %ld with the proxy held outside\n", steps, in_contact);
   EXPECT_GT(in_contact, 1000);
+}
+
+// A query sequence as the proxy makes it, over many updates (a fresh RecallingVoxelSolid each, one
+// certificate for all): points on a random walk about the anchor, now and then a jump, reaches
+// from 0.2 h to 12 h; every answer bitwise the reference's.
+TEST(FastSignedDistance, CertifiedAnswersAreTheQuerysOwn) {
+  auto rig = molar_rig();
+  const VoxelTooth& tooth = *rig->tooth;
+  const double h = tooth.grid().voxel_size;
+  std::mt19937_64 rng(20261127);
+  std::normal_distribution<double> walk(0.0, 0.5 * h);
+  std::uniform_real_distribution<double> jump(-4e-3, 4e-3);
+  std::uniform_real_distribution<double> reach(0.2 * h, 12 * h);
+  fast::FreeSpaceCertificate certificate;
+  Vec3 x = rig->anchor + Vec3(0, 0, 3e-3);
+  long asked = 0, mismatches = 0, found = 0;
+  for (int update = 0; update < 3000; ++update) {
+    const fast::RecallingVoxelSolid solid(tooth, &certificate);
+    if (update % 200 == 199) x = rig->anchor + Vec3(jump(rng), jump(rng), jump(rng));
+    for (int k = 0; k < 4; ++k) {
+      x += Vec3(walk(rng), walk(rng), walk(rng));
+      const double r = reach(rng);
+      check_query(tooth, solid, x, r, &asked, &found, &mismatches);
+    }
+  }
+  std::printf("%ld queries, %ld found, %ld certified, %ld searched\n", asked, found,
+              certificate.certified(), certificate.evaluated());
+  EXPECT_EQ(mismatches, 0);
+  EXPECT_GT(found, asked / 20);
+  EXPECT_GT(certificate.certified(), asked / 4);
+  EXPECT_GT(certificate.evaluated(), asked / 20);
+}
+
+// The solid voxels with an empty face neighbour (or on the grid's border): the nearest point of
+// the solid to a point outside it lies on one of their boxes.
+std::vector<std::size_t> boundary_voxels(const VoxelGrid& g) {
+  std::vector<std::size_t> out;
+  for (int k = 0; k < g.n; ++k) {
+    for (int j = 0; j < g.n; ++j) {
+      for (int i = 0; i < g.n; ++i) {
+        if (!g.solid(i, j, k)) continue;
+        if (!g.solid(i - 1, j, k) || !g.solid(i + 1, j, k) || !g.solid(i, j - 1, k) ||
+            !g.solid(i, j + 1, k) || !g.solid(i, j, k - 1) || !g.solid(i, j, k + 1)) {
+          out.push_back(g.index(i, j, k));
+        }
+      }
+    }
+  }
+  return out;
+}
+
+// Brute force: the least distance from x to the boxes of `voxels` (exact arithmetic aside).
+double brute_distance(const VoxelGrid& g, const std::vector<std::size_t>& voxels, const Vec3& x) {
+  const std::size_t n = static_cast<std::size_t>(g.n);
+  double best2 = std::numeric_limits<double>::infinity();
+  for (const std::size_t v : voxels) {
+    const int idx[3] = {static_cast<int>(v % n), static_cast<int>((v / n) % n),
+                        static_cast<int>(v / (n * n))};
+    double d2 = 0.0;
+    for (int a = 0; a < 3; ++a) {
+      const double lo = g.origin[a] + g.voxel_size * idx[a];
+      const double hi = g.origin[a] + g.voxel_size * (idx[a] + 1);
+      const double gap = std::max({lo - x[a], 0.0, x[a] - hi});
+      d2 += gap * gap;
+    }
+    best2 = std::min(best2, d2);
+  }
+  return std::sqrt(best2);
+}
+
+// The Solid the proxy runs on in the fast pipeline, checked query by query: the answer bitwise the
+// reference's, and every query the certificate answers checked by brute force (the tooth's
+// boundary voxels: none within its reach), so the certificate never skips a query the tip could
+// reach.
+class CheckedSolid {
+ public:
+  CheckedSolid(const VoxelTooth& tooth, fast::FreeSpaceCertificate* cert,
+               const std::vector<std::size_t>* boundary, long* mismatches, long* unsafe)
+      : solid_(tooth, cert), cert_(cert), boundary_(boundary), mismatches_(mismatches),
+        unsafe_(unsafe) {}
+  const VoxelTooth& tooth() const { return solid_.tooth(); }
+  SignedDistance distance(const Vec3& x, double reach) const {
+    const long before = cert_->certified();
+    const SignedDistance got = solid_.distance(x, reach);
+    const SignedDistance want = signed_distance(solid_.tooth(), x, reach);
+    if (want.phi != got.phi || want.found != got.found || want.nearest != got.nearest ||
+        want.voxel != got.voxel) {
+      ++*mismatches_;
+    }
+    if (cert_->certified() > before) {
+      const double d = brute_distance(solid_.tooth().grid(), *boundary_, x);
+      if (!(d >= reach)) {
+        ++*unsafe_;
+        ADD_FAILURE() << "certified at " << x.transpose() << " reach " << reach
+                      << ", brute-force distance " << d;
+      }
+    }
+    return got;
+  }
+  Vec3 normal(const Vec3& x, const SignedDistance& sd) const { return solid_.normal(x, sd); }
+  double lipschitz() const { return 1.0; }
+
+ private:
+  fast::RecallingVoxelSolid solid_;
+  fast::FreeSpaceCertificate* cert_;
+  const std::vector<std::size_t>* boundary_;
+  long* mismatches_;
+  long* unsafe_;
+};
+
+// A scripted approach from 6 mm above the crown, a press 0.3 mm into it with a slide, a pit
+// drilled under the tip (the tooth loses voxels while the certificate lives), a second press into
+// the pit, and a retreat: at every tick g and the contact (reference/tooth/sdf.h
+// surface_proxy_contact) bitwise the reference proxy's.
+TEST(FastSignedDistance, CertificateKeepsTheContactsOnAnApproachAndRetreat) {
+  auto rig = molar_rig();
+  VoxelTooth& tooth = *rig->tooth;
+  const VoxelGrid& g = tooth.grid();
+  const double rho = 0.25e-3, h = g.voxel_size;
+  const std::size_t n = static_cast<std::size_t>(g.n);
+  // The crown's top under the anchor.
+  const int ia = static_cast<int>((rig->anchor.x() - g.origin.x()) / h);
+  const int ja = static_cast<int>((rig->anchor.y() - g.origin.y()) / h);
+  int ka = g.n - 1;
+  while (ka > 0 && !g.solid(ia, ja, ka)) --ka;
+  const Vec3 top = g.center(ia, ja, ka) + Vec3(0, 0, 0.5 * h);
+  std::vector<std::size_t> boundary = boundary_voxels(g);
+  // The path: (tick, tip centre) by pieces; 0.02 mm a tick on the approach (20 mm/s at 1 kHz).
+  std::vector<Vec3> path;
+  auto go = [&path](const Vec3& to, int ticks) {
+    const Vec3 from = path.empty() ? to : path.back();
+    for (int t = 1; t <= ticks; ++t) path.push_back(from + (to - from) * (double(t) / ticks));
+  };
+  path.push_back(top + Vec3(0.3e-3, 0.2e-3, 6e-3));
+  go(top + Vec3(0.3e-3, 0.2e-3, rho + 1e-3), 250);  // approach
+  go(top + Vec3(0.0, 0.0, rho - 0.3e-3), 100);      // press
+  go(top + Vec3(-0.4e-3, 0.1e-3, rho - 0.3e-3), 60);  // slide
+  const std::size_t drill_at = path.size();
+  go(top + Vec3(0.0, 0.0, rho - 0.8e-3), 100);       // into the pit
+  go(top + Vec3(0.5e-3, -0.3e-3, rho + 5e-3), 300);  // retreat
+  go(top + Vec3(1.5e-3, -0.3e-3, rho + 0.1e-3), 150);  // a second approach beside the pit
+  go(top + Vec3(1.5e-3, -0.3e-3, rho + 4e-3), 100);
+  SurfaceProxy ref(rho, h), fst(rho, h, &fast::signed_distance);
+  fast::FreeSpaceCertificate certificate;
+  const ToolTip tip{rho, Vec3::Zero()};
+  long mismatches = 0, unsafe = 0, contacts = 0;
+  for (std::size_t t = 0; t < path.size(); ++t) {
+    if (t == drill_at) {  // a pit of radius 0.6 mm under the tip
+      int removed = 0;
+      for (int k = 0; k < g.n; ++k) {
+        for (int j = 0; j < g.n; ++j) {
+          for (int i = 0; i < g.n; ++i) {
+            if ((g.center(i, j, k) - top).norm() < 0.6e-3 && g.voxels[i + n * (j + n * k)] != 0) {
+              tooth.octree.remove_voxel(i, j, k);
+              ++removed;
+            }
+          }
+        }
+      }
+      ASSERT_GT(removed, 20);
+      boundary = boundary_voxels(g);
+    }
+    const Vec3& c = path[t];
+    const Vec3 gr = ref.update(tooth, c);
+    const Vec3 gf =
+        fst.update_on(CheckedSolid(tooth, &certificate, &boundary, &mismatches, &unsafe), c);
+    ASSERT_EQ(gr, gf) << "tick " << t;
+    Pose pose;
+    pose.x = c;
+    Contact cr, cf;
+    const bool hr = surface_proxy_contact(tooth, pose, tip, gr, 3000.0, 1.0, &cr);
+    const bool hf =
+        surface_proxy_contact(tooth, pose, tip, gf, 3000.0, 1.0, &cf, &fast::signed_distance);
+    ASSERT_EQ(hr, hf) << "tick " << t;
+    if (hr) {
+      ++contacts;
+      ASSERT_EQ(cr.n, cf.n);
+      ASSERT_EQ(cr.x_o, cf.x_o);
+      ASSERT_EQ(cr.r, cf.r);
+      ASSERT_EQ(cr.depth, cf.depth);
+      ASSERT_EQ(cr.material, cf.material);
+    }
+  }
+  std::printf("%zu ticks, %ld in contact, %ld queries certified, %ld searched\n", path.size(),
+              contacts, certificate.certified(), certificate.evaluated());
+  EXPECT_EQ(mismatches, 0);
+  EXPECT_EQ(unsafe, 0);
+  EXPECT_GT(contacts, 200);
+  EXPECT_GT(certificate.certified(), 1000);
 }
 
 }  // namespace
