@@ -303,8 +303,15 @@ namespace {
 // FieldBricks::sample's work, with internal linkage so that FieldSolid::query inlines it (the
 // member itself is an exported symbol, which -fPIC keeps out of line; GCC 12 does not inline a
 // function called twice of this size without the attribute).
+// The cell a sample read (FieldSolid keeps it for sweep_advance).
+struct SampledCell {
+  float corners[8];
+  double t[3];
+  bool in_lattice;
+};
+
 [[gnu::always_inline]] inline FieldSample sample_bricks(const FieldBricks& bricks, const Vec3& x,
-                                                       bool* deep) {
+                                                       bool* deep, SampledCell* cell = nullptr) {
   FieldSample out;
   if (deep != nullptr) *deep = false;
   const SampledField& f = bricks.field();
@@ -314,14 +321,22 @@ namespace {
   const double h = f.spacing();
   int s[3];
   double t[3];
+  bool in_lattice = true;
   for (int a = 0; a < 3; ++a) {  // the reference's locate()
-    const double u = std::clamp((x[a] - origin[a]) / h, 0.0, static_cast<double>(m - 1));
+    const double w = (x[a] - origin[a]) / h;
+    in_lattice = in_lattice && w >= 0.0 && w <= static_cast<double>(m - 1);
+    const double u = std::clamp(w, 0.0, static_cast<double>(m - 1));
     const int i = std::min(static_cast<int>(u), m - 2);
     s[a] = i;
     t[a] = u - i;
   }
   float cf[8];
   bricks.corners(s, cf);
+  if (cell != nullptr) {
+    std::copy_n(cf, 8, cell->corners);
+    std::copy_n(t, 3, cell->t);
+    cell->in_lattice = in_lattice;
+  }
   if (deep != nullptr) {
     bool all_in = true;
     const float floor_value = static_cast<float>(-f.inside_clamp());
@@ -367,7 +382,11 @@ const FieldSolid::Query& FieldSolid::query(const Vec3& x) const {
   last_.x = x;
   last_.generation = bricks_.generation();
   bool deep = false;
-  const FieldSample s = sample_bricks(bricks_, x, &deep);
+  SampledCell cell{};
+  const FieldSample s = sample_bricks(bricks_, x, &deep, &cell);
+  std::copy_n(cell.corners, 8, last_.corners);
+  std::copy_n(cell.t, 3, last_.t);
+  last_.in_lattice = cell.in_lattice;
   last_.deep = deep;
   last_.value = s.value;
   last_.gradient = s.gradient;
@@ -375,6 +394,7 @@ const FieldSolid::Query& FieldSolid::query(const Vec3& x) const {
 }
 
 SignedDistance FieldSolid::distance(const Vec3& x, double reach) const {
+  ++distances_;
   SignedDistance out;
   if (have_exact_ && reach > 0.0) {  // the free-space certificate (header comment)
     const double margin = 1e-9 * bricks_.field().spacing();
@@ -400,6 +420,13 @@ SignedDistance FieldSolid::distance(const Vec3& x, double reach) const {
   const double g = q.gradient.norm();
   out.nearest = g > 0.0 ? Vec3(x - (q.value / g) * q.gradient) : x;
   return out;
+}
+
+double FieldSolid::sweep_advance(const Vec3& y, const SignedDistance&, const Vec3& dir,
+                                 double clearance, double slack) const {
+  const Query& q = query(y);  // the kept query of distance(y)
+  if (!q.in_lattice) return 0.0;
+  return field_cell_advance(q.corners, q.t, bricks_.field().spacing(), dir, clearance, slack);
 }
 
 Vec3 FieldSolid::normal(const Vec3& x, const SignedDistance& sd) const {
