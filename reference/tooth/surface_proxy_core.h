@@ -160,7 +160,7 @@ bool sweep(const ProxyConstants& k, const Solid& solid, Vec3* from, const Vec3& 
     // step's geometric approach (docs/derivations/field_contact.md §3).
     if constexpr (requires(const Vec3& v) { solid.sweep_advance(v, sd, v, 0.0, 0.0); }) {
       const double slack = kSweepSlack * k.skin;
-      if (sd.found && clearance > 2.0 * slack) {
+      if (sd.found && clearance > 2.0 * slack && advance < left) {
         advance = std::max(advance, solid.sweep_advance(*from, sd, gap / left, clearance, slack));
       }
     }
