@@ -307,8 +307,15 @@ namespace {
 // FieldBricks::sample's work, with internal linkage so that FieldSolid::query inlines it (the
 // member itself is an exported symbol, which -fPIC keeps out of line; GCC 12 does not inline a
 // function called twice of this size without the attribute).
+// The cell a sample read (FieldSolid keeps it for sweep_advance).
+struct SampledCell {
+  float corners[8];
+  double t[3];
+  bool in_lattice;
+};
+
 [[gnu::always_inline]] inline FieldSample sample_bricks(const FieldBricks& bricks, const Vec3& x,
-                                                       bool* deep) {
+                                                       bool* deep, SampledCell* cell = nullptr) {
   FieldSample out;
   if (deep != nullptr) *deep = false;
   const SampledField& f = bricks.field();
@@ -318,14 +325,22 @@ namespace {
   const double h = f.spacing();
   int s[3];
   double t[3];
+  bool in_lattice = true;
   for (int a = 0; a < 3; ++a) {  // the reference's locate()
-    const double u = std::clamp((x[a] - origin[a]) / h, 0.0, static_cast<double>(m - 1));
+    const double w = (x[a] - origin[a]) / h;
+    in_lattice = in_lattice && w >= 0.0 && w <= static_cast<double>(m - 1);
+    const double u = std::clamp(w, 0.0, static_cast<double>(m - 1));
     const int i = std::min(static_cast<int>(u), m - 2);
     s[a] = i;
     t[a] = u - i;
   }
   float cf[8];
   bricks.corners(s, cf);
+  if (cell != nullptr) {
+    std::copy_n(cf, 8, cell->corners);
+    std::copy_n(t, 3, cell->t);
+    cell->in_lattice = in_lattice;
+  }
   if (deep != nullptr) {
     bool all_in = true;
     const float floor_value = static_cast<float>(-f.inside_clamp());
@@ -371,7 +386,11 @@ const FieldSolid::Query& FieldSolid::query(const Vec3& x) const {
   last_.x = x;
   last_.generation = bricks_.generation();
   bool deep = false;
-  const FieldSample s = sample_bricks(bricks_, x, &deep);
+  SampledCell cell{};
+  const FieldSample s = sample_bricks(bricks_, x, &deep, &cell);
+  std::copy_n(cell.corners, 8, last_.corners);
+  std::copy_n(cell.t, 3, last_.t);
+  last_.in_lattice = cell.in_lattice;
   last_.deep = deep;
   last_.value = s.value;
   last_.gradient = s.gradient;
@@ -379,6 +398,7 @@ const FieldSolid::Query& FieldSolid::query(const Vec3& x) const {
 }
 
 SignedDistance FieldSolid::distance(const Vec3& x, double reach) const {
+  ++distances_;
   SignedDistance out;
   if (have_exact_ && reach > 0.0) {  // the free-space certificate (header comment)
     const double margin = 1e-9 * bricks_.field().spacing();
@@ -404,6 +424,38 @@ SignedDistance FieldSolid::distance(const Vec3& x, double reach) const {
   const double g = q.gradient.norm();
   out.nearest = g > 0.0 ? Vec3(x - (q.value / g) * q.gradient) : x;
   return out;
+}
+
+double FieldSolid::sweep_advance(const Vec3& y, const SignedDistance&, const Vec3& dir,
+                                 double clearance, double slack) const {
+  const Query& q = query(y);  // the kept query of distance(y)
+  if (!q.in_lattice) return 0.0;
+  // field_cell_advance (reference/tooth/field_contact.h) unrolled: the 12 edge differences once,
+  // each corner's slope the same products summed in the same order, so the same doubles
+  // (FastFieldSolid.TheSweepsCellStepNeverLeavesTheSkinByBruteForce compares them).
+  double v[8];
+  for (int k = 0; k < 8; ++k) v[k] = q.corners[k];
+  const double dx = dir.x(), dy = dir.y(), dz = dir.z();
+  // x-edges at (j, l) as [j + 2 l], y-edges at (i, l) as [i + 2 l], z-edges at (i, j) as [i + 2 j].
+  const double sx[4] = {dx * (v[1] - v[0]), dx * (v[3] - v[2]), dx * (v[5] - v[4]),
+                        dx * (v[7] - v[6])};
+  const double sy[4] = {dy * (v[2] - v[0]), dy * (v[3] - v[1]), dy * (v[6] - v[4]),
+                        dy * (v[7] - v[5])};
+  const double sz[4] = {dz * (v[4] - v[0]), dz * (v[5] - v[1]), dz * (v[6] - v[2]),
+                        dz * (v[7] - v[3])};
+  double least = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 8; ++k) {
+    const int i = k & 1, j = (k >> 1) & 1, l = k >> 2;
+    least = std::min(least, sx[j + 2 * l] + sy[i + 2 * l] + sz[i + 2 * j]);
+  }
+  const double h = bricks_.field().spacing();
+  double exit = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a) {
+    if (dir[a] > 0.0) exit = std::min(exit, (1.0 - q.t[a]) * h / dir[a]);
+    if (dir[a] < 0.0) exit = std::min(exit, q.t[a] * h / -dir[a]);
+  }
+  if (least >= 0.0) return exit;
+  return std::min(exit, (clearance - slack) * h / -least);
 }
 
 Vec3 FieldSolid::normal(const Vec3& x, const SignedDistance& sd) const {

@@ -175,8 +175,13 @@ class FieldSolid {
   SignedDistance distance(const Vec3& x, double reach) const;
   Vec3 normal(const Vec3& x, const SignedDistance& sd) const;
   double lipschitz() const { return bricks_.lipschitz(); }
-  // Queries answered by the free-space certificate, and queries that read the field (counters
-  // for tests and benchmarks).
+  // dentsim::FieldSolid::sweep_advance on the kept query's cell (the sweep asks it right after
+  // distance(y) at the same y: no second gather).
+  double sweep_advance(const Vec3& y, const SignedDistance& sd, const Vec3& dir, double clearance,
+                       double slack) const;
+  // distance() calls, those answered by the free-space certificate, and queries that read the
+  // field (counters for tests and benchmarks).
+  long distances() const { return distances_; }
   long certified() const { return certified_; }
   long evaluated() const { return evaluated_; }
 
@@ -187,6 +192,11 @@ class FieldSolid {
     bool deep = false;
     double value = 0.0;
     Vec3 gradient = Vec3::Zero();
+    // The cell the query read: its corners, x's cell coordinates, and whether x lies in the
+    // lattice (no coordinate clamped).
+    float corners[8] = {};
+    double t[3] = {};
+    bool in_lattice = false;
   };
   // The field at x: deep-inside test, phi and gradient (the reference's arithmetic), kept.
   const Query& query(const Vec3& x) const;
@@ -197,7 +207,7 @@ class FieldSolid {
   mutable bool have_exact_ = false;  // x0_, phi0_: the last exact query (certificate)
   mutable Vec3 x0_ = Vec3::Zero();
   mutable double phi0_ = 0.0;
-  mutable long certified_ = 0, evaluated_ = 0;
+  mutable long distances_ = 0, certified_ = 0, evaluated_ = 0;
 };
 
 // The exact voxel distances the field edit asked before, kept for the next edits (temporal

@@ -40,6 +40,27 @@ Vec3 FieldSolid::normal(const Vec3& x, const SignedDistance& sd) const {
   return distance_gradient(tooth_, x, exact);
 }
 
+double FieldSolid::sweep_advance(const Vec3& y, const SignedDistance&, const Vec3& dir,
+                                 double clearance, double slack) const {
+  // y's cell as SampledField::sample locates it; a clamped coordinate (y beyond the lattice)
+  // gives no cell of y's own: no advance from it.
+  const int m = field_.samples_per_axis();
+  if (m < 2) return 0.0;
+  const Vec3 origin = field_.sample_position(0, 0, 0);
+  const double h = field_.spacing();
+  int s[3];
+  double t[3];
+  for (int a = 0; a < 3; ++a) {
+    const double u = (y[a] - origin[a]) / h;
+    if (!(u >= 0.0 && u <= static_cast<double>(m - 1))) return 0.0;
+    s[a] = std::min(static_cast<int>(u), m - 2);
+    t[a] = u - s[a];
+  }
+  float c[8];
+  for (int k = 0; k < 8; ++k) c[k] = field_.at(s[0] + (k & 1), s[1] + ((k >> 1) & 1), s[2] + (k >> 2));
+  return field_cell_advance(c, t, h, dir, clearance, slack);
+}
+
 namespace {
 
 // The reference's reads and writes for the shared edit (reference/tooth/field_edit_core.h).

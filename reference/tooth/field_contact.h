@@ -16,13 +16,44 @@
 // then edit_field_for_removed_voxels subtracts them from the field (below).
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
+#include <limits>
 #include <span>
 
 #include "reference/tooth/sampled_field.h"
 #include "reference/tooth/sdf.h"
 
 namespace dentsim {
+
+// The sweep's advance from the cell's own slope (docs/derivations/field_contact.md §3, "The
+// sweep's step in one cell"; both twins call this, so their steps are the same doubles). The
+// point y lies in the lattice cell with corners c[dx + 2 dy + 4 dz] (stored values) at cell
+// coordinates t (each in [0, 1]); h the lattice spacing; dir a unit direction; clearance =
+// phi(y) - (rho - s) > slack > 0. Along dir, phi's slope dir . grad phi is multilinear over the
+// cell (d phi / dx is the bilinear interpolation of the x-edge differences over (y, z), and so
+// on), so its least value over the cell is at one of the 8 corners: `least`. Returns the distance
+// along dir to the cell's exit if least >= 0, else the smaller of that and
+// (clearance - slack) / -least: every point of the step has phi >= rho - s + slack (minus the
+// rounding the slack covers). 0 when y is not strictly in the lattice's cell (clamped).
+inline double field_cell_advance(const float c[8], const double t[3], double h, const Vec3& dir,
+                                 double clearance, double slack) {
+  double least = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 8; ++k) {
+    const int i = k & 1, j = (k >> 1) & 1, l = k >> 2;
+    const double gx = static_cast<double>(c[1 + 2 * j + 4 * l]) - c[2 * j + 4 * l];
+    const double gy = static_cast<double>(c[i + 2 + 4 * l]) - c[i + 4 * l];
+    const double gz = static_cast<double>(c[i + 2 * j + 4]) - c[i + 2 * j];
+    least = std::min(least, dir.x() * gx + dir.y() * gy + dir.z() * gz);
+  }
+  double exit = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a) {
+    if (dir[a] > 0.0) exit = std::min(exit, (1.0 - t[a]) * h / dir[a]);
+    if (dir[a] < 0.0) exit = std::min(exit, t[a] * h / -dir[a]);
+  }
+  if (least >= 0.0) return exit;
+  return std::min(exit, (clearance - slack) * h / -least);
+}
 
 // The sampled field as the surface proxy's Solid (surface_proxy_core.h). Both must outlive it.
 class FieldSolid {
@@ -37,6 +68,11 @@ class FieldSolid {
   // grad phi / |grad phi| (deep inside or where the gradient vanishes: the voxel distance's).
   Vec3 normal(const Vec3& x, const SignedDistance& sd) const;
   double lipschitz() const { return field_.lipschitz(); }
+  // The sweep's certified advance from y (sd = distance(y, ..), found) along the unit direction
+  // dir with the given clearance and slack: field_cell_advance on y's cell (0 where y lies
+  // outside the lattice, so that the caller's Lipschitz step is kept).
+  double sweep_advance(const Vec3& y, const SignedDistance& sd, const Vec3& dir, double clearance,
+                       double slack) const;
 
  private:
   const VoxelTooth& tooth_;

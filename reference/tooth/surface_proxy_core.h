@@ -130,6 +130,11 @@ double push_out(const ProxyConstants& k, const Solid& solid, Vec3* x) {
   return sd.phi - k.rho;
 }
 
+// The sweep's slack for a step certified by the cell's slope (sweep below): half its blocking
+// threshold (1e-3 s), so the step ends where the next query blocks, and far above the rounding
+// of phi and of the slope bound (~1e-16 of a millimetre).
+inline constexpr double kSweepSlack = 0.5e-3;
+
 // Step 2: conservative advancement from `from` towards `to` within A_skin = {phi >= rho - s};
 // true if `to` was reached, else *from is the last point reached.
 template <class Solid>
@@ -147,7 +152,18 @@ bool sweep(const ProxyConstants& k, const Solid& solid, Vec3* from, const Vec3& 
     const double reach = floor_phi + lip * std::min(left, 4.0 * h) + k.skin;
     const SignedDistance sd = solid.distance(*from, reach);
     const double clearance = sd.phi - floor_phi;
-    const double advance = clearance / lip;  // a step this long stays in A_skin (Lipschitz)
+    double advance = clearance / lip;  // a step this long stays in A_skin (Lipschitz)
+    // A Solid that bounds its slope along the segment within the cell about y (the field,
+    // field_contact.h field_cell_advance) may certify a longer step: to where its lower bound
+    // meets rho - s + slack, slack = half the blocking threshold below, so a blocked sweep ends
+    // in A_skin with clearance in (0, 1e-3 s] after one more query instead of the Lipschitz
+    // step's geometric approach (docs/derivations/field_contact.md §3).
+    if constexpr (requires(const Vec3& v) { solid.sweep_advance(v, sd, v, 0.0, 0.0); }) {
+      const double slack = kSweepSlack * k.skin;
+      if (sd.found && clearance > 2.0 * slack && advance < left) {
+        advance = std::max(advance, solid.sweep_advance(*from, sd, gap / left, clearance, slack));
+      }
+    }
     if (advance >= left) {
       *from = to;
       return true;

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "fast/tooth/sdf.h"
+#include "reference/tooth/surface_proxy_core.h"
 #include "reference/tooth/tooth_contacts.h"
 #include "tests/support/alloc_counter.h"
 #include "tests/tooth/field_shapes.h"
@@ -222,6 +223,145 @@ void query_equals_the_reference(int stride) {
 }
 TEST(FastFieldSolid, EqualsTheReferenceQueryBitwise) { query_equals_the_reference(1); }
 TEST(FastFieldSolid, EqualsTheReferenceQueryBitwiseAtStride2) { query_equals_the_reference(2); }
+
+// The sweep's step from the cell's slope (reference/tooth/field_contact.h field_cell_advance,
+// docs/derivations/field_contact.md §3) against brute force: at random points near the sphere's
+// and a box mesh's surface, random directions and clearances, phi sampled densely along the
+// certified step never falls below rho - s + slack (the step is safe), and the fast twin's advance
+// is the reference's bitwise.
+TEST(FastFieldSolid, TheSweepsCellStepNeverLeavesTheSkinByBruteForce) {
+  const VoxelGrid sphere = sphere_grid();
+  const Vec3 lo(1e-3, 1e-3, 1e-3), hi(7e-3, 6e-3, 4e-3);
+  const auto in_box = [&](const Vec3& p) {
+    return (p.array() > lo.array()).all() && (p.array() < hi.array()).all();
+  };
+  const VoxelGrid box = test::solid_grid(kN, kSide, in_box);
+  const SampledField fields[2] = {
+      sphere_field(sphere),
+      build_sampled_field(box, test::box_mesh(lo, hi), field_band_for_tip(kRho, box.voxel_size))};
+  const VoxelGrid* grids[2] = {&sphere, &box};
+  std::mt19937_64 rng(45);
+  std::uniform_real_distribution<double> u01(0.0, 1.0), dir(-1.0, 1.0);
+  long steps = 0, longer = 0, unsafe = 0, differ = 0;
+  for (int shape = 0; shape < 2; ++shape) {
+    const VoxelTooth tooth(*grids[shape]);
+    const SampledField& field = fields[shape];
+    const dentsim::FieldSolid reference(tooth, field);
+    const fast::FieldBricks bricks(field, 0);
+    const fast::FieldSolid solid(tooth, bricks);
+    const double h = field.spacing(), skin = std::min(0.25 * kRho, 0.5 * grids[shape]->voxel_size);
+    const double slack = proxy_detail::kSweepSlack * skin;
+    for (int trial = 0; trial < 4000; ++trial) {
+      Vec3 d(dir(rng), dir(rng), dir(rng));
+      if (d.norm() < 1e-3) continue;
+      d.normalize();
+      // A point at phi in (rho - s, rho + s): on the sphere along a random radius, on the box
+      // above its top face or beside its +x face.
+      Vec3 y;
+      const double off = kRho + (2.0 * u01(rng) - 1.0) * skin;
+      if (shape == 0) {
+        Vec3 r(dir(rng), dir(rng), dir(rng));
+        if (r.norm() < 1e-3) continue;
+        y = kCentre + (kR + off) * r.normalized();
+      } else if (trial % 2 == 0) {
+        y = Vec3(2e-3 + 4e-3 * u01(rng), 2e-3 + 3e-3 * u01(rng), hi.z() + off);
+      } else {
+        y = Vec3(hi.x() + off, 2e-3 + 3e-3 * u01(rng), 1.5e-3 + 2e-3 * u01(rng));
+      }
+      const double phi = field.sample(y).value;
+      const double floor_phi = phi - (1e-3 + u01(rng)) * skin;  // clearance in (1e-3 s, 1.001 s)
+      const SignedDistance sr = reference.distance(y, 1.0);
+      const SignedDistance sf = solid.distance(y, 1.0);
+      ASSERT_TRUE(sr.found && sf.found && sr.phi == phi);
+      const double clearance = phi - floor_phi;
+      const double a = reference.sweep_advance(y, sr, d, clearance, slack);
+      differ += a != solid.sweep_advance(y, sf, d, clearance, slack);
+      ++steps;
+      if (a > clearance / field.lipschitz()) ++longer;
+      for (int k = 0; k <= 200; ++k) {
+        const double v = field.sample(y + (a * k / 200.0) * d).value;
+        if (v < floor_phi + slack - 1e-9 * h) {
+          ++unsafe;
+          ADD_FAILURE() << "shape " << shape << " at " << y.transpose() << " dir " << d.transpose()
+                        << ": phi " << v << " below " << floor_phi + slack << " at " << k;
+          break;
+        }
+      }
+    }
+  }
+  std::printf("%ld cell steps, %ld longer than the Lipschitz step, %ld unsafe, %ld differ\n", steps,
+              longer, unsafe, differ);
+  EXPECT_EQ(unsafe, 0);
+  EXPECT_EQ(differ, 0);
+  EXPECT_GT(longer, steps / 2);  // the cell's slope certifies more than the global bound
+}
+
+// Query counts of the sweep on a flat face (the box's top, a plane in the field to float rounding):
+// from g at phi = rho towards a point 1 mm inside at tilt theta, the Lipschitz step alone closes
+// the clearance by the factor 1 - cos(theta) / L a query (ln(1e-3) / ln(1 - cos(theta) / L)
+// queries to block); the cell's slope is exact on a plane, so each query steps to the floor (+
+// slack) or to the cell's exit: at most one query per cell the segment crosses, plus the one
+// that blocks, plus one per face crossed in a negative axis direction (below). Both twins end at the same point, with clearance in (0, 1e-3 s].
+TEST(FastFieldSolid, TheSweepOnAFlatFaceTakesOneQueryPerCellCrossed) {
+  const Vec3 lo(1e-3, 1e-3, 1e-3), hi(7e-3, 7e-3, 4e-3);
+  const auto in_box = [&](const Vec3& p) {
+    return (p.array() > lo.array()).all() && (p.array() < hi.array()).all();
+  };
+  const VoxelGrid g = test::solid_grid(kN, kSide, in_box);
+  const VoxelTooth tooth(g);
+  const SampledField field =
+      build_sampled_field(g, test::box_mesh(lo, hi), field_band_for_tip(kRho, g.voxel_size));
+  const dentsim::FieldSolid reference(tooth, field);
+  const fast::FieldBricks bricks(field, 0);
+  const fast::FieldSolid solid(tooth, bricks);
+  const SurfaceProxy proxy(kRho, g.voxel_size);
+  const proxy_detail::ProxyConstants k = proxy.constants();
+  const double h = field.spacing();
+  const Vec3 origin = field.sample_position(0, 0, 0);
+  const auto cell_of = [&](const Vec3& x) {
+    const Vec3 u = (x - origin) / h;
+    return Eigen::Vector3i(static_cast<int>(u.x()), static_cast<int>(u.y()), static_cast<int>(u.z()));
+  };
+  long sweeps = 0, queries = 0, lipschitz_queries = 0;
+  for (int tilt = 0; tilt < 5; ++tilt) {
+    const double theta = 0.3 * tilt;
+    for (int azimuth = 0; azimuth < 8; ++azimuth) {
+      const double psi = 0.785 * azimuth;
+      const Vec3 d(std::sin(theta) * std::cos(psi), std::sin(theta) * std::sin(psi), -std::cos(theta));
+      const Vec3 g0(3.0e-3 + 0.11e-3 * azimuth, 3.5e-3 + 0.07e-3 * tilt, hi.z() + kRho);
+      const Vec3 to = g0 + 1e-3 * d;
+      Vec3 yr = g0, yf = g0;
+      ASSERT_FALSE(proxy_detail::sweep(k, reference, &yr, to));
+      const long before = solid.distances();
+      ASSERT_FALSE(proxy_detail::sweep(k, solid, &yf, to));
+      const long used = solid.distances() - before;
+      ASSERT_EQ(yr, yf);
+      const double clearance = field.sample(yf).value - (kRho - k.skin);
+      EXPECT_GT(clearance, 0.0);
+      EXPECT_LE(clearance, 1e-3 * k.skin);
+      // The cells the segment g0 -> yf passes through (sampled densely).
+      int cells = 1;
+      Eigen::Vector3i last = cell_of(g0);
+      for (int i = 1; i <= 10000; ++i) {
+        const Eigen::Vector3i c = cell_of(g0 + (yf - g0) * (i / 10000.0));
+        if (c != last) ++cells;
+        last = c;
+      }
+      // One query a cell, one that blocks, and one Lipschitz step for each face crossed towards
+      // -x, -y or -z (the step to the exit lands on the face, which locates in the cell left:
+      // t_exit = 0 there).
+      EXPECT_LE(used, 2 * cells) << "tilt " << theta << " azimuth " << psi;
+      ++sweeps;
+      queries += used;
+      lipschitz_queries += static_cast<long>(
+          std::ceil(std::log(1e-3) / std::log(1.0 - std::cos(theta) / field.lipschitz())));
+    }
+  }
+  std::printf("%ld blocked sweeps on a plane: %ld queries (%.2f a sweep); the Lipschitz step "
+              "alone: about %ld (L = %.4f)\n",
+              sweeps, queries, static_cast<double>(queries) / sweeps, lipschitz_queries,
+              field.lipschitz());
+}
 
 // The bur's path: free space, down 1.1 mm into the sphere (drilling), sideways 0.6 mm, away.
 constexpr int kFree = 200, kDown = 900, kSideways = 600, kAway = 300;
