@@ -12,6 +12,7 @@
 
 #include "fast/tooth/brick_tooth.h"
 #include "fast/tooth/collision.h"
+#include "fast/tooth/cut_set.h"
 #include "fast/tooth/drilling.h"
 #include "reference/tooth/tooth_contacts.h"
 
@@ -35,8 +36,9 @@ class ToothContactProvider : public ToothProviderBase {
 
 // The surface-proxy contact ("sdf") of the fast pipeline: the reference's provider with
 // fast::signed_distance, whose proxy update runs on RecallingVoxelSolid (fast/tooth/sdf.h: the
-// same answers, the repeated ones remembered), so g is bitwise the reference's.
-class SdfContactProvider final : public dentsim::ToothContactProvider {
+// same answers, the repeated ones remembered), so g is bitwise the reference's, and whose cut set
+// and material come from the surface voxels (CutSetProvider, fast/tooth/cut_set.h).
+class SdfContactProvider final : public CutSetProvider {
  public:
   SdfContactProvider(VoxelTooth& tooth, const PipelineToothSetup& setup);
 
