@@ -13,7 +13,9 @@
 #include <vector>
 
 #include "bench/tooth_bench.h"
+#include "fast/tooth/cut_set.h"
 #include "fast/tooth/field.h"
+#include "fast/tooth/sdf.h"
 #include "fast/tooth/tooth_contacts.h"
 #include "sim/scene.h"
 #include "sim/simulator.h"
@@ -133,6 +135,48 @@ void BM_ToothDrillTick(benchmark::State& state) {
   state.SetLabel(state.range(1) == 0 ? "reference" : "fast");
 }
 BENCHMARK(BM_ToothDrillTick)->ArgsProduct({{128, 256}, {0, 1}})->Iterations(20000);
+
+// The surface-proxy contact's voxel side (issue #30, stop 45): the contact's material and the cut
+// set at the anchor g resting rho above the occlusal surface (occlusal_pose lifted by its 0.1 mm),
+// 0.5 mm bur, on the procedural molar: the fast pipeline's before (proxy_material by
+// fast::signed_distance and collect_cut_set on the octree, the reference's code) against
+// fast::SurfaceCutSet (fast/tooth/cut_set.h, over the surface voxels). Results: docs/benchmarks.md
+// "The cut set over the surface voxels". Args: resolution, 0 octree / 1 surface voxels.
+struct MolarTooth {
+  VoxelTooth tooth;
+  explicit MolarTooth(int n) : tooth(voxelize_procedural_molar(MolarParams{}, n)) {}
+};
+void BM_CutSet(benchmark::State& state) {
+  const VoxelTooth& tooth = bench::built_once<MolarTooth>(static_cast<int>(state.range(0))).tooth;
+  const double rho = 0.5e-3;
+  const Vec3 g = occlusal_pose(tooth.grid(), rho).x + Vec3(0, 0, 1e-4);
+  Contact contact;
+  contact.x_o = g - rho * contact.n;
+  std::vector<Contact> shares;
+  std::vector<std::size_t> voxels, candidates;
+  shares.reserve(kContactCapacity);
+  voxels.reserve(kContactCapacity);
+  candidates.reserve(1u << 16);
+  fast::SurfaceCutSet cut(tooth, rho, &fast::signed_distance);
+  fast::SurfaceCutSet::Nearest nearest;
+  std::uint8_t material = 0;
+  for (auto _ : state) {
+    shares.clear();
+    voxels.clear();
+    if (state.range(1) == 0) {
+      material = proxy_material(tooth, g, rho, &fast::signed_distance);
+      collect_cut_set(tooth, contact, g, rho, &candidates, &shares, &voxels);
+    } else {
+      cut.collect(g, contact, &shares, &voxels, &nearest);
+      material = tooth.grid().voxels[nearest.voxel];
+    }
+    benchmark::DoNotOptimize(material);
+    benchmark::DoNotOptimize(shares.data());
+  }
+  state.counters["members"] = static_cast<double>(shares.size());
+  state.SetLabel(state.range(1) == 0 ? "octree" : "surface voxels");
+}
+BENCHMARK(BM_CutSet)->ArgsProduct({{128, 256, 512}, {0, 1}});
 
 // The field model's query (issue #30): value and gradient at a point, i.e. the surface proxy's
 // distance(x, rho) and, where found, normal(x), on the drill scene's tooth (procedural molar at

@@ -723,9 +723,8 @@ void FieldEditWorker::edit(Batch& b, int number) {
 }
 
 FieldContactProvider::FieldContactProvider(VoxelTooth& tooth, const PipelineToothSetup& setup)
-    : dentsim::ToothContactProvider(tooth, setup.tip, setup.k_tooth, setup.b_tooth,
-                                    setup.drilling, ContactModel::kField, &fast::signed_distance,
-                                    setup.field),
+    : CutSetProvider(tooth, setup.tip, setup.k_tooth, setup.b_tooth, setup.drilling,
+                     ContactModel::kField, &fast::signed_distance, setup.field),
       tooth_(tooth),
       field_(setup.field),
       real_time_(setup.real_time),

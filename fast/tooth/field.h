@@ -54,6 +54,7 @@
 #include <utility>
 #include <vector>
 
+#include "fast/tooth/cut_set.h"
 #include "reference/tooth/field_contact.h"
 #include "reference/tooth/tooth_contacts.h"
 
@@ -348,12 +349,12 @@ class FieldEditWorker {
 };
 
 // The fast pipeline's provider of the field model: dentsim::ToothContactProvider with the field
-// steps replaced by their twins (everything else, the contact, the drilled voxels, the edit
-// queue, is the reference's code). With setup.field_edit_latency > 0 and drilling, the edit runs
+// steps replaced by their twins and the cut set by CutSetProvider's (fast/tooth/cut_set.h;
+// everything else, the contact, the drilled voxels, the edit queue, is the reference's code). With setup.field_edit_latency > 0 and drilling, the edit runs
 // on a FieldEditWorker at that latency (bitwise the reference provider with
 // set_field_edit_latency(L)); 0: the reference's budget path on the servo thread. Throws what
 // the reference provider throws.
-class FieldContactProvider final : public dentsim::ToothContactProvider {
+class FieldContactProvider final : public CutSetProvider {
  public:
   FieldContactProvider(VoxelTooth& tooth, const PipelineToothSetup& setup);
   ~FieldContactProvider() override;

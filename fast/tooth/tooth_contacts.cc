@@ -35,9 +35,8 @@ void BrickPipelineTooth::tip_contacts(const Pose& pose, std::vector<Contact>* ou
 }
 
 SdfContactProvider::SdfContactProvider(VoxelTooth& tooth, const PipelineToothSetup& setup)
-    : dentsim::ToothContactProvider(tooth, setup.tip, setup.k_tooth, setup.b_tooth,
-                                    setup.drilling, ContactModel::kSurfaceProxy,
-                                    &fast::signed_distance),
+    : CutSetProvider(tooth, setup.tip, setup.k_tooth, setup.b_tooth, setup.drilling,
+                     ContactModel::kSurfaceProxy, &fast::signed_distance),
       tooth_(tooth),
       certify_(setup.skip_unneeded) {}
 

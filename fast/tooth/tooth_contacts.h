@@ -12,6 +12,7 @@
 
 #include "fast/tooth/brick_tooth.h"
 #include "fast/tooth/collision.h"
+#include "fast/tooth/cut_set.h"
 #include "fast/tooth/drilling.h"
 #include "fast/tooth/sdf.h"
 #include "reference/tooth/tooth_contacts.h"
@@ -36,11 +37,12 @@ class ToothContactProvider : public ToothProviderBase {
 
 // The surface-proxy contact ("sdf") of the fast pipeline: the reference's provider with
 // fast::signed_distance, whose proxy update runs on RecallingVoxelSolid (fast/tooth/sdf.h: the
-// same answers, the repeated ones remembered), so g is bitwise the reference's. With skips on
+// same answers, the repeated ones remembered), so g is bitwise the reference's, and whose cut set
+// and material come from the surface voxels (CutSetProvider, fast/tooth/cut_set.h). With skips on
 // (PipelineToothSetup::skip_unneeded) the solid keeps a free-space certificate across ticks
 // (fast/tooth/sdf.h FreeSpaceCertificate: no octree query while the tip is farther from the tooth
 // than its travel since the last exact one).
-class SdfContactProvider final : public dentsim::ToothContactProvider {
+class SdfContactProvider final : public CutSetProvider {
  public:
   SdfContactProvider(VoxelTooth& tooth, const PipelineToothSetup& setup);
   const FreeSpaceCertificate& certificate() const { return certificate_; }

@@ -93,8 +93,9 @@ void collect_cut_set(const VoxelTooth& tooth, const Contact& contact, const Vec3
                      std::vector<std::size_t>* voxels) {
   const VoxelGrid& grid = tooth.grid();
   candidates->clear();
-  const double band = kCutBandFraction * rho;  // the bur's cutting band about g
-  tooth.octree.query_sphere(g, rho + band, candidates);  // the solid voxels the band meets
+  const CutBand cut = cut_band(rho);  // the bur's cutting band about g
+  const double band = cut.depth;
+  tooth.octree.query_sphere(g, cut.reach, candidates);  // the solid voxels the band meets
   const std::size_t n = static_cast<std::size_t>(grid.n);
   for (const std::size_t v : *candidates) {
     if (tooth.codes.code(v) == 0) continue;  // no exposed face: under the cut surface

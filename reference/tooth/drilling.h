@@ -124,6 +124,19 @@ double cut_band_depth(const VoxelGrid& grid, int i, int j, int k, const Vec3& g,
 // converge to it.
 inline constexpr double kCutBandFraction = 1.0 / 3.0;
 
+// The cutting band of a bur of radius rho, as collect_cut_set and its fast twin
+// (fast/tooth/cut_set.h) both take it: its depth b = kCutBandFraction rho [m] and its reach
+// rho + b [m], the radius of the ball about g whose solid voxels (box nearer than the reach,
+// sphere_intersects_voxel) are the cut set's candidates.
+struct CutBand {
+  double depth;
+  double reach;
+};
+inline CutBand cut_band(double rho) {
+  const double b = kCutBandFraction * rho;
+  return {b, rho + b};
+}
+
 // The removal law's fraction theta (docs/derivations/drilling.md §1): a voxel goes in the first
 // tick at whose end its work W satisfies W >= theta E_m, the cut front past its centre; it is
 // charged the whole E_m, the missing E_m - W carried as a debt (DrillState::carry_j).

@@ -231,28 +231,41 @@ const Vec3& SurfaceProxy::update(const VoxelTooth& tooth, const Vec3& c) {
   return g_;
 }
 
-bool surface_proxy_contact(const VoxelTooth& tooth, const Pose& proxy, const ToolTip& tip,
-                           const Vec3& g, double k_tooth, double b_tooth, Contact* out,
-                           SignedDistanceFn sd_fn) {
+bool surface_proxy_geometry(const Pose& proxy, const ToolTip& tip, const Vec3& g, Contact* out) {
   const Vec3 c = proxy.x + proxy.R * tip.offset_body;
   const Vec3 gap = g - c;
   const double depth = gap.norm();
   if (!(depth > 1e-9 * tip.radius)) return false;
   const Vec3 n = gap / depth;
-  const SignedDistance sd = sd_fn(tooth, g, 2.0 * tip.radius);
-  // The material under the proxy (enamel if, after a slide, no solid is within 2 rho of g).
-  std::uint8_t material = sd.found ? tooth.grid().voxels[sd.voxel] : std::uint8_t{kEmpty};
-  if (material == kEmpty) material = kEnamel;
-  const MaterialProperties& props = material_properties(material);
   out->n = n;
   out->x_o = g - tip.radius * n;
   const Vec3 x_c = c - tip.radius * n;
   out->r = proxy.R.transpose() * (x_c - proxy.x);
   out->depth = n.dot(out->x_o - x_c);  // = |g - c|  (2.15)
+  out->weight = 1.0;
+  return true;
+}
+
+std::uint8_t proxy_material(const VoxelTooth& tooth, const Vec3& g, double rho,
+                            SignedDistanceFn sd) {
+  const SignedDistance near = sd(tooth, g, proxy_material_reach(rho));
+  return near.found ? tooth.grid().voxels[near.voxel] : std::uint8_t{kEmpty};
+}
+
+void set_contact_material(std::uint8_t material, double k_tooth, double b_tooth, Contact* out) {
+  // The material under the proxy (enamel if, after a slide, no solid is within 2 rho of g).
+  if (material == kEmpty) material = kEnamel;
+  const MaterialProperties& props = material_properties(material);
   out->stiffness = k_tooth * props.stiffness_scale;
   out->damping = b_tooth * props.damping_scale;
-  out->weight = 1.0;
   out->material = material;
+}
+
+bool surface_proxy_contact(const VoxelTooth& tooth, const Pose& proxy, const ToolTip& tip,
+                           const Vec3& g, double k_tooth, double b_tooth, Contact* out,
+                           SignedDistanceFn sd_fn) {
+  if (!surface_proxy_geometry(proxy, tip, g, out)) return false;
+  set_contact_material(proxy_material(tooth, g, tip.radius, sd_fn), k_tooth, b_tooth, out);
   return true;
 }
 

@@ -33,6 +33,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 
 #include "reference/core/types.h"
@@ -156,5 +157,16 @@ class SurfaceProxy {
 bool surface_proxy_contact(const VoxelTooth& tooth, const Pose& proxy, const ToolTip& tip,
                            const Vec3& g, double k_tooth, double b_tooth, Contact* out,
                            SignedDistanceFn sd = &signed_distance);
+
+// surface_proxy_contact in its parts, for a provider that finds the material its own way (the
+// fast pipeline's, fast/tooth/cut_set.h): the geometry (n, x_o, r, depth and weight 1; false and
+// *out untouched when g == c); the reach of the material's search (2 rho); the material of the
+// solid voxel nearest to g within that reach by `sd` (kEmpty when none); and the contact's
+// material, stiffness and damping for a material (kEmpty: enamel).
+bool surface_proxy_geometry(const Pose& proxy, const ToolTip& tip, const Vec3& g, Contact* out);
+inline double proxy_material_reach(double rho) { return 2.0 * rho; }
+std::uint8_t proxy_material(const VoxelTooth& tooth, const Vec3& g, double rho,
+                            SignedDistanceFn sd = &signed_distance);
+void set_contact_material(std::uint8_t material, double k_tooth, double b_tooth, Contact* out);
 
 }  // namespace dentsim

@@ -78,12 +78,12 @@ ToothContactProvider::ToothContactProvider(VoxelTooth& tooth, ToolTip tip, doubl
   drill_voxels_.reserve(kContactCapacity);
   if (drill != nullptr && model_ != ContactModel::kFaces) {
     // collect_cut_set's query lists every solid voxel whose cube meets the ball of radius
-    // r = rho (1 + kCutBandFraction) about g: their centres lie within r + h sqrt(3) / 2 of g, so
+    // r = cut_band(rho).reach about g: their centres lie within r + h sqrt(3) / 2 of g, so
     // at most (2 floor(r / h + sqrt(3) / 2) + 1)^3 of them (and no more than the grid's). Room for
     // all, so that the query never grows the vector in the tick (a wide bur on a fine grid holds
     // far more than the scratch's default 4096: ~8 000 solid voxels for the 0.5 mm bur at 512^3).
     const double h = tooth.grid().voxel_size;
-    const double r = tip.radius * (1.0 + kCutBandFraction);
+    const double r = cut_band(tip.radius).reach;
     const double across = 2.0 * std::floor(r / h + 0.5 * std::sqrt(3.0)) + 1.0;
     const double n = static_cast<double>(tooth.grid().n);
     scratch_.candidates.reserve(
@@ -107,19 +107,26 @@ bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out
   const Vec3 c = proxy.x + proxy.R * tip_.offset_body;
   const Vec3& g = model_ == ContactModel::kField ? update_field_proxy(&surface_, c)
                                                  : update_sdf_proxy(&surface_, c);
-  Contact contact;
-  if (!surface_proxy_contact(tooth_, proxy, tip_, g, k_tooth_, b_tooth_, &contact, sd_)) {
+  Contact contact;  // surface_proxy_contact, its material from surface_contact_voxels
+  if (!surface_proxy_geometry(proxy, tip_, g, &contact)) {
     measure_anchor(c, g, false);
     return true;
   }
   measure_anchor(c, g, true);
   if (out.capacity() < 1) return false;
+  // The material, and the voxels in the bur's cutting band about g by the band's depth
+  // (drilling.h collect_cut_set).
+  surface_contact_voxels(g, &contact, drills_ ? &drill_contacts_ : nullptr, &drill_voxels_);
   out.push_back(contact);
-  if (!drills_) return true;
-  // The voxels in the bur's cutting band about g, by the band's depth (drilling.h collect_cut_set).
-  collect_cut_set(tooth_, contact, g, tip_.radius, &scratch_.candidates, &drill_contacts_,
-                  &drill_voxels_);
   return true;
+}
+
+void ToothContactProvider::surface_contact_voxels(const Vec3& g, Contact* contact,
+                                                  std::vector<Contact>* shares,
+                                                  std::vector<std::size_t>* voxels) {
+  set_contact_material(proxy_material(tooth_, g, tip_.radius, sd_), k_tooth_, b_tooth_, contact);
+  if (shares == nullptr) return;
+  collect_cut_set(tooth_, *contact, g, tip_.radius, &scratch_.candidates, shares, voxels);
 }
 
 const Vec3& ToothContactProvider::update_field_proxy(SurfaceProxy* proxy, const Vec3& c) {

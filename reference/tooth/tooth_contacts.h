@@ -134,6 +134,11 @@ class ToothContactProvider : public ToothProviderBase {
   // A flat face: g follows c, h = 0; a held anchor (a drilled hole, a corner): h = 1; a concave
   // face of radius r_A at depth delta: delta / (r_A + delta).
   const AnchoredSpring& anchored_spring() const { return anchored_; }
+  // With drilling (kSurfaceProxy, kField): the last contacts() call's cut set (collect_cut_set:
+  // one force share per voxel, and the voxels' flat indices), which the next drill() cuts (and
+  // clears).
+  const std::vector<Contact>& cut_shares() const { return drill_contacts_; }
+  const std::vector<std::size_t>& cut_voxels() const { return drill_voxels_; }
   // kField with drilling: drill() queues the voxels it removed (a ring of kFieldEditQueue), and
   // each contacts() call first subtracts queued ones from the field, spending about budget(T)
   // units of work (edit_field_for_removed_voxels with this provider's cursor: at most
@@ -215,6 +220,16 @@ class ToothContactProvider : public ToothProviderBase {
   // SurfaceProxy::update with this provider's query), which a twin with the same results may
   // replace (the fast pipeline's, fast/tooth/tooth_contacts.h; no allocation, no throw).
   virtual const Vec3& update_sdf_proxy(SurfaceProxy* proxy, const Vec3& c);
+  // The surface-proxy contact's voxel side (kSurfaceProxy, kField), once its geometry is set
+  // (surface_proxy_geometry): the material of `contact` (surface_proxy_contact's: of the solid
+  // voxel nearest to g within proxy_material_reach, by this provider's query) and, when `shares`
+  // is not null (drilling), the cut set about g (collect_cut_set with `contact` as set here)
+  // appended to `shares` and `voxels`. Here: proxy_material and collect_cut_set on the octree; a
+  // twin with the same results may replace it (the fast pipeline's: fast/tooth/cut_set.h, over
+  // the surface voxels; no allocation, no throw).
+  virtual void surface_contact_voxels(const Vec3& g, Contact* contact,
+                                      std::vector<Contact>* shares,
+                                      std::vector<std::size_t>* voxels);
   // The edit takes `cursor` and `budget` as edit_field_for_removed_voxels does.
   virtual bool edit_field(SampledField* field, std::span<const std::size_t> removed,
                           FieldEditStats* stats, FieldEditCursor* cursor, long budget);

@@ -1,0 +1,384 @@
+// The cut set and the contact's material over the tooth's exposed voxels (fast/tooth/cut_set.h).
+#include "fast/tooth/cut_set.h"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <limits>
+
+#include "reference/tooth/drilling.h"
+#include "reference/tooth/sdf.h"
+
+namespace dentsim::fast {
+
+namespace {
+
+constexpr int kB = SurfaceVoxels::kBrick;
+constexpr int kBrickBits = kB * kB * kB;
+
+// The Morton interleave of local coordinates (x, y, z), each in 0..7: 9 bits.
+constexpr int interleave3(int x, int y, int z) {
+  int m = 0;
+  for (int b = 0; b < 3; ++b) {
+    m |= ((x >> b) & 1) << (3 * b);
+    m |= ((y >> b) & 1) << (3 * b + 1);
+    m |= ((z >> b) & 1) << (3 * b + 2);
+  }
+  return m;
+}
+
+// Per axis and local range [lo, hi] (0..7): the brick's bits whose coordinate on that axis lies in
+// the range (8 words); and each bit's local coordinates x | y << 3 | z << 6.
+struct BrickTables {
+  std::array<std::uint64_t, 3 * kB * kB * SurfaceVoxels::kWords> range{};
+  std::array<std::uint16_t, kBrickBits> coords{};
+};
+
+constexpr BrickTables make_brick_tables() {
+  BrickTables t;
+  for (int z = 0; z < kB; ++z) {
+    for (int y = 0; y < kB; ++y) {
+      for (int x = 0; x < kB; ++x) {
+        t.coords[static_cast<std::size_t>(interleave3(x, y, z))] =
+            static_cast<std::uint16_t>(x | (y << 3) | (z << 6));
+      }
+    }
+  }
+  for (int a = 0; a < 3; ++a) {
+    for (int lo = 0; lo < kB; ++lo) {
+      for (int hi = lo; hi < kB; ++hi) {
+        for (int m = 0; m < kBrickBits; ++m) {
+          const int c = (t.coords[static_cast<std::size_t>(m)] >> (3 * a)) & 7;
+          if (c < lo || c > hi) continue;
+          const std::size_t w = static_cast<std::size_t>(((a * kB + lo) * kB + hi) *
+                                                         SurfaceVoxels::kWords + m / 64);
+          t.range[w] |= std::uint64_t{1} << (m % 64);
+        }
+      }
+    }
+  }
+  return t;
+}
+
+constexpr BrickTables kTables = make_brick_tables();
+
+const std::uint64_t* range_mask(int axis, int lo, int hi) {
+  return &kTables.range[static_cast<std::size_t>(((axis * kB + lo) * kB + hi) *
+                                                 SurfaceVoxels::kWords)];
+}
+
+// Spreads the low 10 bits of v to every third bit (the Morton code of brick coordinates).
+std::uint64_t spread3(std::uint64_t v) {
+  v &= 0x3ff;
+  v = (v | (v << 16)) & 0x30000ffull;
+  v = (v | (v << 8)) & 0x300f00full;
+  v = (v | (v << 4)) & 0x30c30c3ull;
+  v = (v | (v << 2)) & 0x9249249ull;
+  return v;
+}
+
+}  // namespace
+
+int SurfaceVoxels::local_bit(int x, int y, int z) { return interleave3(x, y, z); }
+
+SurfaceVoxels::SurfaceVoxels(const VoxelTooth& tooth) {
+  const VoxelGrid& grid = tooth.grid();
+  n_ = grid.n;
+  nb_ = (n_ + kB - 1) / kB;
+  const std::size_t slots = static_cast<std::size_t>(nb_) * nb_ * nb_;
+  index_.assign(slots, kNoRoom);
+  // A brick's room for every slot holding a solid voxel (the octree's node of the brick's level
+  // says so at once; a grid smaller than a brick is one slot).
+  const int L = tooth.octree.levels();
+  std::size_t room = 0;
+  for (int bz = 0; bz < nb_; ++bz) {
+    for (int by = 0; by < nb_; ++by) {
+      for (int bx = 0; bx < nb_; ++bx) {
+        const bool solid = L >= 3 ? tooth.octree.occupied(L - 3, bx, by, bz)
+                                  : (n_ > 0 && tooth.octree.occupied(0, 0, 0, 0));
+        if (!solid) continue;
+        index_[slot(bx, by, bz)] = kNone;
+        ++room;
+      }
+    }
+  }
+  bits_.reserve(room * kWords);
+  for (int bz = 0; bz < nb_; ++bz) {
+    for (int by = 0; by < nb_; ++by) {
+      for (int bx = 0; bx < nb_; ++bx) {
+        if (index_[slot(bx, by, bz)] == kNoRoom) continue;
+        const int i1 = std::min(n_, kB * (bx + 1)), j1 = std::min(n_, kB * (by + 1));
+        const int k1 = std::min(n_, kB * (bz + 1));
+        for (int k = kB * bz; k < k1; ++k) {
+          for (int j = kB * by; j < j1; ++j) {
+            for (int i = kB * bx; i < i1; ++i) {
+              if (tooth.codes.code(grid.index(i, j, k)) != 0) set(i, j, k, true);
+            }
+          }
+        }
+      }
+    }
+  }
+}
+
+bool SurfaceVoxels::set(int i, int j, int k, bool on) {
+  const std::size_t s = slot(i / kB, j / kB, k / kB);
+  std::int32_t id = index_[s];
+  if (id < 0) {
+    if (!on) return true;
+    if (id == kNoRoom || bits_.size() + kWords > bits_.capacity()) return false;
+    id = static_cast<std::int32_t>(bits_.size() / kWords);
+    bits_.resize(bits_.size() + kWords, 0);  // within the reserve: no allocation
+    index_[s] = id;
+  }
+  const int m = local_bit(i % kB, j % kB, k % kB);
+  std::uint64_t& word = bits_[static_cast<std::size_t>(id) * kWords + static_cast<std::size_t>(m / 64)];
+  const std::uint64_t bit = std::uint64_t{1} << (m % 64);
+  word = on ? (word | bit) : (word & ~bit);
+  return true;
+}
+
+bool SurfaceVoxels::update(const VoxelTooth& tooth, std::span<const std::size_t> removed) {
+  const VoxelGrid& grid = tooth.grid();
+  const std::size_t n = static_cast<std::size_t>(n_);
+  for (const std::size_t v : removed) {
+    const int i = static_cast<int>(v % n), j = static_cast<int>((v / n) % n);
+    const int k = static_cast<int>(v / (n * n));
+    for (int f = -1; f < 6; ++f) {  // the voxel, then its six face neighbours
+      int u[3] = {i, j, k};
+      if (f >= 0) u[face_axis(f)] += face_sign(f);
+      if (!grid.inside(u[0], u[1], u[2])) continue;
+      const bool on = tooth.codes.code(grid.index(u[0], u[1], u[2])) != 0;
+      if (!set(u[0], u[1], u[2], on)) current_ = false;
+    }
+  }
+  return current_;
+}
+
+bool SurfaceVoxels::exposed(int i, int j, int k) const {
+  const std::uint64_t* b = brick(slot(i / kB, j / kB, k / kB));
+  if (b == nullptr) return false;
+  const int m = local_bit(i % kB, j % kB, k % kB);
+  return ((b[m / 64] >> (m % 64)) & 1) != 0;
+}
+
+std::size_t SurfaceVoxels::count() const {
+  std::size_t c = 0;
+  for (const std::uint64_t w : bits_) c += static_cast<std::size_t>(std::popcount(w));
+  return c;
+}
+
+SurfaceCutSet::SurfaceCutSet(const VoxelTooth& tooth, double rho, SignedDistanceFn sd)
+    : tooth_(tooth), rho_(rho), sd_(sd), surface_(tooth) {
+  const VoxelGrid& grid = tooth.grid();
+  const double h = grid.voxel_size;
+  const double reach = std::max(cut_band(rho).reach, proxy_material_reach(rho));  // R'
+  eps_ = std::ldexp(reach, -23);
+  const double extent = grid.origin.cwiseAbs().maxCoeff() + grid.n * h + reach;
+  certify_ = h >= eps_ && eps_ >= std::ldexp(extent, -44);
+  // The ball's box spans at most 2 R / h + 4 voxels per axis (a voxel of margin each side, and
+  // the floors' rounding; collect), hence that many terms (and two more) and its bricks.
+  const double across = std::min<double>(grid.n, std::floor(2.0 * cut_band(rho).reach / h) + 6.0);
+  const std::size_t voxels = static_cast<std::size_t>(std::max(1.0, across));
+  for (std::vector<double>& t : terms_) t.resize(voxels);
+  const std::size_t bricks = std::min<std::size_t>(
+      static_cast<std::size_t>(surface_.slots_per_axis()), (voxels + kB - 2) / kB + 1);
+  order_.reserve(bricks * bricks * bricks);
+  keys_.reserve(bricks * bricks * bricks);
+}
+
+void SurfaceCutSet::order_bricks(const int b_lo[3], const int b_hi[3]) {
+  if (std::equal(b_lo, b_lo + 3, box_lo_) && std::equal(b_hi, b_hi + 3, box_hi_)) return;
+  keys_.clear();
+  for (int bz = b_lo[2]; bz <= b_hi[2]; ++bz) {
+    for (int by = b_lo[1]; by <= b_hi[1]; ++by) {
+      for (int bx = b_lo[0]; bx <= b_hi[0]; ++bx) {
+        // (Morton code, slot): the code in the high bits (at most 30), the slot in the low 32.
+        const std::uint64_t morton = spread3(static_cast<std::uint64_t>(bx)) |
+                                     (spread3(static_cast<std::uint64_t>(by)) << 1) |
+                                     (spread3(static_cast<std::uint64_t>(bz)) << 2);
+        keys_.push_back((morton << 32) | surface_.slot(bx, by, bz));
+      }
+    }
+  }
+  std::sort(keys_.begin(), keys_.end(), [](std::uint64_t a, std::uint64_t b) { return a > b; });
+  order_.clear();
+  for (const std::uint64_t key : keys_) order_.push_back(static_cast<std::uint32_t>(key));
+  std::copy(b_lo, b_lo + 3, box_lo_);
+  std::copy(b_hi, b_hi + 3, box_hi_);
+}
+
+bool SurfaceCutSet::near_grid_plane(const Vec3& g) const {
+  const VoxelGrid& grid = tooth_.grid();
+  for (int a = 0; a < 3; ++a) {
+    const double u = std::floor((g[a] - grid.origin[a]) / grid.voxel_size);
+    for (int d = -1; d <= 2; ++d) {
+      const double p = grid.origin[a] + grid.voxel_size * (u + d);  // origin + h i, i = u + d
+      if (std::abs(g[a] - p) < eps_) return true;
+    }
+  }
+  return false;
+}
+
+bool SurfaceCutSet::collect(const Vec3& g, const Contact& contact, std::vector<Contact>* shares,
+                            std::vector<std::size_t>* voxels, Nearest* nearest) {
+  if (!surface_.current() || !g.allFinite()) return false;
+  ++queries_;
+  const VoxelGrid& grid = tooth_.grid();
+  const int n = grid.n;
+  const double h = grid.voxel_size;
+  // The inside case of signed_distance: g in a solid voxel's cell.
+  int cell[3];
+  const bool inside = sdf_detail::voxel_of(grid, g, cell) &&
+                      grid.voxels[grid.index(cell[0], cell[1], cell[2])] != kEmpty;
+  if (inside && shares == nullptr) {
+    nearest->found = true;
+    nearest->voxel = grid.index(cell[0], cell[1], cell[2]);
+    return true;
+  }
+  const CutBand cut = cut_band(rho_);
+  const double R2 = cut.reach * cut.reach;  // sphere_intersects_cells's rho * rho
+  const double m = proxy_material_reach(rho_);
+  bool found = false;
+  double best2 = m * m;  // outside_distance's reach * reach
+  std::size_t best = 0;
+  // The ball's box of voxels, one voxel wider each side than its bounds (their rounding), clipped
+  // to the grid; the squared gap of each voxel along each axis (sphere_intersects_cells's terms).
+  int lo[3], hi[3];
+  bool empty = false;
+  for (int a = 0; a < 3; ++a) {
+    const double u0 = std::floor((g[a] - cut.reach - grid.origin[a]) / h) - 1.0;
+    const double u1 = std::floor((g[a] + cut.reach - grid.origin[a]) / h) + 1.0;
+    empty = empty || u1 < 0.0 || u0 > n - 1.0;
+    lo[a] = empty ? 0 : static_cast<int>(std::max(u0, 0.0));
+    hi[a] = empty ? 0 : static_cast<int>(std::min(u1, n - 1.0));
+    // Within the constructor's bound (a guard: the reference answers otherwise).
+    if (static_cast<std::size_t>(hi[a] - lo[a] + 1) > terms_[a].size()) return false;
+  }
+  if (inside) {
+    nearest->found = true;
+    nearest->voxel = grid.index(cell[0], cell[1], cell[2]);
+  }
+  for (int a = 0; a < 3 && !empty; ++a) {
+    double* t = terms_[a].data();
+    for (int i = lo[a]; i <= hi[a]; ++i) {
+      const double l = grid.origin[a] + grid.voxel_size * i;
+      const double r = grid.origin[a] + grid.voxel_size * (i + 1);
+      double d = 0.0;
+      if (g[a] < l) {
+        d = l - g[a];
+      } else if (g[a] > r) {
+        d = g[a] - r;
+      }
+      t[i - lo[a]] = d * d;
+    }
+  }
+  if (!empty) {
+    const int b_lo[3] = {lo[0] / kB, lo[1] / kB, lo[2] / kB};
+    const int b_hi[3] = {hi[0] / kB, hi[1] / kB, hi[2] / kB};
+    order_bricks(b_lo, b_hi);
+    const double* tx = terms_[0].data();
+    const double* ty = terms_[1].data();
+    const double* tz = terms_[2].data();
+    bool cutting = shares != nullptr;
+    const std::size_t nn = static_cast<std::size_t>(n);
+    for (const std::uint32_t s : order_) {
+      const std::uint64_t* bits = surface_.brick(s);
+      if (bits == nullptr) continue;
+      const int bx = static_cast<int>(s % static_cast<std::uint32_t>(surface_.slots_per_axis()));
+      const int by = static_cast<int>((s / static_cast<std::uint32_t>(surface_.slots_per_axis())) %
+                                      static_cast<std::uint32_t>(surface_.slots_per_axis()));
+      const int bz = static_cast<int>(s / static_cast<std::uint32_t>(surface_.slots_per_axis() *
+                                                                     surface_.slots_per_axis()));
+      const int x0 = kB * bx, y0 = kB * by, z0 = kB * bz;
+      const std::uint64_t* mx =
+          range_mask(0, std::max(lo[0] - x0, 0), std::min(hi[0] - x0, kB - 1));
+      const std::uint64_t* my =
+          range_mask(1, std::max(lo[1] - y0, 0), std::min(hi[1] - y0, kB - 1));
+      const std::uint64_t* mz =
+          range_mask(2, std::max(lo[2] - z0, 0), std::min(hi[2] - z0, kB - 1));
+      for (int w = SurfaceVoxels::kWords - 1; w >= 0; --w) {
+        std::uint64_t word = bits[w] & mx[w] & my[w] & mz[w];
+        while (word != 0) {
+          // The highest 2^3 block (byte) left, its voxels in child order.
+          const int byte = (63 - std::countl_zero(word)) >> 3;
+          std::uint64_t block = (word >> (8 * byte)) & 0xff;
+          word &= ~(std::uint64_t{0xff} << (8 * byte));
+          while (block != 0) {
+            const int c = std::countr_zero(block);
+            block &= block - 1;
+            const int xyz = kTables.coords[static_cast<std::size_t>(64 * w + 8 * byte + c)];
+            const int i = x0 + (xyz & 7), j = y0 + ((xyz >> 3) & 7), k = z0 + (xyz >> 6);
+            const double d2 = (tx[i - lo[0]] + ty[j - lo[1]]) + tz[k - lo[2]];
+            if (!(d2 < R2)) continue;  // not in the ball: the reference never lists it
+            const std::size_t v = static_cast<std::size_t>(i) + nn * (static_cast<std::size_t>(j) + nn * static_cast<std::size_t>(k));
+            if (d2 < best2 || (found && d2 == best2 && v < best)) {  // sdf_nearer
+              best2 = d2;
+              best = v;
+              found = true;
+            }
+            if (!cutting) continue;
+            if (shares->size() >= shares->capacity() || voxels->size() >= voxels->capacity()) {
+              cutting = false;  // collect_cut_set stops here
+              continue;
+            }
+            const double depth = cut_band_depth(grid, i, j, k, g, rho_, cut.depth);
+            if (!(depth > 0.0)) continue;
+            Contact share = contact;
+            share.material = grid.voxels[v];
+            share.weight = depth;
+            shares->push_back(share);
+            voxels->push_back(v);
+          }
+        }
+      }
+    }
+  }
+  if (inside) return true;
+  if (found && certify_ && !near_grid_plane(g)) {
+    nearest->found = true;
+    nearest->voxel = best;
+    return true;
+  }
+  ++fallbacks_;
+  const SignedDistance sd = sd_(tooth_, g, m);
+  nearest->found = sd.found;
+  nearest->voxel = sd.voxel;
+  return true;
+}
+
+CutSetProvider::CutSetProvider(VoxelTooth& tooth, ToolTip tip, double k_tooth, double b_tooth,
+                               const DrillParams* drill, ContactModel model, SignedDistanceFn sd,
+                               SampledField* field)
+    : dentsim::ToothContactProvider(tooth, tip, k_tooth, b_tooth, drill, model, sd, field),
+      cut_(tooth, tip.radius, sd) {}
+
+int CutSetProvider::drill(std::span<const Contact> contacts, double T) {
+  const int removed = dentsim::ToothContactProvider::drill(contacts, T);
+  if (removed > 0) cut_.update(last_removed());
+  return removed;
+}
+
+void CutSetProvider::surface_contact_voxels(const Vec3& g, Contact* contact,
+                                            std::vector<Contact>* shares,
+                                            std::vector<std::size_t>* voxels) {
+  const std::size_t first = shares != nullptr ? shares->size() : 0;
+  SurfaceCutSet::Nearest nearest;
+  if (!cut_.collect(g, *contact, shares, voxels, &nearest)) {
+    dentsim::ToothContactProvider::surface_contact_voxels(g, contact, shares, voxels);
+    return;
+  }
+  const std::uint8_t material =
+      nearest.found ? voxel_tooth().grid().voxels[nearest.voxel] : std::uint8_t{kEmpty};
+  set_contact_material(material, k_tooth_, b_tooth_, contact);
+  if (shares == nullptr) return;
+  // The members were copied from the contact before its material was known: its stiffness and
+  // damping (the same doubles collect_cut_set copies).
+  for (std::size_t i = first; i < shares->size(); ++i) {
+    (*shares)[i].stiffness = contact->stiffness;
+    (*shares)[i].damping = contact->damping;
+  }
+}
+
+}  // namespace dentsim::fast

@@ -1,0 +1,189 @@
+// The fast twin of the surface-proxy contact's voxel side (issue #30 "fast/ that earns its name";
+// reference: ToothContactProvider::surface_contact_voxels, reference/tooth/tooth_contacts.h): the
+// cut set of drilling (reference/tooth/drilling.h collect_cut_set) and the contact's material
+// (reference/tooth/sdf.h proxy_material), from the tooth's exposed voxels only. Same voxels, same
+// order, same doubles, same material (tests/fast/cut_set_test.cc).
+//
+// The reference's cost: collect_cut_set lists every solid voxel of the ball (g, R), R =
+// cut_band(rho).reach, by an octree descent from the root (FullOctree::query_sphere), and keeps
+// the exposed ones (a non-zero neighbour code) with a band depth > 0: at 512^3 and the 0.5 mm bur
+// ~8 000 solid voxels for ~900 members. The material asks sd(tooth, g, 2 rho), the nearest solid
+// voxel, by a second descent from the root. The twin visits the exposed voxels of the ball's
+// bounding box only, once, for both.
+//
+// SurfaceVoxels: one bit per voxel, set iff its neighbour code is non-zero (reference/tooth/
+// neighbors.h), in bricks of 8^3 voxels (64 bytes) held only where the brick had a solid voxel at
+// construction (a voxel can become exposed only there: removals never add solid). Inside a brick
+// the bits are in Morton order: bit m of the 512 is the voxel whose local coordinates interleave
+// to m (x in bit 0, y in bit 1, z in bit 2, ...), so word w (64 bits) is a 4^3 block and byte b of
+// a word is a 2^3 block, bit c of the byte its child c = dx + 2 dy + 4 dz. Drilling keeps them
+// current at a bounded cost: after drill_tick removed a voxel (and reencode_local re-encoded it and
+// its six face neighbours), update() re-reads those seven codes (7 bits per removed voxel).
+//
+// The order (the reference's, so that the work sums come out the same). query_sphere descends
+// depth first: a node's children are pushed in child order 0..7 and popped 7..0, and a node of
+// level L-1 (a 2^3 block) appends its voxels in child order 0..7. So the candidates come in
+// decreasing Morton code of their 2^3 block, and within a block in increasing child index. With
+// the Morton code of a voxel = (its brick's Morton code) * 512 + its bit m, the twin visits the
+// bricks in decreasing Morton code (the box's bricks sorted once, and kept while the box stays in
+// the same bricks: the band moves little from tick to tick), in a brick its words 7..0, in a word
+// its bytes 7..0, and in a byte its bits 0..7. The members are then the reference's: every
+// exposed voxel whose box passes the ball test (the squared distance D < R^2 from the same terms
+// as sphere_intersects_cells, summed in its order; the octree's node tests never reject a voxel its
+// leaf test accepts, octree.h) with cut_band_depth > 0, in that order, up to the vectors' room,
+// each the contact with the voxel's material and the depth as its weight.
+//
+// The material. The reference (sd(tooth, g, 2 rho), reference/tooth/sdf.cc): for g in a solid
+// voxel's cell (sdf_detail::voxel_of), that voxel; else the solid voxel v* minimising (D(v), v)
+// over the solid voxels with D < (2 rho)^2 (sdf_nearer: the smallest distance, then the smallest
+// flat index; D by box_distance2, the same double as the ball test's). The twin: the same inside
+// test and voxel; outside, the same minimum over the exposed voxels of the ball with D < (2 rho)^2,
+// certified when one exists and g is not near a grid plane: |g_a - p| >= eps on every axis a for
+// every plane p = origin_a + h i (as computed), eps = 2^-23 R', R' = max(R, 2 rho); otherwise the
+// provider's query (counted: fallbacks()). The constructor checks h >= eps and eps >= 2^-44
+// (|origin|_inf + N h + R') (else every query falls back; both hold by orders of magnitude for a
+// tooth). Claim: certified, the two agree.
+// Proof: the found voxel b has D(b) < (2 rho)^2, so v* exists with D(v*) <= D(b) < R^2: v* is in
+// the ball. If v* is exposed, it is among the voxels the twin minimised over (a subset of the
+// reference's holding its minimiser): b = v*. Suppose v* is not exposed: its six face neighbours
+// are solid. If D(v*) = 0, every term is 0, so g is in v*'s closed box (a gap whose square
+// underflows is < eps), at least eps from its planes: then voxel_of, whose rounding is far below
+// eps, puts g in v*'s cell, the inside case. So some term of v*, on axis a, is > 0: g is outside
+// v*'s slab there. The face neighbour u toward g differs from v* in that term only, no larger
+// (the same rounded bounds, monotone rounding): D(u) <= D(v*). If u = v* - e_a, its index is
+// smaller and v* would not be the minimiser; so u = v* + e_a, g_a > hi_a(v*) and D(u) = D(v*).
+// v*'s term is s^2, s = g_a - hi_a(v*) >= eps; u's is 0 if g_a <= hi_a(u), else (s - h)^2, smaller
+// by more than h^2 >= eps^2. Each of D(u), D(v*) < R'^2 is within 2^-52 R'^2 of the exact sum of
+// its terms (two roundings of at most 2^-53 each), and the terms differ by >= eps^2 = 2^-46 R'^2 >
+// 2^-51 R'^2: D(u) < D(v*), a contradiction. So v* is exposed and b = v*.
+//
+// Real-time: collect() and update() neither allocate nor throw (their buffers are sized by the
+// constructor from the tip's radius and the grid).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "reference/tooth/tooth_contacts.h"
+
+namespace dentsim::fast {
+
+// The tooth's exposed voxels as bits (header comment).
+class SurfaceVoxels {
+ public:
+  static constexpr int kBrick = 8;  // brick edge [voxels]
+  static constexpr int kWords = 8;  // 64-bit words of a brick
+
+  // Reads tooth.codes (allocates: the slot index and a brick's room for every slot holding a
+  // solid voxel).
+  explicit SurfaceVoxels(const VoxelTooth& tooth);
+
+  // After drilling removed the voxels `removed` of `tooth` (flat indices; drill_tick re-encoded
+  // them and their face neighbours): their bits and their face neighbours' from tooth.codes.
+  // Returns false, and current() is false from then on, if a bit had no brick's room (impossible
+  // while the tooth only loses voxels). No allocation.
+  bool update(const VoxelTooth& tooth, std::span<const std::size_t> removed);
+  bool current() const { return current_; }
+
+  bool exposed(int i, int j, int k) const;
+  std::size_t count() const;  // voxels exposed (tests: count_surface_voxels)
+  std::size_t brick_count() const { return bits_.size() / kWords; }
+  std::size_t reserved_bricks() const { return bits_.capacity() / kWords; }
+  int slots_per_axis() const { return nb_; }
+  std::size_t slot(int bx, int by, int bz) const {
+    return static_cast<std::size_t>(bx) +
+           static_cast<std::size_t>(nb_) *
+               (static_cast<std::size_t>(by) + static_cast<std::size_t>(nb_) * bz);
+  }
+  // The 8 words of slot s's brick, null if the slot has none (no exposed voxel yet).
+  const std::uint64_t* brick(std::size_t s) const {
+    const std::int32_t id = index_[s];
+    return id < 0 ? nullptr : &bits_[static_cast<std::size_t>(id) * kWords];
+  }
+  // The bit of local voxel (x, y, z) of a brick (each in 0..7): the Morton interleave.
+  static int local_bit(int x, int y, int z);
+
+ private:
+  // Sets voxel (i, j, k)'s bit to `on`; false when it needs a brick where none may be taken.
+  bool set(int i, int j, int k, bool on);
+
+  static constexpr std::int32_t kNone = -1;    // no brick yet (room reserved)
+  static constexpr std::int32_t kNoRoom = -2;  // no solid voxel at construction
+  int n_ = 0, nb_ = 0;
+  bool current_ = true;
+  std::vector<std::int32_t> index_;   // per slot: brick id, kNone or kNoRoom
+  std::vector<std::uint64_t> bits_;   // brick id * 8 + word; capacity: the reserve
+};
+
+// The cut set and the material of the surface-proxy contact at g (header comment) for a tip of
+// radius rho on `tooth` (which must outlive it; its changes reported to update()).
+class SurfaceCutSet {
+ public:
+  // The voxel the material is read from (sd(tooth, g, 2 rho)'s found and voxel).
+  struct Nearest {
+    bool found = false;
+    std::size_t voxel = 0;
+  };
+
+  // `sd`: the provider's signed-distance query (the material's uncertified case). Allocates.
+  SurfaceCutSet(const VoxelTooth& tooth, double rho, SignedDistanceFn sd);
+
+  // drill_tick removed `removed` from the tooth.
+  void update(std::span<const std::size_t> removed) { surface_.update(tooth_, removed); }
+
+  // The nearest voxel into *nearest and, if `shares` is not null, collect_cut_set(tooth, contact,
+  // g, rho, ...)'s members appended to `shares` and `voxels`. Returns false, touching nothing,
+  // when it cannot answer (g not finite, or the bits not current): the caller asks the
+  // reference. No allocation, no throw.
+  bool collect(const Vec3& g, const Contact& contact, std::vector<Contact>* shares,
+               std::vector<std::size_t>* voxels, Nearest* nearest);
+
+  const SurfaceVoxels& surface() const { return surface_; }
+  // Material queries answered by sd (no exposed voxel within reach, or g near a grid plane), and
+  // all of them (tests and benchmarks).
+  long fallbacks() const { return fallbacks_; }
+  long queries() const { return queries_; }
+
+ private:
+  // The bricks of box [b_lo, b_hi] (brick coordinates) in decreasing Morton code, into order_
+  // (kept while the box is the same).
+  void order_bricks(const int b_lo[3], const int b_hi[3]);
+  // Whether g lies within eps_ of a grid plane on some axis (header comment).
+  bool near_grid_plane(const Vec3& g) const;
+
+  const VoxelTooth& tooth_;
+  double rho_;
+  SignedDistanceFn sd_;
+  SurfaceVoxels surface_;
+  double eps_ = 0.0;
+  bool certify_ = true;  // the constructor's conditions (header comment)
+  std::vector<double> terms_[3];  // the squared gaps along each axis over the ball's box
+  std::vector<std::uint32_t> order_;  // slots of the box's bricks, decreasing Morton code
+  std::vector<std::uint64_t> keys_;   // scratch of order_bricks
+  int box_lo_[3] = {1, 1, 1}, box_hi_[3] = {0, 0, 0};  // the box order_ holds (empty)
+  long fallbacks_ = 0, queries_ = 0;
+};
+
+// dentsim::ToothContactProvider with its voxel side replaced by SurfaceCutSet: the fast
+// pipeline's sdf (fast/tooth/tooth_contacts.h) and field (fast/tooth/field.h) providers derive
+// from it. Same arguments and results as the reference provider.
+class CutSetProvider : public dentsim::ToothContactProvider {
+ public:
+  CutSetProvider(VoxelTooth& tooth, ToolTip tip, double k_tooth, double b_tooth,
+                 const DrillParams* drill, ContactModel model, SignedDistanceFn sd,
+                 SampledField* field = nullptr);
+  // The reference's drill(), then the removed voxels into the surface bits.
+  int drill(std::span<const Contact> contacts, double T) override;
+  const SurfaceCutSet& cut_set() const { return cut_; }
+
+ protected:
+  void surface_contact_voxels(const Vec3& g, Contact* contact, std::vector<Contact>* shares,
+                              std::vector<std::size_t>* voxels) override;
+
+ private:
+  SurfaceCutSet cut_;
+};
+
+}  // namespace dentsim::fast

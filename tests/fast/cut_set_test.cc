@@ -1,0 +1,533 @@
+// The fast surface-proxy contact's voxel side (fast/tooth/cut_set.h) against the reference
+// (ToothContactProvider::surface_contact_voxels: collect_cut_set and proxy_material, reference/
+// tooth/drilling.h and sdf.h) and a brute-force oracle:
+// - the surface bits: set exactly on the voxels with a non-zero neighbour code, at construction and
+//   after removals (update, 7 bits per removed voxel);
+// - random anchors g near the surface of the procedural molar (64^3 to 256^3) and of a real molar
+//   mesh (../shared/data), some on grid planes, some inside: the cut set (voxels, order, weights,
+//   bitwise) equal to collect_cut_set's and to a brute force over the flat grid (every exposed
+//   solid voxel of the ball with a band depth > 0, in the reference query's order written out:
+//   decreasing Morton code of the 2^3 block, then the child index), and the material's voxel equal
+//   to sd(tooth, g, 2 rho)'s and to the brute-force nearest solid voxel (smallest distance, then
+//   smallest index);
+// - the providers: the reference and the fast sdf and field providers (field stride 1 and 2) driven
+//   along the same scripted bur path at four resolutions (h = 0.25 mm to 0.0425 mm, the last the
+//   512^3 molar's voxel on a small block): every tick's contact, cut set and removed voxels
+//   bitwise equal, the grids equal at the end, the surface bits still the codes, no allocation;
+// - the drill scene's closed loop in the fast pipeline (sdf and field), its tooth's voxel side the
+//   fast one or the reference's: every tick's contact wrench, torques and removed voxels bitwise
+//   equal, and the removed volume.
+// Bitwise because the arithmetic is the same (docs/tolerance_policy.md item 9).
+#include "fast/tooth/cut_set.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "fast/tooth/field.h"
+#include "fast/tooth/sdf.h"
+#include "fast/tooth/tooth_contacts.h"
+#include "reference/tooth/drilling.h"
+#include "sim/scene.h"
+#include "sim/simulator.h"
+#include "tests/support/alloc_counter.h"
+#include "tests/tooth/field_shapes.h"
+#include "tooth_io/mesh.h"
+#include "tooth_io/procedural_molar.h"
+#include "tooth_io/voxelize.h"
+
+namespace dentsim {
+namespace {
+
+constexpr double kK = 3000.0, kB = 5.0, kT = 1e-3;
+
+bool same(const Contact& a, const Contact& b) {
+  return a.n == b.n && a.x_o == b.x_o && a.r == b.r && a.depth == b.depth &&
+         a.stiffness == b.stiffness && a.damping == b.damping && a.weight == b.weight &&
+         a.material == b.material;
+}
+
+// The first member where two cut sets differ (-1: equal), comparing voxels and contacts bitwise.
+long first_difference(const std::vector<Contact>& a, const std::vector<std::size_t>& va,
+                      const std::vector<Contact>& b, const std::vector<std::size_t>& vb) {
+  const std::size_t n = std::min(a.size(), b.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    if (va[i] != vb[i] || !same(a[i], b[i])) return static_cast<long>(i);
+  }
+  return a.size() == b.size() && va.size() == vb.size() ? -1 : static_cast<long>(n);
+}
+
+// ---- The brute-force oracle -------------------------------------------------------------------
+
+// The Morton code of voxel (i, j, k) (x in bit 0, y in bit 1, z in bit 2, ...).
+std::uint64_t morton(int i, int j, int k) {
+  std::uint64_t m = 0;
+  for (int b = 0; b < 10; ++b) {
+    m |= static_cast<std::uint64_t>((i >> b) & 1) << (3 * b);
+    m |= static_cast<std::uint64_t>((j >> b) & 1) << (3 * b + 1);
+    m |= static_cast<std::uint64_t>((k >> b) & 1) << (3 * b + 2);
+  }
+  return m;
+}
+
+struct Oracle {
+  std::vector<std::size_t> voxels;  // the cut set's voxels in the reference's order
+  std::vector<double> weights;      // their band depths
+  bool found = false;               // the material's voxel (sd's found, voxel)
+  std::size_t voxel = 0;
+};
+
+// Every voxel of the box about g that a ball of radius max(R, 2 rho) can reach (two voxels of
+// margin), tested one by one on the flat grid.
+Oracle brute_force(const VoxelTooth& tooth, const Vec3& g, double rho, std::size_t capacity) {
+  const VoxelGrid& grid = tooth.grid();
+  const double h = grid.voxel_size;
+  const CutBand cut = cut_band(rho);
+  const double reach = proxy_material_reach(rho);
+  const double wide = std::max(cut.reach, reach);
+  int lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::max(0, static_cast<int>(std::floor((g[a] - wide - grid.origin[a]) / h)) - 2);
+    hi[a] = std::min(grid.n - 1, static_cast<int>(std::floor((g[a] + wide - grid.origin[a]) / h)) + 2);
+  }
+  // (block Morton code, child, voxel, depth), sorted by decreasing block, increasing child.
+  std::vector<std::tuple<std::uint64_t, int, std::size_t, double>> members;
+  Oracle o;
+  double best2 = reach * reach;
+  for (int k = lo[2]; k <= hi[2]; ++k) {
+    for (int j = lo[1]; j <= hi[1]; ++j) {
+      for (int i = lo[0]; i <= hi[0]; ++i) {
+        if (!grid.solid(i, j, k)) continue;
+        const std::size_t v = grid.index(i, j, k);
+        const int ilo[3] = {i, j, k}, ihi[3] = {i + 1, j + 1, k + 1};
+        const double d2 = sdf_detail::box_distance2(grid, ilo, ihi, g, nullptr);
+        if (d2 < best2 || (o.found && d2 == best2 && v < o.voxel)) {
+          best2 = d2;
+          o.voxel = v;
+          o.found = true;
+        }
+        if (!sphere_intersects_voxel(grid, i, j, k, g, cut.reach)) continue;
+        if (exposed_faces(grid, i, j, k) == 0) continue;
+        const double depth = cut_band_depth(grid, i, j, k, g, rho, cut.depth);
+        if (!(depth > 0.0)) continue;
+        const std::uint64_t m = morton(i, j, k);
+        members.emplace_back(m >> 3, static_cast<int>(m & 7), v, depth);
+      }
+    }
+  }
+  std::sort(members.begin(), members.end(), [](const auto& a, const auto& b) {
+    if (std::get<0>(a) != std::get<0>(b)) return std::get<0>(a) > std::get<0>(b);
+    return std::get<1>(a) < std::get<1>(b);
+  });
+  for (const auto& m : members) {
+    if (o.voxels.size() >= capacity) break;
+    o.voxels.push_back(std::get<2>(m));
+    o.weights.push_back(std::get<3>(m));
+  }
+  int cell[3];
+  if (sdf_detail::voxel_of(grid, g, cell) && grid.solid(cell[0], cell[1], cell[2])) {
+    o.found = true;  // signed_distance's inside case: the voxel holding g
+    o.voxel = grid.index(cell[0], cell[1], cell[2]);
+  }
+  return o;
+}
+
+// ---- The surface bits ---------------------------------------------------------------------------
+
+// How many voxels' bits differ from "the neighbour code is non-zero".
+long bits_differing(const fast::SurfaceVoxels& s, const VoxelTooth& tooth) {
+  const VoxelGrid& g = tooth.grid();
+  long differ = 0;
+  for (int k = 0; k < g.n; ++k) {
+    for (int j = 0; j < g.n; ++j) {
+      for (int i = 0; i < g.n; ++i) {
+        differ += s.exposed(i, j, k) != (tooth.codes.code(g.index(i, j, k)) != 0);
+      }
+    }
+  }
+  return differ;
+}
+
+TEST(SurfaceVoxels, AreTheVoxelsWithANonZeroCodeBeforeAndAfterRemovals) {
+  VoxelTooth tooth(voxelize_procedural_molar(MolarParams{}, 64));
+  fast::SurfaceVoxels s(tooth);
+  const VoxelGrid& g = tooth.grid();
+  EXPECT_EQ(s.count(), count_surface_voxels(g));
+  EXPECT_EQ(bits_differing(s, tooth), 0);
+  EXPECT_LE(s.brick_count(), s.reserved_bricks());
+  // Remove random exposed voxels in batches as drill_tick does (octree, then the local codes),
+  // reporting each batch; the bits follow at every batch.
+  std::mt19937_64 rng(45);
+  std::vector<std::size_t> surface;
+  for (std::size_t v = 0; v < g.voxels.size(); ++v) {
+    if (tooth.codes.code(v) != 0) surface.push_back(v);
+  }
+  std::shuffle(surface.begin(), surface.end(), rng);
+  const std::size_t n = static_cast<std::size_t>(g.n);
+  std::size_t next = 0;
+  long removed = 0;
+  for (int batch = 0; batch < 40; ++batch) {
+    std::vector<std::size_t> gone;
+    for (int r = 0; r < 200 && next < surface.size(); ++r, ++next) {
+      const std::size_t v = surface[next];
+      const int i = static_cast<int>(v % n), j = static_cast<int>((v / n) % n);
+      const int k = static_cast<int>(v / (n * n));
+      if (tooth.octree.remove_voxel(i, j, k) == kEmpty) continue;
+      reencode_local(tooth.octree.grid(), i, j, k, &tooth.codes);
+      gone.push_back(v);
+    }
+    removed += static_cast<long>(gone.size());
+    {
+      testing::AllocationScope scope;
+      EXPECT_TRUE(s.update(tooth, gone));
+      EXPECT_EQ(scope.count(), 0);
+    }
+    ASSERT_EQ(bits_differing(s, tooth), 0) << "batch " << batch;
+  }
+  EXPECT_EQ(s.count(), count_surface_voxels(g));
+  EXPECT_TRUE(s.current());
+  std::printf("%ld voxels removed; %zu exposed, %zu bricks of %zu reserved\n", removed, s.count(),
+              s.brick_count(), s.reserved_bricks());
+  EXPECT_GT(removed, 4000);
+}
+
+// The Morton layout of a brick: word w is a 4^3 block, byte b of a word a 2^3 block, bit c of the
+// byte the child c = dx + 2 dy + 4 dz (the octree's child index).
+TEST(SurfaceVoxels, BricksAreInMortonOrder) {
+  EXPECT_EQ(fast::SurfaceVoxels::local_bit(0, 0, 0), 0);
+  EXPECT_EQ(fast::SurfaceVoxels::local_bit(1, 0, 0), 1);
+  EXPECT_EQ(fast::SurfaceVoxels::local_bit(0, 1, 0), 2);
+  EXPECT_EQ(fast::SurfaceVoxels::local_bit(0, 0, 1), 4);
+  EXPECT_EQ(fast::SurfaceVoxels::local_bit(2, 0, 0), 8);
+  EXPECT_EQ(fast::SurfaceVoxels::local_bit(0, 0, 4), 256);
+  EXPECT_EQ(fast::SurfaceVoxels::local_bit(7, 7, 7), 511);
+  for (int z = 0; z < 8; ++z) {
+    for (int y = 0; y < 8; ++y) {
+      for (int x = 0; x < 8; ++x) {
+        EXPECT_EQ(static_cast<std::uint64_t>(fast::SurfaceVoxels::local_bit(x, y, z)),
+                  morton(x, y, z));
+      }
+    }
+  }
+}
+
+// ---- Random anchors near a surface ------------------------------------------------------------
+
+struct Agreement {
+  long queries = 0, members = 0, inside = 0, planes = 0, mismatches = 0;
+};
+
+// One anchor: the twin, the reference and the oracle.
+void compare_at(const VoxelTooth& tooth, fast::SurfaceCutSet& twin, const Vec3& g, double rho,
+                Agreement* a) {
+  Contact contact;  // the members copy it: any fields do
+  contact.n = Vec3(0.6, 0.0, 0.8);
+  contact.x_o = g - rho * contact.n;
+  contact.depth = 1e-5;
+  contact.stiffness = 3000.0;
+  contact.damping = 5.0;
+  std::vector<Contact> ref, fst;
+  std::vector<std::size_t> ref_v, fst_v, candidates;
+  ref.reserve(kContactCapacity);
+  fst.reserve(kContactCapacity);
+  ref_v.reserve(kContactCapacity);
+  fst_v.reserve(kContactCapacity);
+  collect_cut_set(tooth, contact, g, rho, &candidates, &ref, &ref_v);
+  const SignedDistance sd = signed_distance(tooth, g, proxy_material_reach(rho));
+  fast::SurfaceCutSet::Nearest near;
+  ASSERT_TRUE(twin.collect(g, contact, &fst, &fst_v, &near));
+  fast::SurfaceCutSet::Nearest alone;  // the material alone (no drilling)
+  ASSERT_TRUE(twin.collect(g, contact, nullptr, nullptr, &alone));
+  const Oracle o = brute_force(tooth, g, rho, kContactCapacity);
+  ++a->queries;
+  a->members += static_cast<long>(ref.size());
+  const long d = first_difference(ref, ref_v, fst, fst_v);
+  bool oracle_ok = o.voxels == ref_v;
+  for (std::size_t i = 0; oracle_ok && i < ref.size(); ++i) oracle_ok = o.weights[i] == ref[i].weight;
+  const bool near_ok = near.found == sd.found && (!sd.found || near.voxel == sd.voxel) &&
+                       alone.found == near.found && alone.voxel == near.voxel &&
+                       o.found == sd.found && (!sd.found || o.voxel == sd.voxel);
+  if (d >= 0 || !oracle_ok || !near_ok) {
+    ++a->mismatches;
+    ADD_FAILURE() << "g " << g.transpose() << ": " << ref.size() << " members (fast "
+                  << fst.size() << ", oracle " << o.voxels.size() << "), first difference " << d
+                  << ", oracle agrees " << oracle_ok << "; nearest " << sd.found << " "
+                  << sd.voxel << " vs " << near.found << " " << near.voxel << " (oracle "
+                  << o.found << " " << o.voxel << ")";
+  }
+}
+
+// Anchors near the surface of `tooth`: at a random exposed voxel's centre plus up to 2.2 rho in a
+// random direction; one in 8 moved onto a grid plane (exactly, or a few ulps off) on one axis; one
+// in 16 at a random point of a solid voxel.
+Agreement random_anchors(const VoxelTooth& tooth, double rho, int count, std::uint64_t seed) {
+  const VoxelGrid& grid = tooth.grid();
+  std::vector<std::size_t> surface;
+  for (std::size_t v = 0; v < grid.voxels.size(); ++v) {
+    if (tooth.codes.code(v) != 0) surface.push_back(v);
+  }
+  fast::SurfaceCutSet twin(tooth, rho, &signed_distance);
+  std::mt19937_64 rng(seed);
+  std::uniform_int_distribution<std::size_t> pick(0, surface.size() - 1);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0), dist(0.0, 2.2 * rho), cell(0.0, 1.0);
+  const std::size_t n = static_cast<std::size_t>(grid.n);
+  Agreement a;
+  for (int q = 0; q < count; ++q) {
+    const std::size_t v = surface[pick(rng)];
+    const int i = static_cast<int>(v % n), j = static_cast<int>((v / n) % n);
+    const int k = static_cast<int>(v / (n * n));
+    Vec3 g;
+    if (q % 16 == 15) {
+      g = grid.origin + grid.voxel_size * Vec3(i + cell(rng), j + cell(rng), k + cell(rng));
+      ++a.inside;
+    } else {
+      Vec3 d(unit(rng), unit(rng), unit(rng));
+      if (d.norm() < 1e-3) d = Vec3::UnitZ();
+      g = grid.center(i, j, k) + dist(rng) * d.normalized();
+    }
+    if (q % 8 == 3) {  // onto a plane origin + h i of one axis, or a few ulps from it
+      const int axis = q % 3;
+      const double p = grid.origin[axis] +
+                       grid.voxel_size * std::floor((g[axis] - grid.origin[axis]) / grid.voxel_size);
+      g[axis] = (q / 8) % 3 == 0 ? p : std::nextafter(p, (q / 8) % 3 == 1 ? 1.0 : -1.0);
+      ++a.planes;
+    }
+    compare_at(tooth, twin, g, rho, &a);
+    if (a.mismatches > 5) break;
+  }
+  std::printf("%dx: %ld anchors (%ld on a plane, %ld inside), %ld cut members, %ld material "
+              "queries by sd of %ld\n",
+              grid.n, a.queries, a.planes, a.inside, a.members, twin.fallbacks(), twin.queries());
+  EXPECT_EQ(twin.queries(), 2 * a.queries);
+  // The certificate answers all but the anchors on planes or with no exposed voxel in the ball.
+  EXPECT_LT(twin.fallbacks(), twin.queries() / 2);
+  return a;
+}
+
+TEST(SurfaceCutSet, EqualsTheReferenceAndBruteForceNearTheMolarsSurface) {
+  const int resolutions[] = {64, 128, 256};
+  for (const int n : resolutions) {
+    const VoxelTooth tooth(voxelize_procedural_molar(MolarParams{}, n));
+    const Agreement a = random_anchors(tooth, 0.5e-3, n == 256 ? 1000 : 2000, 30 + n);
+    EXPECT_EQ(a.mismatches, 0) << n;
+    EXPECT_GT(a.members, 10 * a.queries) << n;  // signal: most anchors cut something
+  }
+  // A bur wider than the band reaches (rho = 1 mm) and a narrow one (0.15 mm, rho / h < 1).
+  const VoxelTooth tooth(voxelize_procedural_molar(MolarParams{}, 128));
+  EXPECT_EQ(random_anchors(tooth, 1.0e-3, 600, 7).mismatches, 0);
+  EXPECT_EQ(random_anchors(tooth, 0.15e-3, 600, 8).mismatches, 0);
+}
+
+TEST(SurfaceCutSet, EqualsTheReferenceAndBruteForceNearAMeshsSurface) {
+  const std::string path = std::string(DENTSIM_SOURCE_DIR) + "/../shared/data/molar-cc0.stl";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "../shared/data absent: " << path;
+  LoadedMesh m = load_mesh(path);
+  scale_mesh(m.mesh, scale_for_size(m.mesh, 11e-3));  // a molar 11 mm tall
+  VoxelizeOptions options;
+  options.resolution = 128;
+  const VoxelTooth tooth(voxelize_mesh(m.mesh, options));
+  const Agreement a = random_anchors(tooth, 0.5e-3, 2000, 46);
+  EXPECT_EQ(a.mismatches, 0);
+  EXPECT_GT(a.members, 10 * a.queries);
+}
+
+// ---- The providers along a drilling path ------------------------------------------------------
+
+// A sphere in a block of n^3 voxels of edge h; the bur (radius rho) comes down onto it, drills
+// down, sideways, and leaves (the path of tests/fast/field_test.cc, scaled by rho).
+struct PathScene {
+  int n;
+  double h, rho;
+  Vec3 centre, top;
+  double radius;
+  PathScene(int n_, double h_, double rho_) : n(n_), h(h_), rho(rho_) {
+    const double side = n * h;
+    centre = Vec3(0.503 * side, 0.497 * side, 0.452 * side);
+    radius = 0.31 * side;
+    top = centre + Vec3(0, 0, radius);
+  }
+  bool inside(const Vec3& p) const { return (p - centre).norm() < radius; }
+  VoxelGrid grid() const {
+    return test::solid_grid(n, n * h, [this](const Vec3& p) { return inside(p); });
+  }
+  static constexpr int kFree = 100, kDown = 500, kSideways = 500, kAway = 100;
+  Vec3 bur(int tick) const {
+    const Vec3 start = top + Vec3(0, 0, 1.4 * rho);
+    if (tick < kFree) return start + Vec3(0.75 * rho, 0, 2.5 * rho) * (1.0 - tick / double(kFree));
+    tick -= kFree;
+    if (tick < kDown) return start - Vec3(0, 0, 2.75 * rho * tick / kDown);
+    tick -= kDown;
+    if (tick < kSideways) {
+      return start - Vec3(0, 0, 2.75 * rho) + Vec3(1.5 * rho * tick / kSideways, 0.25 * rho, 0);
+    }
+    tick -= kSideways;
+    return start + Vec3(1.5 * rho, 0, 7.5 * rho * std::min(1.0, tick / 100.0));
+  }
+};
+
+// The reference provider and the fast one (sdf, or field at `stride`) along the path.
+void providers_agree(const PathScene& p, ContactModel model, int stride) {
+  SCOPED_TRACE(std::string(contact_model_name(model)) + " n " + std::to_string(p.n) + " stride " +
+               std::to_string(stride));
+  const VoxelGrid g = p.grid();
+  VoxelTooth tooth_r(g), tooth_f(g);
+  SampledField field_r, field_f;
+  if (model == ContactModel::kField) {
+    field_r = build_sampled_field(
+        g, triangulate_implicit(g, [&p](const Vec3& x) { return p.inside(x); }),
+        field_band_for_tip(p.rho, g.voxel_size, stride));
+    field_f = field_r;
+  }
+  DrillParams drill;
+  drill.cutting_coefficient = 10.0;  // cuts fast: hundreds of voxels on this path
+  const ToolTip tip{p.rho, Vec3::Zero()};
+  ToothContactProvider reference(tooth_r, tip, kK, kB, &drill, model, &signed_distance,
+                                 model == ContactModel::kField ? &field_r : nullptr);
+  PipelineToothSetup setup;
+  setup.tip = tip;
+  setup.k_tooth = kK;
+  setup.b_tooth = kB;
+  setup.drilling = &drill;
+  setup.contact_model = model;
+  setup.field = model == ContactModel::kField ? &field_f : nullptr;
+  setup.field_edit_latency = 0;  // the budget path on this thread (the worker: field_test.cc)
+  std::unique_ptr<fast::CutSetProvider> fast_provider;
+  if (model == ContactModel::kField) {
+    fast_provider = std::make_unique<fast::FieldContactProvider>(tooth_f, setup);
+  } else {
+    fast_provider = std::make_unique<fast::SdfContactProvider>(tooth_f, setup);
+  }
+  std::vector<Contact> out_r, out_f;
+  out_r.reserve(kContactCapacity);
+  out_f.reserve(kContactCapacity);
+  const int ticks = PathScene::kFree + PathScene::kDown + PathScene::kSideways + PathScene::kAway;
+  long contact_ticks = 0, removed = 0, members = 0, allocations = 0;
+  std::size_t most = 0;
+  {
+    testing::AllocationScope scope;
+    for (int tick = 0; tick < ticks; ++tick) {
+      Pose pose;
+      pose.x = p.bur(tick);
+      ASSERT_EQ(reference.contacts(pose, out_r), fast_provider->contacts(pose, out_f));
+      ASSERT_EQ(out_r.size(), out_f.size()) << "tick " << tick;
+      for (std::size_t i = 0; i < out_r.size(); ++i) {
+        ASSERT_TRUE(same(out_r[i], out_f[i])) << "tick " << tick;
+      }
+      ASSERT_EQ(first_difference(reference.cut_shares(), reference.cut_voxels(),
+                                 fast_provider->cut_shares(), fast_provider->cut_voxels()),
+                -1)
+          << "tick " << tick << ": " << reference.cut_shares().size() << " members, fast "
+          << fast_provider->cut_shares().size();
+      members += static_cast<long>(reference.cut_shares().size());
+      most = std::max(most, reference.cut_shares().size());
+      const int rr = reference.drill(out_r, kT);
+      ASSERT_EQ(rr, fast_provider->drill(out_f, kT)) << "tick " << tick;
+      ASSERT_EQ(reference.last_removed(), fast_provider->last_removed()) << "tick " << tick;
+      contact_ticks += out_r.empty() ? 0 : 1;
+      removed += rr;
+    }
+    allocations = scope.count();
+  }
+  const fast::SurfaceCutSet& cut = fast_provider->cut_set();
+  std::printf("%s n %d h %.4f mm stride %d: %d ticks, %ld in contact, %ld cut members (at most "
+              "%zu), %ld voxels removed; material by sd %ld of %ld; %ld allocations\n",
+              contact_model_name(model), p.n, 1e3 * p.h, stride, ticks, contact_ticks, members,
+              most, removed, cut.fallbacks(), cut.queries(), allocations);
+  EXPECT_EQ(tooth_r.grid().voxels, tooth_f.grid().voxels);
+  EXPECT_EQ(bits_differing(cut.surface(), tooth_f), 0);
+  EXPECT_EQ(reference.drill_state().delivered_j, fast_provider->drill_state().delivered_j);
+  EXPECT_EQ(reference.drill_state().carry_j, fast_provider->drill_state().carry_j);
+  EXPECT_EQ(allocations, 0);
+  EXPECT_GT(contact_ticks, 600);
+  EXPECT_GT(removed, 100);  // signal: the cut set was cut
+  EXPECT_EQ(cut.queries(), contact_ticks);
+  EXPECT_LT(cut.fallbacks(), contact_ticks / 10);
+}
+
+// h = 0.25, 0.125, 0.0625 mm and the 512^3 molar's 0.0425 mm (rho / h = 11.8: ~900 members).
+TEST(CutSetProvider, SdfEqualsTheReferenceWhileDrillingAtFourResolutions) {
+  providers_agree(PathScene(32, 0.25e-3, 0.5e-3), ContactModel::kSurfaceProxy, 1);
+  providers_agree(PathScene(64, 0.125e-3, 0.5e-3), ContactModel::kSurfaceProxy, 1);
+  providers_agree(PathScene(128, 0.0625e-3, 0.5e-3), ContactModel::kSurfaceProxy, 1);
+  providers_agree(PathScene(128, 0.0425e-3, 0.5e-3), ContactModel::kSurfaceProxy, 1);
+}
+
+TEST(CutSetProvider, FieldEqualsTheReferenceWhileDrillingAtStrides1And2) {
+  providers_agree(PathScene(64, 0.125e-3, 0.5e-3), ContactModel::kField, 1);
+  providers_agree(PathScene(64, 0.125e-3, 0.5e-3), ContactModel::kField, 2);
+  providers_agree(PathScene(128, 0.0425e-3, 0.5e-3), ContactModel::kField, 2);
+}
+
+// ---- The drill scene's closed loop --------------------------------------------------------------
+
+// The drill scene in the fast pipeline, twice: with its tooth's provider (the fast voxel side) and
+// with the reference's provider on the second rig's tooth and field (the reference voxel side; the
+// field edit at the fast pipeline's latency, as the fast provider's worker). Each loop is built
+// alike (no safety chain on either).
+void drill_scene_agrees(const std::string& contact_model, int ticks) {
+  SCOPED_TRACE(contact_model);
+  Scene scene = load_scene("drill");
+  scene.tooth.contact_model = contact_model;
+  SceneRigOptions options;
+  options.pipeline = "fast";
+  const std::unique_ptr<SceneRig> a = build_scene_rig(scene, options);
+  const std::unique_ptr<SceneRig> b = build_scene_rig(scene, options);
+  const auto* fast_provider = dynamic_cast<fast::CutSetProvider*>(a->contacts);
+  ASSERT_NE(fast_provider, nullptr);
+  const ContactModel model = parse_contact_model(contact_model);
+  ASSERT_EQ(fast_provider->model(), model);
+  DrillParams drill;
+  drill.bur_speed_rad_s = scene.tool.bur_speed_rpm * 2.0 * 3.14159265358979323846 / 60.0;
+  drill.cutting_coefficient = scene.tool.cutting_coefficient;
+  ToothContactProvider reference(*b->tooth, b->tip, b->k_tooth, b->b_tooth, &drill, model,
+                                 &fast::signed_distance, b->field.get());
+  if (model == ContactModel::kField) {
+    reference.set_field_edit_latency(ToothContactProvider::kFieldEditLatency);
+  }
+  ClosedLoop loop_a(*a->loop_device, *a->pipeline, *a->contacts);
+  ClosedLoop loop_b(*b->loop_device, *b->pipeline, reference);
+  loop_a.start();
+  loop_b.start();
+  long contact_ticks = 0, removed = 0;
+  for (int k = 0; k < ticks; ++k) {
+    const TickResult& ra = loop_a.step();
+    const TickResult& rb = loop_b.step();
+    ASSERT_EQ(ra.F_contact, rb.F_contact) << "tick " << k;
+    ASSERT_EQ(ra.tau, rb.tau) << "tick " << k;
+    ASSERT_EQ(ra.removed_voxels, rb.removed_voxels) << "tick " << k;
+    contact_ticks += ra.contacts.empty() ? 0 : 1;
+    removed += ra.removed_voxels;
+  }
+  const DrillState& sa = a->contacts->drill_state();
+  const DrillState& sb = reference.drill_state();
+  double va = 0.0, vb = 0.0;
+  for (int m = kEnamel; m < kMaterialCount; ++m) {
+    va += sa.removed_volume_m3(m);
+    vb += sb.removed_volume_m3(m);
+  }
+  std::printf("drill scene, %s: %d ticks, %ld in contact, %ld voxels removed, %.6f mm^3; "
+              "material by sd %ld of %ld\n",
+              contact_model.c_str(), ticks, contact_ticks, removed, 1e9 * va,
+              fast_provider->cut_set().fallbacks(), fast_provider->cut_set().queries());
+  EXPECT_EQ(va, vb);
+  EXPECT_EQ(sa.delivered_j, sb.delivered_j);
+  EXPECT_EQ(a->tooth->grid().voxels, b->tooth->grid().voxels);
+  EXPECT_GT(contact_ticks, ticks / 3);
+  EXPECT_GT(removed, 50);
+}
+
+TEST(CutSetProvider, TheDrillSceneRemovesAndPushesTheSameWithEitherVoxelSide) {
+  drill_scene_agrees("sdf", 3000);
+  drill_scene_agrees("field", 3000);
+}
+
+}  // namespace
+}  // namespace dentsim
