@@ -690,6 +690,13 @@ TriangleMesh triangulate_voxel_edges(const VoxelGrid& grid, std::vector<VoxelEdg
     layer_written[lower].clear();
     lower = 1 - lower;
   }
+  // The tables go before the vertices come (the setup's peak memory at 512^3, issue #30).
+  for (int t = 0; t < 2; ++t) {
+    std::vector<std::int32_t>().swap(layer_vertex[t]);
+    std::vector<std::size_t>().swap(layer_written[t]);
+  }
+  std::vector<std::uint64_t>().swap(bits_lo);
+  std::vector<std::uint64_t>().swap(bits_hi);
   mesh.vertices.assign(edges->size(), Vec3::Zero());
   return mesh;
 }
