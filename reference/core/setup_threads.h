@@ -4,7 +4,8 @@
 // bit, whatever the thread count (tests/tooth/sampled_field_test.cc, ThreadedBuild*).
 //
 // The count: the environment variable DENTSIM_SETUP_THREADS (a whole number >= 1) when set, else
-// std::thread::hardware_concurrency() capped at kMaxSetupThreads (docs/usage.md "Environment").
+// std::thread::hardware_concurrency() capped at kMaxSetupThreads (docs/scenes.md, under
+// tooth.contact_model).
 // Never used inside a servo tick (it starts threads).
 #pragma once
 
