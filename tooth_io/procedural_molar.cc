@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <vector>
+
+#include "reference/core/setup_threads.h"
 
 namespace dentsim {
 namespace {
@@ -403,20 +406,34 @@ VoxelGrid voxelize_procedural_molar(const MolarParams& params, int resolution,
   // molar_solid and molar_pulp at every centre, their factors that depend on one or two of the
   // coordinates computed once (MolarSlices): the same operations on the same operands, so the
   // same bits (tests/tooth/procedural_molar_test.cc compares with the per-voxel definition).
-  MolarSlices slices(params, grid, lo, hi);
-  long pulp_voxels = 0;
-  for (int k = lo[2]; k <= hi[2]; ++k) {
-    slices.start_slice(k);
-    for (int j = lo[1]; j <= hi[1]; ++j) {
-      for (int i = lo[0]; i <= hi[0]; ++i) {
-        if (!slices.solid(i, j)) continue;
-        // Solid (any non-zero id); pulp marked kPulp, which assign_materials keeps.
-        const bool pulp = slices.pulp(i, j);
-        grid.voxels[grid.index(i, j, k)] = pulp ? kPulp : kDentin;
-        pulp_voxels += pulp ? 1 : 0;
-        ++r.solid.interior_voxels;
+  // Threads (issue #30, reference/core/setup_threads.h): each task a contiguous run of slices
+  // with its own MolarSlices, writing only its slices' voxels; the counts are summed after.
+  const int slice_count = hi[2] - lo[2] + 1;
+  const int tasks = std::max(1, std::min(setup_threads(), slice_count));
+  std::vector<long> pulp_count(static_cast<std::size_t>(tasks), 0),
+      solid_count(static_cast<std::size_t>(tasks), 0);
+  parallel_tasks(tasks, tasks, [&](int task) {
+    const int k0 = lo[2] + static_cast<int>(static_cast<long>(slice_count) * task / tasks);
+    const int k1 = lo[2] + static_cast<int>(static_cast<long>(slice_count) * (task + 1) / tasks);
+    MolarSlices slices(params, grid, lo, hi);
+    for (int k = k0; k < k1; ++k) {
+      slices.start_slice(k);
+      for (int j = lo[1]; j <= hi[1]; ++j) {
+        for (int i = lo[0]; i <= hi[0]; ++i) {
+          if (!slices.solid(i, j)) continue;
+          // Solid (any non-zero id); pulp marked kPulp, which assign_materials keeps.
+          const bool pulp = slices.pulp(i, j);
+          grid.voxels[grid.index(i, j, k)] = pulp ? kPulp : kDentin;
+          pulp_count[static_cast<std::size_t>(task)] += pulp ? 1 : 0;
+          ++solid_count[static_cast<std::size_t>(task)];
+        }
       }
     }
+  });
+  long pulp_voxels = 0;
+  for (int t = 0; t < tasks; ++t) {
+    pulp_voxels += pulp_count[static_cast<std::size_t>(t)];
+    r.solid.interior_voxels += solid_count[static_cast<std::size_t>(t)];
   }
   r.crown = molar_crown_frame(params);
   assign_materials(grid, {}, r.crown, params.enamel_cusp_m * params.scale);

@@ -8,6 +8,9 @@
 #include <cmath>
 #include <limits>
 #include <bit>
+#include <stdexcept>
+#include <string>
+#include <tuple>
 
 namespace dentsim {
 
@@ -226,7 +229,8 @@ bool SampledField::deep_inside(const Vec3& x) const {
 }
 
 SampledField build_sampled_field(const VoxelGrid& grid, const TriangleMesh& surface,
-                                 const FieldBand& band) {
+                                 const FieldBand& band, int threads) {
+  if (threads <= 0) threads = setup_threads();
   SampledField f;
   // Stride (header comment): h below is the lattice's spacing H = k h_voxel; every length is in
   // it except where a voxel is named. At k = 1 every expression is the one-sample-per-voxel one.
@@ -282,13 +286,12 @@ SampledField build_sampled_field(const VoxelGrid& grid, const TriangleMesh& surf
   // of the coordinates), so the stored values are the same, bit for bit, as without the test
   // (tests/tooth/sampled_field_test.cc BuildSkipsOnlyDistancesThatCannotWin).
   const double slack = 1e-6 * h;
-  for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
+  // Triangle t's sample box [lo, hi] (empty when some lo > hi) and its own bounding box.
+  const auto triangle_box = [&](std::size_t t, int lo[3], int hi[3], Vec3& box_lo, Vec3& box_hi) {
     const auto& v = surface.triangles[t];
     const Vec3& ta = surface.vertices[v[0]];
     const Vec3& tb = surface.vertices[v[1]];
     const Vec3& tc = surface.vertices[v[2]];
-    int lo[3], hi[3];
-    Vec3 box_lo, box_hi;
     for (int a = 0; a < 3; ++a) {
       box_lo[a] = std::min({ta[a], tb[a], tc[a]});
       box_hi[a] = std::max({ta[a], tb[a], tc[a]});
@@ -297,37 +300,117 @@ SampledField build_sampled_field(const VoxelGrid& grid, const TriangleMesh& surf
       lo[a] = std::max(0, static_cast<int>(std::ceil((mn - f.origin_[a]) / h)));
       hi[a] = std::min(m - 1, static_cast<int>(std::floor((mx - f.origin_[a]) / h)));
     }
-    // The plane's unit normal (none for a degenerate triangle: the bound is then 0).
-    const Vec3 cross = (tb - ta).cross(tc - ta);
-    const double cross_norm = cross.norm();
-    const bool has_plane = cross_norm > 0.0 && std::isfinite(cross_norm);
-    const Vec3 unit = has_plane ? Vec3(cross / cross_norm) : Vec3::Zero();
-    const double offset = unit.dot(ta);
-    for (int sz = lo[2]; sz <= hi[2]; ++sz) {
-      for (int sy = lo[1]; sy <= hi[1]; ++sy) {
-        for (int sx = lo[0]; sx <= hi[0]; ++sx) {
-          const std::int64_t r = sample_ref(sx, sy, sz, true);
-          if (tri[r] >= 0) {
-            const double beat = dist[r] + slack;
-            const Vec3 p = f.sample_position(sx, sy, sz);
-            if (std::abs(unit.dot(p) - offset) > beat) continue;
-            double box2 = 0.0;
-            for (int a = 0; a < 3; ++a) {
-              const double g = std::max({box_lo[a] - p[a], 0.0, p[a] - box_hi[a]});
-              box2 += g * g;
-            }
-            if (box2 > beat * beat) continue;
-          }
-          const double d = distance_to(static_cast<int>(t), sx, sy, sz);
-          if (tri[r] < 0) frontier.push_back({sx, sy, sz});
-          if (d < dist[r]) {
-            dist[r] = d;
-            tri[r] = static_cast<std::int32_t>(t);
+    return lo[0] <= hi[0] && lo[1] <= hi[1] && lo[2] <= hi[2];
+  };
+  // Threads (issue #30): the bricks layer 0 reaches are allocated first (a brick holds a sample of
+  // a triangle's box iff its brick range does), then each z-layer of bricks is one task, which
+  // runs the triangles reaching it in index order over its own samples only. So every sample sees
+  // the same triangles in the same order as in one pass over the triangles, with the same state
+  // (its own dist and tri), and ends with the same values. The frontier, which the band's growth
+  // reads in order (ties go to the first), is the one pass's: the tasks' lists (each in the one
+  // pass's order: triangle, then z, y, x) merged by (triangle, z, y, x).
+  // A task scans the index range of the triangles reaching its layer (no list of them is kept:
+  // memory, issue #30); triangulate_voxel_signs makes its triangles slab by slab along z, so the
+  // range of a layer holds few others.
+  const int nb = f.nb_;
+  std::vector<std::size_t> layer_begin(static_cast<std::size_t>(nb), surface.triangles.size()),
+      layer_end(static_cast<std::size_t>(nb), 0);
+  {
+    std::vector<std::uint8_t> reached(slots, 0);
+    for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
+      int lo[3], hi[3];
+      Vec3 box_lo, box_hi;
+      if (!triangle_box(t, lo, hi, box_lo, box_hi)) continue;
+      for (int bz = lo[2] / kFieldBrick; bz <= hi[2] / kFieldBrick; ++bz) {
+        layer_begin[static_cast<std::size_t>(bz)] =
+            std::min(layer_begin[static_cast<std::size_t>(bz)], t);
+        layer_end[static_cast<std::size_t>(bz)] = t + 1;
+        for (int by = lo[1] / kFieldBrick; by <= hi[1] / kFieldBrick; ++by) {
+          for (int bx = lo[0] / kFieldBrick; bx <= hi[0] / kFieldBrick; ++bx) {
+            reached[f.slot(bx, by, bz)] = 1;
           }
         }
       }
     }
+    for (std::size_t sl = 0; sl < slots; ++sl) {
+      if (reached[sl] == 0) continue;
+      id[sl] = static_cast<std::int32_t>(dist.size() / kB);
+      dist.resize(dist.size() + kB, std::numeric_limits<double>::infinity());
+      tri.resize(tri.size() + kB, -1);
+    }
   }
+  struct FirstVisit {
+    std::int32_t t, z, y, x;
+  };
+  std::vector<std::vector<FirstVisit>> firsts(static_cast<std::size_t>(nb));
+  parallel_tasks(nb, threads, [&](int bz) {
+    std::vector<FirstVisit>& mine = firsts[static_cast<std::size_t>(bz)];
+    for (std::size_t t = layer_begin[static_cast<std::size_t>(bz)];
+         t < layer_end[static_cast<std::size_t>(bz)]; ++t) {
+      int lo[3], hi[3];
+      Vec3 box_lo, box_hi;
+      if (!triangle_box(t, lo, hi, box_lo, box_hi) || lo[2] / kFieldBrick > bz ||
+          hi[2] / kFieldBrick < bz) {
+        continue;
+      }
+      lo[2] = std::max(lo[2], bz * kFieldBrick);
+      hi[2] = std::min(hi[2], bz * kFieldBrick + kFieldBrick - 1);
+      const auto& v = surface.triangles[t];
+      const Vec3& ta = surface.vertices[v[0]];
+      const Vec3& tb = surface.vertices[v[1]];
+      const Vec3& tc = surface.vertices[v[2]];
+      // The plane's unit normal (none for a degenerate triangle: the bound is then 0).
+      const Vec3 cross = (tb - ta).cross(tc - ta);
+      const double cross_norm = cross.norm();
+      const bool has_plane = cross_norm > 0.0 && std::isfinite(cross_norm);
+      const Vec3 unit = has_plane ? Vec3(cross / cross_norm) : Vec3::Zero();
+      const double offset = unit.dot(ta);
+      for (int sz = lo[2]; sz <= hi[2]; ++sz) {
+        for (int sy = lo[1]; sy <= hi[1]; ++sy) {
+          for (int sx = lo[0]; sx <= hi[0]; ++sx) {
+            const std::int64_t r = sample_ref(sx, sy, sz, false);  // allocated above
+            if (tri[r] >= 0) {
+              const double beat = dist[r] + slack;
+              const Vec3 p = f.sample_position(sx, sy, sz);
+              if (std::abs(unit.dot(p) - offset) > beat) continue;
+              double box2 = 0.0;
+              for (int a = 0; a < 3; ++a) {
+                const double g = std::max({box_lo[a] - p[a], 0.0, p[a] - box_hi[a]});
+                box2 += g * g;
+              }
+              if (box2 > beat * beat) continue;
+            }
+            const double d = distance_to(static_cast<int>(t), sx, sy, sz);
+            if (tri[r] < 0) mine.push_back({static_cast<std::int32_t>(t), sz, sy, sx});
+            if (d < dist[r]) {
+              dist[r] = d;
+              tri[r] = static_cast<std::int32_t>(t);
+            }
+          }
+        }
+      }
+    }
+  });
+  {
+    // The merge: repeatedly the least head among the layers' lists (each sorted already).
+    const auto before = [](const FirstVisit& p, const FirstVisit& q) {
+      return std::tie(p.t, p.z, p.y, p.x) < std::tie(q.t, q.z, q.y, q.x);
+    };
+    std::size_t total = 0;
+    for (const auto& v : firsts) total += v.size();
+    frontier.reserve(total);
+    std::vector<std::size_t> head(static_cast<std::size_t>(nb), 0);
+    for (std::size_t done = 0; done < total; ++done) {
+      std::size_t best = firsts.size();
+      for (std::size_t q = 0; q < firsts.size(); ++q) {
+        if (head[q] == firsts[q].size()) continue;
+        if (best == firsts.size() || before(firsts[q][head[q]], firsts[best][head[best]])) best = q;
+      }
+      const FirstVisit& e = firsts[best][head[best]++];
+      frontier.push_back({e.x, e.y, e.z});
+    }
+  }
+  std::vector<std::vector<FirstVisit>>().swap(firsts);
   // Grow the band: face neighbours take the nearest of their neighbours' triangles.
   // The sign of sample s: the voxel k (s - P) of the grid (outside the grid: outside).
   const auto sign = [&](int sx, int sy, int sz) {
@@ -370,8 +453,9 @@ SampledField build_sampled_field(const VoxelGrid& grid, const TriangleMesh& surf
       for (const int v : surface.triangles[t]) star[fill[v]++] = static_cast<int>(t);
     }
   }
-  std::array<int, 96> seen{};  // a walk step's triangles so far (a full list only forgets)
-  for (int bz = 0; bz < f.nb_; ++bz) {
+  // Each sample's walk reads and writes only its own dist and tri: a z-layer of bricks a task.
+  parallel_tasks(nb, threads, [&](int bz) {
+    std::array<int, 96> seen{};  // a walk step's triangles so far (a full list only forgets)
     for (int by = 0; by < f.nb_; ++by) {
       for (int bx = 0; bx < f.nb_; ++bx) {
         if (id[f.slot(bx, by, bz)] < 0) continue;
@@ -407,7 +491,7 @@ SampledField build_sampled_field(const VoxelGrid& grid, const TriangleMesh& surf
         }
       }
     }
-  }
+  });
 
   const float out_f = static_cast<float>(f.c_out_), in_f = static_cast<float>(-f.c_in_);
   f.index_.assign(slots, SampledField::kAllOutside);
@@ -470,9 +554,25 @@ SampledField build_sampled_field(const VoxelGrid& grid, const TriangleMesh& surf
 
 TriangleMesh triangulate_voxel_signs(
     const VoxelGrid& grid, const std::function<Vec3(const Vec3& p_in, const Vec3& p_out)>& place) {
+  std::vector<VoxelEdge> edges;
+  TriangleMesh mesh = triangulate_voxel_edges(grid, &edges);
+  for (std::size_t v = 0; v < edges.size(); ++v) {
+    const VoxelEdge& e = edges[v];
+    mesh.vertices[v] = place(grid.center(e.in[0], e.in[1], e.in[2]),
+                             grid.center(e.out[0], e.out[1], e.out[2]));
+  }
+  return mesh;
+}
+
+TriangleMesh triangulate_voxel_edges(const VoxelGrid& grid, std::vector<VoxelEdge>* edges) {
   TriangleMesh mesh;
   mesh.groups.push_back("");
   const int n = grid.n;
+  edges->clear();
+  if (n > 32766) {
+    throw std::invalid_argument("triangulate_voxel_edges: " + std::to_string(n) +
+                                " voxels a side (at most 32766)");
+  }
   // Kuhn's six tetrahedra of a cell along its diagonal 0 -> 7 (corner c = x + 2 y + 4 z): for each
   // order of the axes (a, b, c), the vertices 0, e_a, e_a + e_b, 7. Every tetrahedron edge joins
   // corners c0 < c1 with c1 - c0 a sum of distinct unit steps, so it is keyed by its lower
@@ -492,8 +592,10 @@ TriangleMesh triangulate_voxel_signs(
   std::vector<std::size_t> layer_written[2];
   for (auto& t : layer_vertex) t.assign(static_cast<std::size_t>(span) * span * 8, -1);
   int lower = 0;  // layer_vertex[lower] holds sample layer k (+1 shift: ck = k + 1)
-  const auto corner_position = [&](int i, int j, int k, int c) {
-    return grid.center(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
+  const auto set_corner = [](std::int16_t* e, int i, int j, int k, int c) {
+    e[0] = static_cast<std::int16_t>(i + (c & 1));
+    e[1] = static_cast<std::int16_t>(j + ((c >> 1) & 1));
+    e[2] = static_cast<std::int16_t>(k + ((c >> 2) & 1));
   };
   const auto vertex_on = [&](int i, int j, int k, int c0, int c1, bool in0) {
     // c0 < c1; the slot names the lower corner's sample and the step.
@@ -505,10 +607,12 @@ TriangleMesh triangulate_voxel_signs(
                              static_cast<std::size_t>(c1 - c0);
     std::int32_t& v = layer_vertex[table][slot];
     if (v >= 0) return static_cast<int>(v);
-    v = static_cast<std::int32_t>(mesh.vertices.size());
+    v = static_cast<std::int32_t>(edges->size());
     layer_written[table].push_back(slot);
-    mesh.vertices.push_back(place(corner_position(i, j, k, in0 ? c0 : c1),
-                                  corner_position(i, j, k, in0 ? c1 : c0)));
+    VoxelEdge e;
+    set_corner(e.in, i, j, k, in0 ? c0 : c1);
+    set_corner(e.out, i, j, k, in0 ? c1 : c0);
+    edges->push_back(e);
     return static_cast<int>(v);
   };
   // The solid flags of sample layer z (in [-1, n]) as bit rows: row j + 1 for sample row j.
@@ -586,6 +690,14 @@ TriangleMesh triangulate_voxel_signs(
     layer_written[lower].clear();
     lower = 1 - lower;
   }
+  // The tables go before the vertices come (the setup's peak memory at 512^3, issue #30).
+  for (int t = 0; t < 2; ++t) {
+    std::vector<std::int32_t>().swap(layer_vertex[t]);
+    std::vector<std::size_t>().swap(layer_written[t]);
+  }
+  std::vector<std::uint64_t>().swap(bits_lo);
+  std::vector<std::uint64_t>().swap(bits_hi);
+  mesh.vertices.assign(edges->size(), Vec3::Zero());
   return mesh;
 }
 

@@ -53,12 +53,14 @@
 // Real-time: value() and gradient() read 8 samples through the index; nothing allocates or throws.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <vector>
 
+#include "reference/core/setup_threads.h"
 #include "reference/core/types.h"
 #include "reference/tooth/triangle_mesh.h"
 #include "reference/tooth/voxel_grid.h"
@@ -186,7 +188,8 @@ class SampledField {
   int voxel_of_sample(int s) const { return stride_ * (s - pad_); }
 
  private:
-  friend SampledField build_sampled_field(const VoxelGrid&, const TriangleMesh&, const FieldBand&);
+  friend SampledField build_sampled_field(const VoxelGrid&, const TriangleMesh&, const FieldBand&,
+                                          int);
 
   std::size_t slot(int bx, int by, int bz) const {
     return static_cast<std::size_t>(bx) +
@@ -215,37 +218,66 @@ double point_triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, cons
 
 // The field of the closed surface `surface` (world frame, the grid's) with signs from the solid
 // voxels of `grid` (header comment). `surface` must bound the grid's solid (the mesh it was
-// voxelised from, or the triangulated implicit surface below).
+// voxelised from, or the triangulated implicit surface below). The exact distances (layer 0) and
+// the descent run on `threads` threads (reference/core/setup_threads.h; <= 0: setup_threads()),
+// each on its own z-slab of bricks, every sample seeing the triangles in the one-thread order:
+// the field is the one-thread field bit for bit, whatever the thread count.
 SampledField build_sampled_field(const VoxelGrid& grid, const TriangleMesh& surface,
-                                 const FieldBand& band);
+                                 const FieldBand& band, int threads = 0);
 
 // The surface between the grid's solid and empty voxel centres as triangles, by marching
 // tetrahedra over the cells of voxel centres (Kuhn's six tetrahedra per cell): one vertex on each
 // tetrahedron edge that joins a solid centre p_in and an empty one p_out, at place(p_in, p_out)
-// (asked once per edge; it should return a point of the segment, so that every sample the
-// surface separates has its sign from the grid). Centres beyond the grid count as empty (as in
-// the grid and the field), so the surface is closed even where solid voxels touch the grid's
-// boundary layer (the procedural molar's and the tests' grids keep an empty margin: no cell
-// beyond it has a solid corner, and the surface is the one of the cells inside).
+// (asked once per edge, in the order of the vertices; it should return a point of the segment, so
+// that every sample the surface separates has its sign from the grid). Centres beyond the grid
+// count as empty (as in the grid and the field), so the surface is closed even where solid voxels
+// touch the grid's boundary layer (the procedural molar's and the tests' grids keep an empty
+// margin: no cell beyond it has a solid corner, and the surface is the one of the cells inside).
 TriangleMesh triangulate_voxel_signs(
     const VoxelGrid& grid, const std::function<Vec3(const Vec3& p_in, const Vec3& p_out)>& place);
+
+// A surface vertex's edge: the voxel centres (indices in [-1, n]) of its solid end and its empty
+// end (p_in = grid.center(in), p_out = grid.center(out)).
+struct VoxelEdge {
+  std::int16_t in[3];
+  std::int16_t out[3];
+};
+// triangulate_voxel_signs without placing the vertices: the triangles (and groups) as it makes
+// them, `edges` (resized) the edge of each vertex, and the vertices left at zero (issue #30: the
+// placements are independent of each other, so triangulate_implicit makes them on several
+// threads). Throws std::invalid_argument when the grid has more than 32766 voxels a side.
+TriangleMesh triangulate_voxel_edges(const VoxelGrid& grid, std::vector<VoxelEdge>* edges);
 
 // The surface of an implicit solid {p : inside(p)} as triangles: triangulate_voxel_signs with each
 // vertex placed on its edge where `inside` changes, by bisection to 2^-40 of the edge. The signs
 // at the voxel centres are the grid's solid voxels (which must be inside() at the centres, as
 // voxelize_procedural_molar makes them).
 // `inside` is any callable bool(const Vec3&), called directly (a template: the bisections are
-// 40 calls per surface edge, ~10^8 at 512^3, issue #30), not through std::function.
+// 40 calls per surface edge, ~10^8 at 512^3, issue #30), not through std::function, and from
+// `threads` threads at once (reference/core/setup_threads.h; <= 0: setup_threads()), each placing
+// a contiguous range of the vertices: `inside` must be safe to call concurrently (a pure test).
+// Every vertex is placed by the same bisection whatever the thread count, so the mesh is the
+// one-thread mesh bit for bit.
 template <class Inside>
-TriangleMesh triangulate_implicit(const VoxelGrid& grid, const Inside& inside) {
-  return triangulate_voxel_signs(grid, [&inside](const Vec3& in, const Vec3& out) {
-    Vec3 p_in = in, p_out = out;
-    for (int it = 0; it < 40; ++it) {
-      const Vec3 mid = 0.5 * (p_in + p_out);
-      (inside(mid) ? p_in : p_out) = mid;
+TriangleMesh triangulate_implicit(const VoxelGrid& grid, const Inside& inside, int threads = 0) {
+  std::vector<VoxelEdge> edges;
+  TriangleMesh mesh = triangulate_voxel_edges(grid, &edges);
+  constexpr int kChunk = 4096;  // vertices a task
+  const int tasks = static_cast<int>((edges.size() + kChunk - 1) / kChunk);
+  parallel_tasks(tasks, threads, [&](int task) {
+    const std::size_t end = std::min(edges.size(), static_cast<std::size_t>(task + 1) * kChunk);
+    for (std::size_t v = static_cast<std::size_t>(task) * kChunk; v < end; ++v) {
+      const VoxelEdge& e = edges[v];
+      Vec3 p_in = grid.center(e.in[0], e.in[1], e.in[2]);
+      Vec3 p_out = grid.center(e.out[0], e.out[1], e.out[2]);
+      for (int it = 0; it < 40; ++it) {
+        const Vec3 mid = 0.5 * (p_in + p_out);
+        (inside(mid) ? p_in : p_out) = mid;
+      }
+      mesh.vertices[v] = 0.5 * (p_in + p_out);
     }
-    return Vec3(0.5 * (p_in + p_out));
   });
+  return mesh;
 }
 
 }  // namespace dentsim

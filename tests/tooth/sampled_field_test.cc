@@ -459,5 +459,65 @@ TEST(SampledField, BuildIsThePlainDefinitionAtStrides1To3OnTheMolarAndAMesh) {
   }
 }
 
+// Every sample, row bound, the Lipschitz constant and the brick count of two fields.
+void expect_same_field(const SampledField& a, const SampledField& b, const std::string& what) {
+  ASSERT_EQ(a.samples_per_axis(), b.samples_per_axis()) << what;
+  EXPECT_EQ(a.brick_count(), b.brick_count()) << what;
+  EXPECT_EQ(a.lipschitz(), b.lipschitz()) << what;
+  const int m = a.samples_per_axis();
+  long differ = 0;
+  for (int z = 0; z < m; ++z) {
+    for (int y = 0; y < m; ++y) {
+      for (int x = 0; x < m; ++x) {
+        differ += a.at(x, y, z) != b.at(x, y, z) ? 1 : 0;
+        if (x % kFieldBrick == 0) {
+          differ += a.row_bound(x / kFieldBrick, y, z) != b.row_bound(x / kFieldBrick, y, z);
+        }
+      }
+    }
+  }
+  EXPECT_EQ(differ, 0) << what;
+}
+
+// Issue #30 (the setup on two cores): the surface's vertices and the field's samples are made on
+// several threads, each on a disjoint part (sampled_field.h); the results must be the one-thread
+// ones bit for bit whatever the thread count: the molar's triangulation, and the fields of the
+// molar (strides 1 and 2) and of a mesh tooth (coarse triangles on a finer grid), at 1, 2, 3 and
+// 7 threads (7 more than the z-layers of bricks of the coarser fields: idle threads).
+TEST(SampledField, ThreadedBuildIsTheOneThreadBuildAt1To7Threads) {
+  const MolarParams params;
+  const VoxelGrid molar = voxelize_procedural_molar(params, 64);
+  const MolarSolidTest inside(params);
+  const TriangleMesh one = triangulate_implicit(molar, inside, 1);
+  EXPECT_GT(one.triangles.size(), 20000u);
+  TriangleMesh mesh = triangulate_implicit(voxelize_procedural_molar(params, 16), inside, 1);
+  VoxelizeOptions options;
+  options.resolution = 64;
+  const VoxelGrid mesh_grid = voxelize_mesh(mesh, options);
+  std::vector<SampledField> single;
+  for (const int stride : {1, 2}) {
+    single.push_back(build_sampled_field(
+        molar, one, field_band_for_tip(0.5e-3, molar.voxel_size, stride), 1));
+    single.push_back(build_sampled_field(
+        mesh_grid, mesh, field_band_for_tip(0.5e-3, mesh_grid.voxel_size, stride), 1));
+  }
+  EXPECT_GT(single[0].brick_count(), 100u);
+  for (const int threads : {1, 2, 3, 7}) {
+    const std::string at = " at " + std::to_string(threads) + " threads";
+    expect_same_mesh(triangulate_implicit(molar, inside, threads), one, "molar 64^3" + at);
+    for (const int stride : {1, 2}) {
+      const std::size_t q = 2 * static_cast<std::size_t>(stride - 1);
+      expect_same_field(
+          build_sampled_field(molar, one,
+                              field_band_for_tip(0.5e-3, molar.voxel_size, stride), threads),
+          single[q], "molar, stride " + std::to_string(stride) + at);
+      expect_same_field(
+          build_sampled_field(mesh_grid, mesh,
+                              field_band_for_tip(0.5e-3, mesh_grid.voxel_size, stride), threads),
+          single[q + 1], "mesh, stride " + std::to_string(stride) + at);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace dentsim

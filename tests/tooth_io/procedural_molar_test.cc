@@ -8,10 +8,14 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <random>
 #include <set>
+#include <string>
 #include <tuple>
 
+#include "reference/core/io.h"
+#include "reference/core/setup_threads.h"
 #include "reference/tooth/materials.h"
 #include "reference/tooth/neighbors.h"
 #include "reference/tooth/sampled_field.h"
@@ -146,6 +150,43 @@ TEST(ProceduralMolar, SlicedVoxelisationIsThePlainDefinition) {
 // bisections themselves, whose last steps lie within 2^-40 of an edge of the surface, where the
 // products' margins hand the decision to pow (the surface's vertices at 64^3, bit for bit, for
 // the default molar and an altered one).
+// Issue #30 (the setup on two cores): the voxelisation's slices are split among
+// setup_threads() threads (DENTSIM_SETUP_THREADS), each its own run of slices: the voxels and the
+// report are the one-thread ones whatever the count; a count that is not a whole number in
+// [1, 1024] is refused, naming the variable.
+TEST(ProceduralMolar, ThreadedVoxelisationIsTheOneThreadOne) {
+  const char* saved = std::getenv("DENTSIM_SETUP_THREADS");
+  const std::string restore = saved != nullptr ? saved : "";
+  ASSERT_EQ(setenv("DENTSIM_SETUP_THREADS", "1", 1), 0);
+  EXPECT_EQ(setup_threads(), 1);
+  VoxelizeReport one_report;
+  const VoxelGrid one = voxelize_procedural_molar(MolarParams{}, 64, &one_report);
+  for (const char* threads : {"2", "3", "7"}) {
+    ASSERT_EQ(setenv("DENTSIM_SETUP_THREADS", threads, 1), 0);
+    EXPECT_EQ(setup_threads(), std::atoi(threads));
+    VoxelizeReport report;
+    const VoxelGrid g = voxelize_procedural_molar(MolarParams{}, 64, &report);
+    EXPECT_TRUE(g.voxels == one.voxels) << threads << " threads";
+    EXPECT_EQ(report.pulp_voxels, one_report.pulp_voxels) << threads;
+    EXPECT_EQ(report.solid.interior_voxels, one_report.solid.interior_voxels) << threads;
+  }
+  for (const char* bad : {"0", "-1", "two", "", "2x", "1025"}) {
+    ASSERT_EQ(setenv("DENTSIM_SETUP_THREADS", bad, 1), 0);
+    try {
+      setup_threads();
+      ADD_FAILURE() << "accepted '" << bad << "'";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("DENTSIM_SETUP_THREADS"), std::string::npos) << bad;
+    }
+  }
+  if (saved != nullptr) {
+    setenv("DENTSIM_SETUP_THREADS", restore.c_str(), 1);
+  } else {
+    unsetenv("DENTSIM_SETUP_THREADS");
+  }
+  EXPECT_GE(one_report.pulp_voxels, 1000);
+}
+
 TEST(ProceduralMolar, SolidTestAnswersAsTheDefinition) {
   for (const MolarParams& params : {MolarParams{}, altered_molar()}) {
     const MolarSolidTest test(params);
