@@ -83,6 +83,12 @@ struct Range {
       hi += pad;
     }
   }
+  // After finish(): widens [lo, hi] by `fraction` of its span on each side.
+  void pad(double fraction) {
+    const double d = fraction * (hi - lo);
+    lo -= d;
+    hi += d;
+  }
 };
 
 // An RGB image surface and its drawing context, released on scope exit.
@@ -138,6 +144,14 @@ void draw_figure(cairo_t* cr, const Figure& f, double x0, double y0, double w, d
   }
   rx.finish();
   ry.finish();
+  // Markers at the data's extremes would sit on the frame, half drawn: a figure with point series
+  // keeps 5 % of each axis's span (in its own scale, log or linear) free on both sides.
+  bool markers = false;
+  for (const Series& s : f.series) markers = markers || s.points;
+  if (markers) {
+    rx.pad(0.05);
+    ry.pad(0.05);
+  }
   const double ypad = 0.05 * (ry.hi - ry.lo);
   ry.lo -= ypad;
   ry.hi += ypad;
