@@ -138,6 +138,12 @@ void request_realtime(bool* sched_fifo, bool* memory_locked, std::string* warnin
   *warning = w;
 }
 
+int helper_priority_below(int policy, int priority) {
+  if (policy != SCHED_FIFO && policy != SCHED_RR) return 0;
+  const int lowest = sched_get_priority_min(SCHED_FIFO);
+  return priority - 1 >= lowest ? priority - 1 : 0;
+}
+
 void release_realtime(bool sched_fifo, bool memory_locked) {
   if (sched_fifo) {
     sched_param p{};

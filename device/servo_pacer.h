@@ -87,5 +87,11 @@ inline constexpr int kRealtimePriority = 80;
 void request_realtime(bool* sched_fifo, bool* memory_locked, std::string* warning);
 // Back to SCHED_OTHER and unlocked memory (what request_realtime granted).
 void release_realtime(bool sched_fifo, bool memory_locked);
+// The SCHED_FIFO priority for a helper thread of a servo thread that runs at (`policy`,
+// `priority`), e.g. the vendor's scheduler thread (HdapiDevice::scheduler_policy): one below it
+// when the servo thread is real-time (SCHED_FIFO or SCHED_RR) and one below is still a real-time
+// priority; 0 (leave the helper as it is) otherwise: a helper above a time-shared servo thread
+// would preempt it.
+int helper_priority_below(int policy, int priority);
 
 }  // namespace dentsim

@@ -470,6 +470,19 @@ struct RealtimePacing {
   }
 };
 
+// --hd-loop callback: the tick runs on the vendor's scheduler thread, so the provider's helper
+// thread (the field edit's worker) runs just below that thread when it is real-time
+// (helper_priority_below), a warning where the worker may not; nothing when it is time-shared.
+void place_worker_below_scheduler(SceneRig& rig) {
+  if (rig.tooth_provider == nullptr) return;
+  int policy = 0, priority = 0;
+  if (!static_cast<HdapiDevice&>(*rig.backend).scheduler_policy(&policy, &priority)) return;
+  const int below = helper_priority_below(policy, priority);
+  if (below == 0) return;
+  const std::string why = rig.tooth_provider->set_worker_priority(below);
+  if (!why.empty()) std::fprintf(stderr, "dentsim run: warning: %s\n", why.c_str());
+}
+
 // The measurements of a scene run, tick by tick, whichever thread ran the tick (run_direct's loop,
 // or the vendor's scheduler callback: device/callback_loop.h), and the session recorder's feed.
 struct RunMeasurements {
@@ -826,6 +839,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   }
   RealtimePacing pacing;
   pacing.start(options, T, rig->tooth_provider);
+  if (callback) place_worker_below_scheduler(*rig);
   // A device with its own clock (hdapi) runs until its clock has covered the duration (its ticks
   // need not be the nominal ones); the simulated device for the nominal number of ticks.
   RunSpan span;

@@ -215,6 +215,18 @@ void HdapiDevice::shutdown() {
 
 HdapiDevice::~HdapiDevice() { shutdown(); }
 
+bool HdapiDevice::scheduler_policy(int* policy, int* priority) const {
+  if (!scheduler_started_ || !scheduler_ticked_.load(std::memory_order_acquire)) return false;
+  sched_param param{};
+  int p = 0;
+  if (pthread_getschedparam(scheduler_pthread_.load(std::memory_order_relaxed), &p, &param) != 0) {
+    return false;
+  }
+  *policy = p;
+  *priority = param.sched_priority;
+  return true;
+}
+
 HDCallbackCode HdapiDevice::servo_callback(void* self) {
   return static_cast<HdapiDevice*>(self)->tick();
 }
@@ -222,6 +234,8 @@ HDCallbackCode HdapiDevice::servo_callback(void* self) {
 HDCallbackCode HdapiDevice::tick() {
   const HdLibrary& l = *lib_;
   scheduler_thread_.store(std::this_thread::get_id());
+  scheduler_pthread_.store(pthread_self(), std::memory_order_relaxed);
+  scheduler_ticked_.store(true, std::memory_order_release);
   const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
   l.hdBeginFrame(hhd_);
   HDdouble qv[6 + 16] = {};  // room for a library that writes more than three values

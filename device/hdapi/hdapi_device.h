@@ -33,6 +33,8 @@
 // signs and offsets are not published: identity, to be checked on a device (docs/hardware.md).
 #pragma once
 
+#include <pthread.h>
+
 #include <array>
 #include <atomic>
 #include <chrono>
@@ -133,6 +135,10 @@ class HdapiDevice : public Device {
   std::array<double, 6> motor_temperature() const;
   // True once the callback returned HD_CALLBACK_DONE (servo function returned false).
   bool servo_done() const { return done_.load(); }
+  // The vendor's scheduler thread's scheduling policy and priority (pthread_getschedparam of the
+  // thread the last tick ran on), for a helper thread that must run just below it (the field
+  // edit's worker). False when no tick ran yet or the thread cannot be asked (it ended).
+  bool scheduler_policy(int* policy, int* priority) const;
 
  private:
   static HDCallbackCode servo_callback(void* self);
@@ -172,6 +178,8 @@ class HdapiDevice : public Device {
   std::atomic<void*> fn_ctx_{nullptr};
   std::atomic<bool> fn_running_{false};               // tick() is inside its read of fn_ and call
   std::atomic<std::thread::id> scheduler_thread_{};  // the thread tick() last ran on
+  std::atomic<pthread_t> scheduler_pthread_{};       // the same thread, for its policy
+  std::atomic<bool> scheduler_ticked_{false};        // scheduler_pthread_ is set
   std::atomic<std::uint32_t> faults_{kFaultNone};
   std::atomic<long> ticks_{0};
   std::atomic<bool> done_{false};

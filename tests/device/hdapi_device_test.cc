@@ -5,6 +5,8 @@
 #include "device/hdapi/hdapi_device.h"
 
 #include <gtest/gtest.h>
+#include <pthread.h>
+#include <sched.h>
 #include <stdlib.h>
 
 #include <array>
@@ -309,6 +311,51 @@ TEST(HdapiDevice, ServoFunctionRunsInTheSchedulerCallback) {
   EXPECT_EQ(dev.faults(), kFaultNone);
   // The last frame (the one returning DONE) commanded zero.
   EXPECT_EQ(motor_torque_mnm(dev)[1], 0.0);
+}
+
+// The scheduler thread's policy as the servo function sees it from inside the callback. It first
+// moves its own thread (the scheduler's) to `set_policy`, which an unprivileged process may pick
+// (SCHED_BATCH, SCHED_OTHER), so that the scheduler's thread and the test's differ.
+struct PolicyServo {
+  std::atomic<int> set_policy{SCHED_BATCH};
+  std::atomic<int> policy{-1}, priority{-1};
+  static bool run(void* self, const DeviceSample&, VecX& tau) {
+    auto* p = static_cast<PolicyServo*>(self);
+    sched_param param{};
+    pthread_setschedparam(pthread_self(), p->set_policy.load(), &param);
+    int policy = 0;
+    if (pthread_getschedparam(pthread_self(), &policy, &param) == 0) {
+      p->priority.store(param.sched_priority);
+      p->policy.store(policy);
+    }
+    tau.setZero();
+    return true;
+  }
+};
+
+// scheduler_policy() reads the vendor's scheduler thread, the one the tick runs on (what the
+// field edit's worker is placed below with --hd-loop callback), not the caller's.
+TEST(HdapiDevice, SchedulerPolicyIsTheCallbacksThreads) {
+  const EmulatorEnv env({{"DENTSIM_HD_EMU_GRAVITY", "0"}});
+  HdapiDevice dev(emulator_config());
+  int policy = -1, priority = -1;
+  PolicyServo servo;
+  dev.set_servo_function(&PolicyServo::run, &servo);
+  for (int i = 0; i < 200 && servo.policy.load() != SCHED_BATCH; ++i) dev.wait_ticks(1);
+  ASSERT_EQ(servo.policy.load(), SCHED_BATCH) << "the scheduler's thread could not take SCHED_BATCH";
+  ASSERT_TRUE(dev.scheduler_policy(&policy, &priority));
+  EXPECT_EQ(policy, SCHED_BATCH);
+  EXPECT_EQ(priority, servo.priority.load());
+  sched_param own{};
+  int own_policy = -1;
+  ASSERT_EQ(pthread_getschedparam(pthread_self(), &own_policy, &own), 0);
+  EXPECT_NE(own_policy, SCHED_BATCH);  // the test's thread is not the one asked
+  // Back to SCHED_OTHER (the emulator's scheduler thread may outlive this device).
+  servo.set_policy.store(SCHED_OTHER);
+  for (int i = 0; i < 200 && servo.policy.load() != SCHED_OTHER; ++i) dev.wait_ticks(1);
+  ASSERT_TRUE(dev.scheduler_policy(&policy, &priority));
+  EXPECT_EQ(policy, SCHED_OTHER);
+  dev.set_servo_function(nullptr, nullptr);
 }
 
 // A servo function that stays inside each call for a while, marking when it is inside.

@@ -3,6 +3,8 @@
 // skips the deadlines already passed instead of replaying them, and its statistics are exact.
 #include "device/servo_pacer.h"
 
+#include <sched.h>
+
 #include <gtest/gtest.h>
 
 #include <vector>
@@ -87,6 +89,19 @@ TEST(TimingHistogram, QuantilesFromBinsAndExactMaximum) {
   EXPECT_DOUBLE_EQ(h.quantile_us(0.99), 99.5);
   EXPECT_DOUBLE_EQ(h.quantile_us(1.0), TimingHistogram::kBins - 0.5);
   EXPECT_DOUBLE_EQ(h.max_us(), 1e9);
+}
+
+// A helper thread (the field edit's worker) goes one below a real-time servo thread, never above
+// or beside a time-shared one, and never to a priority that is not real-time.
+TEST(HelperPriority, OneBelowARealTimeServoThreadOnly) {
+  const int lowest = sched_get_priority_min(SCHED_FIFO);  // 1 on Linux
+  EXPECT_EQ(helper_priority_below(SCHED_FIFO, kRealtimePriority), kRealtimePriority - 1);
+  EXPECT_EQ(helper_priority_below(SCHED_RR, 50), 49);
+  EXPECT_EQ(helper_priority_below(SCHED_FIFO, lowest + 1), lowest);
+  EXPECT_EQ(helper_priority_below(SCHED_FIFO, lowest), 0);
+  EXPECT_EQ(helper_priority_below(SCHED_OTHER, 0), 0);
+  EXPECT_EQ(helper_priority_below(SCHED_BATCH, 0), 0);
+  EXPECT_EQ(helper_priority_below(SCHED_IDLE, 0), 0);
 }
 
 }  // namespace
