@@ -229,26 +229,42 @@ TEST(FastFieldSolid, EqualsTheReferenceQueryBitwiseAtStride2) { query_equals_the
 // and a box mesh's surface, random directions and clearances, phi sampled densely along the
 // certified step never falls below rho - s + slack (the step is safe), and the fast twin's advance
 // is the reference's bitwise.
+// One shape's two solids on its field: the reference's and the fast twin on its bricks.
+struct TwinSolids {
+  TwinSolids(const VoxelGrid& grid, const SampledField& field)
+      : tooth(grid), reference(tooth, field), bricks(field, 0), solid(tooth, bricks) {}
+  const VoxelTooth tooth;
+  const dentsim::FieldSolid reference;
+  const fast::FieldBricks bricks;
+  const fast::FieldSolid solid;
+};
+
+// The box mesh of the brute-force tests (corners kBoxLo, kBoxHi), its grid and its field.
+const Vec3 kBoxLo(1e-3, 1e-3, 1e-3), kBoxHi(7e-3, 6e-3, 4e-3);
+VoxelGrid box_grid() {
+  return test::solid_grid(kN, kSide, [](const Vec3& p) {
+    return (p.array() > kBoxLo.array()).all() && (p.array() < kBoxHi.array()).all();
+  });
+}
+SampledField box_field(const VoxelGrid& box) {
+  return build_sampled_field(box, test::box_mesh(kBoxLo, kBoxHi),
+                             field_band_for_tip(kRho, box.voxel_size));
+}
+
 TEST(FastFieldSolid, TheSweepsCellStepNeverLeavesTheSkinByBruteForce) {
   const VoxelGrid sphere = sphere_grid();
-  const Vec3 lo(1e-3, 1e-3, 1e-3), hi(7e-3, 6e-3, 4e-3);
-  const auto in_box = [&](const Vec3& p) {
-    return (p.array() > lo.array()).all() && (p.array() < hi.array()).all();
-  };
-  const VoxelGrid box = test::solid_grid(kN, kSide, in_box);
-  const SampledField fields[2] = {
-      sphere_field(sphere),
-      build_sampled_field(box, test::box_mesh(lo, hi), field_band_for_tip(kRho, box.voxel_size))};
+  const Vec3& hi = kBoxHi;
+  const VoxelGrid box = box_grid();
+  const SampledField fields[2] = {sphere_field(sphere), box_field(box)};
   const VoxelGrid* grids[2] = {&sphere, &box};
   std::mt19937_64 rng(45);
   std::uniform_real_distribution<double> u01(0.0, 1.0), dir(-1.0, 1.0);
   long steps = 0, longer = 0, unsafe = 0, differ = 0;
   for (int shape = 0; shape < 2; ++shape) {
-    const VoxelTooth tooth(*grids[shape]);
+    const TwinSolids twins(*grids[shape], fields[shape]);
     const SampledField& field = fields[shape];
-    const dentsim::FieldSolid reference(tooth, field);
-    const fast::FieldBricks bricks(field, 0);
-    const fast::FieldSolid solid(tooth, bricks);
+    const dentsim::FieldSolid& reference = twins.reference;
+    const fast::FieldSolid& solid = twins.solid;
     const double h = field.spacing(), skin = std::min(0.25 * kRho, 0.5 * grids[shape]->voxel_size);
     const double slack = proxy_detail::kSweepSlack * skin;
     for (int trial = 0; trial < 4000; ++trial) {
@@ -387,17 +403,16 @@ struct RecordingSolid {
 // The push-out's Newton step (reference/tooth/surface_proxy_core.h plain_step,
 // docs/derivations/field_contact.md §3): from random points in the skin {rho - s <= phi < rho}
 // (where a blocked sweep leaves g) near the sphere's and a box mesh's surface (faces, edges,
-// corners) and in a spherical cavity a little wider than the tip, the fast twin's push-out equals the reference's bitwise; it converges
-// (phi >= rho - push_tol); it asks fewer queries than the unit step; and by brute force phi along
-// every step of it (200 points a step) stays >= rho - s (the floor the sweep keeps; the proof
-// gives phi >= 0 by the ball rule, |step| <= phi / L).
+// corners) and in a spherical cavity a little wider than the tip, the fast twin's push-out
+// equals the reference's bitwise; it converges (phi >= rho - push_tol); it asks fewer queries
+// than the unit step; and by brute force phi along every step of it (200 points a step) stays
+// >= rho - s (the floor the sweep keeps; the proof gives phi >= 0 by the ball rule,
+// |step| <= phi / L).
 TEST(FastFieldSolid, ThePushOutsNewtonStepEqualsTheReferenceAndKeepsTheFloor) {
   const VoxelGrid sphere = sphere_grid();
-  const Vec3 lo(1e-3, 1e-3, 1e-3), hi(7e-3, 6e-3, 4e-3);
-  const auto in_box = [&](const Vec3& p) {
-    return (p.array() > lo.array()).all() && (p.array() < hi.array()).all();
-  };
-  const VoxelGrid box = test::solid_grid(kN, kSide, in_box);
+  const Vec3& lo = kBoxLo;
+  const Vec3& hi = kBoxHi;
+  const VoxelGrid box = box_grid();
   // A cavity the bur has cut: a solid block with a spherical hole of radius rho + 0.1 mm (the
   // tip's admissible set there is a ball of radius 0.1 mm, a concave wall all round).
   const double hole = kRho + 0.1e-3;
@@ -406,8 +421,7 @@ TEST(FastFieldSolid, ThePushOutsNewtonStepEqualsTheReferenceAndKeepsTheFloor) {
   };
   const VoxelGrid block = test::solid_grid(kN, kSide, in_block);
   const SampledField fields[3] = {
-      sphere_field(sphere),
-      build_sampled_field(box, test::box_mesh(lo, hi), field_band_for_tip(kRho, box.voxel_size)),
+      sphere_field(sphere), box_field(box),
       build_sampled_field(block, triangulate_implicit(block, in_block),
                           field_band_for_tip(kRho, block.voxel_size))};
   const VoxelGrid* grids[3] = {&sphere, &box, &block};
@@ -417,11 +431,10 @@ TEST(FastFieldSolid, ThePushOutsNewtonStepEqualsTheReferenceAndKeepsTheFloor) {
   double least = 1.0;
   long cavity_newton = 0, cavity_unit = 0;
   for (int shape = 0; shape < 3; ++shape) {
-    const VoxelTooth tooth(*grids[shape]);
+    const TwinSolids twins(*grids[shape], fields[shape]);
     const SampledField& field = fields[shape];
-    const dentsim::FieldSolid reference(tooth, field);
-    const fast::FieldBricks bricks(field, 0);
-    const fast::FieldSolid solid(tooth, bricks);
+    const dentsim::FieldSolid& reference = twins.reference;
+    const fast::FieldSolid& solid = twins.solid;
     const SurfaceProxy proxy(kRho, grids[shape]->voxel_size);
     const proxy_detail::ProxyConstants k = proxy.constants();
     std::vector<Vec3> asked, unit_asked;
