@@ -400,8 +400,10 @@ const FieldSolid::Query& FieldSolid::query(const Vec3& x) const {
 SignedDistance FieldSolid::distance(const Vec3& x, double reach) const {
   ++distances_;
   SignedDistance out;
-  if (have_exact_ && reach > 0.0) {  // the free-space certificate (header comment)
-    const double margin = 1e-9 * bricks_.field().spacing();
+  // The free-space certificate (header comment); its norm only where phi0 >= reach + margin
+  // could make it hold (L |x - x0| >= 0, so the test is the same).
+  const double margin = 1e-9 * bricks_.field().spacing();
+  if (have_exact_ && reach > 0.0 && phi0_ >= reach + margin) {
     if (phi0_ - bricks_.lipschitz() * (x - x0_).norm() >= reach + margin) {
       ++certified_;
       out.phi = reach;
@@ -424,6 +426,11 @@ SignedDistance FieldSolid::distance(const Vec3& x, double reach) const {
   const double g = q.gradient.norm();
   out.nearest = g > 0.0 ? Vec3(x - (q.value / g) * q.gradient) : x;
   return out;
+}
+
+double FieldSolid::slope(const Vec3& x) const {
+  const Query& q = query(x);
+  return q.deep ? 0.0 : q.gradient.norm();
 }
 
 double FieldSolid::sweep_advance(const Vec3& y, const SignedDistance&, const Vec3& dir,

@@ -176,6 +176,9 @@ class FieldSolid {
   SignedDistance distance(const Vec3& x, double reach) const;
   Vec3 normal(const Vec3& x, const SignedDistance& sd) const;
   double lipschitz() const { return bricks_.lipschitz(); }
+  // dentsim::FieldSolid::slope from the kept query (the push-out asks it right after distance(x)
+  // and normal(x) at the same x).
+  double slope(const Vec3& x) const;
   // dentsim::FieldSolid::sweep_advance on the kept query's cell (the sweep asks it right after
   // distance(y) at the same y: no second gather).
   double sweep_advance(const Vec3& y, const SignedDistance& sd, const Vec3& dir, double clearance,

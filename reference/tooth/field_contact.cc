@@ -40,6 +40,10 @@ Vec3 FieldSolid::normal(const Vec3& x, const SignedDistance& sd) const {
   return distance_gradient(tooth_, x, exact);
 }
 
+double FieldSolid::slope(const Vec3& x) const {
+  return field_.deep_inside(x) ? 0.0 : field_.sample(x).gradient.norm();
+}
+
 double FieldSolid::sweep_advance(const Vec3& y, const SignedDistance&, const Vec3& dir,
                                  double clearance, double slack) const {
   // y's cell as SampledField::sample locates it; a clamped coordinate (y beyond the lattice)

@@ -68,6 +68,9 @@ class FieldSolid {
   // grad phi / |grad phi| (deep inside or where the gradient vanishes: the voxel distance's).
   Vec3 normal(const Vec3& x, const SignedDistance& sd) const;
   double lipschitz() const { return field_.lipschitz(); }
+  // |grad phi| at x (0 deep inside, where the query is the voxel distance's): the push-out's
+  // Newton step (surface_proxy_core.h plain_step).
+  double slope(const Vec3& x) const;
   // The sweep's certified advance from y (sd = distance(y, ..), found) along the unit direction
   // dir with the given clearance and slack: field_cell_advance on y's cell (0 where y lies
   // outside the lattice, so that the caller's Lipschitz step is kept).

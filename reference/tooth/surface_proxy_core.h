@@ -9,7 +9,9 @@
 //       phi(x) (found = false and phi = reach when phi >= reach), and the nearest point
 //       `nearest` of the surface along the normal: x - phi n;
 //   Vec3 normal(const Vec3& x, const SignedDistance& sd) const;   unit grad phi at x;
-//   double lipschitz() const;                 L: |phi(x) - phi(y)| <= L |x - y|.
+//   double lipschitz() const;                 L: |phi(x) - phi(y)| <= L |x - y|;
+// and optionally (the field, field_contact.h) sweep_advance (the sweep's step from the cell's
+// slope) and slope(x) = |grad phi(x)| (the push-out's Newton step, plain_step below).
 // The swept test advances by (phi - (rho - s)) / L per step (conservative advancement under the
 // L-Lipschitz bound), so the sweep never leaves {phi >= rho - s}; for the exact distance L = 1
 // and the steps are the same doubles as before the refactor.
@@ -80,12 +82,33 @@ inline bool corner_step(const ProxyConstants& k, const PushWall* walls, const do
   return found;
 }
 
+// The push-out's step off one wall: to the nearest surface point, then rho out along the normal u
+// (for the exact distance, |grad phi| = 1: phi = rho there). A Solid whose |grad phi| is not 1
+// (the sampled field, field_contact.h FieldSolid::slope) takes the Newton step along u instead,
+// x + (rho - phi) / |grad phi| u, where phi's linearisation along u reaches rho (one or two
+// queries near a smooth surface where the unit step closes rho - phi only by the factor
+// |grad phi|), if that step is no longer than phi(x) / L, the corner step's rule (the ball it
+// stays in holds no solid); else the unit step (docs/derivations/field_contact.md §3).
+template <class Solid>
+Vec3 plain_step(const ProxyConstants& k, const Solid& solid, const Vec3& x,
+                const SignedDistance& sd, const Vec3& u) {
+  if constexpr (requires { solid.slope(x); }) {
+    const double slope = solid.slope(x);
+    if (slope > 0.0 && sd.phi > 0.0) {
+      const double t = (k.rho - sd.phi) / slope;
+      if (t * solid.lipschitz() <= sd.phi) return x + t * u;
+    }
+  }
+  return sd.nearest + k.rho * u;
+}
+
 // Step 1: moves x into A = {phi >= rho - push_tol} along the shortest way; returns phi(x) - rho at
 // the end (0 when phi >= rho was found within the search of reach rho; >= -push_tol when it
 // converged). Each step moves x to rho outside the nearest surface point along the normal (the
 // plain step), except in a concave corner: where that step would undo an earlier wall's (by more
 // than push_tol), x moves onto the nearest point of the walls' offset half-spaces (corner_step),
-// if that step is no longer than phi(x) / L (the ball it stays in holds no solid).
+// if that step is no longer than phi(x) / L (the ball it stays in holds no solid); the step off
+// one wall is plain_step's.
 template <class Solid>
 double push_out(const ProxyConstants& k, const Solid& solid, Vec3* x) {
   // Inside, the shortest way out may be long: search as far as the grid's extent. Outside, all
@@ -114,7 +137,7 @@ double push_out(const ProxyConstants& k, const Solid& solid, Vec3* x) {
         d.norm() * solid.lipschitz() <= sd.phi) {
       *x += d;
     } else {
-      *x = sd.nearest + k.rho * u;  // the nearest surface point, then rho out along the normal
+      *x = plain_step(k, solid, *x, sd, u);
     }
     // Remember the current wall (a near-parallel earlier one gives way to it, else the oldest).
     int slot = std::min(kept + 1, kPushWallsKept);

@@ -229,26 +229,42 @@ TEST(FastFieldSolid, EqualsTheReferenceQueryBitwiseAtStride2) { query_equals_the
 // and a box mesh's surface, random directions and clearances, phi sampled densely along the
 // certified step never falls below rho - s + slack (the step is safe), and the fast twin's advance
 // is the reference's bitwise.
+// One shape's two solids on its field: the reference's and the fast twin on its bricks.
+struct TwinSolids {
+  TwinSolids(const VoxelGrid& grid, const SampledField& field)
+      : tooth(grid), reference(tooth, field), bricks(field, 0), solid(tooth, bricks) {}
+  const VoxelTooth tooth;
+  const dentsim::FieldSolid reference;
+  const fast::FieldBricks bricks;
+  const fast::FieldSolid solid;
+};
+
+// The box mesh of the brute-force tests (corners kBoxLo, kBoxHi), its grid and its field.
+const Vec3 kBoxLo(1e-3, 1e-3, 1e-3), kBoxHi(7e-3, 6e-3, 4e-3);
+VoxelGrid box_grid() {
+  return test::solid_grid(kN, kSide, [](const Vec3& p) {
+    return (p.array() > kBoxLo.array()).all() && (p.array() < kBoxHi.array()).all();
+  });
+}
+SampledField box_field(const VoxelGrid& box) {
+  return build_sampled_field(box, test::box_mesh(kBoxLo, kBoxHi),
+                             field_band_for_tip(kRho, box.voxel_size));
+}
+
 TEST(FastFieldSolid, TheSweepsCellStepNeverLeavesTheSkinByBruteForce) {
   const VoxelGrid sphere = sphere_grid();
-  const Vec3 lo(1e-3, 1e-3, 1e-3), hi(7e-3, 6e-3, 4e-3);
-  const auto in_box = [&](const Vec3& p) {
-    return (p.array() > lo.array()).all() && (p.array() < hi.array()).all();
-  };
-  const VoxelGrid box = test::solid_grid(kN, kSide, in_box);
-  const SampledField fields[2] = {
-      sphere_field(sphere),
-      build_sampled_field(box, test::box_mesh(lo, hi), field_band_for_tip(kRho, box.voxel_size))};
+  const Vec3& hi = kBoxHi;
+  const VoxelGrid box = box_grid();
+  const SampledField fields[2] = {sphere_field(sphere), box_field(box)};
   const VoxelGrid* grids[2] = {&sphere, &box};
   std::mt19937_64 rng(45);
   std::uniform_real_distribution<double> u01(0.0, 1.0), dir(-1.0, 1.0);
   long steps = 0, longer = 0, unsafe = 0, differ = 0;
   for (int shape = 0; shape < 2; ++shape) {
-    const VoxelTooth tooth(*grids[shape]);
+    const TwinSolids twins(*grids[shape], fields[shape]);
     const SampledField& field = fields[shape];
-    const dentsim::FieldSolid reference(tooth, field);
-    const fast::FieldBricks bricks(field, 0);
-    const fast::FieldSolid solid(tooth, bricks);
+    const dentsim::FieldSolid& reference = twins.reference;
+    const fast::FieldSolid& solid = twins.solid;
     const double h = field.spacing(), skin = std::min(0.25 * kRho, 0.5 * grids[shape]->voxel_size);
     const double slack = proxy_detail::kSweepSlack * skin;
     for (int trial = 0; trial < 4000; ++trial) {
@@ -361,6 +377,130 @@ TEST(FastFieldSolid, TheSweepOnAFlatFaceTakesOneQueryPerCellCrossed) {
               "alone: about %ld (L = %.4f)\n",
               sweeps, queries, static_cast<double>(queries) / sweeps, lipschitz_queries,
               field.lipschitz());
+}
+
+// A Solid that forwards to the fast FieldSolid and records where distance() was asked (the
+// push-out's iterates); with kNewton false it hides slope(), so push_out takes the unit step
+// (the sdf model's, and the field's before stop 46).
+template <bool kNewton>
+struct RecordingSolid {
+  const fast::FieldSolid& solid;
+  std::vector<Vec3>* asked;
+  const VoxelTooth& tooth() const { return solid.tooth(); }
+  SignedDistance distance(const Vec3& x, double reach) const {
+    asked->push_back(x);
+    return solid.distance(x, reach);
+  }
+  Vec3 normal(const Vec3& x, const SignedDistance& sd) const { return solid.normal(x, sd); }
+  double lipschitz() const { return solid.lipschitz(); }
+  double slope(const Vec3& x) const
+    requires kNewton
+  {
+    return solid.slope(x);
+  }
+};
+
+// The push-out's Newton step (reference/tooth/surface_proxy_core.h plain_step,
+// docs/derivations/field_contact.md §3): from random points in the skin {rho - s <= phi < rho}
+// (where a blocked sweep leaves g) near the sphere's and a box mesh's surface (faces, edges,
+// corners) and in a spherical cavity a little wider than the tip, the fast twin's push-out
+// equals the reference's bitwise; it converges (phi >= rho - push_tol); it asks fewer queries
+// than the unit step; and by brute force phi along every step of it (200 points a step) stays
+// >= rho - s (the floor the sweep keeps; the proof gives phi >= 0 by the ball rule,
+// |step| <= phi / L).
+TEST(FastFieldSolid, ThePushOutsNewtonStepEqualsTheReferenceAndKeepsTheFloor) {
+  const VoxelGrid sphere = sphere_grid();
+  const Vec3& lo = kBoxLo;
+  const Vec3& hi = kBoxHi;
+  const VoxelGrid box = box_grid();
+  // A cavity the bur has cut: a solid block with a spherical hole of radius rho + 0.1 mm (the
+  // tip's admissible set there is a ball of radius 0.1 mm, a concave wall all round).
+  const double hole = kRho + 0.1e-3;
+  const auto in_block = [&](const Vec3& p) {
+    return (p - kCentre).cwiseAbs().maxCoeff() < 2e-3 && (p - kCentre).norm() > hole;
+  };
+  const VoxelGrid block = test::solid_grid(kN, kSide, in_block);
+  const SampledField fields[3] = {
+      sphere_field(sphere), box_field(box),
+      build_sampled_field(block, triangulate_implicit(block, in_block),
+                          field_band_for_tip(kRho, block.voxel_size))};
+  const VoxelGrid* grids[3] = {&sphere, &box, &block};
+  std::mt19937_64 rng(46);
+  std::uniform_real_distribution<double> u01(0.0, 1.0), dir(-1.0, 1.0);
+  long pushes = 0, differ = 0, unconverged = 0, below = 0, newton_queries = 0, unit_queries = 0;
+  double least = 1.0;
+  long cavity_newton = 0, cavity_unit = 0;
+  for (int shape = 0; shape < 3; ++shape) {
+    const TwinSolids twins(*grids[shape], fields[shape]);
+    const SampledField& field = fields[shape];
+    const dentsim::FieldSolid& reference = twins.reference;
+    const fast::FieldSolid& solid = twins.solid;
+    const SurfaceProxy proxy(kRho, grids[shape]->voxel_size);
+    const proxy_detail::ProxyConstants k = proxy.constants();
+    std::vector<Vec3> asked, unit_asked;
+    asked.reserve(64);
+    unit_asked.reserve(64);
+    const RecordingSolid<true> newton{solid, &asked};
+    const RecordingSolid<false> unit{solid, &unit_asked};
+    for (int trial = 0; trial < 3000; ++trial) {
+      // Near the sphere along a random radius; near the box anywhere within 0.8 mm of it (its
+      // edges and corners too).
+      Vec3 y;
+      if (shape == 0) {
+        Vec3 r(dir(rng), dir(rng), dir(rng));
+        if (r.norm() < 1e-3) continue;
+        y = kCentre + (kR + kRho + (2.0 * u01(rng) - 1.0) * k.skin) * r.normalized();
+      } else if (shape == 1) {
+        y = lo - Vec3::Constant(0.8e-3) +
+            Vec3(u01(rng), u01(rng), u01(rng)).cwiseProduct(hi - lo + Vec3::Constant(1.6e-3));
+      } else {
+        Vec3 r(dir(rng), dir(rng), dir(rng));
+        if (r.norm() < 1e-3) continue;
+        y = kCentre + (hole - kRho + u01(rng) * k.skin) * r.normalized();
+      }
+      const double phi = field.sample(y).value;
+      if (!(phi >= k.rho - k.skin && phi < k.rho)) continue;
+      Vec3 xr = y, xf = y, xu = y;
+      const double er = proxy_detail::push_out(k, reference, &xr);
+      asked.clear();
+      const double ef = proxy_detail::push_out(k, newton, &xf);
+      unit_asked.clear();
+      proxy_detail::push_out(k, unit, &xu);
+      ++pushes;
+      differ += !(xr == xf && er == ef);
+      unconverged += ef < -k.push_tol;
+      newton_queries += static_cast<long>(asked.size());
+      unit_queries += static_cast<long>(unit_asked.size());
+      if (shape == 2) {
+        cavity_newton += static_cast<long>(asked.size());
+        cavity_unit += static_cast<long>(unit_asked.size());
+      }
+      // The iterates are the points asked, in order (the last one is the result's).
+      for (std::size_t i = 1; i < asked.size(); ++i) {
+        for (int j = 0; j <= 200; ++j) {
+          const double v = field.sample(asked[i - 1] + (asked[i] - asked[i - 1]) * (j / 200.0)).value;
+          least = std::min(least, v - (k.rho - k.skin));
+          if (v < k.rho - k.skin) {
+            ++below;
+            ADD_FAILURE() << "shape " << shape << " from " << y.transpose() << ": phi " << v;
+            break;
+          }
+        }
+      }
+    }
+  }
+  std::printf("%ld push-outs from the skin: %ld queries with the Newton step (%.2f each), %ld with "
+              "the unit step (%.2f); %ld differ, %ld unconverged, least phi - (rho - s) %.3g m\n",
+              pushes, newton_queries, static_cast<double>(newton_queries) / pushes, unit_queries,
+              static_cast<double>(unit_queries) / pushes, differ, unconverged, least);
+  std::printf("in the cavity: %ld queries with the Newton step, %ld with the unit step\n",
+              cavity_newton, cavity_unit);
+  EXPECT_GT(pushes, 3000);
+  EXPECT_EQ(differ, 0);
+  EXPECT_EQ(unconverged, 0);
+  EXPECT_EQ(below, 0);
+  EXPECT_LE(newton_queries, unit_queries);
+  EXPECT_LT(cavity_newton, cavity_unit);
 }
 
 // The bur's path: free space, down 1.1 mm into the sphere (drilling), sideways 0.6 mm, away.
