@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "reference/core/io.h"
+#include "reference/core/setup_threads.h"
 
 namespace dentsim {
 namespace {
@@ -85,8 +86,10 @@ std::vector<std::uint16_t> edt_box(const VoxelGrid& grid, const std::array<int, 
                static_cast<std::size_t>(bx) *
                    (static_cast<std::size_t>(j) + static_cast<std::size_t>(by) * k)];
   };
+  // Threads (issue #30, reference/core/setup_threads.h): every line of a pass is transformed on
+  // its own, a plane of lines a task, so each value is the one-thread one whatever the count.
   // Pass 1 (x): distance along the row to the nearest empty voxel, clipped.
-  for (int k = 0; k < bz; ++k) {
+  parallel_tasks(bz, 0, [&](int k) {
     for (int j = 0; j < by; ++j) {
       int run = clip;
       for (int i = 0; i < bx; ++i) {
@@ -104,15 +107,21 @@ std::vector<std::uint16_t> edt_box(const VoxelGrid& grid, const std::array<int, 
         at(i, j, k) = static_cast<std::uint16_t>(std::min<double>(double(d) * d, cap));
       }
     }
-  }
+  });
   // Passes 2 (y) and 3 (z): lower envelopes of parabolas.
   const int m = std::max({bx, by, bz});
-  std::vector<double> f(m), d(m), z(m + 1);
-  std::vector<int> v(m);
+  struct Scratch {
+    std::vector<double> f, d, z;
+    std::vector<int> v;
+  };
   // One line of `len` samples, the q-th at `cell(q)`. A line of zeros (all empty) stays zeros,
   // one all at the cap stays there (every parabola is >= cap): both are skipped.
   const auto capped = static_cast<std::uint16_t>(cap);
-  auto transform_line = [&](int len, auto&& cell) {
+  auto transform_line = [&](Scratch& sc, int len, auto&& cell) {
+    std::vector<double>& f = sc.f;
+    std::vector<double>& d = sc.d;
+    std::vector<double>& z = sc.z;
+    std::vector<int>& v = sc.v;
     bool zeros = true, at_cap = true;
     for (int q = 0; q < len; ++q) {
       const std::uint16_t c = cell(q);
@@ -124,16 +133,24 @@ std::vector<std::uint16_t> edt_box(const VoxelGrid& grid, const std::array<int, 
     distance_transform_1d(f, len, d, v, z);
     for (int q = 0; q < len; ++q) cell(q) = static_cast<std::uint16_t>(std::min(d[q], cap));
   };
-  for (int k = 0; k < bz; ++k) {
+  const auto scratch = [m] {
+    return Scratch{std::vector<double>(static_cast<std::size_t>(m)),
+                   std::vector<double>(static_cast<std::size_t>(m)),
+                   std::vector<double>(static_cast<std::size_t>(m) + 1),
+                   std::vector<int>(static_cast<std::size_t>(m))};
+  };
+  parallel_tasks(bz, 0, [&](int k) {
+    Scratch sc = scratch();
     for (int i = 0; i < bx; ++i) {
-      transform_line(by, [&](int j) -> std::uint16_t& { return at(i, j, k); });
+      transform_line(sc, by, [&](int j) -> std::uint16_t& { return at(i, j, k); });
     }
-  }
-  for (int j = 0; j < by; ++j) {
+  });
+  parallel_tasks(by, 0, [&](int j) {
+    Scratch sc = scratch();
     for (int i = 0; i < bx; ++i) {
-      transform_line(bz, [&](int k) -> std::uint16_t& { return at(i, j, k); });
+      transform_line(sc, bz, [&](int k) -> std::uint16_t& { return at(i, j, k); });
     }
-  }
+  });
   return out;
 }
 
@@ -402,7 +419,15 @@ void assign_materials(VoxelGrid& grid, const std::vector<std::uint8_t>& pulp,
   // The bounds of the dentin voxels at or above the CEJ (s >= 0 below): the only ones that can
   // turn to enamel, so the only ones whose depth is needed.
   std::array<int, 3> crown_lo = {n, n, n}, crown_hi = {-1, -1, -1};
-  for (int k = 0; k < n; ++k) {
+  // A plane a task, each with its own bounds (issue #30: threads; a voxel reads and writes only
+  // itself), then the planes' bounds combined: min and max, the same whatever the count.
+  struct Bounds {
+    std::array<int, 3> lo, hi, crown_lo, crown_hi;
+  };
+  std::vector<Bounds> planes(static_cast<std::size_t>(std::max(n, 0)),
+                             Bounds{lo, hi, crown_lo, crown_hi});
+  parallel_tasks(n, 0, [&](int k) {
+    Bounds& b = planes[static_cast<std::size_t>(k)];
     for (int j = 0; j < n; ++j) {
       for (int i = 0; i < n; ++i) {
         const std::size_t x = grid.index(i, j, k);
@@ -411,17 +436,25 @@ void assign_materials(VoxelGrid& grid, const std::vector<std::uint8_t>& pulp,
             (grid.voxels[x] == kPulp || (!pulp.empty() && pulp[x] != 0)) ? kPulp : kDentin;
         const std::array<int, 3> p = {i, j, k};
         for (int d = 0; d < 3; ++d) {
-          lo[d] = std::min(lo[d], p[d]);
-          hi[d] = std::max(hi[d], p[d]);
+          b.lo[d] = std::min(b.lo[d], p[d]);
+          b.hi[d] = std::max(b.hi[d], p[d]);
         }
         // The test of the enamel loop below, on the same expression.
         if (grid.voxels[x] == kDentin && !(crown.axis.dot(grid.center(i, j, k)) - crown.cej < 0)) {
           for (int d = 0; d < 3; ++d) {
-            crown_lo[d] = std::min(crown_lo[d], p[d]);
-            crown_hi[d] = std::max(crown_hi[d], p[d]);
+            b.crown_lo[d] = std::min(b.crown_lo[d], p[d]);
+            b.crown_hi[d] = std::max(b.crown_hi[d], p[d]);
           }
         }
       }
+    }
+  });
+  for (const Bounds& plane : planes) {
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], plane.lo[d]);
+      hi[d] = std::max(hi[d], plane.hi[d]);
+      crown_lo[d] = std::min(crown_lo[d], plane.crown_lo[d]);
+      crown_hi[d] = std::max(crown_hi[d], plane.crown_hi[d]);
     }
   }
   if (crown_hi[0] < 0 || !(enamel_cusp_m > 0)) return;
@@ -443,7 +476,9 @@ void assign_materials(VoxelGrid& grid, const std::vector<std::uint8_t>& pulp,
   }
   const auto d2 = edt_box(grid, lo, hi, clip);
   const int bx = hi[0] - lo[0] + 1, by = hi[1] - lo[1] + 1;
-  for (int k = lo[2]; k <= hi[2]; ++k) {
+  // A plane of voxels a task (each voxel reads and writes only itself): any thread count.
+  parallel_tasks(hi[2] - lo[2] + 1, 0, [&](int plane) {
+    const int k = lo[2] + plane;
     for (int j = lo[1]; j <= hi[1]; ++j) {
       for (int i = lo[0]; i <= hi[0]; ++i) {
         const std::size_t x = grid.index(i, j, k);
@@ -459,7 +494,7 @@ void assign_materials(VoxelGrid& grid, const std::vector<std::uint8_t>& pulp,
         if ((std::sqrt(double(d2[b])) - 0.5) * h < t) grid.voxels[x] = kEnamel;
       }
     }
-  }
+  });
 }
 
 VoxelGrid voxelize_mesh(const TriangleMesh& mesh, const VoxelizeOptions& options,

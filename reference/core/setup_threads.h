@@ -1,7 +1,9 @@
 // Threads for the setup's builds (issue #30: the field model's setup of a 512^3 tooth in <= 10 s
 // on the 2-core machines the project targets): the tooth field's surface and samples are built on
 // several threads, each on a disjoint part, so that the result is the one-thread build's, bit for
-// bit, whatever the thread count (tests/tooth/sampled_field_test.cc, ThreadedBuild*).
+// bit, whatever the thread count (tests/tooth/sampled_field_test.cc, ThreadedBuild*); so are the
+// procedural molar's voxels and the enamel's distance transform and materials (tooth_io/
+// voxelize.cc edt_box, assign_materials; tests/tooth_io/voxelize_test.cc, Materials.Threaded*).
 //
 // The count: the environment variable DENTSIM_SETUP_THREADS (a whole number >= 1) when set, else
 // std::thread::hardware_concurrency() capped at kMaxSetupThreads (docs/scenes.md, under

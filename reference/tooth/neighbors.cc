@@ -60,11 +60,28 @@ SparseNeighborCodes::SparseNeighborCodes(const VoxelGrid& grid) : n_(grid.n) {
     }
   }
   bricks_.reserve(solid_slots * kBrickVoxels);  // untouched until a brick is taken
-  for (int k = 0; k < grid.n; ++k) {
-    for (int j = 0; j < grid.n; ++j) {
-      for (int i = 0; i < grid.n; ++i) {
-        const std::uint8_t c = exposed_faces(grid, i, j, k);
-        if (c != 0) set(grid.index(i, j, k), c);
+  // exposed_faces of every solid voxel, in the same order (so the bricks are taken in the same
+  // order), read from the rows around it (issue #30: the setup of a 512^3 tooth); a row beyond
+  // the grid reads as empty, as VoxelGrid::solid does.
+  const std::vector<std::uint8_t> empty_row(n, 0);
+  const auto row_at = [&](std::size_t j, std::size_t k) {
+    return j < n && k < n ? grid.voxels.data() + n * (j + n * k) : empty_row.data();
+  };
+  for (std::size_t k = 0; k < n; ++k) {
+    for (std::size_t j = 0; j < n; ++j) {
+      const std::uint8_t* row = row_at(j, k);
+      // j - 1 and k - 1 wrap to SIZE_MAX at 0: beyond the grid.
+      const std::uint8_t* around[4] = {row_at(j - 1, k), row_at(j + 1, k), row_at(j, k - 1),
+                                       row_at(j, k + 1)};
+      for (std::size_t i = 0; i < n; ++i) {
+        if (row[i] == 0) continue;
+        std::uint8_t c = 0;
+        if (i == 0 || row[i - 1] == 0) c |= 1u << 0;
+        if (i + 1 == n || row[i + 1] == 0) c |= 1u << 1;
+        for (int f = 0; f < 4; ++f) {
+          if (around[f][i] == 0) c |= static_cast<std::uint8_t>(1u << (f + 2));
+        }
+        if (c != 0) set(n * (j + n * k) + i, c);
       }
     }
   }

@@ -78,21 +78,44 @@ FullOctree::FullOctree(VoxelGrid grid) : grid_(std::move(grid)) {
   }
   levels_ = log2_exact(n);
   masks_.assign(internal_node_count(levels_), 0);
-  // Level L-1 from the leaves, then each level from the one below.
-  for (int l = levels_ - 1; l >= 0; --l) {
-    const int nl = 1 << l;
-    for (int z = 0; z < nl; ++z) {
-      for (int y = 0; y < nl; ++y) {
-        for (int x = 0; x < nl; ++x) {
-          std::uint8_t mask = 0;
-          for (int c = 0; c < 8; ++c) {
-            if (occupied(l + 1, 2 * x + (c & 1), 2 * y + ((c >> 1) & 1), 2 * z + ((c >> 2) & 1))) {
-              mask |= static_cast<std::uint8_t>(1u << c);
-            }
-          }
-          masks_[node_index(l, x, y, z)] = mask;
+  if (levels_ == 0) return;
+  // Level L-1 from the leaves, then each level from the one below. A level's nodes lie in Morton
+  // order (header comment), so node m of level l has its children at 8 m + c of level l + 1; level
+  // L-1 reads its children's voxels from four rows of the grid (issue #30: the setup of a 512^3
+  // tooth; the masks are those of the definition, occupied() of the eight children, bit for bit:
+  // tests/tooth/octree_test.cc).
+  const int top = levels_ - 1;
+  const int nl = 1 << top;
+  std::vector<std::size_t> spread(static_cast<std::size_t>(nl));
+  for (int v = 0; v < nl; ++v) spread[static_cast<std::size_t>(v)] = spread_bits(v);
+  const std::uint8_t* voxels = grid_.voxels.data();
+  std::uint8_t* leaves_parent = masks_.data() + internal_node_count(top);
+  for (int z = 0; z < nl; ++z) {
+    for (int y = 0; y < nl; ++y) {
+      // The rows (2y + cy, 2z + cz) holding children c = cx + 2 cy + 4 cz.
+      const std::uint8_t* row[4];
+      for (int r = 0; r < 4; ++r) row[r] = voxels + grid_.index(0, 2 * y + (r & 1), 2 * z + (r >> 1));
+      const std::size_t yz = (spread[static_cast<std::size_t>(y)] << 1) |
+                             (spread[static_cast<std::size_t>(z)] << 2);
+      for (int x = 0; x < nl; ++x) {
+        std::uint8_t mask = 0;
+        for (int c = 0; c < 8; ++c) {
+          if (row[c >> 1][2 * x + (c & 1)] != 0) mask |= static_cast<std::uint8_t>(1u << c);
         }
+        leaves_parent[spread[static_cast<std::size_t>(x)] | yz] = mask;
       }
+    }
+  }
+  for (int l = top - 1; l >= 0; --l) {
+    std::uint8_t* level = masks_.data() + internal_node_count(l);
+    const std::uint8_t* below = masks_.data() + internal_node_count(l + 1);
+    const std::size_t count = std::size_t{1} << (3 * l);
+    for (std::size_t m = 0; m < count; ++m) {
+      std::uint8_t mask = 0;
+      for (int c = 0; c < 8; ++c) {
+        if (below[8 * m + static_cast<std::size_t>(c)] != 0) mask |= static_cast<std::uint8_t>(1u << c);
+      }
+      level[m] = mask;
     }
   }
 }

@@ -559,7 +559,7 @@ TriangleMesh triangulate_voxel_signs(
   for (std::size_t v = 0; v < edges.size(); ++v) {
     const VoxelEdge& e = edges[v];
     mesh.vertices[v] = place(grid.center(e.in[0], e.in[1], e.in[2]),
-                             grid.center(e.out[0], e.out[1], e.out[2]));
+                             grid.center(e.out(0), e.out(1), e.out(2)));
   }
   return mesh;
 }
@@ -592,10 +592,17 @@ TriangleMesh triangulate_voxel_edges(const VoxelGrid& grid, std::vector<VoxelEdg
   std::vector<std::size_t> layer_written[2];
   for (auto& t : layer_vertex) t.assign(static_cast<std::size_t>(span) * span * 8, -1);
   int lower = 0;  // layer_vertex[lower] holds sample layer k (+1 shift: ck = k + 1)
-  const auto set_corner = [](std::int16_t* e, int i, int j, int k, int c) {
-    e[0] = static_cast<std::int16_t>(i + (c & 1));
-    e[1] = static_cast<std::int16_t>(j + ((c >> 1) & 1));
-    e[2] = static_cast<std::int16_t>(k + ((c >> 2) & 1));
+  // The edge from corner c_in to corner c_out of cell (i, j, k) (VoxelEdge: the step per axis is
+  // the difference of the corners' bits, + 1).
+  const auto make_edge = [](int i, int j, int k, int c_in, int c_out) {
+    VoxelEdge e;
+    e.in[0] = static_cast<std::int16_t>(i + (c_in & 1));
+    e.in[1] = static_cast<std::int16_t>(j + ((c_in >> 1) & 1));
+    e.in[2] = static_cast<std::int16_t>(k + ((c_in >> 2) & 1));
+    int step = 0;
+    for (int a = 0; a < 3; ++a) step |= (((c_out >> a) & 1) - ((c_in >> a) & 1) + 1) << (2 * a);
+    e.step = static_cast<std::uint8_t>(step);
+    return e;
   };
   const auto vertex_on = [&](int i, int j, int k, int c0, int c1, bool in0) {
     // c0 < c1; the slot names the lower corner's sample and the step.
@@ -609,10 +616,7 @@ TriangleMesh triangulate_voxel_edges(const VoxelGrid& grid, std::vector<VoxelEdg
     if (v >= 0) return static_cast<int>(v);
     v = static_cast<std::int32_t>(edges->size());
     layer_written[table].push_back(slot);
-    VoxelEdge e;
-    set_corner(e.in, i, j, k, in0 ? c0 : c1);
-    set_corner(e.out, i, j, k, in0 ? c1 : c0);
-    edges->push_back(e);
+    edges->push_back(make_edge(i, j, k, in0 ? c0 : c1, in0 ? c1 : c0));
     return static_cast<int>(v);
   };
   // The solid flags of sample layer z (in [-1, n]) as bit rows: row j + 1 for sample row j.

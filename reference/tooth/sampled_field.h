@@ -236,12 +236,16 @@ SampledField build_sampled_field(const VoxelGrid& grid, const TriangleMesh& surf
 TriangleMesh triangulate_voxel_signs(
     const VoxelGrid& grid, const std::function<Vec3(const Vec3& p_in, const Vec3& p_out)>& place);
 
-// A surface vertex's edge: the voxel centres (indices in [-1, n]) of its solid end and its empty
-// end (p_in = grid.center(in), p_out = grid.center(out)).
+// A surface vertex's edge: the voxel centres (indices in [-1, n]) of its solid end `in` and its
+// empty end out(), which is in + d with d_a in {-1, 0, 1} (the corners of one cell) kept in 2 bits
+// an axis: 8 bytes a vertex (issue #30: the edges live beside the vertices while they are placed).
+// p_in = grid.center(in), p_out = grid.center(out(0), out(1), out(2)).
 struct VoxelEdge {
   std::int16_t in[3];
-  std::int16_t out[3];
+  std::uint8_t step;  // d_a + 1 in bits 2a and 2a + 1
+  int out(int a) const { return in[a] + ((step >> (2 * a)) & 3) - 1; }
 };
+static_assert(sizeof(VoxelEdge) == 8);
 // triangulate_voxel_signs without placing the vertices: the triangles (and groups) as it makes
 // them, `edges` (resized) the edge of each vertex, and the vertices left at zero (issue #30: the
 // placements are independent of each other, so triangulate_implicit makes them on several
@@ -269,7 +273,7 @@ TriangleMesh triangulate_implicit(const VoxelGrid& grid, const Inside& inside, i
     for (std::size_t v = static_cast<std::size_t>(task) * kChunk; v < end; ++v) {
       const VoxelEdge& e = edges[v];
       Vec3 p_in = grid.center(e.in[0], e.in[1], e.in[2]);
-      Vec3 p_out = grid.center(e.out[0], e.out[1], e.out[2]);
+      Vec3 p_out = grid.center(e.out(0), e.out(1), e.out(2));
       for (int it = 0; it < 40; ++it) {
         const Vec3 mid = 0.5 * (p_in + p_out);
         (inside(mid) ? p_in : p_out) = mid;

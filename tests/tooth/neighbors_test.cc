@@ -146,6 +146,27 @@ TEST(NeighborCodes, SparseCodesEqualTheDenseOnesAfterEveryRemoval) {
   }
 }
 
+// The sparse codes at construction are exposed_faces of every voxel (encode_neighbors), on grids
+// solid up to their faces and edges (the constructor reads the rows around a voxel and takes the
+// layers beyond the grid as empty, issue #30), from one voxel to 32^3.
+TEST(NeighborCodes, SparseCodesAtConstructionAreTheDenseOnesOnFullAndRandomGrids) {
+  std::printf("seed %llu\n", static_cast<unsigned long long>(kSeed));
+  std::mt19937_64 rng(kSeed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (const int n : {1, 2, 8, 32}) {
+    for (const double fill : {0.0, 0.2, 0.7, 1.0}) {
+      VoxelGrid g(n, Vec3::Zero(), 1e-4);
+      for (auto& v : g.voxels) v = u(rng) < fill ? kDentin : kEmpty;
+      const SparseNeighborCodes sparse(g);
+      const NeighborCodes dense = encode_neighbors(g);
+      ASSERT_EQ(sparse.dense().code, dense.code) << "n " << n << " fill " << fill;
+      if (fill == 1.0) {  // a full cube: only its faces are exposed, each to the outside
+        EXPECT_EQ(dense.code[g.index(0, 0, 0)], n == 1 ? 0x3f : 0x15) << "n " << n;
+      }
+    }
+  }
+}
+
 // A slot without a solid voxel at construction has no room: a zero stores (reads 0), a non-zero
 // code is refused; a grid whose N is not a power of two is refused.
 TEST(NeighborCodes, SparseCodesRefuseWhatRemovalsCannotMake) {

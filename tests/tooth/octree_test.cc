@@ -123,6 +123,44 @@ TEST(FullOctree, EveryLevelOccupancyEqualsItsLeaves) {
   }
 }
 
+// Every internal node's byte, bit by bit, against its definition (child c = cx + 2 cy + 4 cz holds
+// a solid voxel of its span), over grids solid up to their boundary, from one voxel to 32^3: the
+// constructor reads the leaves' rows and the levels in Morton order (issue #30), not occupied().
+TEST(FullOctree, EveryChildMaskBitIsItsChildsOccupancy) {
+  std::printf("seed %llu\n", static_cast<unsigned long long>(kSeed));
+  for (const int n : {1, 2, 4, 32}) {
+    for (const double fill : {0.0, 0.01, 0.3, 1.0}) {
+      const VoxelGrid g = random_grid(n, fill, kSeed + static_cast<std::uint64_t>(n));
+      const FullOctree t(g);
+      ASSERT_EQ(t.masks().size(), FullOctree::internal_node_count(t.levels()));
+      for (int l = 0; l < t.levels(); ++l) {
+        const int nl = 1 << l, s = n >> (l + 1);  // s: a child's edge in voxels
+        for (int z = 0; z < nl; ++z) {
+          for (int y = 0; y < nl; ++y) {
+            for (int x = 0; x < nl; ++x) {
+              int expected = 0;
+              for (int c = 0; c < 8; ++c) {
+                const int i0 = (2 * x + (c & 1)) * s, j0 = (2 * y + ((c >> 1) & 1)) * s,
+                          k0 = (2 * z + ((c >> 2) & 1)) * s;
+                bool any = false;
+                for (int k = k0; k < k0 + s; ++k) {
+                  for (int j = j0; j < j0 + s; ++j) {
+                    for (int i = i0; i < i0 + s; ++i) any = any || g.solid(i, j, k);
+                  }
+                }
+                if (any) expected |= 1 << c;
+              }
+              ASSERT_EQ(t.child_mask(l, x, y, z), expected)
+                  << "n " << n << " fill " << fill << " level " << l << " node " << x << ","
+                  << y << "," << z;
+            }
+          }
+        }
+      }
+    }
+  }
+}
+
 TEST(FullOctree, SphereQueriesExactOnAUnitGrid) {
   // All-solid 8^3 grid, h = 1, origin 0: distances to voxel boxes are exact integers' roots.
   VoxelGrid g(8, Vec3::Zero(), 1.0);

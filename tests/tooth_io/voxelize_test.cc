@@ -9,7 +9,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <limits>
@@ -489,6 +491,48 @@ TEST(Materials, CrownBoxDistancesAreTheWholeGridsDistances) {
     EXPECT_GT(counts[kDentin], 100);
     EXPECT_GT(counts[kPulp], 100);
   }
+}
+
+// Issue #30 (the setup on two cores): the distance transform's passes and assign_materials' scans
+// run a plane a task on setup_threads() threads (DENTSIM_SETUP_THREADS): every squared distance
+// and every material is the one-thread one at 2, 3 and 7 threads (a random grid solid to its
+// faces, the clip 255 and 3; the box above with its crown).
+TEST(Materials, ThreadedTransformAndMaterialsAreTheOneThreadOnes) {
+  const char* saved = std::getenv("DENTSIM_SETUP_THREADS");
+  const std::string restore = saved != nullptr ? saved : "";
+  VoxelGrid random(32, Vec3::Zero(), 1e-4);
+  std::mt19937_64 rng(46);
+  for (auto& v : random.voxels) v = rng() % 10 < 8 ? kDentin : kEmpty;
+  const TriangleMesh b = box_mesh(Vec3(1e-3, 1.2e-3, 2e-3), Mat3::Identity(), Vec3::Zero());
+  VoxelGrid solid = make_grid(mesh_bounds(b), 64);
+  solid.voxels = voxelize_solid(b, solid);
+  CrownFrame up;
+  up.crown_height = 1.5e-3;
+  up.cej = 0.3e-3;
+  const auto run = [&](const char* threads) {
+    EXPECT_EQ(setenv("DENTSIM_SETUP_THREADS", threads, 1), 0);
+    std::vector<std::vector<std::uint16_t>> d2 = {distance_to_empty_sq(random, 255),
+                                                  distance_to_empty_sq(random, 3)};
+    VoxelGrid materials = solid;
+    assign_materials(materials, {}, up, 0.4e-3);
+    return std::pair{d2, materials.voxels};
+  };
+  const auto one = run("1");
+  for (const char* threads : {"2", "3", "7"}) {
+    const auto many = run(threads);
+    EXPECT_TRUE(many.first == one.first) << threads << " threads";
+    EXPECT_TRUE(many.second == one.second) << threads << " threads";
+  }
+  if (saved != nullptr) {
+    setenv("DENTSIM_SETUP_THREADS", restore.c_str(), 1);
+  } else {
+    unsetenv("DENTSIM_SETUP_THREADS");
+  }
+  // Not trivially equal: some voxels deep (the random grid's runs), some enamel.
+  EXPECT_GT(*std::max_element(one.first[0].begin(), one.first[0].end()), 1);
+  VoxelGrid with_enamel = solid;
+  with_enamel.voxels = one.second;
+  EXPECT_GT(count_materials(with_enamel)[kEnamel], 100);
 }
 
 // ---- real meshes --------------------------------------------------------------------------------
