@@ -1,8 +1,8 @@
 // The field model's drilling at the fixed edit latency (issue #30, stop 46): the reference
-// pipeline, which cuts each tick's cut set at the start of tick t + L's contacts()
-// (reference/tooth/tooth_contacts.h set_field_edit_latency), against the fast pipeline, whose
-// provider's worker thread does the same drilling on its own copy of the grid and publishes it
-// then (fast/tooth/field.h FieldEditWorker). A whole drill scene at 64^3 and 128^3, at stride 1
+// provider, which cuts each tick's cut set at the start of tick t + L's contacts()
+// (reference/tooth/tooth_contacts.h set_field_edit_latency), against the fast provider, whose
+// worker thread does the same drilling on its own copy of the grid and publishes it then
+// (fast/tooth/field.h FieldEditWorker), each in a closed loop of the fast pipeline. A whole drill scene at 64^3 and 128^3, at stride 1
 // and 2: every tick's contact wrench, torques, proxy and removed voxels bitwise equal, and at the
 // end the drill log, the pulp's tick, the drill state's counts, the field edit's counts and the
 // grids.
@@ -12,6 +12,8 @@
 #include <memory>
 #include <string>
 
+#include "fast/tooth/field.h"
+#include "fast/tooth/sdf.h"
 #include "reference/tooth/tooth_contacts.h"
 #include "sim/scene.h"
 #include "sim/simulator.h"
@@ -25,25 +27,32 @@ void drill_scene_pipelines_agree(int resolution, int stride, int ticks) {
   Scene scene = load_scene("drill");
   scene.tooth.contact_model = "field";
   scene.tooth.resolution = resolution;
-  SceneRigOptions ro, fo;
-  ro.pipeline = "reference";
-  fo.pipeline = "fast";
+  SceneRigOptions options;
+  options.pipeline = "fast";
   if (stride > 1) {
     // H = (stride + 1/2) h: the field samples every stride-th voxel (scene.h field_spacing).
-    const std::unique_ptr<SceneRig> probe = build_scene_rig(scene, ro);
+    const std::unique_ptr<SceneRig> probe = build_scene_rig(scene, options);
     scene.tooth.field_spacing = (stride + 0.5) * probe->tooth->grid().voxel_size;
   }
-  const std::unique_ptr<SceneRig> r = build_scene_rig(scene, ro);
-  const std::unique_ptr<SceneRig> f = build_scene_rig(scene, fo);
+  // Two fast rigs: the first with its provider (the worker), the second driven by the reference
+  // provider on its tooth and field (the pipelines' own arithmetic differs: fast/ is pinned
+  // against reference/ stage by stage, not bitwise over a run), with the fast pipeline's
+  // signed-distance query as the fast provider's.
+  const std::unique_ptr<SceneRig> f = build_scene_rig(scene, options);
+  const std::unique_ptr<SceneRig> r = build_scene_rig(scene, options);
   ASSERT_EQ(r->field->stride(), stride);
-  auto* pr = dynamic_cast<ToothContactProvider*>(r->contacts);
-  auto* pf = dynamic_cast<ToothContactProvider*>(f->contacts);
-  ASSERT_NE(pr, nullptr);
+  DrillParams drill;
+  drill.bur_speed_rad_s = scene.tool.bur_speed_rpm * 2.0 * 3.14159265358979323846 / 60.0;
+  drill.cutting_coefficient = scene.tool.cutting_coefficient;
+  ToothContactProvider reference(*r->tooth, r->tip, r->k_tooth, r->b_tooth, &drill,
+                                 ContactModel::kField, &fast::signed_distance, r->field.get());
+  reference.set_field_edit_latency(ToothContactProvider::kFieldEditLatency);
+  ToothContactProvider* pr = &reference;
+  auto* pf = dynamic_cast<fast::FieldContactProvider*>(f->contacts);
   ASSERT_NE(pf, nullptr);
-  ASSERT_EQ(pr->field_edit_latency(), ToothContactProvider::kFieldEditLatency);
   ASSERT_EQ(pf->field_edit_latency(), ToothContactProvider::kFieldEditLatency);
-  ClosedLoop& lr = *r->loop;
-  ClosedLoop& lf = *f->loop;
+  ClosedLoop lf(*f->loop_device, *f->pipeline, *f->contacts);
+  ClosedLoop lr(*r->loop_device, *r->pipeline, reference);
   lr.start();
   lf.start();
   long contact_ticks = 0, removed = 0;
