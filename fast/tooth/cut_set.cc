@@ -356,7 +356,8 @@ CutSetProvider::CutSetProvider(VoxelTooth& tooth, ToolTip tip, double k_tooth, d
 
 int CutSetProvider::drill(std::span<const Contact> contacts, double T) {
   const int removed = dentsim::ToothContactProvider::drill(contacts, T);
-  if (removed > 0) cut_.update(last_removed());
+  // drills_late(): the voxels were removed by the tick's publish (surface_removed then).
+  if (removed > 0 && !drills_late()) cut_.update(last_removed());
   return removed;
 }
 

@@ -181,6 +181,8 @@ class CutSetProvider : public dentsim::ToothContactProvider {
  protected:
   void surface_contact_voxels(const Vec3& g, Contact* contact, std::vector<Contact>* shares,
                               std::vector<std::size_t>* voxels) override;
+  // The tooth lost `removed` outside drill() (the field model's late drilling, fast/tooth/field.h).
+  void surface_removed(std::span<const std::size_t> removed) { cut_.update(removed); }
 
  private:
   SurfaceCutSet cut_;

@@ -578,14 +578,28 @@ constexpr std::size_t kPoolPerBatch = 512;
 
 FieldEditWorker::FieldEditWorker(SampledField* field, FieldBricks* bricks,
                                  const VoxelTooth& tooth, int latency, bool real_time,
-                                 std::size_t batch_capacity)
-    : field_(field), bricks_(bricks), tooth_(tooth), latency_(latency), real_time_(real_time) {
+                                 std::size_t batch_capacity, const ToolTip& tip,
+                                 const DrillParams& params, const DrillState& state)
+    : field_(field),
+      bricks_(bricks),
+      tooth_(tooth),
+      cut_set_(tooth_, tip.radius, &fast::signed_distance),
+      tip_(tip),
+      params_(params),
+      drill_state_(state),
+      latency_(latency),
+      real_time_(real_time) {
   const std::size_t pool = kPoolPerBatch * static_cast<std::size_t>(latency + 2);
   bricks_->enable_copy_on_write(pool);
+  candidates_.reserve(
+      dentsim::ToothContactProvider::cut_candidates_capacity(tooth_.grid(), tip.radius));
+  shares_.reserve(kContactCapacity);
+  share_voxels_.reserve(kContactCapacity);
   ring_.resize(static_cast<std::size_t>(latency + kWorkerSlack));
   const std::size_t total = bricks_->brick_count();
   for (Batch& b : ring_) {
-    b.voxels.reserve(batch_capacity);
+    b.voxels.reserve(std::min(batch_capacity, kContactCapacity));
+    b.cut.removed.reserve(kContactCapacity);
     b.swaps.reserve(total);
   }
   retired_.reserve(total);
@@ -599,27 +613,24 @@ FieldEditWorker::~FieldEditWorker() {
   thread_.join();
 }
 
-std::vector<std::size_t>* FieldEditWorker::next_batch(long tick) {
-  if (submitted_here_ - published_here_ >= static_cast<int>(ring_.size())) return nullptr;
+bool FieldEditWorker::submit(const FieldDrillCut& cut, std::size_t limit) {
+  if (submitted_here_ - published_here_ >= static_cast<int>(ring_.size())) return false;
   Batch& b = ring_[static_cast<std::size_t>(submitted_here_) % ring_.size()];
-  b.tick = tick;
-  b.voxels.clear();
-  return &b.voxels;
-}
-
-void FieldEditWorker::submit() {
+  b.cut.cut = cut;
+  b.limit = limit;
   ++submitted_here_;
   submitted_.store(submitted_here_, std::memory_order_release);
   signal_.fetch_add(1, std::memory_order_release);
   signal_.notify_one();
+  return true;
 }
 
-void FieldEditWorker::publish(long tick, FieldEditStats* stats, long* shortfalls, long* late,
-                              long* takeovers) {
+void FieldEditWorker::publish(long tick, Sink& sink, FieldEditStats* stats, long* shortfalls,
+                              long* late, long* takeovers) {
   bool took_over = false;  // at most one batch's edit in this tick
-  while (published_here_ < submitted_here_) {
+  while (published_here_ < submitted_here_ && sink.room()) {
     Batch& b = ring_[static_cast<std::size_t>(published_here_) % ring_.size()];
-    if (b.tick > tick - latency_) return;  // not due yet (the later ones neither)
+    if (b.cut.cut.tick > tick - latency_) return;  // not due yet (the later ones neither)
     int done = done_.load(std::memory_order_acquire);
     if (done <= published_here_) {
       if (real_time_) return;  // published at the first tick it is done (counted late then)
@@ -642,10 +653,12 @@ void FieldEditWorker::publish(long tick, FieldEditStats* stats, long* shortfalls
         }
       }
     }
+    sink.done(b.cut);
     bricks_->publish(b.swaps, b.lipschitz);
     *stats = b.stats;
+    *shortfalls += b.dropped;
     if (!b.complete) ++*shortfalls;
-    if (b.tick < tick - latency_) ++*late;
+    if (b.cut.cut.tick < tick - latency_) ++*late;
     ++published_here_;
     published_.store(published_here_, std::memory_order_release);
   }
@@ -705,13 +718,10 @@ void FieldEditWorker::edit(Batch& b, int number) {
     ++retired_head_;
   }
   // The grid right after this batch's tick (the batches come in tick order).
-  const std::size_t n = static_cast<std::size_t>(tooth_.grid().n);
-  for (const std::size_t v : b.voxels) {
-    tooth_.octree.remove_voxel(static_cast<int>(v % n), static_cast<int>((v / n) % n),
-                               static_cast<int>(v / (n * n)));
-  }
+  drill(b);
   FieldEditStats& stats = b.stats;
-  b.complete = edit_field_for_removed_voxels(field_, bricks_, tooth_, b.voxels,
+  b.complete = b.voxels.empty() ||
+               edit_field_for_removed_voxels(field_, bricks_, tooth_, b.voxels,
                                              &fast::signed_distance, &worker_stats_, &cache_);
   stats = worker_stats_;
   b.lipschitz = bricks_->worker_lipschitz();
@@ -727,6 +737,43 @@ void FieldEditWorker::edit(Batch& b, int number) {
     if (w.retired >= 0) retired_.emplace_back(w.retired, number);
   }
   bricks_->worker_end_batch();
+}
+
+void FieldEditWorker::drill(Batch& b) {
+  // The reference's publish_field_edits, on the worker's grid: the cut set about g (the contact
+  // as handed over: its stiffness and damping are the members'), the work and the removal.
+  Cut& c = b.cut;
+  const FieldDrillCut& cut = c.cut;
+  shares_.clear();
+  share_voxels_.clear();
+  c.removed.clear();
+  b.voxels.clear();
+  b.dropped = 0;
+  SurfaceCutSet::Nearest nearest;
+  if (!cut_set_.collect(cut.g, cut.contact, &shares_, &share_voxels_, &nearest)) {
+    shares_.clear();
+    share_voxels_.clear();
+    collect_cut_set(tooth_, cut.contact, cut.g, tip_.radius, &candidates_, &shares_,
+                    &share_voxels_);
+  }
+  c.collected = !shares_.empty();
+  if (c.collected) {
+    c.material = heaviest_material(shares_);
+    dentsim::drill_tick(shares_, share_voxels_, tip_, params_, cut.T, &tooth_, &drill_state_,
+                        &c.removed);
+    if (!c.removed.empty()) cut_set_.update(c.removed);
+    const std::size_t fit = std::min({c.removed.size(), b.limit, b.voxels.capacity()});
+    b.voxels.assign(c.removed.begin(), c.removed.begin() + static_cast<std::ptrdiff_t>(fit));
+    b.dropped = static_cast<long>(c.removed.size() - fit);
+    dentsim::ToothContactProvider::sort_by_field_box(b.voxels.data(),
+                                                     b.voxels.data() + b.voxels.size(),
+                                                     tooth_.grid().n, field_->stride());
+  }
+  c.removed_voxels = drill_state_.removed_voxels;
+  c.pulp_exposed = drill_state_.pulp_exposed;
+  c.work_table_full = drill_state_.work_table_full;
+  c.delivered_j = drill_state_.delivered_j;
+  c.carry_j = drill_state_.carry_j;
 }
 
 FieldContactProvider::FieldContactProvider(VoxelTooth& tooth, const PipelineToothSetup& setup)
@@ -761,28 +808,49 @@ bool FieldContactProvider::edit_field(SampledField* field, std::span<const std::
 
 void FieldContactProvider::prepare_field_latency(int ticks) {
   worker_ = std::make_unique<FieldEditWorker>(field_, &bricks_, tooth_, ticks, real_time_,
-                                              kFieldEditQueue);
+                                              kFieldEditQueue, tip_, drill_params_,
+                                              drill_state_);
 }
 
-void FieldContactProvider::hand_off_field_batch(std::span<const std::size_t> removed,
-                                                long tick) {
-  std::vector<std::size_t>* batch = worker_->next_batch(tick);
-  if (batch == nullptr) {  // never grow in the tick: the field keeps them
-    field_edit_shortfalls_ += static_cast<long>(removed.size());
-    return;
-  }
-  // As the reference's batch: at most the limit, sorted by box (a copy: removed_ stays the
-  // tick's list for last_removed()).
-  const std::size_t fit = std::min({removed.size(), field_batch_limit(), batch->capacity()});
-  batch->assign(removed.begin(), removed.begin() + static_cast<std::ptrdiff_t>(fit));
-  field_edit_shortfalls_ += static_cast<long>(removed.size() - fit);
-  sort_field_batch(batch->data(), batch->data() + batch->size());
-  worker_->submit();
+void FieldContactProvider::hand_off_field_cut(const FieldDrillCut& cut) {
+  // As the reference's: a full ring (a late real-time worker) leaves the tick uncut.
+  if (!worker_->submit(cut, field_batch_limit())) ++field_edit_shortfalls_;
 }
 
 void FieldContactProvider::publish_field_edits(long tick) {
-  worker_->publish(tick, &field_edits_, &field_edit_shortfalls_, &field_edit_late_publishes_,
-                   &field_edit_servo_takeovers_);
+  worker_->publish(tick, *this, &field_edits_, &field_edit_shortfalls_,
+                   &field_edit_late_publishes_, &field_edit_servo_takeovers_);
+}
+
+bool FieldContactProvider::room() const {
+  // The reference's condition: last_removed() has room for a whole cut set.
+  return removed_.size() + kContactCapacity <= removed_.capacity();
+}
+
+void FieldContactProvider::done(const FieldEditWorker::Cut& cut) {
+  // The worker's drilling of tick cut.cut.tick on the servo's grid: the same voxels removed in
+  // the same order (drill_tick's removal: the octree, then the codes), the drill state's figures,
+  // the drill log's record (the reference's publish_field_edits).
+  if (!cut.collected) return;
+  const std::array<std::int64_t, kMaterialCount> removed_before = drill_state_.removed_voxels;
+  const bool pulp_before = drill_state_.pulp_exposed;
+  const int n = tooth_.grid().n;
+  for (const std::size_t v : cut.removed) {
+    const int i = static_cast<int>(v % static_cast<std::size_t>(n));
+    const int j = static_cast<int>((v / static_cast<std::size_t>(n)) % static_cast<std::size_t>(n));
+    const int k = static_cast<int>(v / (static_cast<std::size_t>(n) * static_cast<std::size_t>(n)));
+    tooth_.octree.remove_voxel(i, j, k);
+    reencode_local(tooth_.octree.grid(), i, j, k, &tooth_.codes);
+    removed_.push_back(v);  // within capacity (room())
+  }
+  if (!cut.removed.empty()) surface_removed(cut.removed);
+  drill_state_.removed_voxels = cut.removed_voxels;
+  drill_state_.pulp_exposed = cut.pulp_exposed;
+  drill_state_.work_table_full = cut.work_table_full;
+  drill_state_.delivered_j = cut.delivered_j;
+  drill_state_.carry_j = cut.carry_j;
+  record_drill_at(cut.cut.tick, cut.cut.surface_z, cut.cut.force_n, cut.material,
+                  removed_before, pulp_before);
 }
 
 std::string FieldContactProvider::set_worker_priority(int priority) {

@@ -43,6 +43,7 @@
 // Real-time: queries, mirror() and the edit neither allocate nor throw.
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
@@ -263,14 +264,19 @@ bool edit_field_for_removed_voxels(SampledField* field, FieldBricks* bricks,
                                    VoxelDistanceCache* cache = nullptr,
                                    FieldEditCursor* cursor = nullptr, long budget = 0);
 
-// The field edit at a fixed latency L on a worker thread (the reference's specification:
-// dentsim::ToothContactProvider::set_field_edit_latency; docs/derivations/field_contact.md §8).
-// The servo hands each tick's removed voxels over (submit, from drill()); the worker, started
-// here, takes the batches in order: it removes the batch's voxels from its own copy of the tooth
-// (the grid right after that tick's drilling), subtracts them from `field` and from the bricks'
-// copies (FieldBricks copy-on-write: the servo keeps reading the published bricks), and marks
-// the batch done. publish(t), at the start of tick t's contacts(), swaps in the bricks of every
-// batch of tick <= t - L. In simulation a due batch that is not done is the servo's to finish:
+// The drilling and the field edit at a fixed latency L on a worker thread (the reference's
+// specification: dentsim::ToothContactProvider::set_field_edit_latency;
+// docs/derivations/field_contact.md §8). The servo hands each tick's cut over (next_batch and
+// submit, from drill(): g, the contact, T); the worker, started here, takes the batches in order
+// and on its own copy of the tooth (the grid as the earlier batches left it) collects the cut set
+// (SurfaceCutSet, the reference's collect_cut_set where it cannot answer), does the work and the
+// removal (dentsim::drill_tick on its own drill state: the grid, right after that tick's
+// drilling), subtracts the removed voxels from `field` and from the bricks' copies (FieldBricks
+// copy-on-write: the servo keeps reading the published bricks), and marks the batch done.
+// publish(t), at the start of tick t's contacts(), swaps in the bricks of every batch of tick
+// <= t - L and hands each batch's drilling (Cut: the removed voxels, the drill state's counts)
+// to the servo's sink, which removes the same voxels from the servo's grid and logs the tick.
+// In simulation a due batch that is not done is the servo's to finish:
 // if the worker has not started it, the servo does it itself (the same edit on the same state,
 // so the run is the reference's, bitwise, and repeatable; counted as a takeover, at most one a
 // publish), else it waits for the worker to finish it (the rest of one batch). In real time it
@@ -287,23 +293,49 @@ bool edit_field_for_removed_voxels(SampledField* field, FieldBricks* bricks,
 // destructor.
 class FieldEditWorker {
  public:
-  // `field` and `bricks` (copy-on-write enabled here) must outlive it; `tooth` is copied.
-  // `batch_capacity`: the most voxels a batch holds.
+  // What the drilling of a tick, done by the worker, left (the servo's sink reads it at publish).
+  struct Cut {
+    FieldDrillCut cut;                 // as handed over
+    bool collected = false;            // the cut set was not empty (the tick is logged)
+    std::uint8_t material = kEmpty;    // the heaviest share's
+    std::vector<std::size_t> removed;  // in removal order (drill_tick's)
+    // The drill state's figures right after the removal (the work table stays the worker's).
+    std::array<std::int64_t, kMaterialCount> removed_voxels{};
+    bool pulp_exposed = false, work_table_full = false;
+    double delivered_j = 0.0, carry_j = 0.0;
+  };
+  // The servo's side of publish(): room() whether it can take one more batch's removed voxels
+  // this tick, done() each published batch's drilling, in tick order. Neither may allocate or
+  // throw.
+  class Sink {
+   public:
+    virtual bool room() const = 0;
+    virtual void done(const Cut& cut) = 0;
+
+   protected:
+    ~Sink() = default;
+  };
+
+  // `field` and `bricks` (copy-on-write enabled here) must outlive it; `tooth` (the grid before
+  // the first cut) and `state` (its drill state) are copied. `batch_capacity`: the most voxels a
+  // batch's edit takes. `tip`, `params`: the drilling's.
   FieldEditWorker(SampledField* field, FieldBricks* bricks, const VoxelTooth& tooth, int latency,
-                  bool real_time, std::size_t batch_capacity);
+                  bool real_time, std::size_t batch_capacity, const ToolTip& tip,
+                  const DrillParams& params, const DrillState& state);
   ~FieldEditWorker();
   FieldEditWorker(const FieldEditWorker&) = delete;
   FieldEditWorker& operator=(const FieldEditWorker&) = delete;
 
-  // Servo: the batch of tick `tick`, to be filled (within its capacity) and then handed over by
-  // submit(); null when every slot of the ring holds an unpublished batch (a late real-time
-  // worker: the field keeps those voxels).
-  std::vector<std::size_t>* next_batch(long tick);
-  void submit();
-  // Servo, at the start of tick `tick`: publishes the due batches; adds their edit stats to
-  // `stats`, their incomplete edits to `*shortfalls`, the late publishes to `*late` (real time),
-  // the batches the servo edited itself to `*takeovers` (simulation).
-  void publish(long tick, FieldEditStats* stats, long* shortfalls, long* late, long* takeovers);
+  // Servo: hands tick cut.tick's cut over, its edit taking at most `limit` of the removed voxels
+  // (the rest: shortfalls). False when every slot of the ring holds an unpublished batch (a late
+  // real-time worker: not cut).
+  bool submit(const FieldDrillCut& cut, std::size_t limit);
+  // Servo, at the start of tick `tick`: publishes the due batches while sink.room(), each to
+  // sink.done(); adds their edit stats to `stats`, their incomplete edits to `*shortfalls`, the
+  // late publishes to `*late` (real time), the batches the servo edited itself to `*takeovers`
+  // (simulation).
+  void publish(long tick, Sink& sink, FieldEditStats* stats, long* shortfalls, long* late,
+               long* takeovers);
   int latency() const { return latency_; }
   bool real_time() const { return real_time_; }
   const VoxelDistanceCache& distance_cache() const { return cache_; }
@@ -320,21 +352,32 @@ class FieldEditWorker {
 
  private:
   struct Batch {
-    long tick = 0;
-    std::vector<std::size_t> voxels;
+    Cut cut;
+    std::size_t limit = 0;
+    long dropped = 0;                  // removed voxels beyond the limit (not edited)
+    std::vector<std::size_t> voxels;  // the edit's: the removed voxels sorted by box
     std::vector<FieldBricks::Swap> swaps;
     FieldEditStats stats;  // the edit's counts for this batch
     double lipschitz = 1.0;
     bool complete = true;
   };
   void run();  // the worker thread
-  // Batch `number`'s edit, by whichever thread claimed it (the state it edits is one batch's at a
-  // time: the claims are in order, each after the last batch is done).
+  // Batch `number`'s drilling and edit, by whichever thread claimed it (the state it edits is one
+  // batch's at a time: the claims are in order, each after the last batch is done).
   void edit(Batch& b, int number);
+  // The drilling of b's cut on tooth_ (into b.cut and b.voxels).
+  void drill(Batch& b);
 
   SampledField* field_;
   FieldBricks* bricks_;
-  VoxelTooth tooth_;  // the edit's: the grid after the batches edited so far
+  VoxelTooth tooth_;  // the worker's: the grid after the batches drilled so far
+  SurfaceCutSet cut_set_;  // on tooth_
+  ToolTip tip_;
+  DrillParams params_;
+  DrillState drill_state_;  // the worker's (its work table)
+  std::vector<std::size_t> candidates_;  // collect_cut_set's, where cut_set_ cannot answer
+  std::vector<Contact> shares_;
+  std::vector<std::size_t> share_voxels_;
   VoxelDistanceCache cache_;
   FieldEditStats worker_stats_;  // the edit's running counts
   int latency_;
@@ -357,7 +400,7 @@ class FieldEditWorker {
 // on a FieldEditWorker at that latency (bitwise the reference provider with
 // set_field_edit_latency(L)); 0: the reference's budget path on the servo thread. Throws what
 // the reference provider throws.
-class FieldContactProvider final : public CutSetProvider {
+class FieldContactProvider final : public CutSetProvider, private FieldEditWorker::Sink {
  public:
   FieldContactProvider(VoxelTooth& tooth, const PipelineToothSetup& setup);
   ~FieldContactProvider() override;
@@ -379,10 +422,14 @@ class FieldContactProvider final : public CutSetProvider {
   bool edit_field(SampledField* field, std::span<const std::size_t> removed,
                   FieldEditStats* stats, FieldEditCursor* cursor, long budget) override;
   void prepare_field_latency(int ticks) override;
-  void hand_off_field_batch(std::span<const std::size_t> removed, long tick) override;
+  void hand_off_field_cut(const FieldDrillCut& cut) override;
   void publish_field_edits(long tick) override;
 
  private:
+  // FieldEditWorker::Sink: the worker's drilling of a published batch on the servo's grid.
+  bool room() const override;
+  void done(const FieldEditWorker::Cut& cut) override;
+
   VoxelTooth& tooth_;
   SampledField* field_;
   bool real_time_;

@@ -77,18 +77,21 @@ ToothContactProvider::ToothContactProvider(VoxelTooth& tooth, ToolTip tip, doubl
   drill_contacts_.reserve(kContactCapacity);
   drill_voxels_.reserve(kContactCapacity);
   if (drill != nullptr && model_ != ContactModel::kFaces) {
-    // collect_cut_set's query lists every solid voxel whose cube meets the ball of radius
-    // r = cut_band(rho).reach about g: their centres lie within r + h sqrt(3) / 2 of g, so
-    // at most (2 floor(r / h + sqrt(3) / 2) + 1)^3 of them (and no more than the grid's). Room for
-    // all, so that the query never grows the vector in the tick (a wide bur on a fine grid holds
-    // far more than the scratch's default 4096: ~8 000 solid voxels for the 0.5 mm bur at 512^3).
-    const double h = tooth.grid().voxel_size;
-    const double r = cut_band(tip.radius).reach;
-    const double across = 2.0 * std::floor(r / h + 0.5 * std::sqrt(3.0)) + 1.0;
-    const double n = static_cast<double>(tooth.grid().n);
-    scratch_.candidates.reserve(
-        static_cast<std::size_t>(std::min(across * across * across, n * n * n)));
+    scratch_.candidates.reserve(cut_candidates_capacity(tooth.grid(), tip.radius));
   }
+}
+
+std::size_t ToothContactProvider::cut_candidates_capacity(const VoxelGrid& grid, double rho) {
+  // collect_cut_set's query lists every solid voxel whose cube meets the ball of radius
+  // r = cut_band(rho).reach about g: their centres lie within r + h sqrt(3) / 2 of g, so
+  // at most (2 floor(r / h + sqrt(3) / 2) + 1)^3 of them (and no more than the grid's). Room for
+  // all, so that the query never grows the vector in the tick (a wide bur on a fine grid holds
+  // far more than the scratch's default 4096: ~8 000 solid voxels for the 0.5 mm bur at 512^3).
+  const double h = grid.voxel_size;
+  const double r = cut_band(rho).reach;
+  const double across = 2.0 * std::floor(r / h + 0.5 * std::sqrt(3.0)) + 1.0;
+  const double n = static_cast<double>(grid.n);
+  return static_cast<std::size_t>(std::min(across * across * across, n * n * n));
 }
 
 bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out) {
@@ -99,8 +102,9 @@ bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out
   }
   drill_contacts_.clear();
   drill_voxels_.clear();
+  have_cut_ = false;
   if (field_edit_latency_ > 0) {
-    publish_field_edits(ticks_);  // the batch of tick ticks_ - L (fixed latency)
+    publish_field_edits(ticks_);  // the cut of tick ticks_ - L (fixed latency)
   } else if (edit_count_ > 0) {
     edit_queued_voxels();  // the field follows the last ticks' cuts (bounded)
   }
@@ -116,7 +120,16 @@ bool ToothContactProvider::contacts(const Pose& proxy, std::vector<Contact>& out
   if (out.capacity() < 1) return false;
   // The material, and the voxels in the bur's cutting band about g by the band's depth
   // (drilling.h collect_cut_set).
-  surface_contact_voxels(g, &contact, drills_ ? &drill_contacts_ : nullptr, &drill_voxels_);
+  // At a fixed latency (drills_late()), the material only: the cut is done L ticks later.
+  const bool late = drills_late();
+  surface_contact_voxels(g, &contact, drills_ && !late ? &drill_contacts_ : nullptr,
+                         &drill_voxels_);
+  if (late) {
+    have_cut_ = true;
+    late_cut_.tick = ticks_;
+    late_cut_.g = g;
+    late_cut_.contact = contact;
+  }
   out.push_back(contact);
   return true;
 }
@@ -191,12 +204,17 @@ void ToothContactProvider::set_field_edit_queue(std::size_t capacity) {
 }
 
 void ToothContactProvider::sort_field_batch(std::size_t* first, std::size_t* last) const {
+  sort_by_field_box(first, last, tooth_.grid().n,
+                    edited_field_ != nullptr ? edited_field_->stride() : 1);
+}
+
+void ToothContactProvider::sort_by_field_box(std::size_t* first, std::size_t* last, int grid_n,
+                                             int k) {
   // At stride k > 1, a tick's voxels in the order of their boxes' centres floor(c / k), so that
   // the edit subtracts the voxels of one coarse cell together (the batch, field_edit_core.h). In
   // place: std::sort allocates nothing.
-  const int k = edited_field_ != nullptr ? edited_field_->stride() : 1;
   if (k <= 1 || last - first < 2) return;
-  const std::size_t n = static_cast<std::size_t>(tooth_.grid().n);
+  const std::size_t n = static_cast<std::size_t>(grid_n);
   const std::size_t nk = n / static_cast<std::size_t>(k) + 1;
   const auto key = [n, nk, k](std::size_t v) {
     const std::size_t kk = static_cast<std::size_t>(k);
@@ -216,47 +234,59 @@ void ToothContactProvider::set_field_edit_latency(int ticks) {
 }
 
 void ToothContactProvider::prepare_field_latency(int ticks) {
-  // The batches not yet applied, oldest first: L of them when contacts() runs every tick (one
-  // more of room).
+  // The cuts not yet done, oldest first: L of them when contacts() runs every tick (one more of
+  // room).
   field_batches_.assign(static_cast<std::size_t>(ticks) + 1, FieldBatch{});
   for (FieldBatch& b : field_batches_) b.voxels.reserve(kFieldEditQueue);
-  field_tooth_ = std::make_unique<VoxelTooth>(tooth_);  // the grid before the first cut
 }
 
-void ToothContactProvider::hand_off_field_batch(std::span<const std::size_t> removed, long tick) {
-  if (field_batch_count_ == field_batches_.size()) {  // never grow in the tick: the field
-                                                      // keeps them
-    field_edit_shortfalls_ += static_cast<long>(removed.size());
+void ToothContactProvider::hand_off_field_cut(const FieldDrillCut& cut) {
+  if (field_batch_count_ == field_batches_.size()) {  // never grow in the tick: not cut
+    ++field_edit_shortfalls_;
     return;
   }
-  FieldBatch& b =
-      field_batches_[(field_batch_head_ + field_batch_count_) % field_batches_.size()];
-  const std::size_t fit = std::min({removed.size(), field_batch_limit_, b.voxels.capacity()});
-  b.tick = tick;
-  b.voxels.assign(removed.begin(), removed.begin() + static_cast<std::ptrdiff_t>(fit));
-  field_edit_shortfalls_ += static_cast<long>(removed.size() - fit);
-  sort_field_batch(b.voxels.data(), b.voxels.data() + b.voxels.size());
+  field_batches_[(field_batch_head_ + field_batch_count_) % field_batches_.size()].cut = cut;
   ++field_batch_count_;
 }
 
 void ToothContactProvider::publish_field_edits(long tick) {
-  // Every batch of tick <= tick - L, in tick order (one, the batch of tick - L, when contacts()
-  // runs every tick).
+  // Every cut of tick <= tick - L, in tick order (one, the cut of tick - L, when contacts() runs
+  // every tick), while last_removed() has room for a whole cut set.
   while (field_batch_count_ > 0 &&
-         field_batches_[field_batch_head_].tick <= tick - field_edit_latency_) {
-    const FieldBatch& b = field_batches_[field_batch_head_];
-    // The grid right after that tick's drilling: the copy loses the batch's voxels (the batches
-    // are applied in tick order, and drilling is the only thing that changes the grid).
-    const std::size_t n = static_cast<std::size_t>(field_tooth_->grid().n);
-    for (const std::size_t v : b.voxels) {
-      field_tooth_->octree.remove_voxel(static_cast<int>(v % n), static_cast<int>((v / n) % n),
-                                        static_cast<int>(v / (n * n)));
+         field_batches_[field_batch_head_].cut.tick <= tick - field_edit_latency_ &&
+         removed_.size() + drill_contacts_.capacity() <= removed_.capacity()) {
+    FieldBatch& b = field_batches_[field_batch_head_];
+    // The drilling of tick b.cut.tick on the grid as the earlier cuts left it (drill()'s, then).
+    drill_contacts_.clear();
+    drill_voxels_.clear();
+    collect_cut_set(tooth_, b.cut.contact, b.cut.g, tip_.radius, &scratch_.candidates,
+                    &drill_contacts_, &drill_voxels_);
+    if (!drill_contacts_.empty()) {
+      const std::array<std::int64_t, kMaterialCount> removed_before =
+          drill_state_.removed_voxels;
+      const bool pulp_before = drill_state_.pulp_exposed;
+      const std::uint8_t material = heaviest_material(drill_contacts_);
+      const std::size_t first = removed_.size();
+      drill_tick(drill_contacts_, drill_voxels_, tip_, drill_params_, b.cut.T, &tooth_,
+                 &drill_state_, &removed_);
+      record_drill_at(b.cut.tick, b.cut.surface_z, b.cut.force_n, material, removed_before,
+                      pulp_before);
+      // The batch: the removed voxels (at most the limit) sorted by box, subtracted from the
+      // field on the grid right after their removal.
+      const std::size_t count = removed_.size() - first;
+      const std::size_t fit = std::min({count, field_batch_limit_, b.voxels.capacity()});
+      b.voxels.assign(removed_.begin() + static_cast<std::ptrdiff_t>(first),
+                      removed_.begin() + static_cast<std::ptrdiff_t>(first + fit));
+      field_edit_shortfalls_ += static_cast<long>(count - fit);
+      sort_field_batch(b.voxels.data(), b.voxels.data() + b.voxels.size());
+      if (!b.voxels.empty() &&
+          !edit_field_for_removed_voxels(edited_field_, tooth_, b.voxels, sd_, &field_edits_)) {
+        ++field_edit_shortfalls_;
+      }
     }
-    if (!edit_field_for_removed_voxels(edited_field_, *field_tooth_, b.voxels, sd_,
-                                       &field_edits_)) {
-      ++field_edit_shortfalls_;
-    }
-    if (b.tick < tick - field_edit_latency_) ++field_edit_late_publishes_;
+    drill_contacts_.clear();
+    drill_voxels_.clear();
+    if (b.cut.tick < tick - field_edit_latency_) ++field_edit_late_publishes_;
     field_batch_head_ = (field_batch_head_ + 1) % field_batches_.size();
     --field_batch_count_;
   }
@@ -296,15 +326,21 @@ int ToothContactProvider::drill(std::span<const Contact> contacts, double T) {
   int removed = 0;
   std::uint8_t material = kEmpty;  // the material under the bur: the heaviest cut share's
   if (model_ != ContactModel::kFaces) {  // the surface proxy on the voxels or on the field
+    if (drills_late()) {  // the cut is done L ticks later (publish_field_edits)
+      if (!have_cut_) return 0;
+      have_cut_ = false;
+      late_cut_.T = T;
+      drill_record_figures(contacts, &late_cut_.surface_z, &late_cut_.force_n);
+      hand_off_field_cut(late_cut_);
+      return static_cast<int>(removed_.size());  // the voxels this tick's publish removed
+    }
     if (drill_contacts_.empty()) return 0;
     material = heaviest_material(drill_contacts_);
     removed = drill_tick(drill_contacts_, drill_voxels_, tip_, drill_params_, T, &tooth_,
                          &drill_state_, &removed_);
     drill_contacts_.clear();
     drill_voxels_.clear();
-    if (edited_field_ != nullptr && field_edit_latency_ > 0) {
-      if (!removed_.empty()) hand_off_field_batch(removed_, ticks_);  // applied at ticks_ + L
-    } else if (edited_field_ != nullptr) {  // queued for the next contacts() calls
+    if (edited_field_ != nullptr) {  // queued for the next contacts() calls
       // The next calls' budget, from this tick's length (header: budget(T)).
       const double budget = field_edit_rate_ * T;
       field_edit_budget_ = budget >= 1e15 ? std::numeric_limits<long>::max()
@@ -340,30 +376,43 @@ int ToothContactProvider::drill(std::span<const Contact> contacts, double T) {
   return removed;
 }
 
-void ToothProviderBase::record_drill(std::span<const Contact> contacts, std::uint8_t material,
-                                     const std::array<std::int64_t, kMaterialCount>& removed_before,
-                                     bool pulp_before) {
-  if (drill_state_.pulp_exposed && !pulp_before) pulp_exposed_tick_ = ticks_;
-  if (drill_log_.size() >= drill_log_.capacity()) return;  // full: never grow in the tick
-  DrillRecord rec;
-  rec.tick = ticks_;
+void ToothProviderBase::drill_record_figures(std::span<const Contact> contacts,
+                                             double* surface_z, double* force_n) {
   std::size_t heaviest = 0;
   for (std::size_t i = 1; i < contacts.size(); ++i) {
     if (contacts[i].weight > contacts[heaviest].weight) heaviest = i;
   }
-  const double z = contacts[heaviest].x_o.z();
-  if (!have_surface_z_) {
-    have_surface_z_ = true;
-    first_surface_z_ = z;
-  }
-  rec.depth_m = first_surface_z_ - z;
+  *surface_z = contacts[heaviest].x_o.z();
   double total_weight = 0.0;
   Vec3 f = Vec3::Zero();
   for (const Contact& ct : contacts) {
     total_weight += ct.weight;
     f += ct.weight * ct.stiffness * ct.depth * ct.n;
   }
-  rec.force_n = total_weight > 0.0 ? f.norm() / total_weight : 0.0;
+  *force_n = total_weight > 0.0 ? f.norm() / total_weight : 0.0;
+}
+
+void ToothProviderBase::record_drill(std::span<const Contact> contacts, std::uint8_t material,
+                                     const std::array<std::int64_t, kMaterialCount>& removed_before,
+                                     bool pulp_before) {
+  double z = 0.0, force = 0.0;
+  drill_record_figures(contacts, &z, &force);
+  record_drill_at(ticks_, z, force, material, removed_before, pulp_before);
+}
+
+void ToothProviderBase::record_drill_at(
+    long tick, double z, double force_n, std::uint8_t material,
+    const std::array<std::int64_t, kMaterialCount>& removed_before, bool pulp_before) {
+  if (drill_state_.pulp_exposed && !pulp_before) pulp_exposed_tick_ = tick;
+  if (drill_log_.size() >= drill_log_.capacity()) return;  // full: never grow in the tick
+  DrillRecord rec;
+  rec.tick = tick;
+  if (!have_surface_z_) {
+    have_surface_z_ = true;
+    first_surface_z_ = z;
+  }
+  rec.depth_m = first_surface_z_ - z;
+  rec.force_n = force_n;
   rec.material = material;
   for (int m = 0; m < kMaterialCount; ++m) {
     rec.removed[m] = static_cast<int>(drill_state_.removed_voxels[m] - removed_before[m]);

@@ -50,6 +50,20 @@ struct DrillRecord {
 // Capacity of the drill log (preallocated; recording stops when full): 2 min at 1 kHz.
 inline constexpr std::size_t kDrillLogCapacity = 120000;
 
+// What the drilling of one servo tick needs when it runs L ticks later (the field model at a fixed
+// edit latency, ToothContactProvider::set_field_edit_latency): the tick, the proxy centre g and
+// the contact as contacts() built it (its material and stiffness), the tick's length T, and the
+// drill log's figures of the tick's solved contact set (record_drill: the heaviest member's cut
+// surface height and the blended force).
+struct FieldDrillCut {
+  long tick = 0;
+  Vec3 g = Vec3::Zero();
+  Contact contact;
+  double T = 0.0;
+  double surface_z = 0.0;
+  double force_n = 0.0;
+};
+
 // What the reference and the fast tooth providers (fast/tooth/tooth_contacts.h) share: the tip,
 // the scene's stiffness and damping, the drill parameters and state, the voxel index of each
 // contact of the last query, and the drill log. The constructor validates the tip and the drill
@@ -84,6 +98,14 @@ class ToothProviderBase : public ContactProvider {
   void record_drill(std::span<const Contact> contacts, std::uint8_t material,
                     const std::array<std::int64_t, kMaterialCount>& removed_before,
                     bool pulp_before);
+  // The same for the drilling of tick `tick` done later (FieldDrillCut: `surface_z` and `force_n`
+  // from drill_record_figures of that tick's contacts).
+  void record_drill_at(long tick, double surface_z, double force_n, std::uint8_t material,
+                       const std::array<std::int64_t, kMaterialCount>& removed_before,
+                       bool pulp_before);
+  // The heaviest member's cut surface height x_o.z and |blended penalty force| of a nonempty set.
+  static void drill_record_figures(std::span<const Contact> contacts, double* surface_z,
+                                   double* force_n);
 
   ToolTip tip_;
   double k_tooth_, b_tooth_;
@@ -178,21 +200,28 @@ class ToothContactProvider : public ToothProviderBase {
   // a tick's removed voxels enter its batch (the rest: shortfalls).
   void set_field_edit_queue(std::size_t capacity);
 
-  // The edit at a fixed latency (docs/derivations/field_contact.md §8), the alternative to the
-  // budget above: the voxels drill() removes at tick t (the batch of t, sorted by box as the queue
-  // sorts them) are subtracted, all of them, from the field that tick t + L's contacts() reads,
-  // evaluated on the grid as it was right after tick t's drilling (a copy of the tooth that loses
-  // each batch's voxels when its batch is applied: the same grid whatever the ticks between did).
-  // The field lags the voxels by L ticks, on the safe side (material the voxels lost, never a
-  // tunnel). Here (the specification) the batch is applied at the start of tick t + L's
-  // contacts(); the fast pipeline's provider computes it on a worker thread and publishes it then
-  // (fast/tooth/field.h). kFieldEditLatency: the fast pipeline's default L (the least that lets
-  // the worker overlap a servo tick: L = 1 would publish at the start of the tick after the
-  // drilling, before the worker could run).
+  // The drilling and the edit at a fixed latency (docs/derivations/field_contact.md §8), the
+  // alternative to the budget above (issue #30, stop 46: the drilling's voxel work, which grows
+  // with the resolution, off the servo's tick). Tick t's contacts() solves the contact on the
+  // field and reads its material from the grid, and drill() hands the tick's cut over
+  // (FieldDrillCut: g, the contact, T). At the start of tick t + L's contacts() that cut is done,
+  // in tick order: the cut set about g (collect_cut_set) on the grid as the cuts of the ticks
+  // before t left it, the work and the removal (drill_tick: the grid, the drill state, the drill
+  // log's record of tick t, the pulp's opening at tick t), and the removed voxels (the batch of
+  // t, sorted by box as the queue sorts them) subtracted, all of them, from the field on the grid
+  // right after that removal. So the grid and the field both show the cuts of the ticks up to
+  // t - L when tick t reads them: the contact's material lags the bur by L ticks like the field,
+  // and the voxels and the field lag the bur on the safe side (material the bur has earned, never
+  // a tunnel). Here (the specification) the cut is done at the start of tick t + L's contacts();
+  // the fast pipeline's provider does it on a worker thread, on its own copy of the grid, and
+  // publishes it then (fast/tooth/field.h). kFieldEditLatency: the fast pipeline's default L (the
+  // least that lets the worker overlap a servo tick: L = 1 would publish at the start of the tick
+  // after the drilling, before the worker could run). The cuts of a run's last L ticks are never
+  // done.
   static constexpr int kFieldEditLatency = 2;
-  // Setup only (before the first contacts() call; allocates: a copy of the tooth and L batches
-  // of kFieldEditQueue voxels): L >= 1 ticks, or 0 for the budget path (the default). Ignored
-  // without kField drilling. InputError for L < 0 or after the first tick.
+  // Setup only (before the first contacts() call; allocates L + 1 batches of kFieldEditQueue
+  // voxels): L >= 1 ticks, or 0 for the budget path (the default). Ignored without kField
+  // drilling. InputError for L < 0 or after the first tick.
   void set_field_edit_latency(int ticks);
   int field_edit_latency() const { return field_edit_latency_; }
   // Batches published after their tick t + L (a real-time loop whose worker was not done: the
@@ -202,6 +231,11 @@ class ToothContactProvider : public ToothProviderBase {
   // Batches the servo edited itself because the fast provider's worker had not started them at
   // tick t + L (simulation; 0 here, where the servo applies every batch).
   long field_edit_servo_takeovers() const { return field_edit_servo_takeovers_; }
+  // The room collect_cut_set's candidates need for a bur of radius rho on `grid` (allocated once
+  // at setup, so that the query never grows them in the tick).
+  static std::size_t cut_candidates_capacity(const VoxelGrid& grid, double rho);
+  // sort_field_batch's order for a grid of n^3 voxels and a field of stride k (no allocation).
+  static void sort_by_field_box(std::size_t* first, std::size_t* last, int grid_n, int k);
   // Setup, a real-time loop: the provider's helper thread (the fast provider's field edit
   // worker; none here) at SCHED_FIFO `priority`. Returns "" when granted or when there is no such
   // thread, else why not.
@@ -233,13 +267,15 @@ class ToothContactProvider : public ToothProviderBase {
   // The edit takes `cursor` and `budget` as edit_field_for_removed_voxels does.
   virtual bool edit_field(SampledField* field, std::span<const std::size_t> removed,
                           FieldEditStats* stats, FieldEditCursor* cursor, long budget);
-  // The fixed latency (above): set_field_edit_latency's set-up (here: the batches and the copy of
-  // the tooth), drill()'s hand-off of tick `tick`'s removed voxels (nonempty), and the start of
-  // contacts() at tick `tick` (here: applies the batch of tick - L, if any). A twin may replace
-  // the three together (the fast provider's worker); the tick's two may not allocate or throw.
+  // The fixed latency (above): set_field_edit_latency's set-up (here: the batches), drill()'s
+  // hand-off of a tick's cut, and the start of contacts() at tick `tick` (here: does the cut of
+  // tick - L, if any: its drilling on the grid and its edit of the field). A twin may replace the
+  // three together (the fast provider's worker); the tick's two may not allocate or throw.
   virtual void prepare_field_latency(int ticks);
-  virtual void hand_off_field_batch(std::span<const std::size_t> removed, long tick);
+  virtual void hand_off_field_cut(const FieldDrillCut& cut);
   virtual void publish_field_edits(long tick);
+  // Whether drilling runs L ticks late (kField drilling with a latency: above).
+  bool drills_late() const { return edited_field_ != nullptr && field_edit_latency_ > 0; }
   // Sorts a tick's removed voxels in place by their boxes' centres at the field's stride (the
   // batch, field_edit_core.h; nothing at stride 1). No allocation.
   void sort_field_batch(std::size_t* first, std::size_t* last) const;
@@ -277,12 +313,14 @@ class ToothContactProvider : public ToothProviderBase {
   int field_edit_latency_ = 0;
   std::size_t field_batch_limit_ = kFieldEditQueue;
   struct FieldBatch {
-    long tick = std::numeric_limits<long>::min();
+    FieldDrillCut cut;
     std::vector<std::size_t> voxels;
   };
   std::vector<FieldBatch> field_batches_;
   std::size_t field_batch_head_ = 0, field_batch_count_ = 0;
-  std::unique_ptr<VoxelTooth> field_tooth_;
+  // The cut contacts() found for this tick's drill() (drills_late()).
+  bool have_cut_ = false;
+  FieldDrillCut late_cut_;
   std::vector<Contact> drill_contacts_;  // kSurfaceProxy: the drilled voxels' force shares
   std::vector<std::size_t> drill_voxels_;
   AnchoredSpring anchored_;   // the held fraction of the last contacts() call
