@@ -2,7 +2,6 @@
 #include "fast/tooth/cut_set.h"
 
 #include <algorithm>
-#include <array>
 #include <bit>
 #include <cmath>
 #include <limits>
@@ -15,7 +14,6 @@ namespace dentsim::fast {
 namespace {
 
 constexpr int kB = SurfaceVoxels::kBrick;
-constexpr int kBrickBits = kB * kB * kB;
 
 // The Morton interleave of local coordinates (x, y, z), each in 0..7: 9 bits.
 constexpr int interleave3(int x, int y, int z) {
@@ -26,46 +24,6 @@ constexpr int interleave3(int x, int y, int z) {
     m |= ((z >> b) & 1) << (3 * b + 2);
   }
   return m;
-}
-
-// Per axis and local range [lo, hi] (0..7): the brick's bits whose coordinate on that axis lies in
-// the range (8 words); and each bit's local coordinates x | y << 3 | z << 6.
-struct BrickTables {
-  std::array<std::uint64_t, 3 * kB * kB * SurfaceVoxels::kWords> range{};
-  std::array<std::uint16_t, kBrickBits> coords{};
-};
-
-constexpr BrickTables make_brick_tables() {
-  BrickTables t;
-  for (int z = 0; z < kB; ++z) {
-    for (int y = 0; y < kB; ++y) {
-      for (int x = 0; x < kB; ++x) {
-        t.coords[static_cast<std::size_t>(interleave3(x, y, z))] =
-            static_cast<std::uint16_t>(x | (y << 3) | (z << 6));
-      }
-    }
-  }
-  for (int a = 0; a < 3; ++a) {
-    for (int lo = 0; lo < kB; ++lo) {
-      for (int hi = lo; hi < kB; ++hi) {
-        for (int m = 0; m < kBrickBits; ++m) {
-          const int c = (t.coords[static_cast<std::size_t>(m)] >> (3 * a)) & 7;
-          if (c < lo || c > hi) continue;
-          const std::size_t w = static_cast<std::size_t>(((a * kB + lo) * kB + hi) *
-                                                         SurfaceVoxels::kWords + m / 64);
-          t.range[w] |= std::uint64_t{1} << (m % 64);
-        }
-      }
-    }
-  }
-  return t;
-}
-
-constexpr BrickTables kTables = make_brick_tables();
-
-const std::uint64_t* range_mask(int axis, int lo, int hi) {
-  return &kTables.range[static_cast<std::size_t>(((axis * kB + lo) * kB + hi) *
-                                                 SurfaceVoxels::kWords)];
 }
 
 // Spreads the low 10 bits of v to every third bit (the Morton code of brick coordinates).
@@ -178,12 +136,20 @@ SurfaceCutSet::SurfaceCutSet(const VoxelTooth& tooth, double rho, SignedDistance
   const double extent = grid.origin.cwiseAbs().maxCoeff() + grid.n * h + reach;
   certify_ = h >= eps_ && eps_ >= std::ldexp(extent, -44);
   // The ball's box spans at most 2 R / h + 4 voxels per axis (a voxel of margin each side, and
-  // the floors' rounding; collect), hence that many terms (and two more) and its bricks.
+  // the floors' rounding; collect), hence at most (that + 6) / 8 + 1 bricks; the tables cover
+  // those bricks' voxels.
   const double across = std::min<double>(grid.n, std::floor(2.0 * cut_band(rho).reach / h) + 6.0);
   const std::size_t voxels = static_cast<std::size_t>(std::max(1.0, across));
-  for (std::vector<double>& t : terms_) t.resize(voxels);
   const std::size_t bricks = std::min<std::size_t>(
       static_cast<std::size_t>(surface_.slots_per_axis()), (voxels + kB - 2) / kB + 1);
+  bricks_across_ = static_cast<int>(bricks);
+  for (int a = 0; a < 3; ++a) {
+    terms_[a].resize(bricks * kB);
+    centre_[a].resize(bricks * kB);
+    least2_[a].resize(bricks * kB / 2);
+    least4_[a].resize(bricks * kB / 4);
+    least8_[a].resize(bricks);
+  }
   order_.reserve(bricks * bricks * bricks);
   keys_.reserve(bricks * bricks * bricks);
 }
@@ -194,17 +160,27 @@ void SurfaceCutSet::order_bricks(const int b_lo[3], const int b_hi[3]) {
   for (int bz = b_lo[2]; bz <= b_hi[2]; ++bz) {
     for (int by = b_lo[1]; by <= b_hi[1]; ++by) {
       for (int bx = b_lo[0]; bx <= b_hi[0]; ++bx) {
-        // (Morton code, slot): the code in the high bits (at most 30), the slot in the low 32.
+        // (Morton code, place in the box): the code in the high bits (at most 30), the place
+        // x | y << 8 | z << 16 in the low 32.
         const std::uint64_t morton = spread3(static_cast<std::uint64_t>(bx)) |
                                      (spread3(static_cast<std::uint64_t>(by)) << 1) |
                                      (spread3(static_cast<std::uint64_t>(bz)) << 2);
-        keys_.push_back((morton << 32) | surface_.slot(bx, by, bz));
+        const std::uint64_t place = static_cast<std::uint64_t>(bx - b_lo[0]) |
+                                    (static_cast<std::uint64_t>(by - b_lo[1]) << 8) |
+                                    (static_cast<std::uint64_t>(bz - b_lo[2]) << 16);
+        keys_.push_back((morton << 32) | place);
       }
     }
   }
   std::sort(keys_.begin(), keys_.end(), [](std::uint64_t a, std::uint64_t b) { return a > b; });
   order_.clear();
-  for (const std::uint64_t key : keys_) order_.push_back(static_cast<std::uint32_t>(key));
+  for (const std::uint64_t key : keys_) {
+    const int x = static_cast<int>(key & 0xff), y = static_cast<int>((key >> 8) & 0xff);
+    const int z = static_cast<int>((key >> 16) & 0xff);
+    const std::size_t s = surface_.slot(b_lo[0] + x, b_lo[1] + y, b_lo[2] + z);
+    order_.push_back({static_cast<std::uint32_t>(s), static_cast<std::uint8_t>(x),
+                      static_cast<std::uint8_t>(y), static_cast<std::uint8_t>(z)});
+  }
   std::copy(b_lo, b_lo + 3, box_lo_);
   std::copy(b_hi, b_hi + 3, box_hi_);
 }
@@ -244,8 +220,8 @@ bool SurfaceCutSet::collect(const Vec3& g, const Contact& contact, std::vector<C
   double best2 = m * m;  // outside_distance's reach * reach
   std::size_t best = 0;
   // The ball's box of voxels, one voxel wider each side than its bounds (their rounding), clipped
-  // to the grid; the squared gap of each voxel along each axis (sphere_intersects_cells's terms).
-  int lo[3], hi[3];
+  // to the grid, and the box's bricks [b_lo, b_hi].
+  int lo[3], hi[3], b_lo[3], b_hi[3];
   bool empty = false;
   for (int a = 0; a < 3; ++a) {
     const double u0 = std::floor((g[a] - cut.reach - grid.origin[a]) / h) - 1.0;
@@ -253,66 +229,89 @@ bool SurfaceCutSet::collect(const Vec3& g, const Contact& contact, std::vector<C
     empty = empty || u1 < 0.0 || u0 > n - 1.0;
     lo[a] = empty ? 0 : static_cast<int>(std::max(u0, 0.0));
     hi[a] = empty ? 0 : static_cast<int>(std::min(u1, n - 1.0));
+    b_lo[a] = lo[a] / kB;
+    b_hi[a] = hi[a] / kB;
     // Within the constructor's bound (a guard: the reference answers otherwise).
-    if (static_cast<std::size_t>(hi[a] - lo[a] + 1) > terms_[a].size()) return false;
+    if (b_hi[a] - b_lo[a] + 1 > bricks_across_) return false;
   }
   if (inside) {
     nearest->found = true;
     nearest->voxel = grid.index(cell[0], cell[1], cell[2]);
   }
+  // Per axis over the bricks' voxels i = 8 b_lo + r: the squared gap t (sphere_intersects_cells's
+  // term, +inf outside [lo, hi]: such a voxel is never a candidate), the squared centre offset c
+  // (cut_band_depth's term), and the least t of each aligned run of 2, 4 and 8. A run's least,
+  // summed as a voxel's terms are, bounds every voxel of the block below (the sums round
+  // monotonically): a block whose bound is not < R^2 holds no voxel of the ball.
+  constexpr double kFar = std::numeric_limits<double>::infinity();
+  int origin_voxel[3];
   for (int a = 0; a < 3 && !empty; ++a) {
+    origin_voxel[a] = kB * b_lo[a];
     double* t = terms_[a].data();
-    for (int i = lo[a]; i <= hi[a]; ++i) {
+    double* c = centre_[a].data();
+    const int count = kB * (b_hi[a] - b_lo[a] + 1);
+    for (int r = 0; r < count; ++r) {
+      const int i = origin_voxel[a] + r;
+      if (i < lo[a] || i > hi[a]) {
+        t[r] = kFar;
+        continue;
+      }
       const double l = grid.origin[a] + grid.voxel_size * i;
-      const double r = grid.origin[a] + grid.voxel_size * (i + 1);
+      const double u = grid.origin[a] + grid.voxel_size * (i + 1);
       double d = 0.0;
       if (g[a] < l) {
         d = l - g[a];
-      } else if (g[a] > r) {
-        d = g[a] - r;
+      } else if (g[a] > u) {
+        d = g[a] - u;
       }
-      t[i - lo[a]] = d * d;
+      t[r] = d * d;
+      const double e = (grid.origin[a] + grid.voxel_size * (i + 0.5)) - g[a];  // centre - g
+      c[r] = e * e;
     }
+    double* l2 = least2_[a].data();
+    double* l4 = least4_[a].data();
+    double* l8 = least8_[a].data();
+    for (int r = 0; r < count / 2; ++r) l2[r] = std::min(t[2 * r], t[2 * r + 1]);
+    for (int r = 0; r < count / 4; ++r) l4[r] = std::min(l2[2 * r], l2[2 * r + 1]);
+    for (int r = 0; r < count / 8; ++r) l8[r] = std::min(l4[2 * r], l4[2 * r + 1]);
   }
   if (!empty) {
-    const int b_lo[3] = {lo[0] / kB, lo[1] / kB, lo[2] / kB};
-    const int b_hi[3] = {hi[0] / kB, hi[1] / kB, hi[2] / kB};
     order_bricks(b_lo, b_hi);
-    const double* tx = terms_[0].data();
-    const double* ty = terms_[1].data();
-    const double* tz = terms_[2].data();
+    const double *tx = terms_[0].data(), *ty = terms_[1].data(), *tz = terms_[2].data();
+    const double *cx = centre_[0].data(), *cy = centre_[1].data(), *cz = centre_[2].data();
+    const double *x2 = least2_[0].data(), *y2 = least2_[1].data(), *z2 = least2_[2].data();
+    const double *x4 = least4_[0].data(), *y4 = least4_[1].data(), *z4 = least4_[2].data();
+    const double *x8 = least8_[0].data(), *y8 = least8_[1].data(), *z8 = least8_[2].data();
     bool cutting = shares != nullptr;
     const std::size_t nn = static_cast<std::size_t>(n);
-    for (const std::uint32_t s : order_) {
-      const std::uint64_t* bits = surface_.brick(s);
+    for (const BoxBrick& b : order_) {
+      if (!((x8[b.x] + y8[b.y]) + z8[b.z] < R2)) continue;  // the brick misses the ball
+      const std::uint64_t* bits = surface_.brick(b.slot);
       if (bits == nullptr) continue;
-      const int bx = static_cast<int>(s % static_cast<std::uint32_t>(surface_.slots_per_axis()));
-      const int by = static_cast<int>((s / static_cast<std::uint32_t>(surface_.slots_per_axis())) %
-                                      static_cast<std::uint32_t>(surface_.slots_per_axis()));
-      const int bz = static_cast<int>(s / static_cast<std::uint32_t>(surface_.slots_per_axis() *
-                                                                     surface_.slots_per_axis()));
-      const int x0 = kB * bx, y0 = kB * by, z0 = kB * bz;
-      const std::uint64_t* mx =
-          range_mask(0, std::max(lo[0] - x0, 0), std::min(hi[0] - x0, kB - 1));
-      const std::uint64_t* my =
-          range_mask(1, std::max(lo[1] - y0, 0), std::min(hi[1] - y0, kB - 1));
-      const std::uint64_t* mz =
-          range_mask(2, std::max(lo[2] - z0, 0), std::min(hi[2] - z0, kB - 1));
+      // Word w is the brick's 4^3 block (w & 1, w >> 1 & 1, w >> 2); byte q of it the 2^3 block
+      // (q & 1, q >> 1 & 1, q >> 2) within; bit c of the byte the voxel (c & 1, c >> 1 & 1,
+      // c >> 2) within (SurfaceVoxels). Indices below are runs of the tables.
       for (int w = SurfaceVoxels::kWords - 1; w >= 0; --w) {
-        std::uint64_t word = bits[w] & mx[w] & my[w] & mz[w];
+        const int wx = 2 * b.x + (w & 1), wy = 2 * b.y + ((w >> 1) & 1), wz = 2 * b.z + (w >> 2);
+        std::uint64_t word = bits[w];
+        if (word == 0 || !((x4[wx] + y4[wy]) + z4[wz] < R2)) continue;
         while (word != 0) {
           // The highest 2^3 block (byte) left, its voxels in child order.
-          const int byte = (63 - std::countl_zero(word)) >> 3;
-          std::uint64_t block = (word >> (8 * byte)) & 0xff;
-          word &= ~(std::uint64_t{0xff} << (8 * byte));
+          const int q = (63 - std::countl_zero(word)) >> 3;
+          std::uint64_t block = (word >> (8 * q)) & 0xff;
+          word &= ~(std::uint64_t{0xff} << (8 * q));
+          const int qx = 2 * wx + (q & 1), qy = 2 * wy + ((q >> 1) & 1), qz = 2 * wz + (q >> 2);
+          if (!((x2[qx] + y2[qy]) + z2[qz] < R2)) continue;
           while (block != 0) {
             const int c = std::countr_zero(block);
             block &= block - 1;
-            const int xyz = kTables.coords[static_cast<std::size_t>(64 * w + 8 * byte + c)];
-            const int i = x0 + (xyz & 7), j = y0 + ((xyz >> 3) & 7), k = z0 + (xyz >> 6);
-            const double d2 = (tx[i - lo[0]] + ty[j - lo[1]]) + tz[k - lo[2]];
+            const int rx = 2 * qx + (c & 1), ry = 2 * qy + ((c >> 1) & 1), rz = 2 * qz + (c >> 2);
+            const double d2 = (tx[rx] + ty[ry]) + tz[rz];
             if (!(d2 < R2)) continue;  // not in the ball: the reference never lists it
-            const std::size_t v = static_cast<std::size_t>(i) + nn * (static_cast<std::size_t>(j) + nn * static_cast<std::size_t>(k));
+            const std::size_t v =
+                static_cast<std::size_t>(origin_voxel[0] + rx) +
+                nn * (static_cast<std::size_t>(origin_voxel[1] + ry) +
+                      nn * static_cast<std::size_t>(origin_voxel[2] + rz));
             if (d2 < best2 || (found && d2 == best2 && v < best)) {  // sdf_nearer
               best2 = d2;
               best = v;
@@ -323,12 +322,12 @@ bool SurfaceCutSet::collect(const Vec3& g, const Contact& contact, std::vector<C
               cutting = false;  // collect_cut_set stops here
               continue;
             }
-            const double depth = cut_band_depth(grid, i, j, k, g, rho_, cut.depth);
+            // cut_band_depth: |centre - g|^2 summed as Eigen's squaredNorm sums it.
+            const double depth = cut_band_depth_at((cx[rx] + cy[ry]) + cz[rz], rho_, h, cut.depth);
             if (!(depth > 0.0)) continue;
-            Contact share = contact;
-            share.material = grid.voxels[v];
-            share.weight = depth;
-            shares->push_back(share);
+            shares->push_back(contact);
+            shares->back().material = grid.voxels[v];
+            shares->back().weight = depth;
             voxels->push_back(v);
           }
         }

@@ -33,6 +33,15 @@
 // leaf test accepts, octree.h) with cut_band_depth > 0, in that order, up to the vectors' room,
 // each the contact with the voxel's material and the depth as its weight.
 //
+// The culls (stop 46). The pass reads only the blocks that can hold a voxel of the ball: per axis
+// it tabulates each voxel's squared gap t_a (the ball test's term; +inf outside the box) and the
+// least t_a of each aligned run of 8, 4 and 2 voxels; a brick, a word (4^3) or a byte (2^3) whose
+// least terms, summed as a voxel's are, are not < R^2 is skipped unread. Sound: t >= least on each
+// axis and rounded addition is monotone, so every voxel of a skipped block fails the ball test
+// too. The band depth is cut_band_depth_at of the voxel's squared centre offsets per axis, also
+// tabulated, summed (x + y) + z as Eigen's squaredNorm sums cut_band_depth's (tests/fast/
+// cut_set_test.cc pins both against the reference).
+//
 // The material. The reference (sd(tooth, g, 2 rho), reference/tooth/sdf.cc): for g in a solid
 // voxel's cell (sdf_detail::voxel_of), that voxel; else the solid voxel v* minimising (D(v), v)
 // over the solid voxels with D < (2 rho)^2 (sdf_nearer: the smallest distance, then the smallest
@@ -147,6 +156,12 @@ class SurfaceCutSet {
   long queries() const { return queries_; }
 
  private:
+  // A brick of the box: its slot and its place in the box (brick coordinates less the box's low
+  // corner).
+  struct BoxBrick {
+    std::uint32_t slot;
+    std::uint8_t x, y, z;
+  };
   // The bricks of box [b_lo, b_hi] (brick coordinates) in decreasing Morton code, into order_
   // (kept while the box is the same).
   void order_bricks(const int b_lo[3], const int b_hi[3]);
@@ -159,9 +174,14 @@ class SurfaceCutSet {
   SurfaceVoxels surface_;
   double eps_ = 0.0;
   bool certify_ = true;  // the constructor's conditions (header comment)
-  std::vector<double> terms_[3];  // the squared gaps along each axis over the ball's box
-  std::vector<std::uint32_t> order_;  // slots of the box's bricks, decreasing Morton code
-  std::vector<std::uint64_t> keys_;   // scratch of order_bricks
+  // Per axis, over the voxels of the box's bricks (from 8 b_lo): the squared gap of each voxel
+  // to g (sphere_intersects_cells's term; +inf outside the ball's box), the squared offset of its
+  // centre from g (cut_band_depth's term), and the least gap term of each aligned run of 2, 4 and
+  // 8 voxels (a 2^3 block's, a word's and a brick's bound: collect's culls).
+  std::vector<double> terms_[3], centre_[3], least2_[3], least4_[3], least8_[3];
+  int bricks_across_ = 0;  // the box's bricks per axis at most (the tables' room / 8)
+  std::vector<BoxBrick> order_;      // the box's bricks, decreasing Morton code
+  std::vector<std::uint64_t> keys_;  // scratch of order_bricks
   int box_lo_[3] = {1, 1, 1}, box_hi_[3] = {0, 0, 0};  // the box order_ holds (empty)
   long fallbacks_ = 0, queries_ = 0;
 };

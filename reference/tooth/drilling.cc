@@ -80,14 +80,6 @@ bool accumulate_drill_work(std::span<const Contact> contacts,
   return true;
 }
 
-double cut_band_depth(const VoxelGrid& grid, int i, int j, int k, const Vec3& g, double rho,
-                      double band) {
-  // The gap between the bur's surface and the voxel, at the voxel's middle: its centre's distance
-  // from g less rho and half a voxel (0 for a voxel whose face the bur touches head-on).
-  const double gap = (grid.center(i, j, k) - g).norm() - rho - 0.5 * grid.voxel_size;
-  return std::max(0.0, band - std::max(0.0, gap));
-}
-
 void collect_cut_set(const VoxelTooth& tooth, const Contact& contact, const Vec3& g, double rho,
                      std::vector<std::size_t>* candidates, std::vector<Contact>* shares,
                      std::vector<std::size_t>* voxels) {

@@ -22,7 +22,9 @@
 // deficit of the removed volume is about a quarter of the old law's (drilling.md §1-2).
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -112,11 +114,22 @@ void collect_cut_set(const VoxelTooth& tooth, const Contact& contact, const Vec3
                      std::vector<std::size_t>* candidates, std::vector<Contact>* shares,
                      std::vector<std::size_t>* voxels);
 
-// The depth of the cutting band (g, rho, band) at voxel (i, j, k) of `grid`: band - gap, gap =
-// |centre - g| - rho - h / 2 (the bur's distance to the voxel at its middle, 0 if touching head-on,
-// taken as 0 if negative), 0 outside the band [m].
-double cut_band_depth(const VoxelGrid& grid, int i, int j, int k, const Vec3& g, double rho,
-                      double band);
+// The depth of the cutting band (rho, band) at a voxel whose centre lies at squared distance
+// `centre_d2` from g, for voxels of edge h: band - gap, gap = sqrt(centre_d2) - rho - h / 2 (the
+// bur's distance to the voxel at its middle, 0 if touching head-on, taken as 0 if negative), 0
+// outside the band [m]. Inline, with cut_band_depth: the fast twin (fast/tooth/cut_set.cc) sums
+// centre_d2 per axis as Eigen's squaredNorm does, (dx^2 + dy^2) + dz^2, and calls this.
+inline double cut_band_depth_at(double centre_d2, double rho, double h, double band) {
+  const double gap = std::sqrt(centre_d2) - rho - 0.5 * h;
+  return std::max(0.0, band - std::max(0.0, gap));
+}
+
+// The depth of the cutting band (g, rho, band) at voxel (i, j, k) of `grid` (cut_band_depth_at of
+// |centre - g|^2).
+inline double cut_band_depth(const VoxelGrid& grid, int i, int j, int k, const Vec3& g, double rho,
+                             double band) {
+  return cut_band_depth_at((grid.center(i, j, k) - g).squaredNorm(), rho, grid.voxel_size, band);
+}
 
 // The depth of the bur's cutting band as a fraction of its radius (collect_cut_set): a model
 // constant of the bur like mu_c, b = rho / 3 (0.167 mm for the 0.5 mm bur: the old band h at the

@@ -339,6 +339,122 @@ TEST(SurfaceCutSet, EqualsTheReferenceAndBruteForceNearAMeshsSurface) {
   EXPECT_GT(a.members, 10 * a.queries);
 }
 
+// ---- The culls at bricks' corners and the grid's edges (stop 46) -------------------------------
+
+// collect skips a brick, a word (4^3 block) or a 2^3 block whose least gap terms per axis, summed
+// as a voxel's are, are not < R^2. Their bounds are tightest where the ball's box meets block
+// boundaries and the grid's edges: anchors at bricks' corners (grid planes 8 i on every axis,
+// exactly, an ulp either side, or a random fraction of a voxel off) and at the grid's faces, edges
+// and corners (inside, on, and just outside the grid, where the box is clipped), on a tooth whose
+// solid reaches the grid's faces (a wavy slab under z = f(x, y) across the whole grid, and a ball
+// about the grid's top corner), with the molar's voxel at 64^3, 128^3 and 512^3 (the ball 4 to
+// 32 voxels across; at 512^3's voxel the box spans 5 to 6 bricks): the cut set and the material
+// equal to the reference's and to the brute force (compare_at).
+VoxelTooth edge_tooth(int n, double h) {
+  const double side = n * h;
+  return VoxelTooth(test::solid_grid(n, side, [side](const Vec3& p) {
+    const double u = p.x() / side, v = p.y() / side;
+    const double floor = side * (0.45 + 0.12 * std::sin(7.0 * u) * std::cos(5.0 * v));
+    return p.z() < floor || (p - Vec3(side, side, side)).norm() < 0.3 * side;
+  }));
+}
+
+TEST(SurfaceCutSet, EqualsTheReferenceAtBricksCornersAndTheGridsEdges) {
+  const MolarParams molar;
+  const double h128 = voxelize_procedural_molar(molar, 32).voxel_size * 32.0 / 128.0;
+  const double rho = 0.5e-3;
+  struct Case {
+    int n;
+    double h;
+  };
+  const Case cases[] = {{32, 2.0 * h128}, {64, 2.0 * h128}, {64, h128}, {64, 0.25 * h128}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE("n " + std::to_string(c.n) + ", h " + std::to_string(c.h));
+    const VoxelTooth tooth = edge_tooth(c.n, c.h);
+    const VoxelGrid& grid = tooth.grid();
+    std::vector<std::size_t> surface;
+    for (std::size_t v = 0; v < grid.voxels.size(); ++v) {
+      if (tooth.codes.code(v) != 0) surface.push_back(v);
+    }
+    ASSERT_FALSE(surface.empty());
+    fast::SurfaceCutSet twin(tooth, rho, &signed_distance);
+    std::mt19937_64 rng(46 + c.n);
+    std::uniform_int_distribution<std::size_t> pick(0, surface.size() - 1);
+    std::uniform_int_distribution<int> choice(0, 5);
+    std::uniform_real_distribution<double> fraction(0.0, 1.0), unit(-1.0, 1.0);
+    const double reach = cut_band(rho).reach;
+    const std::size_t nn = static_cast<std::size_t>(grid.n);
+    // Coordinate a of a grid plane (origin + h i, as the grid computes it), moved by `how`: 0 on
+    // it, 1 and 2 an ulp either side, 3 a random fraction of a voxel either side, 4 and 5 a
+    // random fraction of the band's reach either side.
+    auto off_plane = [&](int a, int i, int how) {
+      const double p = grid.origin[a] + grid.voxel_size * i;
+      switch (how) {
+        case 0: return p;
+        case 1: return std::nextafter(p, 1.0);
+        case 2: return std::nextafter(p, -1.0);
+        case 3: return p + unit(rng) * grid.voxel_size;
+        default: return p + (how == 4 ? 1.0 : -1.0) * fraction(rng) * reach;
+      }
+    };
+    Agreement a;
+    for (int q = 0; q < 1500 && a.mismatches <= 5; ++q) {
+      const std::size_t v = surface[pick(rng)];
+      const int ijk[3] = {static_cast<int>(v % nn), static_cast<int>((v / nn) % nn),
+                          static_cast<int>(v / (nn * nn))};
+      Vec3 g;
+      if (q % 2 == 0) {  // the brick corner nearest to a surface voxel
+        for (int ax = 0; ax < 3; ++ax) {
+          const int corner = 8 * static_cast<int>(std::lround(ijk[ax] / 8.0));
+          g[ax] = off_plane(ax, corner, choice(rng));
+        }
+      } else {  // a surface voxel's centre, x or y or both onto the grid's faces (z too, 1 in 6)
+        g = grid.center(ijk[0], ijk[1], ijk[2]);
+        const int axes = 1 + (q / 2) % 3;  // x, y or both
+        for (int ax = 0; ax < 3; ++ax) {
+          const bool snap = ax < 2 ? ((axes >> ax) & 1) != 0 : (q / 2) % 6 == 5;
+          if (snap) g[ax] = off_plane(ax, fraction(rng) < 0.5 ? 0 : grid.n, choice(rng));
+        }
+      }
+      compare_at(tooth, twin, g, rho, &a);
+    }
+    std::printf("n %d, h %.4g mm: %ld anchors, %ld cut members, %ld material queries by sd of %ld\n",
+                grid.n, 1e3 * grid.voxel_size, a.queries, a.members, twin.fallbacks(),
+                twin.queries());
+    EXPECT_EQ(a.mismatches, 0);
+    EXPECT_GT(a.members, 3 * a.queries);  // signal: most anchors cut something
+  }
+}
+
+// The twin's band depth: the squared centre offsets per axis, (origin + h (i + 1/2)) - g squared,
+// summed (x + y) + z and given to cut_band_depth_at, is cut_band_depth's double, at random voxels
+// and anchors within a few voxels.
+TEST(SurfaceCutSet, BandDepthFromTheAxisTermsIsTheReferencesBitwise) {
+  VoxelGrid grid(512, Vec3(-11.3e-3, 2.7e-3, -0.41e-3), 0.0425e-3);
+  std::mt19937_64 rng(460);
+  std::uniform_int_distribution<int> index(0, grid.n - 1);
+  std::uniform_real_distribution<double> off(-6.0, 6.0);
+  const double rho = 0.5e-3, band = cut_band(rho).depth;
+  long positive = 0;
+  for (int q = 0; q < 200000; ++q) {
+    const int ijk[3] = {index(rng), index(rng), index(rng)};
+    const double r = 0.8 * rho / grid.voxel_size;  // near the band's edge
+    Vec3 d(off(rng), off(rng), off(rng));
+    d = (r + off(rng)) * d.normalized();
+    const Vec3 g = grid.center(ijk[0], ijk[1], ijk[2]) + grid.voxel_size * d;
+    double t[3];
+    for (int a = 0; a < 3; ++a) {
+      const double e = (grid.origin[a] + grid.voxel_size * (ijk[a] + 0.5)) - g[a];
+      t[a] = e * e;
+    }
+    const double fast = cut_band_depth_at((t[0] + t[1]) + t[2], rho, grid.voxel_size, band);
+    const double ref = cut_band_depth(grid, ijk[0], ijk[1], ijk[2], g, rho, band);
+    ASSERT_EQ(fast, ref) << q;
+    positive += ref > 0.0;
+  }
+  EXPECT_GT(positive, 10000);
+}
+
 // ---- The providers along a drilling path ------------------------------------------------------
 
 // A sphere in a block of n^3 voxels of edge h; the bur (radius rho) comes down onto it, drills
