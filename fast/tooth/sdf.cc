@@ -115,14 +115,16 @@ inline double plane(const VoxelGrid& grid, int a, int i) {
   return grid.origin[a] + grid.voxel_size * i;
 }
 
-// Whether x lies within eps of a plane origin_a + h i on some axis (the planes about x's cell:
-// the floor of its grid coordinate is within one cell of the true one whatever the rounding).
+// Whether x lies within eps (<= h) of a plane origin_a + h i, 0 <= i <= N, on some axis: the
+// planes about x's grid coordinate u (its truncation is within one cell of its floor, and a
+// coordinate more than 3 cells outside the grid is farther than h from every plane).
 bool near_grid_plane(const VoxelGrid& grid, const Vec3& x, double eps) {
   for (int a = 0; a < 3; ++a) {
-    const double u = std::floor((x[a] - grid.origin[a]) / grid.voxel_size);
-    for (int d = -1; d <= 2; ++d) {
-      const double p = grid.origin[a] + grid.voxel_size * (u + d);
-      if (std::abs(x[a] - p) < eps) return true;
+    const double u = (x[a] - grid.origin[a]) / grid.voxel_size;
+    if (!(u > -3.0 && u < grid.n + 3.0)) continue;
+    const int i = static_cast<int>(u);
+    for (int d = -2; d <= 2; ++d) {
+      if (std::abs(x[a] - plane(grid, a, i + d)) < eps) return true;
     }
   }
   return false;
@@ -153,6 +155,13 @@ void axis_terms(const VoxelGrid& grid, int a, int b, double x, AxisTerms* out) {
 
 }  // namespace
 
+LocalVoxelDistance::LocalVoxelDistance(const VoxelTooth& tooth, const SurfaceVoxels& surface)
+    : tooth_(tooth),
+      surface_(surface),
+      max_reach_(0x1p23 * tooth.grid().voxel_size),
+      extent_(tooth.grid().origin.cwiseAbs().maxCoeff() +
+              tooth.grid().n * tooth.grid().voxel_size) {}
+
 bool LocalVoxelDistance::outside(const Vec3& x, double reach, SignedDistance* out,
                                  double* best2_out) const {
   static_assert(SurfaceVoxels::kBrick == kB && SurfaceVoxels::kWords == 8);
@@ -160,11 +169,10 @@ bool LocalVoxelDistance::outside(const Vec3& x, double reach, SignedDistance* ou
   const VoxelGrid& grid = tooth_.grid();
   const int n = grid.n;
   const double h = grid.voxel_size;
-  // The claim's conditions (header comment).
-  const double eps = std::ldexp(reach, -23);
-  const double extent = grid.origin.cwiseAbs().maxCoeff() + n * h + reach;
-  if (!surface_.current() || !x.allFinite() || !(reach > 0.0) || !std::isfinite(reach) ||
-      !(h >= eps) || !(eps >= std::ldexp(extent, -44)) || near_grid_plane(grid, x, eps)) {
+  // The claim's conditions (header comment); 2^-23 reach and 2^-44 (...) are exact products.
+  const double eps = 0x1p-23 * reach;
+  if (!surface_.current() || !(reach > 0.0) || !(reach <= max_reach_) ||
+      !(eps >= 0x1p-44 * (extent_ + reach)) || !x.allFinite() || near_grid_plane(grid, x, eps)) {
     ++fallbacks_;
     return false;
   }
@@ -188,20 +196,20 @@ bool LocalVoxelDistance::outside(const Vec3& x, double reach, SignedDistance* ou
     }
   }
   // The bricks within the bound r, one brick of margin each side (a brick beyond is more than
-  // r + 7 h away whatever the floors' rounding), and their boxes' term on each axis.
+  // r + 7 h away: the truncations below are within one brick of the floors, and conservative),
+  // and their boxes' term on each axis.
   const double r = best.found ? std::sqrt(best2) : reach;
   const double side = kB * h;
-  const int nb = surface_.slots_per_axis();
+  const double last = surface_.slots_per_axis() - 1.0;
   int b_lo[3], b_hi[3];
   double brick_term[3][kMaxSpan];
   bool none = false;
-  for (int a = 0; a < 3 && !none; ++a) {
-    const double u0 = std::floor((x[a] - r - grid.origin[a]) / side) - 1.0;
-    const double u1 = std::floor((x[a] + r - grid.origin[a]) / side) + 1.0;
-    none = u1 < 0.0 || u0 > nb - 1.0;  // no brick of the grid within r (then no hint either)
-    if (none) break;
-    b_lo[a] = static_cast<int>(std::max(u0, 0.0));
-    b_hi[a] = static_cast<int>(std::min(u1, nb - 1.0));
+  for (int a = 0; a < 3; ++a) {
+    const double t0 = std::clamp((x[a] - r - grid.origin[a]) / side, -1.0, last + 2.0);
+    const double t1 = std::clamp((x[a] + r - grid.origin[a]) / side, -1.0, last + 2.0);
+    b_lo[a] = std::max(0, static_cast<int>(t0) - 1);
+    b_hi[a] = std::min(static_cast<int>(last), static_cast<int>(t1) + 1);
+    none = none || b_lo[a] > b_hi[a];  // no brick of the grid within r (then no hint either)
     if (b_hi[a] - b_lo[a] + 1 > kMaxSpan) {
       ++fallbacks_;
       return false;
@@ -257,9 +265,11 @@ bool LocalVoxelDistance::outside(const Vec3& x, double reach, SignedDistance* ou
               while (block != 0) {
                 const int c = std::countr_zero(block);
                 block &= block - 1;
-                const int lx = 2 * qx + (c & 1), ly = 2 * qy + ((c >> 1) & 1), lz = 2 * qz + (c >> 2);
+                const int lx = 2 * qx + (c & 1), ly = 2 * qy + ((c >> 1) & 1);
+                const int lz = 2 * qz + (c >> 2);
                 const double d2 = (X.t[lx] + Y.t[ly]) + Z.t[lz];  // box_distance2's sum
                 ++tested;
+                if (d2 > best2) continue;  // not nearer (sdf_nearer), whatever its index
                 const std::size_t v =
                     static_cast<std::size_t>(kB * bx + lx) +
                     nn * (static_cast<std::size_t>(kB * by + ly) +
@@ -317,9 +327,11 @@ SignedDistance signed_distance(const VoxelTooth& tooth, const Vec3& x, double re
 
 void RecallingVoxelSolid::remember(const Vec3& x, double reach, double best2,
                                    const SignedDistance& sd) const {
-  memo_[next_] = {x, reach, best2, sd};
-  next_ = (next_ + 1) % kEntries;
-  count_ = std::max(count_, next_ == 0 ? kEntries : next_);
+  RecalledAnswers& memo = answers();
+  constexpr int kEntries = RecalledAnswers::kEntries;
+  memo.entries[memo.next] = {x, reach, best2, sd};
+  memo.next = (memo.next + 1) % kEntries;
+  memo.count = std::max(memo.count, memo.next == 0 ? kEntries : memo.next);
 }
 
 SignedDistance RecallingVoxelSolid::search_outside(const Vec3& x, double reach,
@@ -350,9 +362,12 @@ SignedDistance RecallingVoxelSolid::distance(const Vec3& x, double reach) const 
     none.phi = reach;
     return none;
   }
-  for (int i = 0; i < count_; ++i) {
-    const Entry& e = memo_[i];
+  const RecalledAnswers& memo = answers();
+  for (int i = 0; i < memo.count; ++i) {
+    const RecalledAnswers::Entry& e = memo.entries[i];
     if (!(e.x == x)) continue;
+    // Kept from an earlier update: its voxel may have been drilled away since (RecalledAnswers).
+    if (e.sd.found && tooth_.grid().voxels[e.sd.voxel] == kEmpty) continue;
     // The search's answer is the first of the solid voxels with d2 < reach^2 in the order
     // (d2, index) (sdf_detail::sdf_nearer), and reach -> reach * reach is monotone in floating
     // point: an answer found within e.reach is the answer within any reach whose square exceeds

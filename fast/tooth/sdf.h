@@ -73,8 +73,7 @@ class SurfaceVoxels;  // fast/tooth/cut_set.h
 class LocalVoxelDistance {
  public:
   // `tooth` and `surface` (its exposed voxels, kept current by their owner) outlive this.
-  LocalVoxelDistance(const VoxelTooth& tooth, const SurfaceVoxels& surface)
-      : tooth_(tooth), surface_(surface) {}
+  LocalVoxelDistance(const VoxelTooth& tooth, const SurfaceVoxels& surface);
   // For x not in a solid voxel's cell and reach > 0: signed_distance(tooth, x, reach)'s answer into
   // *out and its squared distance into *best2 (+inf: nothing within reach), true; false (nothing
   // written) when the claim above does not certify it.
@@ -93,6 +92,8 @@ class LocalVoxelDistance {
  private:
   const VoxelTooth& tooth_;
   const SurfaceVoxels& surface_;
+  double max_reach_;  // 2^23 h: h >= eps
+  double extent_;     // |origin|_inf + N h
   mutable std::size_t hint_ = 0;
   mutable bool have_hint_ = false;
   mutable long queries_ = 0, fallbacks_ = 0, voxels_tested_ = 0;
@@ -152,13 +153,33 @@ class FreeSpaceCertificate {
   mutable long certified_ = 0, evaluated_ = 0;
 };
 
+// The outside answers a RecallingVoxelSolid remembers (the last kEntries, the oldest making room).
+// A provider may keep them across updates (SdfContactProvider: the proxy's first queries of a
+// tick are at the g the last tick left): the tooth may only lose voxels meanwhile (drilling), and
+// an answer whose voxel is no longer solid is not used. Removals keep every other answer: a found
+// voxel still solid is still the least (D, index) of a subset holding it, and "nothing within R"
+// stays true.
+struct RecalledAnswers {
+  struct Entry {
+    Vec3 x;
+    double reach;
+    double best2;  // the answer's d2, +inf: nothing within reach
+    SignedDistance sd;
+  };
+  static constexpr int kEntries = 16;
+  std::array<Entry, kEntries> entries{};
+  int count = 0;
+  int next = 0;
+};
+
 // The surface proxy's Solid (reference/tooth/surface_proxy_core.h) on fast::signed_distance for
 // one update of the proxy (the tooth must not change while it lives): it remembers its last
-// kEntries outside answers and answers a query at the same point (bitwise) from them where the
-// contract decides it (an answer found within reach R is the answer within every reach whose
-// square exceeds its d2; "nothing within R" is the answer within every shorter reach), so its
-// answers are the query's own. The proxy asks the same point again and again within a tick: the
-// swept test starts where the push-out ended, a slide asks at the g the push-out left.
+// outside answers (RecalledAnswers; its own, or the provider's kept across updates) and answers a
+// query at the same point (bitwise) from them where the contract decides it (an answer found
+// within reach R is the answer within every reach whose square exceeds its d2; "nothing within
+// R" is the answer within every shorter reach), so its answers are the query's own. The proxy
+// asks the same point again and again within a tick: the swept test starts where the push-out
+// ended, a slide asks at the g the push-out left.
 // With a certificate (the provider's, kept across ticks): a query it certifies reads nothing; an
 // outside query it does not is searched within FreeSpaceCertificate::widened(reach), answered
 // at `reach` by the same rule as a remembered answer, and renews the certificate.
@@ -167,8 +188,9 @@ class FreeSpaceCertificate {
 class RecallingVoxelSolid {
  public:
   explicit RecallingVoxelSolid(const VoxelTooth& tooth, FreeSpaceCertificate* certificate = nullptr,
-                               const LocalVoxelDistance* local = nullptr)
-      : tooth_(tooth), certificate_(certificate), local_(local) {}
+                               const LocalVoxelDistance* local = nullptr,
+                               RecalledAnswers* kept = nullptr)
+      : tooth_(tooth), certificate_(certificate), local_(local), kept_(kept) {}
   const VoxelTooth& tooth() const { return tooth_; }
   SignedDistance distance(const Vec3& x, double reach) const;
   Vec3 normal(const Vec3& x, const SignedDistance& sd) const {
@@ -177,26 +199,19 @@ class RecallingVoxelSolid {
   double lipschitz() const { return 1.0; }
 
  private:
-  struct Entry {
-    Vec3 x;
-    double reach;
-    double best2;  // the answer's d2, +inf: nothing within reach
-    SignedDistance sd;
-  };
-  static constexpr int kEntries = 16;
   // The search at x (not in a solid voxel) within the certificate's widened reach, renewing it.
   SignedDistance certified_search(const Vec3& x, double reach) const;
   // The outside search at x (not in a solid voxel; the octree's levels > 0): the local query's,
   // else the octree's; *best2 as outside_distance's.
   SignedDistance search_outside(const Vec3& x, double reach, double* best2) const;
   void remember(const Vec3& x, double reach, double best2, const SignedDistance& sd) const;
+  RecalledAnswers& answers() const { return kept_ != nullptr ? *kept_ : own_; }
 
   const VoxelTooth& tooth_;
   FreeSpaceCertificate* certificate_;
   const LocalVoxelDistance* local_;
-  mutable std::array<Entry, kEntries> memo_{};
-  mutable int count_ = 0;
-  mutable int next_ = 0;
+  RecalledAnswers* kept_;
+  mutable RecalledAnswers own_;
 };
 
 }  // namespace dentsim::fast

@@ -42,9 +42,9 @@ SdfContactProvider::SdfContactProvider(VoxelTooth& tooth, const PipelineToothSet
       local_(tooth, cut_set().surface()) {}
 
 const Vec3& SdfContactProvider::update_sdf_proxy(SurfaceProxy* proxy, const Vec3& c) {
-  // One update: the tooth does not change within it (the certificate outlives it: drilling only
-  // removes voxels).
-  const RecallingVoxelSolid solid(tooth_, certify_ ? &certificate_ : nullptr, &local_);
+  // One update: the tooth does not change within it (the certificate, the local query's last voxel
+  // and the remembered answers outlive it: drilling only removes voxels).
+  const RecallingVoxelSolid solid(tooth_, certify_ ? &certificate_ : nullptr, &local_, &answers_);
   return proxy->update_on(solid, c);
 }
 

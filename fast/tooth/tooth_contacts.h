@@ -43,7 +43,8 @@ class ToothContactProvider : public ToothProviderBase {
 // (fast/tooth/sdf.h FreeSpaceCertificate: no octree query while the tip is farther from the tooth
 // than its travel since the last exact one). Its outside searches are local (fast/tooth/sdf.h
 // LocalVoxelDistance on the cut set's surface bits, its last answer's voxel kept across ticks),
-// the octree's where the local query cannot certify its answer.
+// the octree's where the local query cannot certify its answer; the answers its solid remembers
+// are kept from tick to tick (RecalledAnswers).
 class SdfContactProvider final : public CutSetProvider {
  public:
   SdfContactProvider(VoxelTooth& tooth, const PipelineToothSetup& setup);
@@ -58,6 +59,7 @@ class SdfContactProvider final : public CutSetProvider {
   FreeSpaceCertificate certificate_;
   bool certify_;
   LocalVoxelDistance local_;
+  RecalledAnswers answers_;  // the proxy's solid's, kept across updates
 };
 
 // The fast pipeline's tooth (fast/registry.h): for the face model the brick tooth, built from
