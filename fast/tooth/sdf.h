@@ -36,6 +36,69 @@ SignedDistance signed_distance(const VoxelTooth& tooth, const Vec3& x, double re
 SignedDistance signed_distance(const VoxelTooth& tooth, const Vec3& x, double reach,
                                double* outside_best2);
 
+class SurfaceVoxels;  // fast/tooth/cut_set.h
+
+// The sdf model's local distance query (issue #30, stop 46): the outside answer of
+// signed_distance (phi, nearest, voxel: the octree descent's, bitwise) from the tooth's exposed
+// voxels (SurfaceVoxels, the bits the cut set keeps current under drilling), searched about the
+// query point instead of from the octree's root.
+//
+// The search. The reference's answer outside is the solid voxel v* minimising (D(v), v) over the
+// solid voxels with D < reach^2 (D: box_distance2's double; the descent prunes only nodes whose
+// box, which holds their voxels' boxes, is no nearer, and a node box's terms are no larger than
+// its voxels' by monotone rounding). The twin minimises the same key over the exposed voxels: the
+// bricks of 8^3 voxels about x (one brick of margin beyond the bound on each side, far above the
+// rounding of the floors), skipping a brick, a 4^3 word, a 2^3 byte whose box is already no
+// nearer than the best (sdf_prunable; a block's term on an axis is the least of its voxels',
+// so the box test never loses a voxel the voxel test would take), and the voxels by the same
+// terms box_distance2 sums, in its order ((t_x + t_y) + t_z): the same D. Temporal coherence:
+// the voxel of the last answer, while it is still exposed, is the first candidate, and its D the
+// search's first bound (the proxy's queries in a tick, and from tick to tick, lie within a few
+// voxels of each other, so the bound is nearly the answer's and few blocks are opened).
+//
+// Claim: if x is at least eps = 2^-23 reach from every grid plane origin_a + h i on every axis,
+// h >= eps and eps >= 2^-44 (|origin|_inf + N h + reach), the exposed minimum is v* (and when no
+// exposed voxel has D < reach^2, no solid voxel has). Proof: SurfaceCutSet's (fast/tooth/
+// cut_set.h, "The material"), with reach for its R': a non-exposed v* has six solid face
+// neighbours; D(v*) = 0 would put x in v*'s cell by voxel_of (an outside query is not in a solid
+// voxel's cell); the face neighbour towards x on an axis where x is below v*'s slab is as near and
+// has a smaller index; above it, it is nearer by more than the roundings (terms differing by
+// >= eps^2 = 2^-46 reach^2 against errors <= 2^-51 reach^2). For "none found": from any solid v
+// with D(v) < reach^2 the same steps (each to a face neighbour no farther, towards x) reach an
+// exposed voxel, or a voxel with D = 0, excluded as above. Otherwise (x near a plane, the bits
+// not current, a reach beyond the bounds below) outside() returns false and the caller asks the
+// octree (counted: fallbacks()).
+//
+// Real-time: fixed-size arrays on the stack; nothing allocates or throws.
+class LocalVoxelDistance {
+ public:
+  // `tooth` and `surface` (its exposed voxels, kept current by their owner) outlive this.
+  LocalVoxelDistance(const VoxelTooth& tooth, const SurfaceVoxels& surface);
+  // For x not in a solid voxel's cell and reach > 0: signed_distance(tooth, x, reach)'s answer into
+  // *out and its squared distance into *best2 (+inf: nothing within reach), true; false (nothing
+  // written) when the claim above does not certify it.
+  bool outside(const Vec3& x, double reach, SignedDistance* out, double* best2) const;
+  // Counters (tests and benchmarks): outside() calls, those that returned false, and the blocks
+  // and voxels whose distance they computed.
+  long queries() const { return queries_; }
+  long fallbacks() const { return fallbacks_; }
+  long voxels_tested() const { return voxels_tested_; }
+  // Forgets the last answer's voxel (the next search starts without a bound).
+  void forget() const { have_hint_ = false; }
+
+  // The largest brick span on an axis the search's arrays hold (a wider reach falls back).
+  static constexpr int kMaxSpan = 24;
+
+ private:
+  const VoxelTooth& tooth_;
+  const SurfaceVoxels& surface_;
+  double max_reach_;  // 2^23 h: h >= eps
+  double extent_;     // |origin|_inf + N h
+  mutable std::size_t hint_ = 0;
+  mutable bool have_hint_ = false;
+  mutable long queries_ = 0, fallbacks_ = 0, voxels_tested_ = 0;
+};
+
 // The sdf model's free-space certificate (issue #30; the field model's is in fast/tooth/field.h):
 // a lower bound on the distance from the tip to the solid kept across ticks, so that while the
 // tip is farther from the tooth than its travel since the last exact query, no query reads the
@@ -90,20 +153,44 @@ class FreeSpaceCertificate {
   mutable long certified_ = 0, evaluated_ = 0;
 };
 
+// The outside answers a RecallingVoxelSolid remembers (the last kEntries, the oldest making room).
+// A provider may keep them across updates (SdfContactProvider: the proxy's first queries of a
+// tick are at the g the last tick left): the tooth may only lose voxels meanwhile (drilling), and
+// an answer whose voxel is no longer solid is not used. Removals keep every other answer: a found
+// voxel still solid is still the least (D, index) of a subset holding it, and "nothing within R"
+// stays true.
+struct RecalledAnswers {
+  struct Entry {
+    Vec3 x;
+    double reach;
+    double best2;  // the answer's d2, +inf: nothing within reach
+    SignedDistance sd;
+  };
+  static constexpr int kEntries = 16;
+  std::array<Entry, kEntries> entries{};
+  int count = 0;
+  int next = 0;
+};
+
 // The surface proxy's Solid (reference/tooth/surface_proxy_core.h) on fast::signed_distance for
 // one update of the proxy (the tooth must not change while it lives): it remembers its last
-// kEntries outside answers and answers a query at the same point (bitwise) from them where the
-// contract decides it (an answer found within reach R is the answer within every reach whose
-// square exceeds its d2; "nothing within R" is the answer within every shorter reach), so its
-// answers are the query's own. The proxy asks the same point again and again within a tick: the
-// swept test starts where the push-out ended, a slide asks at the g the push-out left.
+// outside answers (RecalledAnswers; its own, or the provider's kept across updates) and answers a
+// query at the same point (bitwise) from them where the contract decides it (an answer found
+// within reach R is the answer within every reach whose square exceeds its d2; "nothing within
+// R" is the answer within every shorter reach), so its answers are the query's own. The proxy
+// asks the same point again and again within a tick: the swept test starts where the push-out
+// ended, a slide asks at the g the push-out left.
 // With a certificate (the provider's, kept across ticks): a query it certifies reads nothing; an
 // outside query it does not is searched within FreeSpaceCertificate::widened(reach), answered
 // at `reach` by the same rule as a remembered answer, and renews the certificate.
+// With a local query (LocalVoxelDistance, the provider's: its last answer's voxel kept across
+// ticks) every outside search asks it first, the octree where it cannot certify its answer.
 class RecallingVoxelSolid {
  public:
-  explicit RecallingVoxelSolid(const VoxelTooth& tooth, FreeSpaceCertificate* certificate = nullptr)
-      : tooth_(tooth), certificate_(certificate) {}
+  explicit RecallingVoxelSolid(const VoxelTooth& tooth, FreeSpaceCertificate* certificate = nullptr,
+                               const LocalVoxelDistance* local = nullptr,
+                               RecalledAnswers* kept = nullptr)
+      : tooth_(tooth), certificate_(certificate), local_(local), kept_(kept) {}
   const VoxelTooth& tooth() const { return tooth_; }
   SignedDistance distance(const Vec3& x, double reach) const;
   Vec3 normal(const Vec3& x, const SignedDistance& sd) const {
@@ -112,22 +199,19 @@ class RecallingVoxelSolid {
   double lipschitz() const { return 1.0; }
 
  private:
-  struct Entry {
-    Vec3 x;
-    double reach;
-    double best2;  // the answer's d2, +inf: nothing within reach
-    SignedDistance sd;
-  };
-  static constexpr int kEntries = 16;
   // The search at x (not in a solid voxel) within the certificate's widened reach, renewing it.
   SignedDistance certified_search(const Vec3& x, double reach) const;
+  // The outside search at x (not in a solid voxel; the octree's levels > 0): the local query's,
+  // else the octree's; *best2 as outside_distance's.
+  SignedDistance search_outside(const Vec3& x, double reach, double* best2) const;
   void remember(const Vec3& x, double reach, double best2, const SignedDistance& sd) const;
+  RecalledAnswers& answers() const { return kept_ != nullptr ? *kept_ : own_; }
 
   const VoxelTooth& tooth_;
   FreeSpaceCertificate* certificate_;
-  mutable std::array<Entry, kEntries> memo_{};
-  mutable int count_ = 0;
-  mutable int next_ = 0;
+  const LocalVoxelDistance* local_;
+  RecalledAnswers* kept_;
+  mutable RecalledAnswers own_;
 };
 
 }  // namespace dentsim::fast

@@ -38,12 +38,13 @@ SdfContactProvider::SdfContactProvider(VoxelTooth& tooth, const PipelineToothSet
     : CutSetProvider(tooth, setup.tip, setup.k_tooth, setup.b_tooth, setup.drilling,
                      ContactModel::kSurfaceProxy, &fast::signed_distance),
       tooth_(tooth),
-      certify_(setup.skip_unneeded) {}
+      certify_(setup.skip_unneeded),
+      local_(tooth, cut_set().surface()) {}
 
 const Vec3& SdfContactProvider::update_sdf_proxy(SurfaceProxy* proxy, const Vec3& c) {
-  // One update: the tooth does not change within it (the certificate outlives it: drilling only
-  // removes voxels).
-  const RecallingVoxelSolid solid(tooth_, certify_ ? &certificate_ : nullptr);
+  // One update: the tooth does not change within it (the certificate, the local query's last voxel
+  // and the remembered answers outlive it: drilling only removes voxels).
+  const RecallingVoxelSolid solid(tooth_, certify_ ? &certificate_ : nullptr, &local_, &answers_);
   return proxy->update_on(solid, c);
 }
 

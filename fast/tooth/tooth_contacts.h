@@ -41,11 +41,15 @@ class ToothContactProvider : public ToothProviderBase {
 // and material come from the surface voxels (CutSetProvider, fast/tooth/cut_set.h). With skips on
 // (PipelineToothSetup::skip_unneeded) the solid keeps a free-space certificate across ticks
 // (fast/tooth/sdf.h FreeSpaceCertificate: no octree query while the tip is farther from the tooth
-// than its travel since the last exact one).
+// than its travel since the last exact one). Its outside searches are local (fast/tooth/sdf.h
+// LocalVoxelDistance on the cut set's surface bits, its last answer's voxel kept across ticks),
+// the octree's where the local query cannot certify its answer; the answers its solid remembers
+// are kept from tick to tick (RecalledAnswers).
 class SdfContactProvider final : public CutSetProvider {
  public:
   SdfContactProvider(VoxelTooth& tooth, const PipelineToothSetup& setup);
   const FreeSpaceCertificate& certificate() const { return certificate_; }
+  const LocalVoxelDistance& local_distance() const { return local_; }
 
  protected:
   const Vec3& update_sdf_proxy(SurfaceProxy* proxy, const Vec3& c) override;
@@ -54,6 +58,8 @@ class SdfContactProvider final : public CutSetProvider {
   const VoxelTooth& tooth_;
   FreeSpaceCertificate certificate_;
   bool certify_;
+  LocalVoxelDistance local_;
+  RecalledAnswers answers_;  // the proxy's solid's, kept across updates
 };
 
 // The fast pipeline's tooth (fast/registry.h): for the face model the brick tooth, built from

@@ -5,7 +5,12 @@
 // ties too; and the surface proxy driven by either along the same tool path stays on the same g,
 // step by step. The free-space certificate (FreeSpaceCertificate): every answer bitwise the
 // reference's on random query sequences and on a scripted approach, press, drill and retreat, and
-// every certified query checked against brute force (no solid voxel within its reach).
+// every certified query checked against brute force (no solid voxel within its reach). The local
+// query (LocalVoxelDistance, on the surface bits): at 64^3-512^3 on the molar and 64^3-256^3 on a
+// mesh, at points near and far, on grid planes too, before and after random removals (the bits
+// kept current as drilling keeps them), every answer it gives bitwise the reference's and the
+// ones it declines (near a plane) few; and the proxy on it, with the certificate, step by step on
+// the reference's path while a pit is drilled under it.
 #include "fast/tooth/sdf.h"
 
 #include <gtest/gtest.h>
@@ -13,14 +18,22 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <string>
 #include <limits>
+#include <memory>
 #include <random>
 #include <vector>
 
+#include "fast/tooth/cut_set.h"
 #include "reference/tooth/surface_proxy_core.h"
 
 #include "sim/scene.h"
 #include "sim/simulator.h"
+#include "tests/support/alloc_counter.h"
+#include "tooth_io/mesh.h"
+#include "tooth_io/procedural_molar.h"
+#include "tooth_io/voxelize.h"
 
 namespace dentsim {
 namespace {
@@ -294,6 +307,40 @@ class CheckedSolid {
   long* unsafe_;
 };
 
+// The top of the crown under the rig's anchor: the upper face of the highest solid voxel of its
+// column.
+Vec3 crown_top(const SceneRig& rig) {
+  const VoxelGrid& g = rig.tooth->grid();
+  const double h = g.voxel_size;
+  const int ia = static_cast<int>((rig.anchor.x() - g.origin.x()) / h);
+  const int ja = static_cast<int>((rig.anchor.y() - g.origin.y()) / h);
+  int ka = g.n - 1;
+  while (ka > 0 && !g.solid(ia, ja, ka)) --ka;
+  return g.center(ia, ja, ka) + Vec3(0, 0, 0.5 * h);
+}
+
+// Appends `ticks` points on the segment from the path's last point (or `to`) to `to`.
+void extend_path(std::vector<Vec3>* path, const Vec3& to, int ticks) {
+  const Vec3 from = path->empty() ? to : path->back();
+  for (int t = 1; t <= ticks; ++t) path->push_back(from + (to - from) * (double(t) / ticks));
+}
+
+// The contacts of the tool's sphere at tip centre c with the reference proxy's g and the fast
+// one's (surface_proxy_contact, the material by either pipeline's query): the same (bitwise) or
+// neither; *in_contact: whether there is one.
+bool same_contact(const VoxelTooth& tooth, const Vec3& c, const ToolTip& tip, const Vec3& gr,
+                  const Vec3& gf, bool* in_contact) {
+  Pose pose;
+  pose.x = c;
+  Contact cr, cf;
+  *in_contact = surface_proxy_contact(tooth, pose, tip, gr, 3000.0, 1.0, &cr);
+  const bool hf =
+      surface_proxy_contact(tooth, pose, tip, gf, 3000.0, 1.0, &cf, &fast::signed_distance);
+  if (*in_contact != hf) return false;
+  return !hf || (cr.n == cf.n && cr.x_o == cf.x_o && cr.r == cf.r && cr.depth == cf.depth &&
+                 cr.material == cf.material);
+}
+
 // A scripted approach from 6 mm above the crown, a press 0.3 mm into it with a slide, a pit
 // drilled under the tip (the tooth loses voxels while the certificate lives), a second press into
 // the pit, and a retreat: at every tick g and the contact (reference/tooth/sdf.h
@@ -305,18 +352,11 @@ TEST(FastSignedDistance, CertificateKeepsTheContactsOnAnApproachAndRetreat) {
   const double rho = 0.25e-3, h = g.voxel_size;
   const std::size_t n = static_cast<std::size_t>(g.n);
   // The crown's top under the anchor.
-  const int ia = static_cast<int>((rig->anchor.x() - g.origin.x()) / h);
-  const int ja = static_cast<int>((rig->anchor.y() - g.origin.y()) / h);
-  int ka = g.n - 1;
-  while (ka > 0 && !g.solid(ia, ja, ka)) --ka;
-  const Vec3 top = g.center(ia, ja, ka) + Vec3(0, 0, 0.5 * h);
+  const Vec3 top = crown_top(*rig);
   std::vector<std::size_t> boundary = boundary_voxels(g);
   // The path: (tick, tip centre) by pieces; 0.02 mm a tick on the approach (20 mm/s at 1 kHz).
   std::vector<Vec3> path;
-  auto go = [&path](const Vec3& to, int ticks) {
-    const Vec3 from = path.empty() ? to : path.back();
-    for (int t = 1; t <= ticks; ++t) path.push_back(from + (to - from) * (double(t) / ticks));
-  };
+  auto go = [&path](const Vec3& to, int ticks) { extend_path(&path, to, ticks); };
   path.push_back(top + Vec3(0.3e-3, 0.2e-3, 6e-3));
   go(top + Vec3(0.3e-3, 0.2e-3, rho + 1e-3), 250);  // approach
   go(top + Vec3(0.0, 0.0, rho - 0.3e-3), 100);      // press
@@ -351,21 +391,9 @@ TEST(FastSignedDistance, CertificateKeepsTheContactsOnAnApproachAndRetreat) {
     const Vec3 gf =
         fst.update_on(CheckedSolid(tooth, &certificate, &boundary, &mismatches, &unsafe), c);
     ASSERT_EQ(gr, gf) << "tick " << t;
-    Pose pose;
-    pose.x = c;
-    Contact cr, cf;
-    const bool hr = surface_proxy_contact(tooth, pose, tip, gr, 3000.0, 1.0, &cr);
-    const bool hf =
-        surface_proxy_contact(tooth, pose, tip, gf, 3000.0, 1.0, &cf, &fast::signed_distance);
-    ASSERT_EQ(hr, hf) << "tick " << t;
-    if (hr) {
-      ++contacts;
-      ASSERT_EQ(cr.n, cf.n);
-      ASSERT_EQ(cr.x_o, cf.x_o);
-      ASSERT_EQ(cr.r, cf.r);
-      ASSERT_EQ(cr.depth, cf.depth);
-      ASSERT_EQ(cr.material, cf.material);
-    }
+    bool hr = false;
+    ASSERT_TRUE(same_contact(tooth, c, tip, gr, gf, &hr)) << "tick " << t;
+    contacts += hr ? 1 : 0;
   }
   std::printf("%zu ticks, %ld in contact, %ld queries certified, %ld searched\n", path.size(),
               contacts, certificate.certified(), certificate.evaluated());
@@ -373,6 +401,291 @@ TEST(FastSignedDistance, CertificateKeepsTheContactsOnAnApproachAndRetreat) {
   EXPECT_EQ(unsafe, 0);
   EXPECT_GT(contacts, 200);
   EXPECT_GT(certificate.certified(), 1000);
+}
+
+// ---- The local query (LocalVoxelDistance) ------------------------------------------------------
+
+// Removes voxel (i, j, k) as drill_tick does (the octree, then the local codes); true if it was
+// solid.
+bool remove_as_drilling(VoxelTooth* tooth, std::size_t v, std::vector<std::size_t>* removed) {
+  const std::size_t n = static_cast<std::size_t>(tooth->grid().n);
+  const int i = static_cast<int>(v % n), j = static_cast<int>((v / n) % n);
+  const int k = static_cast<int>(v / (n * n));
+  if (tooth->octree.remove_voxel(i, j, k) == kEmpty) return false;
+  reencode_local(tooth->octree.grid(), i, j, k, &tooth->codes);
+  removed->push_back(v);
+  return true;
+}
+
+struct LocalAgreement {
+  long outside = 0, answered = 0, found = 0, mismatches = 0;
+};
+
+// One outside query by the local search against the reference's: when it answers, everything
+// bitwise equal (phi, found, nearest, voxel, and the squared distance outside_distance reports).
+void compare_local(const VoxelTooth& tooth, const fast::LocalVoxelDistance& local, const Vec3& x,
+                   double reach, LocalAgreement* a) {
+  int idx[3];
+  const VoxelGrid& g = tooth.grid();
+  if (sdf_detail::voxel_of(g, x, idx) && g.solid(idx[0], idx[1], idx[2])) return;  // inside
+  ++a->outside;
+  const SignedDistance want = signed_distance(tooth, x, reach);
+  double want2;
+  fast::signed_distance(tooth, x, reach, &want2);
+  SignedDistance got;
+  double got2 = -7.0;
+  if (!local.outside(x, reach, &got, &got2)) return;
+  ++a->answered;
+  if (want.found) ++a->found;
+  if (want.phi != got.phi || want.found != got.found || want.nearest != got.nearest ||
+      want.voxel != got.voxel || want2 != got2) {
+    ++a->mismatches;
+    ADD_FAILURE() << "phi " << want.phi << " vs " << got.phi << ", voxel " << want.voxel << " vs "
+                  << got.voxel << " at " << x.transpose() << " reach " << reach;
+  }
+}
+
+// ~count queries about `tooth`: random walks of small steps from points near its surface voxels
+// (the proxy's pattern: the kept voxel is the next query's first candidate), jumps, points far
+// from it, some moved onto a grid plane or a few ulps from one; reaches from 0.2 h to 16 h, 2 rho
+// and rho + 12 h (the certificate's widened reach).
+// `surface`: the tooth's exposed voxels.
+LocalAgreement random_local_queries(const VoxelTooth& tooth, const fast::LocalVoxelDistance& local,
+                                    const std::vector<std::size_t>& surface, int count,
+                                    unsigned seed) {
+  const VoxelGrid& g = tooth.grid();
+  const double h = g.voxel_size, side = h * g.n, rho = 0.5e-3;
+  std::mt19937_64 rng(seed);
+  std::uniform_int_distribution<std::size_t> pick(0, surface.size() - 1);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0), far(-0.2 * side, 1.2 * side);
+  std::uniform_real_distribution<double> dist(0.0, 3.0 * rho), reach(0.2 * h, 16.0 * h);
+  std::normal_distribution<double> walk(0.0, 0.3 * h);
+  const std::size_t n = static_cast<std::size_t>(g.n);
+  LocalAgreement a;
+  Vec3 x = Vec3::Zero();
+  for (int q = 0; q < count; ++q) {
+    if (q % 16 == 0) {  // a jump: near a surface voxel, or anywhere about the grid
+      const std::size_t v = surface[pick(rng)];
+      const Vec3 d(unit(rng), unit(rng), unit(rng));
+      x = (q % 64 == 32) ? Vec3(g.origin + Vec3(far(rng), far(rng), far(rng)))
+                         : Vec3(g.center(static_cast<int>(v % n), static_cast<int>((v / n) % n),
+                                         static_cast<int>(v / (n * n))) +
+                                dist(rng) * d.normalized());
+    } else {
+      x += Vec3(walk(rng), walk(rng), walk(rng));
+    }
+    Vec3 y = x;
+    if (q % 8 == 5) {  // onto a plane origin + h i of one axis, or an ulp beside it
+      const int axis = q % 3;
+      const double p = g.origin[axis] + h * std::floor((y[axis] - g.origin[axis]) / h);
+      y[axis] = (q / 8) % 3 == 0 ? p : std::nextafter(p, (q / 8) % 3 == 1 ? 1.0 : -1.0);
+    }
+    const double r = q % 5 == 0 ? 2.0 * rho : q % 5 == 1 ? rho + 12.0 * h : reach(rng);
+    compare_local(tooth, local, y, r, &a);
+  }
+  return a;
+}
+
+// Before and after removals: `batches` of random exposed voxels removed (drill_tick's way), the
+// bits updated, queries after each.
+void local_query_agrees(VoxelTooth* tooth, const char* what, int count, int batches) {
+  SCOPED_TRACE(what);
+  fast::SurfaceVoxels surface(*tooth);
+  const fast::LocalVoxelDistance local(*tooth, surface);
+  LocalAgreement total;
+  auto add = [&total](const LocalAgreement& a) {
+    total.outside += a.outside;
+    total.answered += a.answered;
+    total.found += a.found;
+    total.mismatches += a.mismatches;
+  };
+  const VoxelGrid& g = tooth->grid();
+  auto exposed_voxels = [&g, tooth] {
+    std::vector<std::size_t> out;
+    for (std::size_t v = 0; v < g.voxels.size(); ++v) {
+      if (tooth->codes.code(v) != 0) out.push_back(v);
+    }
+    return out;
+  };
+  std::vector<std::size_t> exposed = exposed_voxels();
+  add(random_local_queries(*tooth, local, exposed, count, 46));
+  std::mt19937_64 rng(4646);
+  long removed_total = 0;
+  for (int batch = 0; batch < batches; ++batch) {
+    std::vector<std::size_t> removed;
+    std::shuffle(exposed.begin(), exposed.end(), rng);
+    // A drilled pit (a ball of 6 voxels' radius about an exposed voxel) and scattered voxels.
+    const int n = g.n;
+    const std::size_t c = exposed.front();
+    const int ci = static_cast<int>(c % g.n), cj = static_cast<int>((c / g.n) % g.n);
+    const int ck = static_cast<int>(c / (static_cast<std::size_t>(n) * n));
+    for (int k = std::max(0, ck - 6); k <= std::min(n - 1, ck + 6); ++k) {
+      for (int j = std::max(0, cj - 6); j <= std::min(n - 1, cj + 6); ++j) {
+        for (int i = std::max(0, ci - 6); i <= std::min(n - 1, ci + 6); ++i) {
+          if ((i - ci) * (i - ci) + (j - cj) * (j - cj) + (k - ck) * (k - ck) < 36) {
+            remove_as_drilling(tooth, g.index(i, j, k), &removed);
+          }
+        }
+      }
+    }
+    for (std::size_t r = 1; r < exposed.size() && r <= exposed.size() / 20; ++r) {
+      remove_as_drilling(tooth, exposed[r], &removed);
+    }
+    {
+      testing::AllocationScope scope;
+      ASSERT_TRUE(surface.update(*tooth, removed));
+      EXPECT_EQ(scope.count(), 0);
+    }
+    removed_total += static_cast<long>(removed.size());
+    exposed = exposed_voxels();
+    add(random_local_queries(*tooth, local, exposed, count, 47 + static_cast<unsigned>(batch)));
+  }
+  std::printf("%s: %ld outside queries, %ld answered locally (%ld found), %ld mismatches; %ld "
+              "voxels removed; %ld voxels tested, %.1f a query\n",
+              what, total.outside, total.answered, total.found, total.mismatches, removed_total,
+              local.voxels_tested(),
+              static_cast<double>(local.voxels_tested()) / static_cast<double>(local.queries()));
+  EXPECT_EQ(total.mismatches, 0);
+  EXPECT_EQ(local.queries(), total.outside);
+  // Declined: the points put on or an ulp beside a plane (1 in 8), and only those.
+  EXPECT_GT(total.answered, total.outside * 5 / 6);
+  EXPECT_GT(total.found, total.answered / 3);  // signal: most queries near the surface find one
+  EXPECT_LT(total.found, total.answered);
+}
+
+TEST(LocalVoxelDistance, EqualsTheReferenceOnTheMolarAt64To512BeforeAndAfterRemovals) {
+  const int resolutions[] = {64, 128, 256, 512};
+  for (const int n : resolutions) {
+    VoxelTooth tooth(voxelize_procedural_molar(MolarParams{}, n));
+    local_query_agrees(&tooth, ("molar " + std::to_string(n)).c_str(), n == 512 ? 3000 : 2500,
+                       n == 512 ? 1 : 3);
+  }
+}
+
+// The real molar mesh of ../shared/data, 11 mm tall, voxelised at n^3; false when it is absent.
+bool molar_mesh_tooth(int n, std::unique_ptr<VoxelTooth>* out) {
+  const std::string file = std::string(DENTSIM_SOURCE_DIR) + "/../shared/data/molar-cc0.stl";
+  if (!std::filesystem::exists(file)) return false;
+  LoadedMesh mesh = load_mesh(file);
+  scale_mesh(mesh.mesh, scale_for_size(mesh.mesh, 11e-3));
+  VoxelizeOptions voxelize;
+  voxelize.resolution = n;
+  *out = std::make_unique<VoxelTooth>(voxelize_mesh(mesh.mesh, voxelize));
+  return true;
+}
+
+TEST(LocalVoxelDistance, EqualsTheReferenceOnAMeshAt64To256BeforeAndAfterRemovals) {
+  for (const int n : {64, 128, 256}) {
+    std::unique_ptr<VoxelTooth> tooth;
+    if (!molar_mesh_tooth(n, &tooth)) GTEST_SKIP() << "../shared/data/molar-cc0.stl absent";
+    local_query_agrees(tooth.get(), ("mesh " + std::to_string(n)).c_str(), 2000, 2);
+  }
+}
+
+// Ties: points on voxel corners, edges and face centres above the crown (on planes of the grid:
+// the local query declines them; on planes beyond the grid's top it may answer) and a hair off
+// them (1e-4 h: near ties, answered).
+TEST(LocalVoxelDistance, DeclinesGridPlanesAndDecidesNearTiesAlike) {
+  auto rig = molar_rig();
+  const VoxelTooth& tooth = *rig->tooth;
+  const VoxelGrid& g = tooth.grid();
+  const double h = g.voxel_size;
+  const fast::SurfaceVoxels surface(tooth);
+  const fast::LocalVoxelDistance local(tooth, surface);
+  LocalAgreement on, beyond, off;
+  for (int i = -20; i <= 20; ++i) {
+    for (int k = -5; k <= 25; ++k) {
+      const Vec3 corner = g.origin + h * Vec3(std::floor((rig->anchor.x() - g.origin.x()) / h) + i,
+                                              std::floor((rig->anchor.y() - g.origin.y()) / h),
+                                              std::floor((rig->anchor.z() - g.origin.z()) / h) + k);
+      for (const Vec3& x : {corner, Vec3(corner + Vec3(0.5 * h, 0, 0)),
+                            Vec3(corner + Vec3(0.5 * h, 0.5 * h, 0))}) {
+        const Vec3 u = x - g.origin;
+        const bool in_grid = u.minCoeff() >= 0.0 && u.maxCoeff() <= h * g.n;
+        compare_local(tooth, local, x, 2e-3, in_grid ? &on : &beyond);
+        compare_local(tooth, local, x + Vec3(1e-4 * h, 2e-4 * h, 3e-4 * h), 2e-3, &off);
+      }
+    }
+  }
+  EXPECT_EQ(on.answered, 0);
+  EXPECT_GT(on.outside, 1000);
+  EXPECT_EQ(beyond.mismatches, 0);
+  EXPECT_EQ(off.mismatches, 0);
+  EXPECT_EQ(off.answered, off.outside);
+  EXPECT_GT(off.found, 1000);
+}
+
+// The proxy on the local query (with the certificate, as SdfContactProvider runs it): the scripted
+// approach, press, slide, a pit drilled under the tip (drill_tick's way, the bits kept current),
+// a press into it and a retreat; at every tick g and the contact bitwise the reference proxy's.
+TEST(LocalVoxelDistance, SurfaceProxyFollowsTheReferenceWhileAPitIsDrilled) {
+  auto rig = molar_rig();
+  VoxelTooth& tooth = *rig->tooth;
+  const VoxelGrid& g = tooth.grid();
+  const double rho = 0.5e-3, h = g.voxel_size;
+  const Vec3 top = crown_top(*rig);
+  std::vector<Vec3> path;
+  auto go = [&path](const Vec3& to, int ticks) { extend_path(&path, to, ticks); };
+  path.push_back(top + Vec3(0.3e-3, 0.2e-3, 6e-3));
+  go(top + Vec3(0.3e-3, 0.2e-3, rho + 1e-3), 250);      // approach
+  go(top + Vec3(0.0, 0.0, rho - 0.4e-3), 100);          // press
+  go(top + Vec3(-0.5e-3, 0.1e-3, rho - 0.4e-3), 100);   // slide
+  const std::size_t drill_from = path.size();
+  go(top + Vec3(0.0, 0.0, rho - 1.2e-3), 300);          // into the pit as it is drilled
+  const std::size_t drill_to = path.size();
+  go(top + Vec3(0.6e-3, -0.3e-3, rho - 1.0e-3), 200);   // sideways in it
+  go(top + Vec3(0.5e-3, -0.3e-3, rho + 5e-3), 300);     // retreat
+  SurfaceProxy ref(rho, h), fst(rho, h, &fast::signed_distance);
+  fast::SurfaceVoxels surface(tooth);
+  const fast::LocalVoxelDistance local(tooth, surface);
+  fast::FreeSpaceCertificate certificate;
+  const ToolTip tip{rho, Vec3::Zero()};
+  long contacts = 0, removed_total = 0, allocations = 0;
+  std::vector<std::size_t> removed;
+  removed.reserve(g.voxels.size());
+  for (std::size_t t = 0; t < path.size(); ++t) {
+    const Vec3& c = path[t];
+    const Vec3 gr = ref.update(tooth, c);
+    Vec3 gf;
+    {
+      testing::AllocationScope scope;
+      gf = fst.update_on(fast::RecallingVoxelSolid(tooth, &certificate, &local), c);
+      allocations += scope.count();
+    }
+    ASSERT_EQ(gr, gf) << "tick " << t;
+    bool hr = false;
+    ASSERT_TRUE(same_contact(tooth, c, tip, gr, gf, &hr)) << "tick " << t;
+    contacts += hr ? 1 : 0;
+    if (t >= drill_from && t < drill_to && hr) {
+      // The voxels whose centre lies within rho + h of g (a crude bur), a tick at a time.
+      removed.clear();
+      const int span = static_cast<int>(rho / h) + 3;
+      const int lo[3] = {static_cast<int>((gr.x() - g.origin.x()) / h) - span,
+                         static_cast<int>((gr.y() - g.origin.y()) / h) - span,
+                         static_cast<int>((gr.z() - g.origin.z()) / h) - span};
+      for (int k = lo[2]; k <= lo[2] + 2 * span; ++k) {
+        for (int j = lo[1]; j <= lo[1] + 2 * span; ++j) {
+          for (int i = lo[0]; i <= lo[0] + 2 * span; ++i) {
+            if (g.solid(i, j, k) && (g.center(i, j, k) - gr).norm() < rho + h) {
+              remove_as_drilling(&tooth, g.index(i, j, k), &removed);
+            }
+          }
+        }
+      }
+      ASSERT_TRUE(surface.update(tooth, removed));
+      removed_total += static_cast<long>(removed.size());
+    }
+  }
+  std::printf("%zu ticks, %ld in contact, %ld voxels removed; %ld certified, %ld searched, %ld "
+              "local (%ld declined), %.1f voxels tested a local query\n",
+              path.size(), contacts, removed_total, certificate.certified(),
+              certificate.evaluated(), local.queries(), local.fallbacks(),
+              static_cast<double>(local.voxels_tested()) / static_cast<double>(local.queries()));
+  EXPECT_EQ(allocations, 0);
+  EXPECT_GT(contacts, 500);
+  EXPECT_GT(removed_total, 100);
+  EXPECT_EQ(local.queries(), certificate.evaluated());
+  EXPECT_LT(local.fallbacks(), local.queries() / 100);
 }
 
 }  // namespace
