@@ -123,6 +123,96 @@ TEST(FastDecomposition, FeedforwardAgreesWithTheReference) {
   std::printf("fast vs reference feed-forward: worst relative error %.2e\n", worst);
 }
 
+// M1 = J1^T M J1 (fast/decomposition.h inertia_at_tool) against the reference's (J1^T M) J1: each
+// entry within the derived bound 2 (2 gamma_6 + gamma_6^2) (|J1|^T |M| |J1|)(i, j) < 25 u
+// (|J1|^T |M| |J1|)(i, j), u = 2^-53, and exactly symmetric. J1 the inverse of the Phantom's J_t at
+// random joint states (the tick's own) and random matrices; M the Phantom's mass matrix there and
+// random SPD matrices of condition up to 1e6.
+TEST(FastDecomposition, InertiaAtToolAgreesWithTheReferenceWithinItsRoundOffBound) {
+  constexpr unsigned kSeed = 46030;
+  Rng rng(kSeed);
+  const fast::PhantomModel device(default_phantom_params());
+  const double u = std::ldexp(1.0, -53);
+  double worst = 0.0;  // |got - ref| / (u (|J1|^T |M| |J1|)(i, j)), largest over every entry
+  int nonzero = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    SCOPED_TRACE("seed " + std::to_string(kSeed) + " trial " + std::to_string(trial));
+    Mat6 J1, M;
+    if (trial % 2 == 0) {
+      Vec6 q, qd = Vec6::Zero();
+      for (int i = 0; i < 6; ++i) q(i) = uni(rng, -0.8, 0.8);
+      DeviceTerms t;
+      device.terms(q, qd, false, t);
+      J1 = t.J_t.inverse();
+      M = t.M;
+    } else {
+      J1 = random_matrix(rng) * std::pow(10.0, uni(rng, -2.0, 2.0));
+      M = random_spd(rng, 1e-4, 1e2);
+    }
+    ASSERT_TRUE(J1.allFinite());
+    Mat6 got;
+    fast::inertia_at_tool(J1, M, &got);
+    const Mat6 ref = J1.transpose() * M * J1;
+    const Mat6 scale = J1.cwiseAbs().transpose() * M.cwiseAbs() * J1.cwiseAbs();
+    for (int j = 0; j < 6; ++j) {
+      for (int i = 0; i < 6; ++i) {
+        EXPECT_EQ(got(i, j), got(j, i));
+        const double e = std::abs(got(i, j) - ref(i, j));
+        EXPECT_LE(e, 25.0 * u * scale(i, j)) << "entry " << i << "," << j;
+        worst = std::max(worst, e / (u * scale(i, j)));
+        nonzero += got(i, j) != 0.0 ? 1 : 0;
+      }
+    }
+  }
+  EXPECT_EQ(nonzero, 4000 * 36);  // signal guard: no entry is a zero compared against a zero
+  std::printf("inertia_at_tool vs (J1^T M) J1: worst %.2f u of |J1|^T |M| |J1| (bound 25)\n",
+              worst);
+}
+
+// The isotropic proxy's path (J = j I, every scene's) against the general path on the same
+// inputs: J = j I + a perturbation of 1e-300 off the diagonal takes the general path, which
+// differs only in Q^T J Q's round-off (order eps j): outputs within 1e-12 relative to their scale.
+TEST(FastDecomposition, IsotropicProxyPathAgreesWithTheGeneralPath) {
+  constexpr unsigned kSeed = 46031;
+  Rng rng(kSeed);
+  double worst = 0.0;
+  for (int trial = 0; trial < 500; ++trial) {
+    SCOPED_TRACE("seed " + std::to_string(kSeed) + " trial " + std::to_string(trial));
+    const Mat6 M1 = random_spd(rng, 1e-2, 1e2);
+    ProxyParams iso;
+    iso.mass = std::pow(10.0, uni(rng, -3.0, 0.0));
+    iso.inertia = Mat3::Identity() * std::pow(10.0, uni(rng, -6.0, -4.0));
+    ProxyParams general = iso;
+    general.inertia(0, 1) = general.inertia(1, 0) = 1e-300;
+    const ToolDynamics tool = tool_preset(tool_preset_names()[trial % tool_preset_names().size()]);
+    const Mat3 R1 = random_rotation(rng), R2 = random_rotation(rng);
+    Vec6 V1, F1_hat;
+    for (int i = 0; i < 6; ++i) V1(i) = uni(rng, -1.0, 1.0), F1_hat(i) = uni(rng, -5.0, 5.0);
+    AffineWrench F2;
+    if (trial % 2 != 0) {
+      for (int i = 0; i < 6; ++i) F2.f0(i) = uni(rng, -5.0, 5.0);
+      F2.G = -random_spd(rng, 1e-2, 1e4);
+    }
+    PdFeedforward a, b;
+    ASSERT_TRUE(fast::pd_feedforward_diagonal(M1, iso, tool, R1, R2, V1, F1_hat, F2, &a));
+    ASSERT_TRUE(fast::pd_feedforward_diagonal(M1, general, tool, R1, R2, V1, F1_hat, F2, &b));
+    const double s0 = std::max({b.T1.f0.cwiseAbs().maxCoeff(), b.T2.f0.cwiseAbs().maxCoeff(),
+                                F1_hat.cwiseAbs().maxCoeff()});
+    const double sG = std::max({b.T1.G.cwiseAbs().maxCoeff(), b.T2.G.cwiseAbs().maxCoeff(),
+                                F2.G.cwiseAbs().maxCoeff()});
+    ASSERT_GT(s0, 1e-3);  // signal guard
+    const double errs[] = {(a.T1.f0 - b.T1.f0).cwiseAbs().maxCoeff() / s0,
+                           (a.T2.f0 - b.T2.f0).cwiseAbs().maxCoeff() / s0,
+                           (a.T1.G - b.T1.G).cwiseAbs().maxCoeff() / std::max(sG, 1e-300),
+                           (a.T2.G - b.T2.G).cwiseAbs().maxCoeff() / std::max(sG, 1e-300)};
+    for (const double e : errs) {
+      EXPECT_LE(e, 1e-12);
+      worst = std::max(worst, e);
+    }
+  }
+  std::printf("isotropic vs general proxy path: worst relative difference %.2e\n", worst);
+}
+
 TEST(FastDecomposition, LockedInertiaNotPositiveDefiniteFailsAsTheReference) {
   Mat6 M1 = Mat6::Identity();
   M1(0, 0) = -10.0;  // M_L = M1 + E^T M2 E not positive definite
