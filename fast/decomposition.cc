@@ -5,6 +5,18 @@
 
 namespace dentsim::fast {
 
+void inertia_at_tool(const Mat6& J1, const Mat6& M, Mat6* M1) {
+  Mat6 MJ;
+  MJ.noalias() = M * J1;
+  for (int j = 0; j < 6; ++j) {
+    for (int i = 0; i <= j; ++i) {
+      const double v = J1.col(i).dot(MJ.col(j));
+      (*M1)(i, j) = v;
+      (*M1)(j, i) = v;
+    }
+  }
+}
+
 bool pd_tool_is_diagonal(const ToolDynamics& tool) {
   for (int c = 0; c < 6; ++c) {
     for (int r = 0; r < 6; ++r) {
@@ -24,13 +36,24 @@ bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const Too
   const Mat3 Q = R2.transpose() * R1;  // E = diag(I, Q)
   const Mat3 Qt = Q.transpose();
   // N = E^T M2 E = diag(m I, Q^T J Q), symmetrised as the reference symmetrises M_L   (3.3)
-  const Mat3 QtJ = Qt * J;  // E^T M2 = diag(m I, Q^T J)
-  const Mat3 Jq = QtJ * Q;
-  const Mat3 Jqs = 0.5 * (Jq + Jq.transpose());
+  // J = j I: Q^T J Q = j I exactly (the general path's product carries round-off off it), and
+  // Q^T J = j Q^T, J (Q W) = j (Q W) (bitwise the general path's: the zeros add nothing).
+  const bool isotropic = J(0, 1) == 0.0 && J(0, 2) == 0.0 && J(1, 0) == 0.0 && J(1, 2) == 0.0 &&
+                         J(2, 0) == 0.0 && J(2, 1) == 0.0 && J(1, 1) == J(0, 0) &&
+                         J(2, 2) == J(0, 0);
+  const double j = J(0, 0);
+  Mat3 QtJ;  // E^T M2 = diag(m I, Q^T J)
   const Mat6 M1s = 0.5 * (M1 + M1.transpose());
   Mat6 M_L = M1s;  // M_L = M1 + N
   M_L.diagonal().head<3>().array() += m;
-  M_L.bottomRightCorner<3, 3>() += Jqs;
+  if (isotropic) {
+    QtJ = j * Qt;
+    M_L.diagonal().tail<3>().array() += j;
+  } else {
+    QtJ.noalias() = Qt * J;
+    const Mat3 Jq = QtJ * Q;
+    M_L.bottomRightCorner<3, 3>() += 0.5 * (Jq + Jq.transpose());
+  }
   Llt6 L;
   if (!cholesky6(M_L, &L)) return false;  // fast/dense6.h
   // P = phi E^T = M_L^-1 N E^T = M_L^-1 diag(m I, Q^T J)
@@ -64,7 +87,11 @@ bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const Too
   // T2 + F2 = E phi^T X = E N M_L^-1 X = diag(m I, J Q) W
   const Mat37 QW = Q * W.bottomRows<3>();
   Mat37 T2w;
-  T2w.noalias() = J * QW;
+  if (isotropic) {
+    T2w = j * QW;
+  } else {
+    T2w.noalias() = J * QW;
+  }
   out->T2.f0.head<3>() = m * W.col(0).head<3>() - F2.f0.head<3>();
   out->T2.f0.tail<3>() = T2w.col(0) - F2.f0.tail<3>();
   out->T2.G.topRows<3>() = m * W.topRightCorner<3, 6>() - F2.G.topRows<3>();

@@ -5,6 +5,8 @@
 // Structure used (every tool preset and scene has it; anything else takes the reference's path):
 //   E = diag(I, Q), Q = R2^T R1:        E^T x = [x_v; Q^T x_w], E y = [y_v; Q y_w] (3x3 blocks)
 //   E^T M2 E = diag(m I, Q^T J Q):      no 6x6 products with the proxy inertia M2 = diag(m I, J)
+//   J = j I (isotropic, every scene's): Q^T J Q = j I and J Q W = j (Q W), no 3x3 product with J
+//                                       (the reference's Q^T J Q carries round-off off j I: eps j)
 //   M_d, D_d diagonal:                  M_d^-1 and D_d scale rows
 // and X is never formed: with phi = M_L^-1 N (N = E^T M2 E) and X = M_L M_d^-1 B,
 //   (I - phi^T) X = (M_L - N) M_L^-1 X = M1 W,   E phi^T X = E N M_L^-1 X = diag(m I, J Q) W,
@@ -19,6 +21,16 @@
 #include "reference/decomposition.h"
 
 namespace dentsim::fast {
+
+// M1 = J1^T M J1 (2.2), the device's inertia at the tool, for a symmetric M: the upper triangle
+// as dot products of J1's columns with M J1's (one 6x6 product and 21 dot products instead of two
+// 6x6 products), mirrored, so M1 is exactly symmetric. The reference forms (J1^T M) J1; in exact
+// arithmetic the two are equal, and each computed entry is within (2 gamma_6 + gamma_6^2)
+// (|J1|^T |M| |J1|)(i, j) of it (a 6-term dot product of a 6-term dot product, gamma_6 = 6 u /
+// (1 - 6 u), u = 2^-53, any summation order), so the two differ entrywise by at most
+// 2 (2 gamma_6 + gamma_6^2) (|J1|^T |M| |J1|)(i, j) < 25 u (|J1|^T |M| |J1|)(i, j)
+// (tests/fast/decomposition_test.cc). No allocation, no throw.
+void inertia_at_tool(const Mat6& J1, const Mat6& M, Mat6* M1);
 
 // True when M_d and D_d are diagonal (the specialised path applies).
 bool pd_tool_is_diagonal(const ToolDynamics& tool);

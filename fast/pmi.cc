@@ -5,11 +5,12 @@
 #include "fast/dense6.h"
 
 #include "reference/pmi.h"
+#include "reference/tick_detail.h"
 
 namespace dentsim::fast {
 
 bool pmi_try_solve(const PmiSystem& sys, Vec6* V_hat) {
-  if (!sys.A.allFinite() || !sys.b.allFinite()) return false;
+  if (!reference::detail::all_finite(sys.A, sys.b)) return false;
   const Vec6 d = pmi_scaling(sys.A);  // the reference's scaling (reference/pmi.h)
   const Mat6 As = d.asDiagonal() * sys.A * d.asDiagonal();
   Lu6 lu;  // fast/dense6.h
@@ -19,7 +20,7 @@ bool pmi_try_solve(const PmiSystem& sys, Vec6* V_hat) {
   Vec6 x;
   lu6_solve(lu, d.cwiseProduct(sys.b), &x);
   *V_hat = d.cwiseProduct(x);
-  return V_hat->allFinite();
+  return reference::detail::all_finite(*V_hat);
 }
 
 }  // namespace dentsim::fast

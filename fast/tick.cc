@@ -59,11 +59,12 @@ void unneeded_decomposition(const PipelineModel& m, PipelineData& d) {
 bool pd_step(const PipelineModel& m, PipelineData& d) {
   if (!m.tool_diagonal) return reference::detail::pd_step(m, d);
   const TickResult& r = d.r;
-  const Mat6 M_joint = reference::detail::model_joint_inertia(m, d, d.dev.M);
-  Mat6 JM;
-  JM.noalias() = d.J1.transpose() * M_joint;
-  Mat6 M1;
-  M1.noalias() = JM * d.J1;  // J1^T M J1 (2.2)
+  Mat6 M1;  // J1^T M J1 (2.2), M under the hypothesis in force (model_joint_inertia)
+  if (m.grasp && d.grip.gripped) {
+    inertia_at_tool(d.J1, reference::detail::model_joint_inertia(m, d, d.dev.M), &M1);
+  } else {
+    inertia_at_tool(d.J1, d.dev.M, &M1);
+  }
   PdFeedforward pd;
   if (!pd_feedforward_diagonal(M1, m.proxy, m.tool, r.device.R, d.proxy.pose.R, r.V1, r.F1_hat,
                                d.contact, &pd)) {

@@ -291,14 +291,12 @@ TickStatus detail::device_terms_with(const PipelineModel& m, PipelineData& d,
   // One pass of the device model: x1, R1, J_t (V1 = J_t qd), M, C^T qd, g, tau_f   (2.1), (2.2)
   DeviceTerms& t = d.dev;
   m.device->terms(d.q, d.qd, m.grasp, t);
-  if (!t.pose.x.allFinite() || !t.pose.R.allFinite() || !t.J_t.allFinite() ||
-      !t.J_t_dot.allFinite() || !t.M.allFinite() || !t.CTqd.allFinite() || !t.g.allFinite() ||
-      !t.tau_f.allFinite()) {
+  if (!all_finite(t.pose.x, t.pose.R, t.J_t, t.J_t_dot, t.M, t.CTqd, t.g, t.tau_f)) {
     return TickStatus::kDeviceModelFailure;
   }
   // J1 = J_t^-1 (2.2): the one inverse a tick needs (observer wrench, device inertia).
   invert(m, t.J_t, d);
-  if (!d.J1.allFinite()) return TickStatus::kDeviceModelFailure;
+  if (!all_finite(d.J1)) return TickStatus::kDeviceModelFailure;
   d.r.device = t.pose;
   d.r.V1.noalias() = t.J_t * d.qd;  // V1 = J_t qd                                   (2.2)
   if (m.grasp) grasp_mass_terms(m.grasp_mass.Mt, t, d.r.V1, &d.M_hand, &d.CTqd_hand);

@@ -6,6 +6,17 @@
 
 namespace dentsim::reference::detail {
 
+// True when every entry of every argument is finite: the same answer as each one's allFinite(),
+// in one multiply and one add an entry (vectorised) where allFinite() compares and branches on
+// each. x * 0 is +-0 for a finite x and NaN for an infinite or NaN one, and a sum of signed zeros
+// is a zero, so the sum is zero exactly when every entry is finite.
+template <typename... Ms>
+inline bool all_finite(const Ms&... ms) {
+  double zeros = 0.0;
+  ((zeros += (ms.array() * 0.0).sum()), ...);
+  return zeros == 0.0;
+}
+
 // The device's joint-space inertia under the hypothesis in force of the grip detector: M, plus the
 // hand's M_hand while the hand is judged on the tool (grasp on). The one place that picks it: the
 // encoder Kalman filter, the loop-lag compensation and both twins' decomposition read it here.

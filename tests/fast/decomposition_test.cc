@@ -50,21 +50,27 @@ Mat6 random_spd(Rng& rng, double lo, double hi) {
   return U * e.asDiagonal() * U.transpose();
 }
 
+// A proxy of mass 1 g - 1 kg and inertia 1e-6 - 1e-4 kg m^2, isotropic (j I) or general (SPD).
+ProxyParams random_proxy(Rng& rng, bool isotropic) {
+  ProxyParams proxy;
+  proxy.mass = std::pow(10.0, uni(rng, -3.0, 0.0));
+  if (isotropic) {
+    proxy.inertia = Mat3::Identity() * std::pow(10.0, uni(rng, -6.0, -4.0));
+  } else {
+    const Mat6 S = random_spd(rng, 1e-6, 1e-4);
+    proxy.inertia = S.topLeftCorner<3, 3>();
+  }
+  return proxy;
+}
+
 TEST(FastDecomposition, FeedforwardAgreesWithTheReference) {
   constexpr unsigned kSeed = 30038;
   Rng rng(kSeed);
-  double worst = 0.0;
+  double worst = 0.0, worst_isotropic = 0.0;
   for (int trial = 0; trial < 2000; ++trial) {
     SCOPED_TRACE("seed " + std::to_string(kSeed) + " trial " + std::to_string(trial));
     const Mat6 M1 = random_spd(rng, 1e-2, 1e2);
-    ProxyParams proxy;
-    proxy.mass = std::pow(10.0, uni(rng, -3.0, 0.0));
-    if (trial % 2 == 0) {
-      proxy.inertia = Mat3::Identity() * std::pow(10.0, uni(rng, -6.0, -4.0));
-    } else {
-      const Mat6 S = random_spd(rng, 1e-6, 1e-4);
-      proxy.inertia = S.topLeftCorner<3, 3>();
-    }
+    const ProxyParams proxy = random_proxy(rng, trial % 2 == 0);
     ToolDynamics tool;
     if (trial % 3 == 0) {
       tool = tool_preset(tool_preset_names()[(trial / 3) % tool_preset_names().size()]);
@@ -93,6 +99,23 @@ TEST(FastDecomposition, FeedforwardAgreesWithTheReference) {
     const PdFeedforward ref = pd_feedforward(dec, Md_llt, tool.D_d, V1, F1_hat, F2);
     PdFeedforward got;
     ASSERT_TRUE(fast::pd_feedforward_diagonal(M1, proxy, tool, R1, R2, V1, F1_hat, F2, &got));
+    if (trial % 2 == 0) {
+      // The isotropic proxy's path (J = j I) against the general path on the same inputs (J
+      // perturbed by 1e-300 off the diagonal): they differ only by the general path's round-off
+      // of Q^T J Q off j I (order eps j): within 1e-12 of the outputs' scale.
+      ProxyParams general = proxy;
+      general.inertia(0, 1) = general.inertia(1, 0) = 1e-300;
+      PdFeedforward g;
+      ASSERT_TRUE(fast::pd_feedforward_diagonal(M1, general, tool, R1, R2, V1, F1_hat, F2, &g));
+      const double s = std::max({g.T1.f0.cwiseAbs().maxCoeff(), g.T2.f0.cwiseAbs().maxCoeff(),
+                                 g.T1.G.cwiseAbs().maxCoeff(), g.T2.G.cwiseAbs().maxCoeff()});
+      const double e = std::max({(got.T1.f0 - g.T1.f0).cwiseAbs().maxCoeff(),
+                                 (got.T2.f0 - g.T2.f0).cwiseAbs().maxCoeff(),
+                                 (got.T1.G - g.T1.G).cwiseAbs().maxCoeff(),
+                                 (got.T2.G - g.T2.G).cwiseAbs().maxCoeff()});
+      EXPECT_LE(e, 1e-12 * s);
+      worst_isotropic = std::max(worst_isotropic, e / s);
+    }
 
     // Each output is a difference, T1 = (I - phi^T) X - F1_hat and T2 = E phi^T X - F2, which
     // cancels where phi is near I: its scale is that of the terms summed (item 2), |X| (1 +
@@ -121,6 +144,54 @@ TEST(FastDecomposition, FeedforwardAgreesWithTheReference) {
     }
   }
   std::printf("fast vs reference feed-forward: worst relative error %.2e\n", worst);
+  std::printf("isotropic vs general proxy path: worst relative difference %.2e\n",
+              worst_isotropic);
+}
+
+// M1 = J1^T M J1 (fast/decomposition.h inertia_at_tool) against the reference's (J1^T M) J1: each
+// entry within the derived bound 2 (2 gamma_6 + gamma_6^2) (|J1|^T |M| |J1|)(i, j) < 25 u
+// (|J1|^T |M| |J1|)(i, j), u = 2^-53, and exactly symmetric. J1 the inverse of the Phantom's J_t at
+// random joint states (the tick's own) and random matrices; M the Phantom's mass matrix there and
+// random SPD matrices of condition up to 1e6.
+TEST(FastDecomposition, InertiaAtToolAgreesWithTheReferenceWithinItsRoundOffBound) {
+  constexpr unsigned kSeed = 46030;
+  Rng rng(kSeed);
+  const fast::PhantomModel device(default_phantom_params());
+  const double u = std::ldexp(1.0, -53);
+  double worst = 0.0;  // |got - ref| / (u (|J1|^T |M| |J1|)(i, j)), largest over every entry
+  int nonzero = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    SCOPED_TRACE("seed " + std::to_string(kSeed) + " trial " + std::to_string(trial));
+    Mat6 J1, M;
+    if (trial % 2 == 0) {
+      Vec6 q, qd = Vec6::Zero();
+      for (int i = 0; i < 6; ++i) q(i) = uni(rng, -0.8, 0.8);
+      DeviceTerms t;
+      device.terms(q, qd, false, t);
+      J1 = t.J_t.inverse();
+      M = t.M;
+    } else {
+      J1 = random_matrix(rng) * std::pow(10.0, uni(rng, -2.0, 2.0));
+      M = random_spd(rng, 1e-4, 1e2);
+    }
+    ASSERT_TRUE(J1.allFinite());
+    Mat6 got;
+    fast::inertia_at_tool(J1, M, &got);
+    const Mat6 ref = J1.transpose() * M * J1;
+    const Mat6 scale = J1.cwiseAbs().transpose() * M.cwiseAbs() * J1.cwiseAbs();
+    for (int j = 0; j < 6; ++j) {
+      for (int i = 0; i < 6; ++i) {
+        EXPECT_EQ(got(i, j), got(j, i));
+        const double e = std::abs(got(i, j) - ref(i, j));
+        EXPECT_LE(e, 25.0 * u * scale(i, j)) << "entry " << i << "," << j;
+        worst = std::max(worst, e / (u * scale(i, j)));
+        nonzero += got(i, j) != 0.0 ? 1 : 0;
+      }
+    }
+  }
+  EXPECT_EQ(nonzero, 4000 * 36);  // signal guard: no entry is a zero compared against a zero
+  std::printf("inertia_at_tool vs (J1^T M) J1: worst %.2f u of |J1|^T |M| |J1| (bound 25)\n",
+              worst);
 }
 
 TEST(FastDecomposition, LockedInertiaNotPositiveDefiniteFailsAsTheReference) {

@@ -12,6 +12,7 @@
 #include "reference/core/so3.h"
 #include "reference/grasp_mass_model.h"
 #include "reference/rigid_body_device.h"
+#include "reference/tick_detail.h"
 #include "reference/tools.h"
 #include "validation/wall_loop.h"
 
@@ -43,6 +44,43 @@ WallLoopConfig testbed(Method m, double k_vc, double k_tooth, double push_n) {
   c.start = Vec3(0, 0, c.tip_radius + 2e-4);
   c.duration = 2.0;
   return c;
+}
+
+// detail::all_finite (the device stage's and the fast PMI solve's finite check) gives
+// allFinite()'s answer: for each non-finite value (+inf, -inf, NaN) in each entry of a 6x6 and a
+// 3-vector, alone or beside the largest and smallest doubles and signed zeros, and for finite
+// extremes (no overflow: x * 0 is a zero for every finite x).
+TEST(Tick, AllFiniteAgreesWithEigensAllFinite) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  const double bad[] = {kInf, -kInf, std::numeric_limits<double>::quiet_NaN()};
+  const double good[] = {0.0, -0.0, std::numeric_limits<double>::max(),
+                         -std::numeric_limits<double>::max(),
+                         std::numeric_limits<double>::denorm_min(), 1.0};
+  int checked = 0;
+  for (const double fill : good) {
+    Mat6 A = Mat6::Constant(fill);
+    Vec3 v = Vec3::Constant(-fill);
+    ASSERT_TRUE(A.allFinite() && v.allFinite());
+    EXPECT_TRUE(reference::detail::all_finite(A, v));
+    EXPECT_TRUE(reference::detail::all_finite(A));
+    for (const double b : bad) {
+      for (int i = 0; i < 36; ++i) {
+        Mat6 Ab = A;
+        Ab(i) = b;
+        EXPECT_EQ(reference::detail::all_finite(Ab, v), Ab.allFinite() && v.allFinite());
+        EXPECT_FALSE(reference::detail::all_finite(v, Ab));
+        ++checked;
+      }
+      for (int i = 0; i < 3; ++i) {
+        Vec3 vb = v;
+        vb(i) = b;
+        EXPECT_FALSE(reference::detail::all_finite(A, vb));
+        EXPECT_EQ(reference::detail::all_finite(vb), vb.allFinite());
+        ++checked;
+      }
+    }
+  }
+  EXPECT_EQ(checked, 6 * 3 * 39);
 }
 
 TEST(Tick, AtRestWithNoContactCommandsNothing) {
