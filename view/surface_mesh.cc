@@ -246,6 +246,21 @@ void SurfaceMesher::smooth_occupancy(const int b0[3], const int b1[3], int L) {
   }
 }
 
+namespace {
+// Whether every sample of the lattice box [lo, hi] (inclusive) holds the inside clamp.
+bool all_inside_samples(const SampledField& field, const int lo[3], const int hi[3]) {
+  const float inside = static_cast<float>(-field.inside_clamp());
+  for (int z = lo[2]; z <= hi[2]; ++z) {
+    for (int y = lo[1]; y <= hi[1]; ++y) {
+      for (int x = lo[0]; x <= hi[0]; ++x) {
+        if (field.at(x, y, z) != inside) return false;
+      }
+    }
+  }
+  return true;
+}
+}  // namespace
+
 void SurfaceMesher::mesh_block(int block) {
   BlockMesh& out = blocks_[block];
   out.vertices.clear();
@@ -280,6 +295,12 @@ void SurfaceMesher::mesh_block(int block) {
       hi[a] = std::clamp(below(b1[a]) + (stride > 1 ? 1 : 0), 0, last);
     }
     if (field_->all_outside(lo, hi)) return;
+    // Deep inside: every sample the block reads at the inside clamp, so s = -phi >= c_in > iso
+    // at every centre (at stride k > 1 phi interpolates those samples only) and no edge changes
+    // sign: no quad, unless the centre cut lowers some centres of [b0 - 1, b1]. Skipping it
+    // leaves the mesh as it was (empty) and saves the per-centre reads of the tooth's interior.
+    const bool cut_reaches = cut_.enabled && b1[0] >= cut_.i && b1[1] >= cut_.j;
+    if (!cut_reaches && all_inside_samples(*field_, lo, hi)) return;
     for (int k = b0[2] - 1; k <= b1[2]; ++k) {
       for (int j = b0[1] - 1; j <= b1[1]; ++j) {
         for (int i = b0[0] - 1; i <= b1[0]; ++i) {

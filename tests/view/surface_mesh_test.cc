@@ -442,51 +442,75 @@ TEST(SurfaceMesh, SkippedBlocksAndSeparableFilterKeepTheDefinitionsQuads) {
   }
 }
 
-// The same on the field (the view skips blocks whose samples are all the outside clamp): a ball
-// of radius 10.3 h in a 64^3 grid, most of whose 8^3 blocks are far outside.
+// The same on the field (the view skips blocks whose samples are all the outside clamp, and,
+// away from the cut, blocks whose samples are all the inside clamp): a ball of radius 10.3 h in a
+// 64^3 grid, most of whose 8^3 blocks are far outside, and one of 24.3 h whose middle blocks are
+// deep inside.
 TEST(SurfaceMesh, FieldBlocksSkippedOutsideKeepTheDefinitionsQuads) {
   const int n = 64;
-  const double h = 1e-4, r = 10.3 * h;
-  VoxelGrid g(n, Vec3(0.01, -0.02, 0.03), h);
-  const Vec3 centre = g.origin + Vec3(30.21, 33.87, 29.43) * h;
-  const auto inside = [&](const Vec3& p) { return (p - centre).norm() < r; };
-  for (int k = 0; k < n; ++k) {
-    for (int j = 0; j < n; ++j) {
-      for (int i = 0; i < n; ++i) {
-        if (inside(g.center(i, j, k))) g.set(i, j, k, kEnamel);
-      }
-    }
-  }
-  FieldBand band;
-  band.outside_m = 3 * h;
-  const SampledField field = build_sampled_field(g, triangulate_implicit(g, inside), band);
-  const int pad = field.padding();
-  const float half_voxel = 0.5f * static_cast<float>(h);
-  for (const CutAway cut : {CutAway{}, centre_cut(g)}) {
-    auto s_of = [&](int i, int j, int k) {
-      float v = -field.at(i + pad, j + pad, k + pad);
-      if (cut.enabled && i >= cut.i && j >= cut.j) v = std::min(v, -half_voxel);
-      return v;
-    };
-    long pairs = 0;
+  const double h = 1e-4;
+  for (const double radius : {10.3, 24.3}) {
+    const double r = radius * h;
+    VoxelGrid g(n, Vec3(0.01, -0.02, 0.03), h);
+    const Vec3 centre = g.origin + Vec3(30.21, 33.87, 29.43) * h;
+    const auto inside = [&](const Vec3& p) { return (p - centre).norm() < r; };
     for (int k = 0; k < n; ++k) {
       for (int j = 0; j < n; ++j) {
         for (int i = 0; i < n; ++i) {
-          if (s_of(i, j, k) < 0.0f) continue;
-          for (int f = 0; f < 6; ++f) {
-            int nb[3] = {i, j, k};
-            nb[f / 2] += f % 2 == 0 ? -1 : 1;
-            if (s_of(nb[0], nb[1], nb[2]) < 0.0f) ++pairs;
-          }
+          if (inside(g.center(i, j, k))) g.set(i, j, k, kEnamel);
         }
       }
     }
-    ASSERT_GT(pairs, 500);
-    const SurfaceMesher m8(g, &field, 8, cut);
-    EXPECT_EQ(static_cast<long>(m8.triangle_count()), 2 * pairs) << "cut " << cut.enabled;
-    const auto soup = triangle_soup(m8);
-    EXPECT_EQ(triangle_soup(SurfaceMesher(g, &field, 4, cut)), soup) << "cut " << cut.enabled;
-    EXPECT_EQ(triangle_soup(SurfaceMesher(g, &field, 16, cut)), soup) << "cut " << cut.enabled;
+    FieldBand band;
+    band.outside_m = 3 * h;
+    const SampledField field = build_sampled_field(g, triangulate_implicit(g, inside), band);
+    const int pad = field.padding();
+    // The 8^3 blocks whose samples (with the one-voxel halo) all hold the inside clamp.
+    int deep = 0;
+    for (int b = 0; b < (n / 8) * (n / 8) * (n / 8); ++b) {
+      const int b0[3] = {8 * (b % 8), 8 * ((b / 8) % 8), 8 * (b / 64)};
+      bool all = true;
+      for (int k = b0[2] - 1; all && k <= b0[2] + 8; ++k) {
+        for (int j = b0[1] - 1; all && j <= b0[1] + 8; ++j) {
+          for (int i = b0[0] - 1; all && i <= b0[0] + 8; ++i) {
+            all = field.at(i + pad, j + pad, k + pad) ==
+                  static_cast<float>(-field.inside_clamp());
+          }
+        }
+      }
+      deep += all ? 1 : 0;
+    }
+    if (radius > 20.0) {
+      EXPECT_GT(deep, 0) << "no block deep inside: the inside skip is not exercised";
+    }
+    const float half_voxel = 0.5f * static_cast<float>(h);
+    for (const CutAway cut : {CutAway{}, centre_cut(g)}) {
+      auto s_of = [&](int i, int j, int k) {
+        float v = -field.at(i + pad, j + pad, k + pad);
+        if (cut.enabled && i >= cut.i && j >= cut.j) v = std::min(v, -half_voxel);
+        return v;
+      };
+      long pairs = 0;
+      for (int k = 0; k < n; ++k) {
+        for (int j = 0; j < n; ++j) {
+          for (int i = 0; i < n; ++i) {
+            if (s_of(i, j, k) < 0.0f) continue;
+            for (int f = 0; f < 6; ++f) {
+              int nb[3] = {i, j, k};
+              nb[f / 2] += f % 2 == 0 ? -1 : 1;
+              if (s_of(nb[0], nb[1], nb[2]) < 0.0f) ++pairs;
+            }
+          }
+        }
+      }
+      ASSERT_GT(pairs, 500);
+      const SurfaceMesher m8(g, &field, 8, cut);
+      EXPECT_EQ(static_cast<long>(m8.triangle_count()), 2 * pairs)
+          << "radius " << radius << " h, cut " << cut.enabled;
+      const auto soup = triangle_soup(m8);
+      EXPECT_EQ(triangle_soup(SurfaceMesher(g, &field, 4, cut)), soup) << "cut " << cut.enabled;
+      EXPECT_EQ(triangle_soup(SurfaceMesher(g, &field, 16, cut)), soup) << "cut " << cut.enabled;
+    }
   }
 }
 
