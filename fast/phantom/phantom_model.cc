@@ -9,6 +9,10 @@ namespace dentsim::fast {
 
 namespace {
 
+// The shipped gimbal's joint axes (yaw +y, pitch +x, roll +z, each body's rot0 = E):
+// PhantomDynamics::shipped_gimbal().
+constexpr std::array<int, 3> kShippedGimbalAxis = {1, 0, 2};
+
 constexpr std::array<int, kPhantomTreeDof> kParent = {-1,     kBase,    kUpperArm,  kBase,
                                                       kCrank, kForearm, kGimbalYaw, kGimbalPitch};
 
@@ -109,7 +113,7 @@ bool signed_permutation(const Mat3& R, std::array<int, 3>& from, std::array<T, 3
 }  // namespace
 
 template <typename T>
-PhantomDynamics<T>::PhantomDynamics(const PhantomParams& params)
+PhantomDynamics<T>::PhantomDynamics(const PhantomParams& params, bool specialise)
     : params_(params), reference_(params) {
   const PhantomTreeT<double>& tree = reference_.tree();
   for (int i = 0; i < kPhantomTreeDof; ++i) {
@@ -135,6 +139,8 @@ PhantomDynamics<T>::PhantomDynamics(const PhantomParams& params)
       b.axis_sign = T(v);
     }
     b.axis_aligned = aligned && axis_nonzero == 1;
+    b.ci = (b.k + 1) % 3;
+    b.cj = (b.k + 2) % 3;
     b.at_parent_origin = tree.pos[i].isZero(0.0);
   }
   tip_ = tree.tip.cast<T>();
@@ -179,13 +185,23 @@ PhantomDynamics<T>::PhantomDynamics(const PhantomParams& params)
   E0sq_ = T(E0.squaredNorm()), P0sq_ = T(P0.squaredNorm()), F0sq_ = T(F0.squaredNorm());
   fit = signed_permutation(k0.R[kForearm], fore_from_, fore_sign_) && fit;
   closed_form_ = fit;
+  // The shipped gimbal (terms_closed<true>): rot0 = E, axes +e_1, +e_0, +e_2 (yaw, pitch, roll).
+  bool shipped = specialise && fit;
+  for (int g = 0; g < 3; ++g) {
+    const Body& b = body_[kGimbalYaw + g];
+    shipped = shipped && b.k == kShippedGimbalAxis[g] && b.axis_sign == T(1);
+    for (int c = 0; c < 3; ++c) shipped = shipped && b.col_from[c] == c && b.col_sign[c] == T(1);
+  }
+  shipped_gimbal_ = shipped;
 }
 
 template <typename T>
 void PhantomDynamics<T>::terms(const Vec6& q, const Vec6& qd, bool with_jacobian_rate,
                                DeviceTerms& out) const {
-  if (closed_form_) {
-    terms_closed(q, qd, with_jacobian_rate, out);
+  if (shipped_gimbal_) {
+    terms_closed<true>(q, qd, with_jacobian_rate, out);
+  } else if (closed_form_) {
+    terms_closed<false>(q, qd, with_jacobian_rate, out);
   } else {
     terms_tree(q, qd, with_jacobian_rate, out);
   }
@@ -381,6 +397,7 @@ void PhantomDynamics<T>::terms_tree(const Vec6& q_in, const Vec6& qd_in, bool wi
 // (the yaw turns about gravity's axis), and the world-frame rows of the pose, J_t and dJ_t/dt are
 // {B}'s turned by Rz(q1) (§6).
 template <typename T>
+template <bool Shipped>
 void PhantomDynamics<T>::terms_closed(const Vec6& q_in, const Vec6& qd_in,
                                       bool with_jacobian_rate, DeviceTerms& out) const {
   using std::cos;
@@ -445,15 +462,26 @@ void PhantomDynamics<T>::terms_closed(const Vec6& q_in, const Vec6& qd_in,
       }
     }
     V3 wpar(T(0), -qd3, qd1);
+#pragma GCC unroll 3
     for (int g = 0; g < 3; ++g) {
       const Body& b = body_[kGimbalYaw + g];
       const M3& Rp = g == 0 ? RB : R[g - 1];
       M3& Ri = R[g];
-      for (int c = 0; c < 3; ++c) Ri.col(c) = b.col_sign[c] * Rp.col(b.col_from[c]);
-      a[g] = b.axis_sign * Ri.col(b.k);
-      const int ci = (b.k + 1) % 3, cj = (b.k + 2) % 3;
       const T sn = sin(q(3 + g)), cs = cos(q(3 + g));
-      const T st = b.axis_sign * sn;
+      int ci, cj;
+      T st;
+      if constexpr (Shipped) {  // rot0 = E, axis +e_k: the multiplications by +1 left out
+        constexpr std::array<int, 3> kCi = {2, 1, 0}, kCj = {0, 2, 1};  // (k + 1, k + 2) % 3
+        Ri = Rp;
+        a[g] = Ri.col(kShippedGimbalAxis[g]);
+        ci = kCi[g], cj = kCj[g];
+        st = sn;
+      } else {
+        for (int c = 0; c < 3; ++c) Ri.col(c) = b.col_sign[c] * Rp.col(b.col_from[c]);
+        a[g] = b.axis_sign * Ri.col(b.k);
+        ci = b.ci, cj = b.cj;
+        st = b.axis_sign * sn;
+      }
       const V3 col_i = Ri.col(ci);
       Ri.col(ci) = cs * col_i + st * Ri.col(cj);
       Ri.col(cj) = cs * Ri.col(cj) - st * col_i;
@@ -592,9 +620,32 @@ void PhantomDynamics<T>::terms_closed(const Vec6& q_in, const Vec6& qd_in,
         R1.col(2).dot(dw);
     return v;
   };
-  Jb.col(0) = col(ez, V3(T(0), T(0), qd1), zero, zero);
-  Jb.col(1) = col(-ey, OA, zero, zero) - col(-ey, OB, E, vE);
-  Jb.col(2) = col(-ey, OB, E, vE);
+  if constexpr (Shipped) {
+    // The arm's three columns with the known zeros of their axes (ez, -ey), the arm's angular
+    // velocities (0, *, qd1) and points (y = 0) left out: the same products and sums as col()'s
+    // on the entries that are not zero, so the same doubles (a zero's sign aside).
+    // Column 0: a = ez, w = (0, 0, qd1): w x a = 0, so dv = 0, av = ez x xd1, dw = -(w1 x ez).
+    // Columns A (q2's upper arm, about O) and B (q3's forearm, about E): a = -ey, w = (0, *, qd1),
+    // w x a = (qd1, 0, 0), dw = (qd1 - w1_z, 0, w1_x) in both, so their difference's angular rows
+    // are zero.
+    const V3 xv = xd1 - vE;
+    const T xp2 = x1(2) - Ez;
+    const T dwx = qd1 - w1(2);
+    for (int c = 0; c < 3; ++c) {
+      Jb(3 + c, 0) = R1(0, c) * -w1(1) + R1(1, c) * w1(0);
+      Jb(3 + c, 1) = T(0);
+      Jb(3 + c, 2) = R1(0, c) * dwx + R1(2, c) * w1(0);
+    }
+    Jb(0, 0) = -xd1(1), Jb(1, 0) = xd1(0), Jb(2, 0) = T(0);
+    Jb(0, 2) = -xv(2), Jb(1, 2) = -(qd1 * xp2), Jb(2, 2) = qd1 * x1(1) + xv(0);
+    Jb(0, 1) = -xd1(2) + xv(2);
+    Jb(1, 1) = qd1 * xp2 - qd1 * x1(2);
+    Jb(2, 1) = (qd1 * x1(1) + xd1(0)) - Jb(2, 2);
+  } else {
+    Jb.col(0) = col(ez, V3(T(0), T(0), qd1), zero, zero);
+    Jb.col(1) = col(-ey, OA, zero, zero) - col(-ey, OB, E, vE);
+    Jb.col(2) = col(-ey, OB, E, vE);
+  }
   for (int j = 0; j < 3; ++j) Jb.col(3 + j) = col(a[j], w[j], C, vC);
   to_world(Jb, out.J_t_dot);
 }

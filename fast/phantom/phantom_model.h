@@ -93,7 +93,9 @@ namespace dentsim::fast {
 template <typename T>
 class PhantomDynamics : public SixDofDeviceModel {
  public:
-  explicit PhantomDynamics(const PhantomParams& params);
+  // specialise false keeps the closed form's run-time gimbal path even for a file that fits the
+  // shipped gimbal (tests compare the two; every other caller takes the default).
+  explicit PhantomDynamics(const PhantomParams& params, bool specialise = true);
 
   const PhantomParams& params() const { return params_; }
 
@@ -105,6 +107,11 @@ class PhantomDynamics : public SixDofDeviceModel {
   // True when the device file fits the closed form of docs/derivations/phantom_closed_form.md
   // (decided once, at construction): terms() then takes it; otherwise the tree sweeps above.
   bool closed_form() const { return closed_form_; }
+  // True when the closed form runs its specialisation for the shipped gimbal (decided at
+  // construction): rot0 = E for yaw, pitch and roll, axes +y, +x, +z (the shipped file's), fixed
+  // at compile time; any other file that fits the closed form takes its run-time column turns
+  // (col_from, col_sign, axis_sign). The same operations on the same numbers: bitwise equal.
+  bool shipped_gimbal() const { return shipped_gimbal_; }
   // True when jacobian_inverse() applies (the gimbal's joints meet at a point; at construction).
   bool block_jacobian_inverse() const { return gimbal_at_point_; }
 
@@ -129,6 +136,8 @@ class PhantomDynamics : public SixDofDeviceModel {
   // Sections 1-5 on the tree (any device file).
   void terms_tree(const Vec6& q, const Vec6& qd, bool with_jacobian_rate, DeviceTerms& out) const;
   // The closed form (docs/derivations/phantom_closed_form.md), when closed_form_.
+  // Shipped: the gimbal's permutations and axes fixed at compile time (shipped_gimbal()).
+  template <bool Shipped>
   void terms_closed(const Vec6& q, const Vec6& qd, bool with_jacobian_rate,
                     DeviceTerms& out) const;
 
@@ -148,6 +157,7 @@ class PhantomDynamics : public SixDofDeviceModel {
     std::array<int, 3> col_from{};
     std::array<T, 3> col_sign{};
     int k = 0;
+    int ci = 1, cj = 2;  // (k + 1) % 3, (k + 2) % 3: the columns the joint turns
     T axis_sign = T(1);
     bool at_parent_origin = false;  // pos = 0: p_i = p_par, vo_i = vo_par, no parallel-axis shift
   };
@@ -166,6 +176,7 @@ class PhantomDynamics : public SixDofDeviceModel {
     T Kyy;            // dy + m (rho_x^2 + rho_z^2): the yy entry about the pivot, constant
   };
   bool closed_form_ = false;
+  bool shipped_gimbal_ = false;
   std::array<ArmBody, 4> arm_{};  // upper arm, forearm, crank, parallel link
   T base_zz_ = T(0);              // the base's zz inertia about the yaw axis
   T E0x_ = T(0), E0z_ = T(0);     // elbow at q2 = 0

@@ -156,6 +156,42 @@ TEST(FastPhantomModel, ClosedFormFitIsDecidedAtSetup) {
   EXPECT_FALSE(fast::PhantomModel(p).closed_form());
 }
 
+// The shipped gimbal's specialisation (its column turns fixed at compile time, dJ_t/dt's arm
+// columns without their known zeros) does the run-time path's operations on the same numbers:
+// every output equal as a double (a zero's sign aside), with and without the Jacobian rate, on
+// 10^4 random states of the shipped file (half beyond the joint box, qd up to 20 rad/s). Taken for
+// the shipped file only: the fitting perturbed file (other gimbal axes) and the generic one keep
+// the run-time path. Guard: the rate's arm columns carry signal.
+TEST(FastPhantomModel, ShippedGimbalSpecialisationEqualsTheRunTimePath) {
+  const PhantomParams p = default_phantom_params();
+  const fast::PhantomModel special(p), runtime(p, false);
+  EXPECT_TRUE(special.shipped_gimbal());
+  EXPECT_FALSE(runtime.shipped_gimbal());
+  EXPECT_TRUE(runtime.closed_form());
+  EXPECT_FALSE(fast::PhantomModel(perturbed_fitting_params()).shipped_gimbal());
+  EXPECT_FALSE(fast::PhantomModel(perturbed_params()).shipped_gimbal());
+  States s(p, kSeed + 47);
+  int unequal = 0;
+  double arm_rate = 0.0;
+  auto count = [&unequal](const auto& a, const auto& b) {
+    for (int i = 0; i < a.size(); ++i) unequal += a.data()[i] == b.data()[i] ? 0 : 1;
+  };
+  for (int k = 0; k < 10000; ++k) {
+    const Vec6 q = s.q(k % 2 == 1 ? 0.0 : 1.0), qd = s.qd(20.0);
+    for (const bool rate : {true, false}) {
+      DeviceTerms a, b;
+      special.terms(q, qd, rate, a);
+      runtime.terms(q, qd, rate, b);
+      count(a.pose.x, b.pose.x), count(a.pose.R, b.pose.R), count(a.J_t, b.J_t);
+      count(a.J_t_dot, b.J_t_dot), count(a.M, b.M), count(a.CTqd, b.CTqd), count(a.g, b.g);
+      count(a.tau_f, b.tau_f);
+      arm_rate = std::max(arm_rate, a.J_t_dot.leftCols<3>().cwiseAbs().maxCoeff());
+    }
+  }
+  EXPECT_EQ(unequal, 0);
+  EXPECT_GT(arm_rate, 1.0);
+}
+
 // The closed form on a file other than the shipped one (same bound, header).
 TEST(FastPhantomModel, ClosedFormMatchesReferenceWithAPerturbedFileThatFits) {
   EXPECT_LT(
