@@ -28,7 +28,7 @@ bool pd_tool_is_diagonal(const ToolDynamics& tool) {
 
 bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const ToolDynamics& tool,
                              const Mat3& R1, const Mat3& R2, const Vec6& V1, const Vec6& F1_hat,
-                             const AffineWrench& F2, PdFeedforward* out) {
+                             const AffineWrench& F2, PdFeedforward* out, bool contact_free) {
   using Mat37 = Eigen::Matrix<double, 3, 7>;
   using Mat67 = Eigen::Matrix<double, 6, 7>;
   const double m = proxy.mass;
@@ -72,10 +72,14 @@ bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const Too
   const Vec6 dd = tool.D_d.diagonal();
   Mat67 B;
   B.col(0) = F1_hat - dd.cwiseProduct(V1 - phiV1);
-  B.col(0).head<3>() += F2.f0.head<3>();
-  B.col(0).tail<3>().noalias() += Qt * F2.f0.tail<3>();
-  B.topRightCorner<3, 6>() = F2.G.topRows<3>();
-  B.bottomRightCorner<3, 6>().noalias() = Qt * F2.G.bottomRows<3>();
+  if (contact_free) {  // E^T f0 = 0, E^T G = 0
+    B.rightCols<6>().setZero();
+  } else {
+    B.col(0).head<3>() += F2.f0.head<3>();
+    B.col(0).tail<3>().noalias() += Qt * F2.f0.tail<3>();
+    B.topRightCorner<3, 6>() = F2.G.topRows<3>();
+    B.bottomRightCorner<3, 6>().noalias() = Qt * F2.G.bottomRows<3>();
+  }
   B.rightCols<6>().noalias() -= dd.asDiagonal() * P;
   // W = M_d^-1 B = M_L^-1 X
   const Mat67 W = tool.M_d.diagonal().cwiseInverse().asDiagonal() * B;
@@ -91,6 +95,13 @@ bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const Too
     T2w = j * QW;
   } else {
     T2w.noalias() = J * QW;
+  }
+  if (contact_free) {
+    out->T2.f0.head<3>() = m * W.col(0).head<3>();
+    out->T2.f0.tail<3>() = T2w.col(0);
+    out->T2.G.topRows<3>() = m * W.topRightCorner<3, 6>();
+    out->T2.G.bottomRows<3>() = T2w.rightCols<6>();
+    return true;
   }
   out->T2.f0.head<3>() = m * W.col(0).head<3>() - F2.f0.head<3>();
   out->T2.f0.tail<3>() = T2w.col(0) - F2.f0.tail<3>();

@@ -38,8 +38,12 @@ bool pd_tool_is_diagonal(const ToolDynamics& tool);
 // decompose_locked (phi, M_L at the poses R1, R2 with the proxy's M2 = diag(m I, J)) and
 // pd_feedforward with a diagonal M_d, D_d (pd_tool_is_diagonal(tool) must hold). false when M_L
 // is not positive definite or phi is not finite (as decompose_locked). No allocation, no throw.
+// contact_free: the caller knows F2 = 0 exactly (a free tick: no contact, no anchored spring);
+// the products with F2 and its subtractions are then left out (x - 0 = x, x + 0 = x: the same
+// doubles, a zero's sign aside; tests/fast/decomposition_test.cc).
 bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const ToolDynamics& tool,
                              const Mat3& R1, const Mat3& R2, const Vec6& V1, const Vec6& F1_hat,
-                             const AffineWrench& F2, PdFeedforward* out);
+                             const AffineWrench& F2, PdFeedforward* out,
+                             bool contact_free = false);
 
 }  // namespace dentsim::fast

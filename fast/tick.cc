@@ -65,9 +65,11 @@ bool pd_step(const PipelineModel& m, PipelineData& d) {
   } else {
     inertia_at_tool(d.J1, d.dev.M, &M1);
   }
+  // A free tick with skips on: fast::assemble set d.contact to zero (no contact, no spring).
+  const bool contact_free = m.skip_unneeded && r.contacts.empty();
   PdFeedforward pd;
   if (!pd_feedforward_diagonal(M1, m.proxy, m.tool, r.device.R, d.proxy.pose.R, r.V1, r.F1_hat,
-                               d.contact, &pd)) {
+                               d.contact, &pd, contact_free)) {
     return false;
   }
   d.pd_T1 = pd.T1;

@@ -99,6 +99,21 @@ TEST(FastDecomposition, FeedforwardAgreesWithTheReference) {
     const PdFeedforward ref = pd_feedforward(dec, Md_llt, tool.D_d, V1, F1_hat, F2);
     PdFeedforward got;
     ASSERT_TRUE(fast::pd_feedforward_diagonal(M1, proxy, tool, R1, R2, V1, F1_hat, F2, &got));
+    if (trial % 4 == 0) {
+      // F2 = 0 known to the caller (a free tick): the products with F2 left out, the same
+      // doubles (x - 0 = x, x + 0 = x).
+      PdFeedforward f;
+      ASSERT_TRUE(
+          fast::pd_feedforward_diagonal(M1, proxy, tool, R1, R2, V1, F1_hat, F2, &f, true));
+      for (int i = 0; i < 6; ++i) {
+        EXPECT_EQ(f.T1.f0(i), got.T1.f0(i));
+        EXPECT_EQ(f.T2.f0(i), got.T2.f0(i));
+        for (int k = 0; k < 6; ++k) {
+          EXPECT_EQ(f.T1.G(i, k), got.T1.G(i, k));
+          EXPECT_EQ(f.T2.G(i, k), got.T2.G(i, k));
+        }
+      }
+    }
     if (trial % 2 == 0) {
       // The isotropic proxy's path (J = j I) against the general path on the same inputs (J
       // perturbed by 1e-300 off the diagonal): they differ only by the general path's round-off
