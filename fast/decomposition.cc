@@ -28,7 +28,8 @@ bool pd_tool_is_diagonal(const ToolDynamics& tool) {
 
 bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const ToolDynamics& tool,
                              const Mat3& R1, const Mat3& R2, const Vec6& V1, const Vec6& F1_hat,
-                             const AffineWrench& F2, PdFeedforward* out, bool contact_free) {
+                             const AffineWrench& F2, AffineWrench* T1, AffineWrench* T2,
+                             bool contact_free) {
   using Mat37 = Eigen::Matrix<double, 3, 7>;
   using Mat67 = Eigen::Matrix<double, 6, 7>;
   const double m = proxy.mass;
@@ -84,10 +85,8 @@ bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const Too
   // W = M_d^-1 B = M_L^-1 X
   const Mat67 W = tool.M_d.diagonal().cwiseInverse().asDiagonal() * B;
   // T1 + F1_hat = (I - phi^T) X = M1 M_L^-1 X = M1 W
-  Mat67 T1;
-  T1.noalias() = M1s * W;
-  out->T1.f0 = T1.col(0) - F1_hat;
-  out->T1.G = T1.rightCols<6>();
+  Mat67 T1w;
+  T1w.noalias() = M1s * W;
   // T2 + F2 = E phi^T X = E N M_L^-1 X = diag(m I, J Q) W
   const Mat37 QW = Q * W.bottomRows<3>();
   Mat37 T2w;
@@ -96,17 +95,19 @@ bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const Too
   } else {
     T2w.noalias() = J * QW;
   }
+  T1->f0 = T1w.col(0) - F1_hat;
+  T1->G = T1w.rightCols<6>();
   if (contact_free) {
-    out->T2.f0.head<3>() = m * W.col(0).head<3>();
-    out->T2.f0.tail<3>() = T2w.col(0);
-    out->T2.G.topRows<3>() = m * W.topRightCorner<3, 6>();
-    out->T2.G.bottomRows<3>() = T2w.rightCols<6>();
+    T2->f0.head<3>() = m * W.col(0).head<3>();
+    T2->f0.tail<3>() = T2w.col(0);
+    T2->G.topRows<3>() = m * W.topRightCorner<3, 6>();
+    T2->G.bottomRows<3>() = T2w.rightCols<6>();
     return true;
   }
-  out->T2.f0.head<3>() = m * W.col(0).head<3>() - F2.f0.head<3>();
-  out->T2.f0.tail<3>() = T2w.col(0) - F2.f0.tail<3>();
-  out->T2.G.topRows<3>() = m * W.topRightCorner<3, 6>() - F2.G.topRows<3>();
-  out->T2.G.bottomRows<3>() = T2w.rightCols<6>() - F2.G.bottomRows<3>();
+  T2->f0.head<3>() = m * W.col(0).head<3>() - F2.f0.head<3>();
+  T2->f0.tail<3>() = T2w.col(0) - F2.f0.tail<3>();
+  T2->G.topRows<3>() = m * W.topRightCorner<3, 6>() - F2.G.topRows<3>();
+  T2->G.bottomRows<3>() = T2w.rightCols<6>() - F2.G.bottomRows<3>();
   return true;
 }
 

@@ -41,9 +41,18 @@ bool pd_tool_is_diagonal(const ToolDynamics& tool);
 // contact_free: the caller knows F2 = 0 exactly (a free tick: no contact, no anchored spring);
 // the products with F2 and its subtractions are then left out (x - 0 = x, x + 0 = x: the same
 // doubles, a zero's sign aside; tests/fast/decomposition_test.cc).
+// T1, T2 are written only on success (untouched when false).
 bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const ToolDynamics& tool,
                              const Mat3& R1, const Mat3& R2, const Vec6& V1, const Vec6& F1_hat,
-                             const AffineWrench& F2, PdFeedforward* out,
+                             const AffineWrench& F2, AffineWrench* T1, AffineWrench* T2,
                              bool contact_free = false);
+// The same into a PdFeedforward.
+inline bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy,
+                                    const ToolDynamics& tool, const Mat3& R1, const Mat3& R2,
+                                    const Vec6& V1, const Vec6& F1_hat, const AffineWrench& F2,
+                                    PdFeedforward* out, bool contact_free = false) {
+  return pd_feedforward_diagonal(M1, proxy, tool, R1, R2, V1, F1_hat, F2, &out->T1, &out->T2,
+                                 contact_free);
+}
 
 }  // namespace dentsim::fast

@@ -67,14 +67,8 @@ bool pd_step(const PipelineModel& m, PipelineData& d) {
   }
   // A free tick with skips on: fast::assemble set d.contact to zero (no contact, no spring).
   const bool contact_free = m.skip_unneeded && r.contacts.empty();
-  PdFeedforward pd;
-  if (!pd_feedforward_diagonal(M1, m.proxy, m.tool, r.device.R, d.proxy.pose.R, r.V1, r.F1_hat,
-                               d.contact, &pd, contact_free)) {
-    return false;
-  }
-  d.pd_T1 = pd.T1;
-  d.pd_T2 = pd.T2;
-  return true;
+  return pd_feedforward_diagonal(M1, m.proxy, m.tool, r.device.R, d.proxy.pose.R, r.V1, r.F1_hat,
+                                 d.contact, &d.pd_T1, &d.pd_T2, contact_free);
 }
 
 // J1 = J_t^-1: on the Phantom's block structure when the device is fast::PhantomModel and its
