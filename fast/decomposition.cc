@@ -29,7 +29,7 @@ bool pd_tool_is_diagonal(const ToolDynamics& tool) {
 bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const ToolDynamics& tool,
                              const Mat3& R1, const Mat3& R2, const Vec6& V1, const Vec6& F1_hat,
                              const AffineWrench& F2, AffineWrench* T1, AffineWrench* T2,
-                             bool contact_free) {
+                             FeedforwardKnown known) {
   using Mat37 = Eigen::Matrix<double, 3, 7>;
   using Mat67 = Eigen::Matrix<double, 6, 7>;
   const double m = proxy.mass;
@@ -44,7 +44,9 @@ bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const Too
                          J(2, 2) == J(0, 0);
   const double j = J(0, 0);
   Mat3 QtJ;  // E^T M2 = diag(m I, Q^T J)
-  const Mat6 M1s = 0.5 * (M1 + M1.transpose());
+  Mat6 M1_symmetrised;
+  if (!known.symmetric_M1) M1_symmetrised = 0.5 * (M1 + M1.transpose());
+  const Mat6& M1s = known.symmetric_M1 ? M1 : M1_symmetrised;
   Mat6 M_L = M1s;  // M_L = M1 + N
   M_L.diagonal().head<3>().array() += m;
   if (isotropic) {
@@ -73,7 +75,7 @@ bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const Too
   const Vec6 dd = tool.D_d.diagonal();
   Mat67 B;
   B.col(0) = F1_hat - dd.cwiseProduct(V1 - phiV1);
-  if (contact_free) {  // E^T f0 = 0, E^T G = 0
+  if (known.contact_free) {  // E^T f0 = 0, E^T G = 0
     B.rightCols<6>().setZero();
   } else {
     B.col(0).head<3>() += F2.f0.head<3>();
@@ -97,7 +99,7 @@ bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const Too
   }
   T1->f0 = T1w.col(0) - F1_hat;
   T1->G = T1w.rightCols<6>();
-  if (contact_free) {
+  if (known.contact_free) {
     T2->f0.head<3>() = m * W.col(0).head<3>();
     T2->f0.tail<3>() = T2w.col(0);
     T2->G.topRows<3>() = m * W.topRightCorner<3, 6>();

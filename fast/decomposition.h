@@ -38,21 +38,27 @@ bool pd_tool_is_diagonal(const ToolDynamics& tool);
 // decompose_locked (phi, M_L at the poses R1, R2 with the proxy's M2 = diag(m I, J)) and
 // pd_feedforward with a diagonal M_d, D_d (pd_tool_is_diagonal(tool) must hold). false when M_L
 // is not positive definite or phi is not finite (as decompose_locked). No allocation, no throw.
-// contact_free: the caller knows F2 = 0 exactly (a free tick: no contact, no anchored spring);
-// the products with F2 and its subtractions are then left out (x - 0 = x, x + 0 = x: the same
-// doubles, a zero's sign aside; tests/fast/decomposition_test.cc).
-// T1, T2 are written only on success (untouched when false).
+// What the caller knows of its inputs, each saving work on the same doubles:
+//  contact_free: F2 = 0 exactly (a free tick: no contact, no anchored spring); the products with
+//    F2 and its subtractions are left out (x - 0 = x, x + 0 = x: a zero's sign aside);
+//  symmetric_M1: M1 exactly symmetric (inertia_at_tool's); the symmetrisation 0.5 (M1 + M1^T),
+//    which is then M1 exactly, is left out.
+// (tests/fast/decomposition_test.cc). T1, T2 are written only on success (untouched when false).
+struct FeedforwardKnown {
+  bool contact_free = false;
+  bool symmetric_M1 = false;
+};
 bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const ToolDynamics& tool,
                              const Mat3& R1, const Mat3& R2, const Vec6& V1, const Vec6& F1_hat,
                              const AffineWrench& F2, AffineWrench* T1, AffineWrench* T2,
-                             bool contact_free = false);
+                             FeedforwardKnown known = {});
 // The same into a PdFeedforward.
 inline bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy,
                                     const ToolDynamics& tool, const Mat3& R1, const Mat3& R2,
                                     const Vec6& V1, const Vec6& F1_hat, const AffineWrench& F2,
-                                    PdFeedforward* out, bool contact_free = false) {
+                                    PdFeedforward* out, FeedforwardKnown known = {}) {
   return pd_feedforward_diagonal(M1, proxy, tool, R1, R2, V1, F1_hat, F2, &out->T1, &out->T2,
-                                 contact_free);
+                                 known);
 }
 
 }  // namespace dentsim::fast

@@ -66,9 +66,10 @@ bool pd_step(const PipelineModel& m, PipelineData& d) {
     inertia_at_tool(d.J1, d.dev.M, &M1);
   }
   // A free tick with skips on: fast::assemble set d.contact to zero (no contact, no spring).
-  const bool contact_free = m.skip_unneeded && r.contacts.empty();
+  // M1 from inertia_at_tool: exactly symmetric.
+  const FeedforwardKnown known{m.skip_unneeded && r.contacts.empty(), true};
   return pd_feedforward_diagonal(M1, m.proxy, m.tool, r.device.R, d.proxy.pose.R, r.V1, r.F1_hat,
-                                 d.contact, &d.pd_T1, &d.pd_T2, contact_free);
+                                 d.contact, &d.pd_T1, &d.pd_T2, known);
 }
 
 // J1 = J_t^-1: on the Phantom's block structure when the device is fast::PhantomModel and its

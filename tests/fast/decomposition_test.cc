@@ -103,8 +103,8 @@ TEST(FastDecomposition, FeedforwardAgreesWithTheReference) {
       // F2 = 0 known to the caller (a free tick): the products with F2 left out, the same
       // doubles (x - 0 = x, x + 0 = x).
       PdFeedforward f;
-      ASSERT_TRUE(
-          fast::pd_feedforward_diagonal(M1, proxy, tool, R1, R2, V1, F1_hat, F2, &f, true));
+      ASSERT_TRUE(fast::pd_feedforward_diagonal(M1, proxy, tool, R1, R2, V1, F1_hat, F2, &f,
+                                                {.contact_free = true}));
       for (int i = 0; i < 6; ++i) {
         EXPECT_EQ(f.T1.f0(i), got.T1.f0(i));
         EXPECT_EQ(f.T2.f0(i), got.T2.f0(i));
@@ -113,6 +113,19 @@ TEST(FastDecomposition, FeedforwardAgreesWithTheReference) {
           EXPECT_EQ(f.T2.G(i, k), got.T2.G(i, k));
         }
       }
+    }
+    {
+      // M1 exactly symmetric (as inertia_at_tool gives it): the symmetrisation left out, the
+      // same doubles as with it (0.5 (x + x) = x).
+      const Mat6 Ms = 0.5 * (M1 + M1.transpose());
+      PdFeedforward with, without;
+      ASSERT_TRUE(fast::pd_feedforward_diagonal(Ms, proxy, tool, R1, R2, V1, F1_hat, F2, &with));
+      ASSERT_TRUE(fast::pd_feedforward_diagonal(Ms, proxy, tool, R1, R2, V1, F1_hat, F2, &without,
+                                                {.symmetric_M1 = true}));
+      EXPECT_EQ(with.T1.f0, without.T1.f0);
+      EXPECT_EQ(with.T1.G, without.T1.G);
+      EXPECT_EQ(with.T2.f0, without.T2.f0);
+      EXPECT_EQ(with.T2.G, without.T2.G);
     }
     if (trial % 2 == 0) {
       // The isotropic proxy's path (J = j I) against the general path on the same inputs (J
