@@ -11,7 +11,8 @@
 //   Vec3 normal(const Vec3& x, const SignedDistance& sd) const;   unit grad phi at x;
 //   double lipschitz() const;                 L: |phi(x) - phi(y)| <= L |x - y|;
 // and optionally (the field, field_contact.h) sweep_advance (the sweep's step from the cell's
-// slope) and slope(x) = |grad phi(x)| (the push-out's Newton step, plain_step below).
+// slope) and slope(x) = |grad phi(x)| (the push-out's Newton step, plain_step below; its presence
+// also turns on update's stalled-slide stop).
 // The swept test advances by (phi - (rho - s)) / L per step (conservative advancement under the
 // L-Lipschitz bound), so the sweep never leaves {phi >= rho - s}; for the exact distance L = 1
 // and the steps are the same doubles as before the refactor.
