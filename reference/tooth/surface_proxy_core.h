@@ -11,7 +11,8 @@
 //   Vec3 normal(const Vec3& x, const SignedDistance& sd) const;   unit grad phi at x;
 //   double lipschitz() const;                 L: |phi(x) - phi(y)| <= L |x - y|;
 // and optionally (the field, field_contact.h) sweep_advance (the sweep's step from the cell's
-// slope) and slope(x) = |grad phi(x)| (the push-out's Newton step, plain_step below).
+// slope) and slope(x) = |grad phi(x)| (the push-out's Newton step, plain_step below; its presence
+// also turns on update's stalled-slide stop).
 // The swept test advances by (phi - (rho - s)) / L per step (conservative advancement under the
 // L-Lipschitz bound), so the sweep never leaves {phi >= rho - s}; for the exact distance L = 1
 // and the steps are the same doubles as before the refactor.
@@ -198,7 +199,9 @@ bool sweep(const ProxyConstants& k, const Solid& solid, Vec3* from, const Vec3& 
 }
 
 // Steps 1-3 for the tool's tip centre c: updates g (valid: g holds a previous tick's proxy).
-template <class Solid>
+// kStallStop: the field's stalled-slide stop below (false: the slides up to the cap, as the `sdf`
+// model; for tests that compare the two rules).
+template <class Solid, bool kStallStop = true>
 void update(const ProxyConstants& k, const Solid& solid, bool* valid, Vec3* g, const Vec3& c) {
   if (!*valid) {
     *g = c;
@@ -216,12 +219,22 @@ void update(const ProxyConstants& k, const Solid& solid, bool* valid, Vec3* g, c
   }
   Vec3 target = c;
   for (int slide = 0; slide <= kSurfaceProxySlides; ++slide) {
+    const Vec3 start = *g;
     Vec3 y = *g;
     const bool reached = sweep(k, solid, &y, target);
     *g = y;
     // Back from the skin to phi >= rho, along the local normal; where the push-out does not
     // converge, y itself (in A_skin: the sweep started there and stays there) is kept.
     if (push_out(k, solid, g) < -k.skin) *g = y;
+    // The field: a slide the sweep blocked that moved g by no more than push_tol (the push-out's
+    // own tolerance on where g ends) has stalled against a second wall (a concave corner, the
+    // cavity the bur cut): g stays, instead of the tangent-plane slides that follow, each blocked
+    // at once by the same wall, up to the cap. Only where the next slide would be taken; g is
+    // admissible either way (Claim 1 rests on the sweep and the push-out, not on the target;
+    // docs/derivations/field_contact.md §3, "The slide cap").
+    if constexpr (kStallStop && requires { solid.slope(c); }) {
+      if (slide > 0 && !reached && (*g - start).norm() <= k.push_tol) break;
+    }
     if (reached && (target - c).norm() <= k.tol) break;  // the tool itself is admissible
     // Blocked (or a slide target reached): slide towards c on the tangent plane at g.
     const SignedDistance sd = solid.distance(*g, k.rho + k.skin);

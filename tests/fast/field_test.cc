@@ -380,8 +380,8 @@ TEST(FastFieldSolid, TheSweepOnAFlatFaceTakesOneQueryPerCellCrossed) {
 }
 
 // A Solid that forwards to the fast FieldSolid and records where distance() was asked (the
-// push-out's iterates); with kNewton false it hides slope(), so push_out takes the unit step
-// (the sdf model's, and the field's before stop 46).
+// push-out's iterates, the sweep's steps); with kNewton false it hides slope(), so push_out takes
+// the unit step (the sdf model's, and the field's before stop 46).
 template <bool kNewton>
 struct RecordingSolid {
   const fast::FieldSolid& solid;
@@ -397,6 +397,10 @@ struct RecordingSolid {
     requires kNewton
   {
     return solid.slope(x);
+  }
+  double sweep_advance(const Vec3& y, const SignedDistance& sd, const Vec3& d, double clearance,
+                       double slack) const {
+    return solid.sweep_advance(y, sd, d, clearance, slack);
   }
 };
 
@@ -501,6 +505,83 @@ TEST(FastFieldSolid, ThePushOutsNewtonStepEqualsTheReferenceAndKeepsTheFloor) {
   EXPECT_EQ(below, 0);
   EXPECT_LE(newton_queries, unit_queries);
   EXPECT_LT(cavity_newton, cavity_unit);
+}
+
+// The slide cap in a cavity (docs/derivations/field_contact.md §3, "The slide cap"): the tool
+// pressed from inside a spherical hole and a cubic hole (concave walls, edges and corners) into
+// their walls, a tick at a time. Both twins' proxies are the same doubles with the stalled-slide
+// stop; every proxy keeps phi >= rho - s (Claim 1); the stop asks fewer queries than the
+// tangent-plane slides up to the cap (the old rule, run from the same g each tick), and where it
+// ends is printed against the old rule's.
+TEST(FastFieldSolid, TheStalledSlideStopEqualsTheReferenceAndKeepsTheFloor) {
+  const double ball = kRho + 0.1e-3;   // the spherical hole's radius
+  const double cube = kRho + 0.25e-3;  // the cubic hole's half side
+  const auto in_ball_block = [&](const Vec3& p) {
+    return (p - kCentre).cwiseAbs().maxCoeff() < 2e-3 && (p - kCentre).norm() > ball;
+  };
+  const auto in_cube_block = [&](const Vec3& p) {
+    const double m = (p - kCentre).cwiseAbs().maxCoeff();
+    return m < 2e-3 && m > cube;
+  };
+  const VoxelGrid grids[2] = {test::solid_grid(kN, kSide, in_ball_block),
+                              test::solid_grid(kN, kSide, in_cube_block)};
+  const SampledField fields[2] = {
+      build_sampled_field(grids[0], triangulate_implicit(grids[0], in_ball_block),
+                          field_band_for_tip(kRho, grids[0].voxel_size)),
+      build_sampled_field(grids[1], triangulate_implicit(grids[1], in_cube_block),
+                          field_band_for_tip(kRho, grids[1].voxel_size))};
+  const double reach[2] = {ball - kRho, cube - kRho};
+  std::mt19937_64 rng(47);
+  std::uniform_real_distribution<double> dir(-1.0, 1.0), depth(0.0, 0.3e-3);
+  long updates = 0, differ = 0, below = 0, stop_queries = 0, cap_queries = 0, apart = 0;
+  double least = 1.0, farthest = 0.0;
+  for (int shape = 0; shape < 2; ++shape) {
+    const TwinSolids twins(grids[shape], fields[shape]);
+    const SurfaceProxy proxy(kRho, grids[shape].voxel_size);
+    const proxy_detail::ProxyConstants k = proxy.constants();
+    std::vector<Vec3> asked, cap_asked;
+    asked.reserve(1024);
+    cap_asked.reserve(1024);
+    const RecordingSolid<true> stop{twins.solid, &asked};
+    const RecordingSolid<true> capped{twins.solid, &cap_asked};
+    for (int trial = 0; trial < 60; ++trial) {
+      Vec3 r(dir(rng), dir(rng), dir(rng));
+      if (r.norm() < 1e-3) continue;
+      // In the cube, towards its corners and edges as often as its faces.
+      if (shape == 1) r = r.cwiseSign().cwiseProduct(r.cwiseAbs().cwiseSqrt().cwiseSqrt());
+      const Vec3 end = kCentre + (reach[shape] * 1.8 + depth(rng)) * r.normalized();
+      bool valid_r = false, valid_f = false, valid_t = false;
+      Vec3 gr = kCentre, gf = kCentre, gt = kCentre;
+      for (int tick = 0; tick <= 40; ++tick) {
+        const Vec3 c = kCentre + (end - kCentre) * (tick / 40.0);
+        Vec3 g_cap = gf;
+        bool valid_cap = valid_f;
+        proxy_detail::update(k, twins.reference, &valid_r, &gr, c);
+        proxy_detail::update(k, twins.solid, &valid_t, &gt, c);
+        asked.clear();
+        proxy_detail::update(k, stop, &valid_f, &gf, c);
+        cap_asked.clear();
+        proxy_detail::update<RecordingSolid<true>, false>(k, capped, &valid_cap, &g_cap, c);
+        ++updates;
+        differ += !(gr == gt && gt == gf);
+        stop_queries += static_cast<long>(asked.size());
+        cap_queries += static_cast<long>(cap_asked.size());
+        const double phi = fields[shape].sample(gf).value;
+        least = std::min(least, phi - (k.rho - k.skin));
+        below += phi < k.rho - k.skin;
+        farthest = std::max(farthest, (gf - g_cap).norm());
+        apart += (gf - g_cap).norm() > k.push_tol;
+      }
+    }
+  }
+  std::printf("%ld updates in the holes: %ld queries with the stalled-slide stop, %ld with the "
+              "slides to the cap; %ld differ, least phi - (rho - s) %.3g m; the two rules' g "
+              "apart by %.3g m at most, by more than push_tol in %ld\n",
+              updates, stop_queries, cap_queries, differ, least, farthest, apart);
+  EXPECT_GT(updates, 4000);
+  EXPECT_EQ(differ, 0);
+  EXPECT_EQ(below, 0);
+  EXPECT_LT(stop_queries, cap_queries);
 }
 
 // The bur's path: free space, down 1.1 mm into the sphere (drilling), sideways 0.6 mm, away.
