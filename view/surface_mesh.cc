@@ -6,6 +6,9 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "reference/core/setup_threads.h"
+#include "view/field_values.h"
+
 namespace dentsim::view {
 
 SurfaceMesher::SurfaceMesher(const VoxelGrid& grid, int block_size, CutAway cut)
@@ -13,20 +16,22 @@ SurfaceMesher::SurfaceMesher(const VoxelGrid& grid, int block_size, CutAway cut)
 
 SurfaceMesher::SurfaceMesher(const VoxelGrid& grid, const SampledField* field, int block_size,
                              CutAway cut)
-    : SurfaceMesher(nullptr, grid, field, block_size, cut) {}
+    : SurfaceMesher(nullptr, grid, field, block_size, cut, 1) {}
 
 SurfaceMesher SurfaceMesher::borrowing(const VoxelGrid& grid, const SampledField* field,
-                                       int block_size, CutAway cut) {
-  return SurfaceMesher(&grid, grid, field, block_size, cut);
+                                       int block_size, CutAway cut, int threads) {
+  return SurfaceMesher(&grid, grid, field, block_size, cut,
+                       threads > 0 ? threads : setup_threads());
 }
 
 SurfaceMesher::SurfaceMesher(const VoxelGrid* borrowed, const VoxelGrid& grid,
-                             const SampledField* field, int block_size, CutAway cut)
+                             const SampledField* field, int block_size, CutAway cut, int threads)
     : own_(borrowed == nullptr ? grid : VoxelGrid()),
       borrowed_(borrowed),
       block_size_(block_size),
       cut_(cut),
-      field_(field) {
+      field_(field),
+      threads_(threads) {
   if (block_size < 4) throw std::invalid_argument("SurfaceMesher: block size must be >= 4");
   if (field_ != nullptr) {
     const int k = field_->stride();
@@ -44,7 +49,17 @@ SurfaceMesher::SurfaceMesher(const VoxelGrid* borrowed, const VoxelGrid& grid,
   nb_ = (grid.n + block_size - 1) / block_size;
   blocks_.resize(static_cast<std::size_t>(nb_) * nb_ * nb_);
   if (field_ == nullptr) count_block_solids();
-  for (int b = 0; b < static_cast<int>(blocks_.size()); ++b) mesh_block(b);
+  mesh_all();
+}
+
+void SurfaceMesher::mesh_all() {
+  // Tasks of a row of blocks (x): each block is meshed by one task into its own BlockMesh from
+  // the grid and field, which no task writes, so the blocks are the one-thread ones.
+  const int rows = nb_ * nb_;
+  parallel_tasks(rows, threads_, [&](int row) {
+    Scratch scratch;
+    for (int b = row * nb_; b < (row + 1) * nb_; ++b) mesh_block(b, scratch);
+  });
 }
 
 bool SurfaceMesher::occupied(int i, int j, int k) const {
@@ -54,7 +69,7 @@ bool SurfaceMesher::occupied(int i, int j, int k) const {
 
 void SurfaceMesher::set_cut(CutAway cut) {
   cut_ = cut;
-  for (int b = 0; b < static_cast<int>(blocks_.size()); ++b) mesh_block(b);
+  mesh_all();
 }
 
 std::size_t SurfaceMesher::triangle_count() const {
@@ -106,7 +121,7 @@ void SurfaceMesher::copy_voxels(const VoxelGrid& grid, std::span<const std::size
 std::vector<int> SurfaceMesher::remesh(std::vector<int> dirty) {
   std::sort(dirty.begin(), dirty.end());
   dirty.erase(std::unique(dirty.begin(), dirty.end()), dirty.end());
-  for (int b : dirty) mesh_block(b);
+  for (int b : dirty) mesh_block(b, scratch_);
   return dirty;
 }
 
@@ -194,10 +209,12 @@ bool SurfaceMesher::uniform_neighbourhood(const int b0[3]) const {
   return empty || full;
 }
 
-void SurfaceMesher::smooth_occupancy(const int b0[3], const int b1[3], int L) {
+void SurfaceMesher::smooth_occupancy(const int b0[3], const int b1[3], int L,
+                                     Scratch& scratch) const {
   // s(c) = sum_d w(d) o(c + d) / 64 over the cells [b0 - 1, b1] (header comment), as three
   // passes of the 1-2-1 filter along x, y and z: the same integer sums as the 27-term one.
   const int R = L + 2;  // o over the voxels [b0 - 2, b0 + L - 1] per axis
+  std::vector<std::uint8_t>& o_ = scratch.o;
   o_.assign(static_cast<std::size_t>(R) * R * R, 0);
   auto oidx = [R](int x, int y, int z) {
     return static_cast<std::size_t>(x) +
@@ -213,8 +230,8 @@ void SurfaceMesher::smooth_occupancy(const int b0[3], const int b1[3], int L) {
   }
   // Pass a filters along axis a the cells 1..hi-1 of that axis, all of the axes not yet passed.
   // Pass a: axes 0..a in [1, hi - 1] (filtered), the later ones in [0, hi] (still needed).
-  std::vector<int>& t = filter_;
-  std::vector<int>& u = filter_out_;
+  std::vector<int>& t = scratch.filter;
+  std::vector<int>& u = scratch.filter_out;
   t.assign(o_.begin(), o_.end());
   u.resize(t.size());
   for (int a = 0; a < 3; ++a) {
@@ -237,7 +254,7 @@ void SurfaceMesher::smooth_occupancy(const int b0[3], const int b1[3], int L) {
   for (int z = 1; z < hi[2]; ++z) {
     for (int y = 1; y < hi[1]; ++y) {
       for (int x = 1; x < hi[0]; ++x) {
-        s_[static_cast<std::size_t>(x - 1) +
+        scratch.s[static_cast<std::size_t>(x - 1) +
            static_cast<std::size_t>(L) *
                (static_cast<std::size_t>(y - 1) + static_cast<std::size_t>(L) * (z - 1))] =
             static_cast<float>(t[oidx(x, y, z)]) / 64.0f;
@@ -246,22 +263,7 @@ void SurfaceMesher::smooth_occupancy(const int b0[3], const int b1[3], int L) {
   }
 }
 
-namespace {
-// Whether every sample of the lattice box [lo, hi] (inclusive) holds the inside clamp.
-bool all_inside_samples(const SampledField& field, const int lo[3], const int hi[3]) {
-  const float inside = static_cast<float>(-field.inside_clamp());
-  for (int z = lo[2]; z <= hi[2]; ++z) {
-    for (int y = lo[1]; y <= hi[1]; ++y) {
-      for (int x = lo[0]; x <= hi[0]; ++x) {
-        if (field.at(x, y, z) != inside) return false;
-      }
-    }
-  }
-  return true;
-}
-}  // namespace
-
-void SurfaceMesher::mesh_block(int block) {
+void SurfaceMesher::mesh_block(int block, Scratch& scratch) {
   BlockMesh& out = blocks_[block];
   out.vertices.clear();
   out.indices.clear();
@@ -272,6 +274,7 @@ void SurfaceMesher::mesh_block(int block) {
   for (int a = 0; a < 3; ++a) b1[a] = std::min(grid().n, b0[a] + B);
   // s over the block + 1 voxel halo: local index (c - b0 + 1).
   const int L = B + 2;
+  std::vector<float>& s_ = scratch.s;
   s_.assign(static_cast<std::size_t>(L) * L * L, 0.0f);
   auto sidx = [&](int i, int j, int k) {
     return static_cast<std::size_t>(i - b0[0] + 1) +
@@ -300,13 +303,41 @@ void SurfaceMesher::mesh_block(int block) {
     // sign: no quad, unless the centre cut lowers some centres of [b0 - 1, b1]. Skipping it
     // leaves the mesh as it was (empty) and saves the per-centre reads of the tooth's interior.
     const bool cut_reaches = cut_.enabled && b1[0] >= cut_.i && b1[1] >= cut_.j;
-    if (!cut_reaches && all_inside_samples(*field_, lo, hi)) return;
+    // The samples of [lo, hi], read once (the skip's test, and at k = 1 the values).
+    std::vector<float>& samples = scratch.samples;
+    samples.resize(static_cast<std::size_t>(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) *
+                   (hi[2] - lo[2] + 1));
+    read_field_samples(*field_, lo, hi, samples.data());
+    const float inside = static_cast<float>(-field_->inside_clamp());
+    if (!cut_reaches &&
+        std::all_of(samples.begin(), samples.end(), [&](float v) { return v == inside; })) {
+      return;
+    }
+    // s at the centres [b0 - 1, b1], x fastest: k = 1, the sample at the centre itself (bit for
+    // bit the field's; sample c + P, inside [lo, hi] unclamped as P >= 1 and m >= n + 2 P); else
+    // phi there, float(value(centre)) (view/field_values.h).
+    const int w[3] = {b1[0] - b0[0] + 2, b1[1] - b0[1] + 2, b1[2] - b0[2] + 2};
+    const float* v = samples.data();
+    std::size_t step_y = static_cast<std::size_t>(hi[0] - lo[0] + 1);
+    std::size_t step_z = step_y * static_cast<std::size_t>(hi[1] - lo[1] + 1);
+    std::size_t first = static_cast<std::size_t>(b0[0] - 1 + pad - lo[0]) +
+                        step_y * static_cast<std::size_t>(b0[1] - 1 + pad - lo[1]) +
+                        step_z * static_cast<std::size_t>(b0[2] - 1 + pad - lo[2]);
+    if (stride > 1) {
+      const int c0[3] = {b0[0] - 1, b0[1] - 1, b0[2] - 1};
+      scratch.values.resize(static_cast<std::size_t>(w[0]) * w[1] * w[2]);
+      field_values_at_voxel_centres(*field_, grid(), c0, b1, &samples, scratch.values.data());
+      v = scratch.values.data();
+      step_y = static_cast<std::size_t>(w[0]);
+      step_z = step_y * static_cast<std::size_t>(w[1]);
+      first = 0;
+    }
     for (int k = b0[2] - 1; k <= b1[2]; ++k) {
       for (int j = b0[1] - 1; j <= b1[1]; ++j) {
+        const float* row = v + first + step_y * static_cast<std::size_t>(j - b0[1] + 1) +
+                           step_z * static_cast<std::size_t>(k - b0[2] + 1);
         for (int i = b0[0] - 1; i <= b1[0]; ++i) {
-          // k = 1: the sample at the centre itself (bit for bit the field's); else phi there.
-          float s = stride == 1 ? -field_->at(i + pad, j + pad, k + pad)
-                                : -static_cast<float>(field_->value(grid().center(i, j, k)));
+          float s = -row[i - b0[0] + 1];
           if (cut_.enabled && i >= cut_.i && j >= cut_.j) s = std::min(s, -half_voxel);
           s_[sidx(i, j, k)] = s;
         }
@@ -314,7 +345,7 @@ void SurfaceMesher::mesh_block(int block) {
     }
   } else {
     if (uniform_neighbourhood(b0)) return;  // no crossing: no quad (and the mesh stays empty)
-    smooth_occupancy(b0, b1, L);
+    smooth_occupancy(b0, b1, L, scratch);
   }
   auto s_at = [&](int i, int j, int k) { return s_[sidx(i, j, k)]; };
   const float h = static_cast<float>(grid().voxel_size);
@@ -386,6 +417,16 @@ void SurfaceMesher::mesh_block(int block) {
     return static_cast<float>(best);
   };
 
+  // A dual cell's vertex is shared by the quads around it: computed once per block (the same
+  // function of s, so the same vertex). The cells c in [b0 - 1, b1 - 1]: index c - b0 + 1.
+  const std::size_t C = static_cast<std::size_t>(B) + 1;
+  scratch.cell_done.assign(C * C * C, 0);
+  scratch.cell_vertex.resize(C * C * C);
+  const auto cell_index = [&](const int c[3]) {
+    return static_cast<std::size_t>(c[0] - b0[0] + 1) +
+           C * (static_cast<std::size_t>(c[1] - b0[1] + 1) +
+                C * static_cast<std::size_t>(c[2] - b0[2] + 1));
+  };
   for (int k = b0[2]; k < b1[2]; ++k) {
     for (int j = b0[1]; j < b1[1]; ++j) {
       for (int i = b0[0]; i < b1[0]; ++i) {
@@ -409,8 +450,12 @@ void SurfaceMesher::mesh_block(int block) {
               c[axis] = std::min(a_idx[axis], nb[axis]);
               c[u] = a_idx[u] + du[q];
               c[w] = a_idx[w] + dw[q];
-              MeshVertex v;
-              cell_vertex(c[0], c[1], c[2], &v);
+              const std::size_t cell = cell_index(c);
+              if (scratch.cell_done[cell] == 0) {
+                cell_vertex(c[0], c[1], c[2], &scratch.cell_vertex[cell]);
+                scratch.cell_done[cell] = 1;
+              }
+              MeshVertex v = scratch.cell_vertex[cell];
               v.material = material;
               out.vertices.push_back(v);
             }

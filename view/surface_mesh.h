@@ -81,9 +81,14 @@ class SurfaceMesher {
   // Meshes `grid` as the constructor above does, but reads the caller's grid instead of copying
   // it (a 512^3 tooth is 128 MiB; issue #30): `grid` must outlive the mesher and not change
   // while it lives. Such a mesher cannot update() (it throws std::logic_error). The meshes are
-  // the same as a copying mesher's.
+  // the same as a copying mesher's. Its blocks are meshed on `threads` threads (reference/core/
+  // setup_threads.h parallel_tasks; <= 0: setup_threads()), each block by one thread into its own
+  // BlockMesh, so the blocks are the one-thread mesher's bit for bit whatever the count (issue
+  // #30: the pictures of a 512^3 tooth). The other constructors mesh on the calling thread (the
+  // live view's mesher runs beside the servo).
   static SurfaceMesher borrowing(const VoxelGrid& grid, const SampledField* field = nullptr,
-                                 int block_size = kDefaultBlockSize, CutAway cut = {});
+                                 int block_size = kDefaultBlockSize, CutAway cut = {},
+                                 int threads = 0);
 
   // The grid changed at the flat voxel indices `changed` (the mesher's own copy is updated from
   // `grid`); re-meshes the dirty blocks and returns their ids, sorted.
@@ -119,10 +124,22 @@ class SurfaceMesher {
   std::vector<int> blocks_touched_by(int i, int j, int k) const;
 
  private:
+  // A block's working arrays: one per thread meshing blocks.
+  struct Scratch {
+    std::vector<float> s;                  // s over one block + 1 voxel halo
+    std::vector<float> samples;            // the field's samples a block reads
+    std::vector<float> values;             // phi at a block's voxel centres (stride k > 1)
+    std::vector<std::uint8_t> o;           // o over one block + 2 voxel halo
+    std::vector<int> filter, filter_out;   // the separable filter's passes
+    std::vector<MeshVertex> cell_vertex;   // each dual cell's vertex, once computed
+    std::vector<std::uint8_t> cell_done;   // whether cell_vertex holds it
+  };
   // borrowed: the grid read (not copied), else null and `grid` copied.
   SurfaceMesher(const VoxelGrid* borrowed, const VoxelGrid& grid, const SampledField* field,
-                int block_size, CutAway cut);
-  void mesh_block(int block);
+                int block_size, CutAway cut, int threads);
+  void mesh_block(int block, Scratch& scratch);
+  // Meshes every block, on threads_ threads.
+  void mesh_all();
   // Copies the changed voxels from `grid` (the per-block solid counts follow).
   void copy_voxels(const VoxelGrid& grid, std::span<const std::size_t> changed);
   // Appends the blocks that hold a voxel of the box [lo, hi] (inclusive, clamped to the grid).
@@ -139,7 +156,7 @@ class SurfaceMesher {
   // a block and its halo by a separable filter (the same sums as the 27-term definition).
   void count_block_solids();
   bool uniform_neighbourhood(const int b0[3]) const;
-  void smooth_occupancy(const int b0[3], const int b1[3], int L);
+  void smooth_occupancy(const int b0[3], const int b1[3], int L, Scratch& scratch) const;
 
   VoxelGrid own_;                        // the mesher's copy (empty when borrowing)
   const VoxelGrid* borrowed_ = nullptr;  // the caller's grid (borrowing())
@@ -151,11 +168,10 @@ class SurfaceMesher {
   // Voxels around a change that the mesh depends on: kHalo on the voxels, the field's edit radius
   // + 2 on a field.
   int halo_ = kHalo;
+  int threads_ = 1;  // mesh_all()'s (borrowing()), else 1
   std::vector<BlockMesh> blocks_;
-  std::vector<float> s_;  // scratch: s over one block + 1 voxel halo
   std::vector<std::uint32_t> block_solid_;  // solid voxels per block (voxels' path)
-  std::vector<std::uint8_t> o_;             // scratch: o over one block + 2 voxel halo
-  std::vector<int> filter_, filter_out_;    // scratch: the separable filter's passes
+  Scratch scratch_;                         // update()'s
 };
 
 // The cut-away through the centre of the solid's bounding box: removes the +x, +y quarter (seen

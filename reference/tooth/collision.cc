@@ -7,6 +7,7 @@
 #include <string>
 
 #include "reference/core/io.h"
+#include "reference/tooth/grid_pages.h"
 
 namespace dentsim {
 namespace {
@@ -49,6 +50,7 @@ double patch_bound(const VoxelTooth& tooth, const int idx[3], int f, int axis, i
 
 VoxelTooth::VoxelTooth(VoxelGrid grid) : octree(std::move(grid)) {
   codes = SparseNeighborCodes(octree.grid());
+  release_empty_pages(octree.grid());  // the grid's empty pages, not resident (issue #30)
 }
 
 void validate_tool_tip(const ToolTip& tip) {

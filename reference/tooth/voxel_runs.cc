@@ -1,11 +1,8 @@
 #include "reference/tooth/voxel_runs.h"
 
-#if defined(__linux__)
-#include <sys/mman.h>
-#include <unistd.h>
-#endif
-
 #include <cstdint>
+
+#include "reference/tooth/grid_pages.h"
 
 namespace dentsim {
 
@@ -31,26 +28,6 @@ VoxelRuns::VoxelRuns(const VoxelGrid& grid)
   }
 }
 
-namespace {
-
-// Hands the whole memory pages inside [begin, end) back to the system (Linux): the caller wrote
-// zeros there, which a private anonymous page reads as again once released (MADV_DONTNEED); a
-// failed madvise leaves them as they are.
-void release_zero_pages(const std::uint8_t* begin, const std::uint8_t* end) {
-#if defined(__linux__)
-  static const long page_size = sysconf(_SC_PAGESIZE);
-  if (page_size <= 0) return;
-  const auto page = static_cast<std::uintptr_t>(page_size);
-  const std::uintptr_t lo = (reinterpret_cast<std::uintptr_t>(begin) + page - 1) / page * page;
-  const std::uintptr_t hi = reinterpret_cast<std::uintptr_t>(end) / page * page;
-  if (hi > lo) madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_DONTNEED);
-#else
-  (void)begin;
-  (void)end;
-#endif
-}
-
-}  // namespace
 
 VoxelGrid VoxelRuns::unpack() const {
   VoxelGrid g;

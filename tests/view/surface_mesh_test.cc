@@ -19,6 +19,7 @@
 
 #include "reference/tooth/sampled_field.h"
 #include "tooth_io/procedural_molar.h"
+#include "view/field_values.h"
 
 namespace dentsim::view {
 namespace {
@@ -518,20 +519,22 @@ TEST(SurfaceMesh, FieldBlocksSkippedOutsideKeepTheDefinitionsQuads) {
 // The pictures' mesher reads the caller's grid instead of copying it (issue #30: 128 MiB at
 // 512^3): the same blocks, vertex for vertex and index for index, as the copying mesher's, on the
 // voxels and on the field, with and without the cut; and it refuses update() (it has no copy).
+// Whether two meshers hold the same blocks, vertex for vertex (bytes) and index for index.
+bool same_blocks(const SurfaceMesher& a, const SurfaceMesher& b) {
+  if (a.blocks().size() != b.blocks().size()) return false;
+  for (std::size_t i = 0; i < a.blocks().size(); ++i) {
+    const BlockMesh& x = a.blocks()[i];
+    const BlockMesh& y = b.blocks()[i];
+    if (x.indices != y.indices || x.vertices.size() != y.vertices.size()) return false;
+    for (std::size_t v = 0; v < x.vertices.size(); ++v) {
+      if (std::memcmp(&x.vertices[v], &y.vertices[v], sizeof(MeshVertex)) != 0) return false;
+    }
+  }
+  return true;
+}
+
 TEST(SurfaceMesh, BorrowingMesherMeshesAsTheCopyingOne) {
   VoxelGrid g = voxelize_procedural_molar(MolarParams{}, 64);
-  const auto same_blocks = [](const SurfaceMesher& a, const SurfaceMesher& b) {
-    if (a.blocks().size() != b.blocks().size()) return false;
-    for (std::size_t i = 0; i < a.blocks().size(); ++i) {
-      const BlockMesh& x = a.blocks()[i];
-      const BlockMesh& y = b.blocks()[i];
-      if (x.indices != y.indices || x.vertices.size() != y.vertices.size()) return false;
-      for (std::size_t v = 0; v < x.vertices.size(); ++v) {
-        if (std::memcmp(&x.vertices[v], &y.vertices[v], sizeof(MeshVertex)) != 0) return false;
-      }
-    }
-    return true;
-  };
   FieldBand band;
   band.outside_m = 3 * g.voxel_size;
   const MolarParams params;
@@ -551,6 +554,116 @@ TEST(SurfaceMesh, BorrowingMesherMeshesAsTheCopyingOne) {
   }
 }
 
+
+// view/field_values.h: read_field_samples is at() over its box, and
+// field_values_at_voxel_centres is float(value(grid.center(i, j, k))) bit for bit, on the molar's
+// field at strides 1, 2 and 3, moved off the grid's first placement (translate, as the simulator
+// places the tooth, the grid moved with it), in random boxes inside the grid, astride its faces
+// and beyond it (the clamped lattice).
+TEST(SurfaceMesh, FieldValuesAtVoxelCentresAreValueBitForBit) {
+  const MolarParams params;
+  const VoxelGrid grid = voxelize_procedural_molar(params, 64);
+  const TriangleMesh surface =
+      triangulate_implicit(grid, [&](const Vec3& p) { return molar_solid(params, p); });
+  std::mt19937_64 rng(30);
+  const Vec3 shift(1.234567e-3, -7.654321e-4, 2.5e-3);
+  for (const int stride : {1, 2, 3}) {
+    SampledField field =
+        build_sampled_field(grid, surface, field_band_for_tip(0.25e-3, grid.voxel_size, stride));
+    VoxelGrid placed = grid;
+    placed.origin += shift;
+    field.translate(shift);
+    const int m = field.samples_per_axis();
+    std::uniform_int_distribution<int> sample_at(0, m - 1), centre_at(-6, grid.n + 5),
+        width(0, 11);
+    std::vector<float> box, values, scratch;
+    long compared = 0, differ = 0, in_band = 0;
+    for (int trial = 0; trial < 300; ++trial) {
+      int lo[3], hi[3], c0[3], c1[3];
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = sample_at(rng);
+        hi[a] = std::min(m - 1, lo[a] + width(rng));
+        c0[a] = centre_at(rng);
+        c1[a] = c0[a] + width(rng);
+      }
+      box.resize(static_cast<std::size_t>(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) *
+                 (hi[2] - lo[2] + 1));
+      read_field_samples(field, lo, hi, box.data());
+      std::size_t q = 0;
+      for (int z = lo[2]; z <= hi[2]; ++z) {
+        for (int y = lo[1]; y <= hi[1]; ++y) {
+          for (int x = lo[0]; x <= hi[0]; ++x) differ += box[q++] != field.at(x, y, z) ? 1 : 0;
+        }
+      }
+      values.resize(static_cast<std::size_t>(c1[0] - c0[0] + 1) * (c1[1] - c0[1] + 1) *
+                    (c1[2] - c0[2] + 1));
+      field_values_at_voxel_centres(field, placed, c0, c1, &scratch, values.data());
+      q = 0;
+      for (int k = c0[2]; k <= c1[2]; ++k) {
+        for (int j = c0[1]; j <= c1[1]; ++j) {
+          for (int i = c0[0]; i <= c1[0]; ++i) {
+            const float expected = static_cast<float>(field.value(placed.center(i, j, k)));
+            differ += std::memcmp(&values[q++], &expected, sizeof(float)) != 0 ? 1 : 0;
+            in_band += expected < field.outside_clamp() && expected > -field.inside_clamp();
+            ++compared;
+          }
+        }
+      }
+    }
+    EXPECT_EQ(differ, 0) << "stride " << stride;
+    EXPECT_GT(compared, 50000) << "stride " << stride;
+    EXPECT_GT(in_band, 1000) << "stride " << stride << ": the band's values are compared";
+  }
+}
+
+// Issue #30 (the pictures of a 512^3 tooth): the borrowing mesher meshes its blocks on several
+// threads, each block by one; the blocks are the one-thread ones, byte for byte, at 2, 3 and 7
+// threads, on the voxels and on the molar's field at strides 1 and 2, with and without the cut.
+// At stride 2 (phi interpolated at the voxel centres) the quads are the sign changes of
+// s = -float(value(centre)) (with the cut's min) between face neighbours, counted by brute force.
+TEST(SurfaceMesh, ThreadedMesherIsTheOneThreadOneAndStride2IsTheDefinition) {
+  const MolarParams params;
+  const VoxelGrid g = voxelize_procedural_molar(params, 64);
+  const TriangleMesh surface =
+      triangulate_implicit(g, [&](const Vec3& p) { return molar_solid(params, p); });
+  std::vector<SampledField> fields;
+  for (const int stride : {1, 2}) {
+    FieldBand band = field_band_for_tip(0.25e-3, g.voxel_size, stride);
+    fields.push_back(build_sampled_field(g, surface, band));
+  }
+  for (const SampledField* f : std::vector<const SampledField*>{nullptr, &fields[0], &fields[1]}) {
+    for (const CutAway cut : {CutAway{}, centre_cut(g)}) {
+      const SurfaceMesher one = SurfaceMesher::borrowing(g, f, 8, cut, 1);
+      ASSERT_GT(one.triangle_count(), 1000u);
+      for (const int threads : {2, 3, 7}) {
+        EXPECT_TRUE(same_blocks(one, SurfaceMesher::borrowing(g, f, 8, cut, threads)))
+            << "stride " << (f != nullptr ? f->stride() : 0) << " cut " << cut.enabled
+            << " threads " << threads;
+      }
+      if (f == nullptr || f->stride() != 2) continue;
+      const float half_voxel = 0.5f * static_cast<float>(g.voxel_size);
+      const auto s_of = [&](int i, int j, int k) {
+        float v = -static_cast<float>(f->value(g.center(i, j, k)));
+        if (cut.enabled && i >= cut.i && j >= cut.j) v = std::min(v, -half_voxel);
+        return v;
+      };
+      long pairs = 0;
+      for (int k = 0; k < g.n; ++k) {
+        for (int j = 0; j < g.n; ++j) {
+          for (int i = 0; i < g.n; ++i) {
+            if (s_of(i, j, k) < 0.0f) continue;
+            for (int face = 0; face < 6; ++face) {
+              int nb[3] = {i, j, k};
+              nb[face / 2] += face % 2 == 0 ? -1 : 1;
+              if (s_of(nb[0], nb[1], nb[2]) < 0.0f) ++pairs;
+            }
+          }
+        }
+      }
+      EXPECT_EQ(static_cast<long>(one.triangle_count()), 2 * pairs) << "cut " << cut.enabled;
+    }
+  }
+}
 
 // centre_cut scans the grid a row at a time: the same cut as the definition (the middle of the
 // solid voxels' x and y extent, every voxel tested), on random sparse grids and an empty one.

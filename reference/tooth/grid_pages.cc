@@ -1,0 +1,80 @@
+// The voxel grid's empty pages (reference/tooth/grid_pages.h).
+#include "reference/tooth/grid_pages.h"
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#include <unistd.h>
+#endif
+
+#include <algorithm>
+#include <cstring>
+
+namespace dentsim {
+
+namespace {
+
+std::size_t page_bytes() {
+#if defined(__linux__)
+  static const long page_size = sysconf(_SC_PAGESIZE);
+  return page_size > 0 ? static_cast<std::size_t>(page_size) : 0;
+#else
+  return 0;
+#endif
+}
+
+bool all_zero(const std::uint8_t* p, std::size_t size) {
+  std::uint64_t any = 0;
+  std::size_t i = 0;
+  for (; i + 8 <= size; i += 8) {
+    std::uint64_t word;
+    std::memcpy(&word, p + i, 8);
+    any |= word;
+  }
+  for (; i < size; ++i) any |= p[i];
+  return any == 0;
+}
+
+}  // namespace
+
+void release_zero_pages(const std::uint8_t* begin, const std::uint8_t* end) {
+#if defined(__linux__)
+  const std::uintptr_t page = page_bytes();
+  if (page == 0) return;
+  const std::uintptr_t lo = (reinterpret_cast<std::uintptr_t>(begin) + page - 1) / page * page;
+  const std::uintptr_t hi = reinterpret_cast<std::uintptr_t>(end) / page * page;
+  if (hi > lo) madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_DONTNEED);
+#else
+  (void)begin;
+  (void)end;
+#endif
+}
+
+std::size_t release_empty_pages(const VoxelGrid& grid) {
+  const std::size_t page = page_bytes();
+  if (page == 0 || grid.voxels.empty()) return 0;
+  const std::uint8_t* data = grid.voxels.data();
+  const std::uint8_t* end = data + grid.voxels.size();
+  // The whole pages of the storage, in runs of empty ones (one madvise a run).
+  const auto first = reinterpret_cast<std::uintptr_t>(data);
+  const std::uint8_t* p = data + ((page - first % page) % page);
+  const std::uint8_t* run = nullptr;  // the start of the current run of empty pages
+  std::size_t released = 0;
+  for (; p + page <= end; p += page) {
+    if (all_zero(p, page)) {
+      if (run == nullptr) run = p;
+      continue;
+    }
+    if (run != nullptr) {
+      release_zero_pages(run, p);
+      released += static_cast<std::size_t>(p - run);
+      run = nullptr;
+    }
+  }
+  if (run != nullptr) {
+    release_zero_pages(run, p);
+    released += static_cast<std::size_t>(p - run);
+  }
+  return released;
+}
+
+}  // namespace dentsim
