@@ -129,6 +129,31 @@ bool SurfaceVoxels::update(const VoxelTooth& tooth, std::span<const std::size_t>
   return current_;
 }
 
+bool SurfaceVoxels::remove(VoxelTooth& tooth, std::span<const std::size_t> removed) {
+  const VoxelGrid& grid = tooth.grid();
+  const std::size_t n = static_cast<std::size_t>(n_);
+  for (const std::size_t v : removed) {
+    const int i = static_cast<int>(v % n), j = static_cast<int>((v / n) % n);
+    const int k = static_cast<int>(v / (n * n));
+    if (tooth.octree.remove_voxel(i, j, k) == kEmpty) continue;  // its codes and bits hold
+    if (!tooth.codes.set(v, 0) || !set(i, j, k, false)) current_ = false;
+    for (int f = 0; f < 6; ++f) {
+      int u[3] = {i, j, k};
+      u[face_axis(f)] += face_sign(f);
+      if (!grid.inside(u[0], u[1], u[2])) continue;
+      const std::size_t w = grid.index(u[0], u[1], u[2]);
+      if (grid.voxels[w] == kEmpty) continue;  // code 0 and bit clear, as before
+      // Face f ^ 1 of u is the one toward v (the faces come in pairs -a, +a).
+      const std::uint8_t before = tooth.codes.code(w);
+      const bool stored = tooth.codes.set(w, static_cast<std::uint8_t>(before | (1u << (f ^ 1))));
+      // A code not stored (impossible while the tooth only loses voxels) keeps the bit update()
+      // would read.
+      if (!set(u[0], u[1], u[2], stored || before != 0)) current_ = false;
+    }
+  }
+  return current_;
+}
+
 bool SurfaceVoxels::exposed(int i, int j, int k) const {
   const std::uint64_t* b = brick(slot(i / kB, j / kB, k / kB));
   if (b == nullptr) return false;

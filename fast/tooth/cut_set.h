@@ -106,6 +106,13 @@ class SurfaceVoxels {
   // Returns false, and current() is false from then on, if a bit had no brick's room (impossible
   // while the tooth only loses voxels). No allocation.
   bool update(const VoxelTooth& tooth, std::span<const std::size_t> removed);
+  // Removes the voxels `removed` (flat indices) from `tooth` (the octree, the codes) and updates
+  // the bits: the state FullOctree::remove_voxel and reencode_local for each, then update(),
+  // leave, from the codes already held (the tooth's codes are those of its grid): the voxel's code
+  // becomes 0 and its bit clear, each solid face neighbour's code gains the face toward it and its
+  // bit is set; an empty voxel is skipped (nothing changes). 6 grid reads per voxel instead of 49,
+  // and no neighbour read twice. Same return as update(). No allocation.
+  bool remove(VoxelTooth& tooth, std::span<const std::size_t> removed);
   bool current() const { return current_; }
 
   bool exposed(int i, int j, int k) const;
@@ -153,6 +160,11 @@ class SurfaceCutSet {
 
   // drill_tick removed `removed` from the tooth.
   void update(std::span<const std::size_t> removed) { surface_.update(tooth_, removed); }
+  // Removes `removed` from the tooth (this one's, given writable) and the bits: SurfaceVoxels::
+  // remove.
+  void remove(VoxelTooth& tooth, std::span<const std::size_t> removed) {
+    surface_.remove(tooth, removed);
+  }
 
   // The nearest voxel into *nearest and, if `shares` is not null, collect_cut_set(tooth, contact,
   // g, rho, ...)'s members appended to `shares` and `voxels`. Returns false, touching nothing,
@@ -230,6 +242,10 @@ class CutSetProvider : public dentsim::ToothContactProvider {
                               std::vector<std::size_t>* voxels) override;
   // The tooth lost `removed` outside drill() (the field model's late drilling, fast/tooth/field.h).
   void surface_removed(std::span<const std::size_t> removed) { cut_.update(removed); }
+  // Removes `removed` from `tooth` (the provider's) and the bits at once (SurfaceVoxels::remove).
+  void remove_voxels(VoxelTooth& tooth, std::span<const std::size_t> removed) {
+    cut_.remove(tooth, removed);
+  }
 
  private:
   SurfaceCutSet cut_;

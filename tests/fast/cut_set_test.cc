@@ -199,6 +199,70 @@ TEST(SurfaceVoxels, AreTheVoxelsWithANonZeroCodeBeforeAndAfterRemovals) {
   EXPECT_GT(removed, 4000);
 }
 
+// SurfaceVoxels::remove (the field model's replay of the worker's removal on the servo's tooth,
+// stop 47) leaves the octree, the codes and the bits as remove_voxel and reencode_local for each
+// voxel, then update(), do: random batches of exposed voxels of the molar, some batches repeating
+// voxels already removed, some removing face neighbours in the same batch; the grids, every
+// octree node, every code and every bit equal after each batch, no allocation.
+TEST(SurfaceVoxels, RemoveLeavesTheToothAndBitsOfRemoveVoxelAndReencodeLocal) {
+  const VoxelTooth start(voxelize_procedural_molar(MolarParams{}, 64));
+  VoxelTooth ref = start, fst = start;
+  fast::SurfaceVoxels s_ref(ref), s_fst(fst);
+  const VoxelGrid& g = ref.grid();
+  const std::size_t n = static_cast<std::size_t>(g.n);
+  std::mt19937_64 rng(47);
+  std::vector<std::size_t> done;
+  long removed = 0;
+  for (int batch = 0; batch < 30; ++batch) {
+    std::vector<std::size_t> surface;
+    for (std::size_t v = 0; v < g.voxels.size(); ++v) {
+      if (ref.codes.code(v) != 0) surface.push_back(v);
+    }
+    std::shuffle(surface.begin(), surface.end(), rng);
+    std::vector<std::size_t> batch_voxels;
+    for (std::size_t r = 0; r < 60 && r < surface.size(); ++r) {
+      batch_voxels.push_back(surface[r]);
+      if (r % 5 == 0 && surface[r] % n + 1 < n) batch_voxels.push_back(surface[r] + 1);  // +x
+    }
+    if (batch % 3 == 2) batch_voxels.insert(batch_voxels.end(), done.begin(), done.begin() + 10);
+    for (const std::size_t v : batch_voxels) {
+      const int i = static_cast<int>(v % n), j = static_cast<int>((v / n) % n);
+      const int k = static_cast<int>(v / (n * n));
+      removed += ref.octree.remove_voxel(i, j, k) != kEmpty;
+      reencode_local(ref.octree.grid(), i, j, k, &ref.codes);
+      done.push_back(v);
+    }
+    EXPECT_TRUE(s_ref.update(ref, batch_voxels));
+    {
+      testing::AllocationScope scope;
+      EXPECT_TRUE(s_fst.remove(fst, batch_voxels));
+      EXPECT_EQ(scope.count(), 0);
+    }
+    ASSERT_TRUE(fst.grid().voxels == g.voxels) << "batch " << batch;
+    long differ = 0;
+    for (std::size_t v = 0; v < g.voxels.size(); ++v) differ += fst.codes.code(v) != ref.codes.code(v);
+    for (int l = 0; l < ref.octree.levels(); ++l) {
+      const int side = 1 << l;
+      for (int z = 0; z < side; ++z) {
+        for (int y = 0; y < side; ++y) {
+          for (int x = 0; x < side; ++x) {
+            differ += fst.octree.occupied(l, x, y, z) != ref.octree.occupied(l, x, y, z);
+          }
+        }
+      }
+    }
+    for (int k = 0; k < g.n; ++k) {
+      for (int j = 0; j < g.n; ++j) {
+        for (int i = 0; i < g.n; ++i) differ += s_fst.exposed(i, j, k) != s_ref.exposed(i, j, k);
+      }
+    }
+    ASSERT_EQ(differ, 0) << "batch " << batch;
+    ASSERT_EQ(bits_differing(s_fst, fst), 0) << "batch " << batch;
+  }
+  EXPECT_TRUE(s_fst.current());
+  EXPECT_GT(removed, 1500);
+}
+
 // The Morton layout of a brick: word w is a 4^3 block, byte b of a word a 2^3 block, bit c of the
 // byte the child c = dx + 2 dy + 4 dz (the octree's child index).
 TEST(SurfaceVoxels, BricksAreInMortonOrder) {
