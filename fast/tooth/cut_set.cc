@@ -15,17 +15,6 @@ namespace {
 
 constexpr int kB = SurfaceVoxels::kBrick;
 
-// The Morton interleave of local coordinates (x, y, z), each in 0..7: 9 bits.
-constexpr int interleave3(int x, int y, int z) {
-  int m = 0;
-  for (int b = 0; b < 3; ++b) {
-    m |= ((x >> b) & 1) << (3 * b);
-    m |= ((y >> b) & 1) << (3 * b + 1);
-    m |= ((z >> b) & 1) << (3 * b + 2);
-  }
-  return m;
-}
-
 // Spreads the low 10 bits of v to every third bit (the Morton code of brick coordinates).
 std::uint64_t spread3(std::uint64_t v) {
   v &= 0x3ff;
@@ -52,8 +41,6 @@ inline double gap_term(const VoxelGrid& grid, int a, int i, double ga) {
 }
 
 }  // namespace
-
-int SurfaceVoxels::local_bit(int x, int y, int z) { return interleave3(x, y, z); }
 
 SurfaceVoxels::SurfaceVoxels(const VoxelTooth& tooth) {
   const VoxelGrid& grid = tooth.grid();

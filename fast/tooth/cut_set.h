@@ -131,7 +131,10 @@ class SurfaceVoxels {
     return id < 0 ? nullptr : &bits_[static_cast<std::size_t>(id) * kWords];
   }
   // The bit of local voxel (x, y, z) of a brick (each in 0..7): the Morton interleave.
-  static int local_bit(int x, int y, int z);
+  static int local_bit(int x, int y, int z) {
+    constexpr int kSpread[8] = {0, 1, 8, 9, 64, 65, 72, 73};  // bits 0, 1, 2 to 0, 3, 6
+    return kSpread[x] | (kSpread[y] << 1) | (kSpread[z] << 2);
+  }
 
  private:
   // Sets voxel (i, j, k)'s bit to `on`; false when it needs a brick where none may be taken.
