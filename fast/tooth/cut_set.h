@@ -76,7 +76,8 @@
 // sums bound it below) is < best, or = best once a voxel is found (a tie with a smaller index),
 // and best falls as nearer voxels come. No skipped block can hold the minimiser, so the answer is
 // collect's with a cut set (the same certificate and fallback), whatever the seed; the cost is that
-// of the blocks about the ball of radius D(v*): the surface's cap within a block's size of it.
+// of the blocks about the ball of radius D(v*): the surface within a block's size of it (a cap on
+// an open surface; in a cavity about g, the bur's own hole, its whole wall).
 //
 // Real-time: collect() and update() neither allocate nor throw (their buffers are sized by the
 // constructor from the tip's radius and the grid).
