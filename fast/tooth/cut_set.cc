@@ -481,7 +481,6 @@ bool SurfaceCutSet::collect(const Vec3& g, const Contact& contact, std::vector<C
   return answer(g, found, best, nearest);
 }
 
-
 CutSetProvider::CutSetProvider(VoxelTooth& tooth, ToolTip tip, double k_tooth, double b_tooth,
                                const DrillParams* drill, ContactModel model, SignedDistanceFn sd,
                                SampledField* field)

@@ -240,7 +240,9 @@ TEST(SurfaceVoxels, RemoveLeavesTheToothAndBitsOfRemoveVoxelAndReencodeLocal) {
     }
     ASSERT_TRUE(fst.grid().voxels == g.voxels) << "batch " << batch;
     long differ = 0;
-    for (std::size_t v = 0; v < g.voxels.size(); ++v) differ += fst.codes.code(v) != ref.codes.code(v);
+    for (std::size_t v = 0; v < g.voxels.size(); ++v) {
+      differ += fst.codes.code(v) != ref.codes.code(v);
+    }
     for (int l = 0; l < ref.octree.levels(); ++l) {
       const int side = 1 << l;
       for (int z = 0; z < side; ++z) {
