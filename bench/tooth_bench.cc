@@ -178,6 +178,41 @@ void BM_CutSet(benchmark::State& state) {
 }
 BENCHMARK(BM_CutSet)->ArgsProduct({{128, 256, 512}, {0, 1}});
 
+// The contact's material alone (issue #30, stop 47: the field model's servo asks for it without a
+// cut set, its cut being the worker's): the solid voxel nearest to the anchor within 2 rho, on the
+// procedural molar at `resolution`, 0.5 mm bur, the anchor g moving 0.5 um a call along a
+// 2 mm-long line through the occlusal anchor of BM_CutSet and back (a tip at 0.5 mm/s at 1 kHz).
+// Args: resolution, 0 octree (proxy_material by fast::signed_distance) / 1 surface voxels
+// (SurfaceCutSet::collect without a cut set). Results: docs/benchmarks.md "The field model's
+// contact material without the band scan".
+void BM_ContactMaterial(benchmark::State& state) {
+  const VoxelTooth& tooth = bench::built_once<MolarTooth>(static_cast<int>(state.range(0))).tooth;
+  const double rho = 0.5e-3;
+  const Vec3 g0 = occlusal_pose(tooth.grid(), rho).x + Vec3(0, 0, 1e-4);
+  Contact contact;
+  fast::SurfaceCutSet cut(tooth, rho, &fast::signed_distance);
+  fast::SurfaceCutSet::Nearest nearest;
+  constexpr int kSteps = 4000;  // 2 mm at 0.5 um
+  int step = 0;
+  long found = 0;
+  for (auto _ : state) {
+    const int s = step < kSteps ? step : 2 * kSteps - step;  // there and back
+    step = step + 1 == 2 * kSteps ? 0 : step + 1;
+    const Vec3 g = g0 + Vec3(0.5e-6 * (s - kSteps / 2), 0.2e-6 * (s - kSteps / 2), 0.0);
+    std::uint8_t material = kEmpty;
+    if (state.range(1) == 0) {
+      material = proxy_material(tooth, g, rho, &fast::signed_distance);
+    } else if (cut.collect(g, contact, nullptr, nullptr, &nearest) && nearest.found) {
+      material = tooth.grid().voxels[nearest.voxel];
+    }
+    found += material != kEmpty;
+    benchmark::DoNotOptimize(material);
+  }
+  state.counters["found"] = static_cast<double>(found) / static_cast<double>(state.iterations());
+  state.SetLabel(state.range(1) == 0 ? "octree" : "surface voxels");
+}
+BENCHMARK(BM_ContactMaterial)->ArgsProduct({{128, 256, 512}, {0, 1}});
+
 // The field model's query (issue #30): value and gradient at a point, i.e. the surface proxy's
 // distance(x, rho) and, where found, normal(x), on the drill scene's tooth (procedural molar at
 // 128^3, 0.5 mm bur) and field: dentsim::FieldSolid (reference) against fast::FieldSolid (fast/

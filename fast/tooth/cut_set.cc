@@ -15,17 +15,6 @@ namespace {
 
 constexpr int kB = SurfaceVoxels::kBrick;
 
-// The Morton interleave of local coordinates (x, y, z), each in 0..7: 9 bits.
-constexpr int interleave3(int x, int y, int z) {
-  int m = 0;
-  for (int b = 0; b < 3; ++b) {
-    m |= ((x >> b) & 1) << (3 * b);
-    m |= ((y >> b) & 1) << (3 * b + 1);
-    m |= ((z >> b) & 1) << (3 * b + 2);
-  }
-  return m;
-}
-
 // Spreads the low 10 bits of v to every third bit (the Morton code of brick coordinates).
 std::uint64_t spread3(std::uint64_t v) {
   v &= 0x3ff;
@@ -36,9 +25,22 @@ std::uint64_t spread3(std::uint64_t v) {
   return v;
 }
 
-}  // namespace
+// Axis a's term of sphere_intersects_cells for voxel i: the squared gap from g_a to the voxel's
+// slab [origin + h i, origin + h (i + 1)] (0 inside it). One function, so that the tables and the
+// seed of the material's search compute the same double.
+inline double gap_term(const VoxelGrid& grid, int a, int i, double ga) {
+  const double l = grid.origin[a] + grid.voxel_size * i;
+  const double u = grid.origin[a] + grid.voxel_size * (i + 1);
+  double d = 0.0;
+  if (ga < l) {
+    d = l - ga;
+  } else if (ga > u) {
+    d = ga - u;
+  }
+  return d * d;
+}
 
-int SurfaceVoxels::local_bit(int x, int y, int z) { return interleave3(x, y, z); }
+}  // namespace
 
 SurfaceVoxels::SurfaceVoxels(const VoxelTooth& tooth) {
   const VoxelGrid& grid = tooth.grid();
@@ -109,6 +111,31 @@ bool SurfaceVoxels::update(const VoxelTooth& tooth, std::span<const std::size_t>
       if (!grid.inside(u[0], u[1], u[2])) continue;
       const bool on = tooth.codes.code(grid.index(u[0], u[1], u[2])) != 0;
       if (!set(u[0], u[1], u[2], on)) current_ = false;
+    }
+  }
+  return current_;
+}
+
+bool SurfaceVoxels::remove(VoxelTooth& tooth, std::span<const std::size_t> removed) {
+  const VoxelGrid& grid = tooth.grid();
+  const std::size_t n = static_cast<std::size_t>(n_);
+  for (const std::size_t v : removed) {
+    const int i = static_cast<int>(v % n), j = static_cast<int>((v / n) % n);
+    const int k = static_cast<int>(v / (n * n));
+    if (tooth.octree.remove_voxel(i, j, k) == kEmpty) continue;  // its codes and bits hold
+    if (!tooth.codes.set(v, 0) || !set(i, j, k, false)) current_ = false;
+    for (int f = 0; f < 6; ++f) {
+      int u[3] = {i, j, k};
+      u[face_axis(f)] += face_sign(f);
+      if (!grid.inside(u[0], u[1], u[2])) continue;
+      const std::size_t w = grid.index(u[0], u[1], u[2]);
+      if (grid.voxels[w] == kEmpty) continue;  // code 0 and bit clear, as before
+      // Face f ^ 1 of u is the one toward v (the faces come in pairs -a, +a).
+      const std::uint8_t before = tooth.codes.code(w);
+      const bool stored = tooth.codes.set(w, static_cast<std::uint8_t>(before | (1u << (f ^ 1))));
+      // A code not stored (impossible while the tooth only loses voxels) keeps the bit update()
+      // would read.
+      if (!set(u[0], u[1], u[2], stored || before != 0)) current_ = false;
     }
   }
   return current_;
@@ -197,6 +224,168 @@ bool SurfaceCutSet::near_grid_plane(const Vec3& g) const {
   return false;
 }
 
+int SurfaceCutSet::box_about(const Vec3& g, double r, int lo[3], int hi[3], int b_lo[3],
+                             int b_hi[3]) const {
+  // The ball's box of voxels, one voxel wider each side than its bounds (their rounding), clipped
+  // to the grid, and the box's bricks [b_lo, b_hi].
+  const VoxelGrid& grid = tooth_.grid();
+  const int n = grid.n;
+  const double h = grid.voxel_size;
+  bool empty = false;
+  for (int a = 0; a < 3; ++a) {
+    const double u0 = std::floor((g[a] - r - grid.origin[a]) / h) - 1.0;
+    const double u1 = std::floor((g[a] + r - grid.origin[a]) / h) + 1.0;
+    empty = empty || u1 < 0.0 || u0 > n - 1.0;
+    lo[a] = empty ? 0 : static_cast<int>(std::max(u0, 0.0));
+    hi[a] = empty ? 0 : static_cast<int>(std::min(u1, n - 1.0));
+    b_lo[a] = lo[a] / kB;
+    b_hi[a] = hi[a] / kB;
+    // Within the constructor's bound (a guard: the reference answers otherwise).
+    if (b_hi[a] - b_lo[a] + 1 > bricks_across_) return -1;
+  }
+  return empty ? 1 : 0;
+}
+
+void SurfaceCutSet::fill_tables(const Vec3& g, const int lo[3], const int hi[3],
+                                const int b_lo[3], const int b_hi[3], bool centres) {
+  // Per axis over the bricks' voxels i = 8 b_lo + r: the squared gap t (sphere_intersects_cells's
+  // term, +inf outside [lo, hi]: such a voxel is never a candidate), the squared centre offset c
+  // (cut_band_depth's term, if asked), and the least t of each aligned run of 2, 4 and 8. A run's
+  // least, summed as a voxel's terms are, bounds every voxel of the block below (the sums round
+  // monotonically): a block whose bound is not < R^2 holds no voxel of the ball.
+  constexpr double kFar = std::numeric_limits<double>::infinity();
+  const VoxelGrid& grid = tooth_.grid();
+  for (int a = 0; a < 3; ++a) {
+    const int origin_voxel = kB * b_lo[a];
+    double* t = terms_[a].data();
+    double* c = centre_[a].data();
+    const int count = kB * (b_hi[a] - b_lo[a] + 1);
+    for (int r = 0; r < count; ++r) {
+      const int i = origin_voxel + r;
+      if (i < lo[a] || i > hi[a]) {
+        t[r] = kFar;
+        continue;
+      }
+      t[r] = gap_term(grid, a, i, g[a]);
+      if (!centres) continue;
+      const double e = (grid.origin[a] + grid.voxel_size * (i + 0.5)) - g[a];  // centre - g
+      c[r] = e * e;
+    }
+    double* l2 = least2_[a].data();
+    double* l4 = least4_[a].data();
+    double* l8 = least8_[a].data();
+    for (int r = 0; r < count / 2; ++r) l2[r] = std::min(t[2 * r], t[2 * r + 1]);
+    for (int r = 0; r < count / 4; ++r) l4[r] = std::min(l2[2 * r], l2[2 * r + 1]);
+    for (int r = 0; r < count / 8; ++r) l8[r] = std::min(l4[2 * r], l4[2 * r + 1]);
+  }
+}
+
+bool SurfaceCutSet::answer(const Vec3& g, bool found, std::size_t best, Nearest* nearest) {
+  if (found && certify_ && !near_grid_plane(g)) {
+    nearest->found = true;
+    nearest->voxel = best;
+    seed_ = best;
+    seeded_ = true;
+    return true;
+  }
+  ++fallbacks_;
+  const SignedDistance sd = sd_(tooth_, g, proxy_material_reach(rho_));
+  nearest->found = sd.found;
+  nearest->voxel = sd.voxel;
+  seeded_ = sd.found;  // a seed only if exposed (material_alone checks)
+  seed_ = sd.voxel;
+  return true;
+}
+
+bool SurfaceCutSet::material_alone(const Vec3& g, Nearest* nearest) {
+  // The minimum of (D, v) over the exposed voxels with D < min(R^2, (2 rho)^2), as collect's pass
+  // finds it, but nearest first: seeded by the last answer's voxel if it is still exposed and
+  // within reach (the contact moves little from tick to tick), then every brick, word and 2^3
+  // block whose bound can hold a voxel with D < best, or D = best and a smaller index, is read;
+  // the others cannot hold the minimiser (header comment). The visiting order does not matter:
+  // the minimum of a total order is unique.
+  const VoxelGrid& grid = tooth_.grid();
+  const double R = cut_band(rho_).reach;
+  const double m = proxy_material_reach(rho_);
+  double best2 = std::min(R * R, m * m);  // collect's ball test and outside_distance's reach
+  std::size_t best = 0;
+  bool found = false;
+  const std::size_t nn = static_cast<std::size_t>(grid.n);
+  if (seeded_ && seed_ < grid.voxels.size()) {
+    const int i = static_cast<int>(seed_ % nn), j = static_cast<int>((seed_ / nn) % nn);
+    const int k = static_cast<int>(seed_ / (nn * nn));
+    if (surface_.exposed(i, j, k)) {
+      const double d2 = (gap_term(grid, 0, i, g[0]) + gap_term(grid, 1, j, g[1])) +
+                        gap_term(grid, 2, k, g[2]);
+      if (d2 < best2) {
+        best2 = d2;
+        best = seed_;
+        found = true;
+        ++seeded_queries_;
+      }
+    }
+  }
+  // The box of the ball of radius sqrt(best): every voxel with D <= best has each term <= best,
+  // so lies within it (the box's voxel of margin covers the rounding).
+  int lo[3], hi[3], b_lo[3], b_hi[3];
+  const int box = box_about(g, found ? std::sqrt(best2) : R, lo, hi, b_lo, b_hi);
+  if (box < 0) return false;
+  if (box == 0) {
+    fill_tables(g, lo, hi, b_lo, b_hi, false);
+    const double *tx = terms_[0].data(), *ty = terms_[1].data(), *tz = terms_[2].data();
+    const double *x2 = least2_[0].data(), *y2 = least2_[1].data(), *z2 = least2_[2].data();
+    const double *x4 = least4_[0].data(), *y4 = least4_[1].data(), *z4 = least4_[2].data();
+    const double *x8 = least8_[0].data(), *y8 = least8_[1].data(), *z8 = least8_[2].data();
+    // A block may hold the minimiser iff its bound is < best, or = best once one is found (a
+    // smaller index). Partial sums bound the full one below (rounded addition is monotone).
+    auto may = [&](double bound) { return bound < best2 || (found && bound == best2); };
+    const int across[3] = {b_hi[0] - b_lo[0] + 1, b_hi[1] - b_lo[1] + 1, b_hi[2] - b_lo[2] + 1};
+    for (int bz = 0; bz < across[2]; ++bz) {
+      if (!may(z8[bz])) continue;
+      for (int by = 0; by < across[1]; ++by) {
+        if (!may(y8[by] + z8[bz])) continue;
+        for (int bx = 0; bx < across[0]; ++bx) {
+          if (!may((x8[bx] + y8[by]) + z8[bz])) continue;
+          const std::uint64_t* bits =
+              surface_.brick(surface_.slot(b_lo[0] + bx, b_lo[1] + by, b_lo[2] + bz));
+          if (bits == nullptr) continue;
+          for (int w = 0; w < SurfaceVoxels::kWords; ++w) {
+            std::uint64_t word = bits[w];
+            if (word == 0) continue;
+            const int wx = 2 * bx + (w & 1), wy = 2 * by + ((w >> 1) & 1), wz = 2 * bz + (w >> 2);
+            if (!may((x4[wx] + y4[wy]) + z4[wz])) continue;
+            while (word != 0) {
+              const int q = std::countr_zero(word) >> 3;  // the lowest 2^3 block left
+              std::uint64_t block = (word >> (8 * q)) & 0xff;
+              word &= ~(std::uint64_t{0xff} << (8 * q));
+              const int qx = 2 * wx + (q & 1), qy = 2 * wy + ((q >> 1) & 1);
+              const int qz = 2 * wz + (q >> 2);
+              if (!may((x2[qx] + y2[qy]) + z2[qz])) continue;
+              while (block != 0) {
+                const int c = std::countr_zero(block);
+                block &= block - 1;
+                const int rx = 2 * qx + (c & 1), ry = 2 * qy + ((c >> 1) & 1);
+                const int rz = 2 * qz + (c >> 2);
+                const double d2 = (tx[rx] + ty[ry]) + tz[rz];
+                if (!may(d2)) continue;
+                const std::size_t v = static_cast<std::size_t>(kB * b_lo[0] + rx) +
+                                      nn * (static_cast<std::size_t>(kB * b_lo[1] + ry) +
+                                            nn * static_cast<std::size_t>(kB * b_lo[2] + rz));
+                if (d2 < best2 || (found && v < best)) {  // sdf_nearer (may: d2 <= best)
+                  best2 = d2;
+                  best = v;
+                  found = true;
+                }
+              }
+            }
+          }
+        }
+      }
+    }
+  }
+  return answer(g, found, best, nearest);
+}
+
 bool SurfaceCutSet::collect(const Vec3& g, const Contact& contact, std::vector<Contact>* shares,
                             std::vector<std::size_t>* voxels, Nearest* nearest) {
   if (!surface_.current() || !g.allFinite()) return false;
@@ -213,76 +402,30 @@ bool SurfaceCutSet::collect(const Vec3& g, const Contact& contact, std::vector<C
     nearest->voxel = grid.index(cell[0], cell[1], cell[2]);
     return true;
   }
+  if (shares == nullptr) return material_alone(g, nearest);
   const CutBand cut = cut_band(rho_);
   const double R2 = cut.reach * cut.reach;  // sphere_intersects_cells's rho * rho
   const double m = proxy_material_reach(rho_);
   bool found = false;
   double best2 = m * m;  // outside_distance's reach * reach
   std::size_t best = 0;
-  // The ball's box of voxels, one voxel wider each side than its bounds (their rounding), clipped
-  // to the grid, and the box's bricks [b_lo, b_hi].
   int lo[3], hi[3], b_lo[3], b_hi[3];
-  bool empty = false;
-  for (int a = 0; a < 3; ++a) {
-    const double u0 = std::floor((g[a] - cut.reach - grid.origin[a]) / h) - 1.0;
-    const double u1 = std::floor((g[a] + cut.reach - grid.origin[a]) / h) + 1.0;
-    empty = empty || u1 < 0.0 || u0 > n - 1.0;
-    lo[a] = empty ? 0 : static_cast<int>(std::max(u0, 0.0));
-    hi[a] = empty ? 0 : static_cast<int>(std::min(u1, n - 1.0));
-    b_lo[a] = lo[a] / kB;
-    b_hi[a] = hi[a] / kB;
-    // Within the constructor's bound (a guard: the reference answers otherwise).
-    if (b_hi[a] - b_lo[a] + 1 > bricks_across_) return false;
-  }
+  const int box = box_about(g, cut.reach, lo, hi, b_lo, b_hi);
+  if (box < 0) return false;
   if (inside) {
     nearest->found = true;
     nearest->voxel = grid.index(cell[0], cell[1], cell[2]);
   }
-  // Per axis over the bricks' voxels i = 8 b_lo + r: the squared gap t (sphere_intersects_cells's
-  // term, +inf outside [lo, hi]: such a voxel is never a candidate), the squared centre offset c
-  // (cut_band_depth's term), and the least t of each aligned run of 2, 4 and 8. A run's least,
-  // summed as a voxel's terms are, bounds every voxel of the block below (the sums round
-  // monotonically): a block whose bound is not < R^2 holds no voxel of the ball.
-  constexpr double kFar = std::numeric_limits<double>::infinity();
-  int origin_voxel[3];
-  for (int a = 0; a < 3 && !empty; ++a) {
-    origin_voxel[a] = kB * b_lo[a];
-    double* t = terms_[a].data();
-    double* c = centre_[a].data();
-    const int count = kB * (b_hi[a] - b_lo[a] + 1);
-    for (int r = 0; r < count; ++r) {
-      const int i = origin_voxel[a] + r;
-      if (i < lo[a] || i > hi[a]) {
-        t[r] = kFar;
-        continue;
-      }
-      const double l = grid.origin[a] + grid.voxel_size * i;
-      const double u = grid.origin[a] + grid.voxel_size * (i + 1);
-      double d = 0.0;
-      if (g[a] < l) {
-        d = l - g[a];
-      } else if (g[a] > u) {
-        d = g[a] - u;
-      }
-      t[r] = d * d;
-      const double e = (grid.origin[a] + grid.voxel_size * (i + 0.5)) - g[a];  // centre - g
-      c[r] = e * e;
-    }
-    double* l2 = least2_[a].data();
-    double* l4 = least4_[a].data();
-    double* l8 = least8_[a].data();
-    for (int r = 0; r < count / 2; ++r) l2[r] = std::min(t[2 * r], t[2 * r + 1]);
-    for (int r = 0; r < count / 4; ++r) l4[r] = std::min(l2[2 * r], l2[2 * r + 1]);
-    for (int r = 0; r < count / 8; ++r) l8[r] = std::min(l4[2 * r], l4[2 * r + 1]);
-  }
-  if (!empty) {
+  if (box == 0) {
+    fill_tables(g, lo, hi, b_lo, b_hi, true);
     order_bricks(b_lo, b_hi);
     const double *tx = terms_[0].data(), *ty = terms_[1].data(), *tz = terms_[2].data();
     const double *cx = centre_[0].data(), *cy = centre_[1].data(), *cz = centre_[2].data();
     const double *x2 = least2_[0].data(), *y2 = least2_[1].data(), *z2 = least2_[2].data();
     const double *x4 = least4_[0].data(), *y4 = least4_[1].data(), *z4 = least4_[2].data();
     const double *x8 = least8_[0].data(), *y8 = least8_[1].data(), *z8 = least8_[2].data();
-    bool cutting = shares != nullptr;
+    const int origin_voxel[3] = {kB * b_lo[0], kB * b_lo[1], kB * b_lo[2]};
+    bool cutting = true;
     const std::size_t nn = static_cast<std::size_t>(n);
     for (const BoxBrick& b : order_) {
       if (!((x8[b.x] + y8[b.y]) + z8[b.z] < R2)) continue;  // the brick misses the ball
@@ -335,16 +478,7 @@ bool SurfaceCutSet::collect(const Vec3& g, const Contact& contact, std::vector<C
     }
   }
   if (inside) return true;
-  if (found && certify_ && !near_grid_plane(g)) {
-    nearest->found = true;
-    nearest->voxel = best;
-    return true;
-  }
-  ++fallbacks_;
-  const SignedDistance sd = sd_(tooth_, g, m);
-  nearest->found = sd.found;
-  nearest->voxel = sd.voxel;
-  return true;
+  return answer(g, found, best, nearest);
 }
 
 CutSetProvider::CutSetProvider(VoxelTooth& tooth, ToolTip tip, double k_tooth, double b_tooth,

@@ -66,6 +66,19 @@
 // its terms (two roundings of at most 2^-53 each), and the terms differ by >= eps^2 = 2^-46 R'^2 >
 // 2^-51 R'^2: D(u) < D(v*), a contradiction. So v* is exposed and b = v*.
 //
+// The material alone (stop 47: the field model's servo asks for it without a cut set, its cut being
+// the worker's). The same minimum of (D(v), v) over the exposed voxels with D < min(R^2,
+// (2 rho)^2), found nearest first instead of by the pass over the ball's band (N^2 voxels): the
+// last answer's voxel, if still exposed and within reach, bounds best = D from the start (the
+// contact moves little from tick to tick); the box shrinks to the ball of radius sqrt(best) (every
+// voxel with D <= best has each axis term <= best: it lies in that ball's box); a brick, a word or
+// a 2^3 block is read only if its bound (the least terms per axis, summed as a voxel's are; partial
+// sums bound it below) is < best, or = best once a voxel is found (a tie with a smaller index),
+// and best falls as nearer voxels come. No skipped block can hold the minimiser, so the answer is
+// collect's with a cut set (the same certificate and fallback), whatever the seed; the cost is that
+// of the blocks about the ball of radius D(v*): the surface within a block's size of it (a cap on
+// an open surface; in a cavity about g, the bur's own hole, its whole wall).
+//
 // Real-time: collect() and update() neither allocate nor throw (their buffers are sized by the
 // constructor from the tip's radius and the grid).
 #pragma once
@@ -94,6 +107,13 @@ class SurfaceVoxels {
   // Returns false, and current() is false from then on, if a bit had no brick's room (impossible
   // while the tooth only loses voxels). No allocation.
   bool update(const VoxelTooth& tooth, std::span<const std::size_t> removed);
+  // Removes the voxels `removed` (flat indices) from `tooth` (the octree, the codes) and updates
+  // the bits: the state FullOctree::remove_voxel and reencode_local for each, then update(),
+  // leave, from the codes already held (the tooth's codes are those of its grid): the voxel's code
+  // becomes 0 and its bit clear, each solid face neighbour's code gains the face toward it and its
+  // bit is set; an empty voxel is skipped (nothing changes). 6 grid reads per voxel instead of 49,
+  // and no neighbour read twice. Same return as update(). No allocation.
+  bool remove(VoxelTooth& tooth, std::span<const std::size_t> removed);
   bool current() const { return current_; }
 
   bool exposed(int i, int j, int k) const;
@@ -112,7 +132,10 @@ class SurfaceVoxels {
     return id < 0 ? nullptr : &bits_[static_cast<std::size_t>(id) * kWords];
   }
   // The bit of local voxel (x, y, z) of a brick (each in 0..7): the Morton interleave.
-  static int local_bit(int x, int y, int z);
+  static int local_bit(int x, int y, int z) {
+    constexpr int kSpread[8] = {0, 1, 8, 9, 64, 65, 72, 73};  // bits 0, 1, 2 to 0, 3, 6
+    return kSpread[x] | (kSpread[y] << 1) | (kSpread[z] << 2);
+  }
 
  private:
   // Sets voxel (i, j, k)'s bit to `on`; false when it needs a brick where none may be taken.
@@ -141,6 +164,11 @@ class SurfaceCutSet {
 
   // drill_tick removed `removed` from the tooth.
   void update(std::span<const std::size_t> removed) { surface_.update(tooth_, removed); }
+  // Removes `removed` from the tooth (this one's, given writable) and the bits: SurfaceVoxels::
+  // remove.
+  void remove(VoxelTooth& tooth, std::span<const std::size_t> removed) {
+    surface_.remove(tooth, removed);
+  }
 
   // The nearest voxel into *nearest and, if `shares` is not null, collect_cut_set(tooth, contact,
   // g, rho, ...)'s members appended to `shares` and `voxels`. Returns false, touching nothing,
@@ -154,6 +182,8 @@ class SurfaceCutSet {
   // all of them (tests and benchmarks).
   long fallbacks() const { return fallbacks_; }
   long queries() const { return queries_; }
+  // Material-alone queries that started from the last answer's voxel (tests).
+  long seeded() const { return seeded_queries_; }
 
  private:
   // A brick of the box: its slot and its place in the box (brick coordinates less the box's low
@@ -167,6 +197,16 @@ class SurfaceCutSet {
   void order_bricks(const int b_lo[3], const int b_hi[3]);
   // Whether g lies within eps_ of a grid plane on some axis (header comment).
   bool near_grid_plane(const Vec3& g) const;
+  // The box of voxels of the ball (g, r), a voxel of margin each side, clipped to the grid, and
+  // its bricks: 0, 1 if it misses the grid, -1 if wider than the tables.
+  int box_about(const Vec3& g, double r, int lo[3], int hi[3], int b_lo[3], int b_hi[3]) const;
+  // The tables below for the box (the centre offsets only if `centres`).
+  void fill_tables(const Vec3& g, const int lo[3], const int hi[3], const int b_lo[3],
+                   const int b_hi[3], bool centres);
+  // The material alone, nearest first (header comment, "The material alone").
+  bool material_alone(const Vec3& g, Nearest* nearest);
+  // The material outside g's voxel: the found exposed voxel if certified, else sd (the seed).
+  bool answer(const Vec3& g, bool found, std::size_t best, Nearest* nearest);
 
   const VoxelTooth& tooth_;
   double rho_;
@@ -184,6 +224,9 @@ class SurfaceCutSet {
   std::vector<std::uint64_t> keys_;  // scratch of order_bricks
   int box_lo_[3] = {1, 1, 1}, box_hi_[3] = {0, 0, 0};  // the box order_ holds (empty)
   long fallbacks_ = 0, queries_ = 0;
+  bool seeded_ = false;    // seed_ holds the last material query's voxel outside g's
+  std::size_t seed_ = 0;
+  long seeded_queries_ = 0;
 };
 
 // dentsim::ToothContactProvider with its voxel side replaced by SurfaceCutSet: the fast
@@ -203,6 +246,10 @@ class CutSetProvider : public dentsim::ToothContactProvider {
                               std::vector<std::size_t>* voxels) override;
   // The tooth lost `removed` outside drill() (the field model's late drilling, fast/tooth/field.h).
   void surface_removed(std::span<const std::size_t> removed) { cut_.update(removed); }
+  // Removes `removed` from `tooth` (the provider's) and the bits at once (SurfaceVoxels::remove).
+  void remove_voxels(VoxelTooth& tooth, std::span<const std::size_t> removed) {
+    cut_.remove(tooth, removed);
+  }
 
  private:
   SurfaceCutSet cut_;

@@ -837,16 +837,10 @@ void FieldContactProvider::done(const FieldEditWorker::Cut& cut) {
   if (!cut.collected) return;
   const std::array<std::int64_t, kMaterialCount> removed_before = drill_state_.removed_voxels;
   const bool pulp_before = drill_state_.pulp_exposed;
-  const int n = tooth_.grid().n;
-  for (const std::size_t v : cut.removed) {
-    const int i = static_cast<int>(v % static_cast<std::size_t>(n));
-    const int j = static_cast<int>((v / static_cast<std::size_t>(n)) % static_cast<std::size_t>(n));
-    const int k = static_cast<int>(v / (static_cast<std::size_t>(n) * static_cast<std::size_t>(n)));
-    tooth_.octree.remove_voxel(i, j, k);
-    reencode_local(tooth_.octree.grid(), i, j, k, &tooth_.codes);
-    removed_.push_back(v);  // within capacity (room())
-  }
-  if (!cut.removed.empty()) surface_removed(cut.removed);
+  // The octree, the codes and the surface bits at once, from the codes held (the state of
+  // remove_voxel and reencode_local for each, then surface_removed: SurfaceVoxels::remove).
+  remove_voxels(tooth_, cut.removed);
+  removed_.insert(removed_.end(), cut.removed.begin(), cut.removed.end());  // within capacity
   drill_state_.removed_voxels = cut.removed_voxels;
   drill_state_.pulp_exposed = cut.pulp_exposed;
   drill_state_.work_table_full = cut.work_table_full;

@@ -199,6 +199,72 @@ TEST(SurfaceVoxels, AreTheVoxelsWithANonZeroCodeBeforeAndAfterRemovals) {
   EXPECT_GT(removed, 4000);
 }
 
+// SurfaceVoxels::remove (the field model's replay of the worker's removal on the servo's tooth,
+// stop 47) leaves the octree, the codes and the bits as remove_voxel and reencode_local for each
+// voxel, then update(), do: random batches of exposed voxels of the molar, some batches repeating
+// voxels already removed, some removing face neighbours in the same batch; the grids, every
+// octree node, every code and every bit equal after each batch, no allocation.
+TEST(SurfaceVoxels, RemoveLeavesTheToothAndBitsOfRemoveVoxelAndReencodeLocal) {
+  const VoxelTooth start(voxelize_procedural_molar(MolarParams{}, 64));
+  VoxelTooth ref = start, fst = start;
+  fast::SurfaceVoxels s_ref(ref), s_fst(fst);
+  const VoxelGrid& g = ref.grid();
+  const std::size_t n = static_cast<std::size_t>(g.n);
+  std::mt19937_64 rng(47);
+  std::vector<std::size_t> done;
+  long removed = 0;
+  for (int batch = 0; batch < 30; ++batch) {
+    std::vector<std::size_t> surface;
+    for (std::size_t v = 0; v < g.voxels.size(); ++v) {
+      if (ref.codes.code(v) != 0) surface.push_back(v);
+    }
+    std::shuffle(surface.begin(), surface.end(), rng);
+    std::vector<std::size_t> batch_voxels;
+    for (std::size_t r = 0; r < 60 && r < surface.size(); ++r) {
+      batch_voxels.push_back(surface[r]);
+      if (r % 5 == 0 && surface[r] % n + 1 < n) batch_voxels.push_back(surface[r] + 1);  // +x
+    }
+    if (batch % 3 == 2) batch_voxels.insert(batch_voxels.end(), done.begin(), done.begin() + 10);
+    for (const std::size_t v : batch_voxels) {
+      const int i = static_cast<int>(v % n), j = static_cast<int>((v / n) % n);
+      const int k = static_cast<int>(v / (n * n));
+      removed += ref.octree.remove_voxel(i, j, k) != kEmpty;
+      reencode_local(ref.octree.grid(), i, j, k, &ref.codes);
+      done.push_back(v);
+    }
+    EXPECT_TRUE(s_ref.update(ref, batch_voxels));
+    {
+      testing::AllocationScope scope;
+      EXPECT_TRUE(s_fst.remove(fst, batch_voxels));
+      EXPECT_EQ(scope.count(), 0);
+    }
+    ASSERT_TRUE(fst.grid().voxels == g.voxels) << "batch " << batch;
+    long differ = 0;
+    for (std::size_t v = 0; v < g.voxels.size(); ++v) {
+      differ += fst.codes.code(v) != ref.codes.code(v);
+    }
+    for (int l = 0; l < ref.octree.levels(); ++l) {
+      const int side = 1 << l;
+      for (int z = 0; z < side; ++z) {
+        for (int y = 0; y < side; ++y) {
+          for (int x = 0; x < side; ++x) {
+            differ += fst.octree.occupied(l, x, y, z) != ref.octree.occupied(l, x, y, z);
+          }
+        }
+      }
+    }
+    for (int k = 0; k < g.n; ++k) {
+      for (int j = 0; j < g.n; ++j) {
+        for (int i = 0; i < g.n; ++i) differ += s_fst.exposed(i, j, k) != s_ref.exposed(i, j, k);
+      }
+    }
+    ASSERT_EQ(differ, 0) << "batch " << batch;
+    ASSERT_EQ(bits_differing(s_fst, fst), 0) << "batch " << batch;
+  }
+  EXPECT_TRUE(s_fst.current());
+  EXPECT_GT(removed, 1500);
+}
+
 // The Morton layout of a brick: word w is a 4^3 block, byte b of a word a 2^3 block, bit c of the
 // byte the child c = dx + 2 dy + 4 dz (the octree's child index).
 TEST(SurfaceVoxels, BricksAreInMortonOrder) {
@@ -242,10 +308,12 @@ void compare_at(const VoxelTooth& tooth, fast::SurfaceCutSet& twin, const Vec3& 
   fst_v.reserve(kContactCapacity);
   collect_cut_set(tooth, contact, g, rho, &candidates, &ref, &ref_v);
   const SignedDistance sd = signed_distance(tooth, g, proxy_material_reach(rho));
+  // The material alone (no drilling) first: its search starts from the previous anchor's answer
+  // when that voxel is within reach (material_alone's seed), any seed giving the same voxel.
+  fast::SurfaceCutSet::Nearest alone;
+  ASSERT_TRUE(twin.collect(g, contact, nullptr, nullptr, &alone));
   fast::SurfaceCutSet::Nearest near;
   ASSERT_TRUE(twin.collect(g, contact, &fst, &fst_v, &near));
-  fast::SurfaceCutSet::Nearest alone;  // the material alone (no drilling)
-  ASSERT_TRUE(twin.collect(g, contact, nullptr, nullptr, &alone));
   const Oracle o = brute_force(tooth, g, rho, kContactCapacity);
   ++a->queries;
   a->members += static_cast<long>(ref.size());
@@ -423,6 +491,159 @@ TEST(SurfaceCutSet, EqualsTheReferenceAtBricksCornersAndTheGridsEdges) {
                 twin.queries());
     EXPECT_EQ(a.mismatches, 0);
     EXPECT_GT(a.members, 3 * a.queries);  // signal: most anchors cut something
+  }
+}
+
+// ---- The material alone, nearest first (stop 47) -----------------------------------------------
+
+// collect without a cut set searches nearest first from the last answer's voxel (the seed) and
+// reads only the blocks whose bound can hold a voxel as near (cut_set.h "The material alone").
+// Walks of small steps (up to 1.5 voxels, so the seed is mostly valid but often not the nearest)
+// held 0.7 to 1.2 rho off the last answer's voxel (as the proxy's anchor is); every third step one
+// coordinate moved onto the nearest voxel's, brick's (8 i, within 1.5 voxels) or grid face's
+// plane, exactly or an ulp either side; every 16th a jump of up to 2.2 rho (the seed out of reach,
+// or far from the nearest); every 10th the removal of the answer's voxel and some of its
+// neighbours as drill_tick removes them (the seed gone or no longer exposed). At every step the
+// voxel equals sd(tooth, g, 2 rho)'s and the brute force's, with no allocation; the seed is used
+// in a third of the steps at least. Last, anchors on an exact lattice, where the nearest voxel is
+// often a tie.
+struct Walks {
+  long steps = 0, seeded = 0, removed = 0, mismatches = 0;
+};
+
+Walks material_walks(VoxelTooth& tooth, double rho, int walks, int steps, std::uint64_t seed,
+                     bool lattice = false) {
+  const VoxelGrid& grid = tooth.grid();
+  fast::SurfaceCutSet twin(tooth, rho, &signed_distance);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0), fraction(0.0, 1.0);
+  const std::size_t nn = static_cast<std::size_t>(grid.n);
+  const double h = grid.voxel_size;
+  Contact contact;
+  contact.stiffness = kK;
+  contact.damping = kB;
+  Walks w;
+  auto direction = [&] {
+    Vec3 d(unit(rng), unit(rng), unit(rng));
+    return d.norm() < 1e-3 ? Vec3(Vec3::UnitZ()) : Vec3(d.normalized());
+  };
+  for (int walk = 0; walk < walks && w.mismatches <= 5; ++walk) {
+    std::vector<std::size_t> surface;
+    for (std::size_t v = 0; v < grid.voxels.size(); ++v) {
+      if (tooth.codes.code(v) != 0) surface.push_back(v);
+    }
+    const std::size_t v0 = surface[std::uniform_int_distribution<std::size_t>(
+        0, surface.size() - 1)(rng)];
+    Vec3 g = grid.center(static_cast<int>(v0 % nn), static_cast<int>((v0 / nn) % nn),
+                         static_cast<int>(v0 / (nn * nn))) +
+             rho * direction();
+    bool last_found = false;
+    std::size_t last = 0;
+    for (int s = 0; s < steps && w.mismatches <= 5; ++s) {
+      if (s % 16 == 15) {
+        g += 2.2 * rho * fraction(rng) * direction();
+      } else if (last_found) {  // held 0.7 to 1.2 rho off the last answer's voxel, as a proxy is
+        const Vec3 c = grid.center(static_cast<int>(last % nn), static_cast<int>((last / nn) % nn),
+                                   static_cast<int>(last / (nn * nn)));
+        const Vec3 off = (g - c).norm() > 1e-3 * h ? Vec3((g - c).normalized()) : direction();
+        g = c + rho * (0.7 + 0.5 * fraction(rng)) * off + 1.5 * h * fraction(rng) * direction();
+      } else {
+        g += 1.5 * h * fraction(rng) * direction();
+      }
+      if (lattice) {  // onto the lattice of quarter voxels (grid origin 0, h a power of 2)
+        for (int a = 0; a < 3; ++a) g[a] = 0.25 * h * std::round(g[a] / (0.25 * h));
+      }
+      if (s % 3 == 1) {  // onto a brick's plane or the grid's face on one axis
+        const int a = (s / 3) % 3;
+        const double u = (g[a] - grid.origin[a]) / h;
+        // The nearest brick's plane within 1.5 voxels, else the grid's face within 2, else the
+        // nearest voxel plane (a step stays small).
+        const int brick = 8 * static_cast<int>(std::lround(u / 8.0));
+        int plane = static_cast<int>(std::lround(u));
+        if (std::abs(brick - u) < 1.5) plane = brick;
+        if (u < 2.0) plane = 0;
+        if (u > grid.n - 2.0) plane = grid.n;
+        const double p = grid.origin[a] + h * plane;
+        const int how = static_cast<int>(3.0 * fraction(rng));
+        g[a] = how == 0 ? p : std::nextafter(p, how == 1 ? 1.0 : -1.0);
+      }
+      fast::SurfaceCutSet::Nearest alone;
+      const long seeded_before = twin.seeded();
+      {
+        testing::AllocationScope scope;
+        EXPECT_TRUE(twin.collect(g, contact, nullptr, nullptr, &alone));
+        EXPECT_EQ(scope.count(), 0);
+      }
+      w.seeded += twin.seeded() - seeded_before;
+      last_found = alone.found;
+      last = alone.voxel;
+      ++w.steps;
+      const SignedDistance sd = signed_distance(tooth, g, proxy_material_reach(rho));
+      const Oracle o = brute_force(tooth, g, rho, 0);
+      const bool ok = alone.found == sd.found && (!sd.found || alone.voxel == sd.voxel) &&
+                      o.found == sd.found && (!sd.found || o.voxel == sd.voxel);
+      if (!ok) {
+        ++w.mismatches;
+        ADD_FAILURE() << "walk " << walk << " step " << s << " g " << g.transpose() << ": sd "
+                      << sd.found << " " << sd.voxel << ", fast " << alone.found << " "
+                      << alone.voxel << ", oracle " << o.found << " " << o.voxel;
+      }
+      if (s % 10 == 9 && alone.found) {  // drill the answer's voxel and some neighbours away
+        std::vector<std::size_t> gone;
+        const int c[3] = {static_cast<int>(alone.voxel % nn),
+                          static_cast<int>((alone.voxel / nn) % nn),
+                          static_cast<int>(alone.voxel / (nn * nn))};
+        for (int d = 0; d < 7; ++d) {
+          int u[3] = {c[0], c[1], c[2]};
+          if (d > 0) u[face_axis(d - 1)] += face_sign(d - 1);
+          if (d > 0 && fraction(rng) < 0.5) continue;
+          if (!grid.inside(u[0], u[1], u[2])) continue;
+          if (tooth.octree.remove_voxel(u[0], u[1], u[2]) == kEmpty) continue;
+          reencode_local(tooth.octree.grid(), u[0], u[1], u[2], &tooth.codes);
+          gone.push_back(grid.index(u[0], u[1], u[2]));
+        }
+        twin.update(gone);
+        w.removed += static_cast<long>(gone.size());
+      }
+    }
+  }
+  std::printf("%dx, h %.4g mm, rho %.3g mm: %ld steps, %ld seeded, %ld voxels removed, %ld "
+              "material queries by sd of %ld\n",
+              grid.n, 1e3 * h, 1e3 * rho, w.steps, w.seeded, w.removed, twin.fallbacks(),
+              twin.queries());
+  return w;
+}
+
+TEST(SurfaceCutSet, TheMaterialAloneNearestFirstEqualsTheReferenceAlongWalks) {
+  for (const int n : {64, 128}) {
+    VoxelTooth tooth(voxelize_procedural_molar(MolarParams{}, n));
+    const Walks w = material_walks(tooth, 0.5e-3, 40, 60, 470 + n);
+    EXPECT_EQ(w.mismatches, 0) << n;
+    EXPECT_GT(w.seeded, w.steps / 3) << n;  // signal: the seed is used
+    EXPECT_GT(w.removed, 100) << n;
+  }
+  // A narrow bur (rho / h < 1) and a wide one on the 128^3 molar.
+  for (const double rho : {0.15e-3, 1.0e-3}) {
+    VoxelTooth tooth(voxelize_procedural_molar(MolarParams{}, 128));
+    EXPECT_EQ(material_walks(tooth, rho, 20, 60, 480).mismatches, 0) << rho;
+  }
+  // The wavy slab reaching the grid's faces, with the 512^3 molar's voxel (the ball ~24 voxels
+  // across) and with 128^3's.
+  const double h128 = voxelize_procedural_molar(MolarParams{}, 32).voxel_size * 32.0 / 128.0;
+  for (const double h : {0.25 * h128, h128}) {
+    VoxelTooth tooth = edge_tooth(64, h);
+    const Walks w = material_walks(tooth, 0.5e-3, 30, 60, 490);
+    EXPECT_EQ(w.mismatches, 0) << h;
+    EXPECT_GT(w.seeded, w.steps / 3) << h;
+  }
+  // Ties: with the grid's origin at 0, h a power of two and the anchors on the lattice of quarter
+  // voxels, every gap and term is exact, so voxels either side of an anchor's mid-voxel plane have
+  // the same D: the smaller index must win (a block whose bound equals the best is read).
+  for (const int e : {12, 14}) {
+    VoxelTooth tooth = edge_tooth(64, std::ldexp(1.0, -e));
+    const Walks w = material_walks(tooth, 0.5e-3, 30, 60, 500 + e, true);
+    EXPECT_EQ(w.mismatches, 0) << e;
+    EXPECT_GT(w.seeded, w.steps / 3) << e;
   }
 }
 
