@@ -130,12 +130,26 @@ bool near_grid_plane(const VoxelGrid& grid, const Vec3& x, double eps) {
   return false;
 }
 
+// Per 2^3 byte of the bits (bit c its voxel (c & 1, (c >> 1) & 1, c >> 2)), per axis, which of its
+// two layers hold a set bit: 1 the lower, 2 the upper, 3 both; packed x | y << 2 | z << 4.
+constexpr std::array<std::uint8_t, 256> kByteLayers = [] {
+  std::array<std::uint8_t, 256> t{};
+  for (int b = 1; b < 256; ++b) {
+    const int lx = ((b & 0x55) != 0 ? 1 : 0) | ((b & 0xaa) != 0 ? 2 : 0);
+    const int ly = ((b & 0x33) != 0 ? 1 : 0) | ((b & 0xcc) != 0 ? 2 : 0);
+    const int lz = ((b & 0x0f) != 0 ? 1 : 0) | ((b & 0xf0) != 0 ? 2 : 0);
+    t[static_cast<std::size_t>(b)] = static_cast<std::uint8_t>(lx | ly << 2 | lz << 4);
+  }
+  return t;
+}();
+
 // One axis of a brick: its voxels' squared gaps to x (box_distance2's terms; +inf beyond the
-// grid), and the least of each run of 2 and of 4 (a 2^3 or 4^3 block's term on that axis: no
-// larger than any of its voxels', so a block no nearer than the best holds no better voxel).
+// grid); per run q of 2 voxels and layer set l (kByteLayers' code) the least term of the voxels in
+// l, and the least of each run of 4. A block's term on an axis is then no larger than any of its
+// set voxels', so a block no nearer than the best holds no better voxel.
 struct AxisTerms {
   double t[kB];
-  double m2[kB / 2];
+  double pair[kB / 2][4];  // [q][l], l = 1 (the lower voxel), 2 (the upper), 3 (both)
   double m4[2];
 };
 
@@ -148,9 +162,112 @@ void axis_terms(const VoxelGrid& grid, int a, int b, double x, AxisTerms* out) {
     out->t[l] = i < grid.n ? gap2(x, lo, hi) : std::numeric_limits<double>::infinity();
     lo = hi;
   }
-  for (int q = 0; q < kB / 2; ++q) out->m2[q] = std::min(out->t[2 * q], out->t[2 * q + 1]);
-  out->m4[0] = std::min(out->m2[0], out->m2[1]);
-  out->m4[1] = std::min(out->m2[2], out->m2[3]);
+  for (int q = 0; q < kB / 2; ++q) {
+    out->pair[q][1] = out->t[2 * q];
+    out->pair[q][2] = out->t[2 * q + 1];
+    out->pair[q][3] = std::min(out->t[2 * q], out->t[2 * q + 1]);
+  }
+  out->m4[0] = std::min(out->pair[0][3], out->pair[1][3]);
+  out->m4[1] = std::min(out->pair[2][3], out->pair[3][3]);
+}
+
+// The search's best so far as sdf_nearer and sdf_prunable read it (found, voxel) and its d2, and
+// `other`: a lower bound on D of every exposed voxel the search has ruled out (the least of the
+// bounds of the blocks it pruned and of the D of the voxels it tested and did not keep).
+struct Best {
+  SignedDistance sd;
+  double d2;
+  double other = std::numeric_limits<double>::infinity();
+  long tested = 0;  // voxels whose D was computed
+};
+
+// Brick (bx, by, bz) (its words `bits`, its axes' terms X, Y, Z): its words nearest first, in a
+// word its bytes by their boxes shrunk to their set bits, and their voxels, each by
+// box_distance2's terms summed in its order ((t_x + t_y) + t_z: the same D).
+void search_brick(const std::uint64_t* bits, const AxisTerms& X, const AxisTerms& Y,
+                  const AxisTerms& Z, int bx, int by, int bz, std::size_t nn, Best* best) {
+  struct Word {
+    double d2;
+    int w;
+  };
+  Word order[SurfaceVoxels::kWords];
+  int count = 0;
+  for (int w = 0; w < SurfaceVoxels::kWords; ++w) {
+    if (bits[w] == 0) continue;
+    // Word w: the 4^3 block (x, y, z) = bits 0, 1, 2 of w (the Morton layout, cut_set.h).
+    const double d2 = (X.m4[w & 1] + Y.m4[(w >> 1) & 1]) + Z.m4[w >> 2];
+    if (sdf_detail::sdf_prunable(d2, best->d2, best->sd)) {
+      best->other = std::min(best->other, d2);
+      continue;
+    }
+    int at = count++;
+    while (at > 0 && order[at - 1].d2 > d2) {
+      order[at] = order[at - 1];
+      --at;
+    }
+    order[at] = {d2, w};
+  }
+  for (int i = 0; i < count; ++i) {
+    // In increasing order: once one is no nearer than the best, none after it is.
+    if (sdf_detail::sdf_prunable(order[i].d2, best->d2, best->sd)) {
+      best->other = std::min(best->other, order[i].d2);
+      break;
+    }
+    const int w = order[i].w;
+    const int wx = w & 1, wy = (w >> 1) & 1, wz = w >> 2;
+    const std::uint64_t word = bits[w];
+    // The word's runs of 2 on each axis: pair rows 2 w_a and 2 w_a + 1, 4 layer sets each.
+    const double* px = X.pair[2 * wx];
+    const double* py = Y.pair[2 * wy];
+    const double* pz = Z.pair[2 * wz];
+#pragma GCC unroll 8
+    for (int byte = 0; byte < 8; ++byte) {
+      const unsigned block = static_cast<unsigned>(word >> (8 * byte)) & 0xffu;
+      if (block == 0) continue;
+      // Byte `byte`: the 2^3 block (2 w_a + its bit a) of the brick; bit c its child c.
+      const int ox = byte & 1, oy = (byte >> 1) & 1, oz = byte >> 2;
+      const unsigned layers = kByteLayers[block];
+      const double d2q = (px[4 * ox + (layers & 3)] + py[4 * oy + ((layers >> 2) & 3)]) +
+                         pz[4 * oz + (layers >> 4)];
+      if (sdf_detail::sdf_prunable(d2q, best->d2, best->sd)) {
+        best->other = std::min(best->other, d2q);
+        continue;
+      }
+      const int qx = 2 * wx + ox, qy = 2 * wy + oy, qz = 2 * wz + oz;
+      const double* tx = X.t + 2 * qx;
+      const double* ty = Y.t + 2 * qy;
+      const double* tz = Z.t + 2 * qz;
+#pragma GCC unroll 8
+      for (int c = 0; c < 8; ++c) {
+        if ((block & (1u << c)) == 0) continue;
+        const double d2 = (tx[c & 1] + ty[(c >> 1) & 1]) + tz[c >> 2];  // box_distance2's sum
+        ++best->tested;
+        if (d2 > best->d2) {  // not nearer (sdf_nearer), whatever its index
+          best->other = std::min(best->other, d2);
+          continue;
+        }
+        const std::size_t v = static_cast<std::size_t>(kB * bx + 2 * qx + (c & 1)) +
+                              nn * (static_cast<std::size_t>(kB * by + 2 * qy + ((c >> 1) & 1)) +
+                                    nn * static_cast<std::size_t>(kB * bz + 2 * qz + (c >> 2)));
+        if (best->sd.found && v == best->sd.voxel) continue;  // the best itself (the hint)
+        if (!sdf_detail::sdf_nearer(d2, v, best->d2, best->sd)) {
+          best->other = std::min(best->other, d2);
+          continue;
+        }
+        if (best->sd.found) best->other = std::min(best->other, best->d2);
+        best->d2 = d2;
+        best->sd.voxel = v;
+        best->sd.found = true;
+      }
+    }
+  }
+}
+
+// D of voxel (i, j, k) at x: box_distance2's terms summed in its order.
+inline double voxel_distance2(const VoxelGrid& grid, int i, int j, int k, const Vec3& x) {
+  return (gap2(x[0], plane(grid, 0, i), plane(grid, 0, i + 1)) +
+          gap2(x[1], plane(grid, 1, j), plane(grid, 1, j + 1))) +
+         gap2(x[2], plane(grid, 2, k), plane(grid, 2, k + 1));
 }
 
 }  // namespace
@@ -169,6 +286,38 @@ bool LocalVoxelDistance::outside(const Vec3& x, double reach, SignedDistance* ou
   const VoxelGrid& grid = tooth_.grid();
   const int n = grid.n;
   const double h = grid.voxel_size;
+  const std::size_t nn = static_cast<std::size_t>(n);
+  // A voxel certified about where it was found (header comment), the latest balls first.
+  if (reach > 0.0 && x.allFinite()) {
+    for (int at = 0; at < ball_count_; ++at) {
+      const Ball& ball = balls_[static_cast<std::size_t>((ball_next_ - 1 - at + kBalls) % kBalls)];
+      const double left = ball.lower - (x - ball.x).norm();
+      if (!(left >= ball.margin) || grid.voxels[ball.voxel] == kEmpty) continue;
+      const std::size_t v = ball.voxel;
+      const int i = static_cast<int>(v % nn), j = static_cast<int>((v / nn) % nn);
+      const int k = static_cast<int>(v / (nn * nn));
+      const double d2 = voxel_distance2(grid, i, j, k, x);
+      const double phi = std::sqrt(d2);
+      if (!(left >= phi + ball.margin)) continue;
+      ++reused_;
+      SignedDistance sd;
+      sd.phi = reach;
+      *best2_out = std::numeric_limits<double>::infinity();
+      if (d2 < reach * reach) {
+        sd.nearest = Vec3(std::clamp(x[0], plane(grid, 0, i), plane(grid, 0, i + 1)),
+                          std::clamp(x[1], plane(grid, 1, j), plane(grid, 1, j + 1)),
+                          std::clamp(x[2], plane(grid, 2, k), plane(grid, 2, k + 1)));
+        sd.voxel = v;
+        sd.found = true;
+        sd.phi = phi;
+        *best2_out = d2;
+        hint_ = v;
+        have_hint_ = true;
+      }
+      *out = sd;
+      return true;
+    }
+  }
   // The claim's conditions (header comment); 2^-23 reach and 2^-44 (...) are exact products.
   const double eps = 0x1p-23 * reach;
   if (!surface_.current() || !(reach > 0.0) || !(reach <= max_reach_) ||
@@ -176,29 +325,31 @@ bool LocalVoxelDistance::outside(const Vec3& x, double reach, SignedDistance* ou
     ++fallbacks_;
     return false;
   }
-  const std::size_t nn = static_cast<std::size_t>(n);
-  // The best so far as sdf_nearer and sdf_prunable read it (found, voxel) and its d2.
-  SignedDistance best;
-  double best2 = reach * reach;  // outside_distance's bound: a candidate has D < reach^2
-  // The last answer's voxel first, while it is exposed.
-  if (have_hint_) {
-    const int i = static_cast<int>(hint_ % nn), j = static_cast<int>((hint_ / nn) % nn);
-    const int k = static_cast<int>(hint_ / (nn * nn));
-    if (surface_.exposed(i, j, k)) {
-      const double d2 = (gap2(x[0], plane(grid, 0, i), plane(grid, 0, i + 1)) +
-                         gap2(x[1], plane(grid, 1, j), plane(grid, 1, j + 1))) +
-                        gap2(x[2], plane(grid, 2, k), plane(grid, 2, k + 1));
-      if (d2 < best2) {
-        best2 = d2;
-        best.voxel = hint_;
-        best.found = true;
-      }
+  Best best;
+  best.d2 = reach * reach;  // outside_distance's bound: a candidate has D < reach^2
+  // The last answer's voxel and the balls' first: any solid voxel's (D, index) bounds the answer's
+  // (the exposed minimum is the solid one, header comment), and the answer is often one of them.
+  auto candidate = [&](std::size_t v) {
+    if (grid.voxels[v] == kEmpty) return;
+    const int i = static_cast<int>(v % nn), j = static_cast<int>((v / nn) % nn);
+    const int k = static_cast<int>(v / (nn * nn));
+    const double d2 = voxel_distance2(grid, i, j, k, x);
+    if (!sdf_detail::sdf_nearer(d2, v, best.d2, best.sd)) return;
+    if (best.sd.found) best.other = std::min(best.other, best.d2);
+    best.d2 = d2;
+    best.sd.voxel = v;
+    best.sd.found = true;
+  };
+  if (have_hint_) candidate(hint_);
+  for (int at = 0; at < ball_count_; ++at) {
+    if (!have_hint_ || balls_[static_cast<std::size_t>(at)].voxel != hint_) {
+      candidate(balls_[static_cast<std::size_t>(at)].voxel);
     }
   }
   // The bricks within the bound r, one brick of margin each side (a brick beyond is more than
   // r + 7 h away: the truncations below are within one brick of the floors, and conservative),
   // and their boxes' term on each axis.
-  const double r = best.found ? std::sqrt(best2) : reach;
+  const double r = best.sd.found ? std::sqrt(best.d2) : reach;
   const double side = kB * h;
   const double last = surface_.slots_per_axis() - 1.0;
   int b_lo[3], b_hi[3];
@@ -231,76 +382,96 @@ bool LocalVoxelDistance::outside(const Vec3& x, double reach, SignedDistance* ou
       }
       return terms[a][at];
     };
-    long tested = 0;
+    auto search = [&](const std::uint64_t* bits, int bx, int by, int bz) {
+      search_brick(bits, axis(0, bx), axis(1, by), axis(2, bz), bx, by, bz, nn, &best);
+    };
+    // The bricks not prunable, nearest first (by their boxes' d2); beyond the room of the list,
+    // a brick is searched at once (the order decides no answer, sdf_nearer: only the work).
+    struct Brick {
+      double d2;
+      const std::uint64_t* bits;
+      int bx, by, bz;
+    };
+    constexpr int kRoom = 128;
+    Brick order[kRoom];
+    int count = 0;
     for (int bz = b_lo[2]; bz <= b_hi[2]; ++bz) {
       const double tz = brick_term[2][bz - b_lo[2]];
-      if (sdf_detail::sdf_prunable(tz, best2, best)) continue;  // (t_x + t_y) + t_z >= t_z
+      if (sdf_detail::sdf_prunable(tz, best.d2, best.sd)) {  // (t_x + t_y) + t_z >= t_z
+        best.other = std::min(best.other, tz);
+        continue;
+      }
       for (int by = b_lo[1]; by <= b_hi[1]; ++by) {
         const double ty = brick_term[1][by - b_lo[1]];
-        if (sdf_detail::sdf_prunable(ty, best2, best)) continue;
+        if (sdf_detail::sdf_prunable(ty, best.d2, best.sd)) {
+          best.other = std::min(best.other, ty);
+          continue;
+        }
         for (int bx = b_lo[0]; bx <= b_hi[0]; ++bx) {
-          const double d2b = (brick_term[0][bx - b_lo[0]] + ty) + tz;
-          if (sdf_detail::sdf_prunable(d2b, best2, best)) continue;
           const std::uint64_t* bits = surface_.brick(surface_.slot(bx, by, bz));
           if (bits == nullptr) continue;
-          const AxisTerms& X = axis(0, bx);
-          const AxisTerms& Y = axis(1, by);
-          const AxisTerms& Z = axis(2, bz);
-          for (int w = 0; w < SurfaceVoxels::kWords; ++w) {
-            std::uint64_t word = bits[w];
-            if (word == 0) continue;
-            // Word w: the 4^3 block (x, y, z) = bits 0, 1, 2 of w (the Morton layout, cut_set.h).
-            const int wx = w & 1, wy = (w >> 1) & 1, wz = w >> 2;
-            const double d2w = (X.m4[wx] + Y.m4[wy]) + Z.m4[wz];
-            if (sdf_detail::sdf_prunable(d2w, best2, best)) continue;
-            while (word != 0) {
-              const int byte = std::countr_zero(word) >> 3;
-              std::uint64_t block = (word >> (8 * byte)) & 0xff;
-              word &= ~(std::uint64_t{0xff} << (8 * byte));
-              // Byte `byte`: the 2^3 block (qx, qy, qz) of the brick; bit c its child c.
-              const int qx = 2 * wx + (byte & 1), qy = 2 * wy + ((byte >> 1) & 1);
-              const int qz = 2 * wz + (byte >> 2);
-              const double d2q = (X.m2[qx] + Y.m2[qy]) + Z.m2[qz];
-              if (sdf_detail::sdf_prunable(d2q, best2, best)) continue;
-              while (block != 0) {
-                const int c = std::countr_zero(block);
-                block &= block - 1;
-                const int lx = 2 * qx + (c & 1), ly = 2 * qy + ((c >> 1) & 1);
-                const int lz = 2 * qz + (c >> 2);
-                const double d2 = (X.t[lx] + Y.t[ly]) + Z.t[lz];  // box_distance2's sum
-                ++tested;
-                if (d2 > best2) continue;  // not nearer (sdf_nearer), whatever its index
-                const std::size_t v =
-                    static_cast<std::size_t>(kB * bx + lx) +
-                    nn * (static_cast<std::size_t>(kB * by + ly) +
-                          nn * static_cast<std::size_t>(kB * bz + lz));
-                if (!sdf_detail::sdf_nearer(d2, v, best2, best)) continue;
-                best2 = d2;
-                best.voxel = v;
-                best.found = true;
-              }
-            }
+          const double d2b = (brick_term[0][bx - b_lo[0]] + ty) + tz;
+          if (sdf_detail::sdf_prunable(d2b, best.d2, best.sd)) {
+            best.other = std::min(best.other, d2b);
+            continue;
           }
+          if (count == kRoom) {
+            search(bits, bx, by, bz);
+            continue;
+          }
+          int at = count++;
+          while (at > 0 && order[at - 1].d2 > d2b) {
+            order[at] = order[at - 1];
+            --at;
+          }
+          order[at] = {d2b, bits, bx, by, bz};
         }
       }
     }
-    voxels_tested_ += tested;
+    for (int i = 0; i < count; ++i) {
+      const Brick& b = order[i];
+      if (sdf_detail::sdf_prunable(b.d2, best.d2, best.sd)) {  // and every brick after it
+        best.other = std::min(best.other, b.d2);
+        break;
+      }
+      search(b.bits, b.bx, b.by, b.bz);
+    }
+    voxels_tested_ += best.tested;
   }
   SignedDistance sd;
   sd.phi = reach;
   *best2_out = std::numeric_limits<double>::infinity();
-  if (best.found) {
-    const int idx[3] = {static_cast<int>(best.voxel % nn), static_cast<int>((best.voxel / nn) % nn),
-                        static_cast<int>(best.voxel / (nn * nn))};
+  if (best.sd.found) {
+    const std::size_t v = best.sd.voxel;
+    const int idx[3] = {static_cast<int>(v % nn), static_cast<int>((v / nn) % nn),
+                        static_cast<int>(v / (nn * nn))};
     for (int a = 0; a < 3; ++a) {
       sd.nearest[a] = std::clamp(x[a], plane(grid, a, idx[a]), plane(grid, a, idx[a] + 1));
     }
-    sd.voxel = best.voxel;
+    sd.voxel = v;
     sd.found = true;
-    sd.phi = std::sqrt(best2);
-    *best2_out = best2;
-    hint_ = best.voxel;
+    sd.phi = std::sqrt(best.d2);
+    *best2_out = best.d2;
+    hint_ = v;
     have_hint_ = true;
+    // The ball about x in which v stays the answer: every other solid voxel is at least
+    // sqrt(L) from x, L the least of the search's `other`, the bricks beyond its span ((r + 7 h)^2
+    // and more) and the solid face neighbours of v (header comment).
+    double lower2 = std::min(best.other, (r + 4.0 * h) * (r + 4.0 * h));
+    for (int a = 0; a < 3; ++a) {
+      for (const int d : {-1, 1}) {
+        int m[3] = {idx[0], idx[1], idx[2]};
+        m[a] += d;
+        if (m[a] < 0 || m[a] >= n || !grid.solid(m[0], m[1], m[2])) continue;
+        lower2 = std::min(lower2, voxel_distance2(grid, m[0], m[1], m[2], x));
+      }
+    }
+    if (lower2 > best.d2) {
+      const double lower = std::sqrt(lower2);
+      balls_[static_cast<std::size_t>(ball_next_)] = {x, lower, 1e-9 * h + 1e-12 * lower, v};
+      ball_next_ = (ball_next_ + 1) % kBalls;
+      ball_count_ = std::min(ball_count_ + 1, kBalls);
+    }
   }
   *out = sd;
   return true;

@@ -69,6 +69,32 @@ class SurfaceVoxels;  // fast/tooth/cut_set.h
 // not current, a reach beyond the bounds below) outside() returns false and the caller asks the
 // octree (counted: fallbacks()).
 //
+// Nearest first (stop 47). The bricks within the bound are searched by increasing box distance,
+// in a brick its 4^3 words likewise, and a 2^3 byte's box is shrunk to its set bits per axis
+// (kByteLayers, a table of 256: a byte's term on an axis is the least of its set voxels'), so
+// bytes in the cap about the tangent point are pruned. The first bound is the least (D, index)
+// of the last answer's voxel and the balls' voxels (below), each taken only while solid: any
+// solid voxel's key bounds the answer's, and the exposed minimum is the solid one (the claim).
+//
+// The balls (stop 47): no search where an earlier answer is certified. A search that found v at
+// x0 also bounds every other solid voxel's squared distance from x0 below by L: the least of
+// (a) the bounds of the blocks it pruned and the D of the voxels (and first candidates) it did
+// not keep, (b) (r + 4 h)^2 for the bricks beyond its span (more than r + 7 h away), and (c) D
+// of v's solid face neighbours. Claim: every solid voxel u != v of the tooth at that time has
+// D(u) >= L. An exposed u was pruned or tested (a), or lies beyond the span (b). An interior u:
+// x0 is in no solid voxel's cell and at least eps from the grid planes, so some term of u is
+// > 0 and u's face neighbour towards x0 on that axis is solid and no farther (the claim's step);
+// repeating, the chain reaches an exposed voxel w with D(w) <= D(u): w != v gives D(u) >= L by
+// (a)/(b), and w = v means the voxel before it is a solid face neighbour of v (c). Drilling only
+// removes voxels, so the bound holds while v stays solid. Then at a later x with d = |x - x0|,
+// if sqrt(L) - d >= phi_v(x) + m (phi_v(x) = sqrt(D_v(x)), D_v by box_distance2's terms in its
+// order, m = 1e-9 h + 1e-12 sqrt(L)), v is the answer at x: every other solid voxel is at least
+// sqrt(L) - d away (1-Lipschitz) and m covers the roundings (each D within 5 u = 5 2^-53 of its
+// exact square, the norm and the differences within a few u, far below 1e-12); the answer is
+// (phi_v, the clamp of x to v's box, v) when D_v(x) < reach^2, and nothing within reach
+// otherwise: the search's own doubles. The last kBalls balls are kept across ticks. A point on a
+// grid plane may be answered from a ball (the ball's argument does not need the plane guard).
+//
 // Real-time: fixed-size arrays on the stack; nothing allocates or throws.
 class LocalVoxelDistance {
  public:
@@ -78,13 +104,17 @@ class LocalVoxelDistance {
   // *out and its squared distance into *best2 (+inf: nothing within reach), true; false (nothing
   // written) when the claim above does not certify it.
   bool outside(const Vec3& x, double reach, SignedDistance* out, double* best2) const;
-  // Counters (tests and benchmarks): outside() calls, those that returned false, and the blocks
-  // and voxels whose distance they computed.
+  // Counters (tests and benchmarks): outside() calls, those that returned false, the voxels whose
+  // distance they computed, and the calls answered from a ball (no search).
   long queries() const { return queries_; }
   long fallbacks() const { return fallbacks_; }
   long voxels_tested() const { return voxels_tested_; }
+  long reused() const { return reused_; }
   // Forgets the last answer's voxel (the next search starts without a bound).
-  void forget() const { have_hint_ = false; }
+  void forget() const {
+    have_hint_ = false;
+    ball_count_ = 0;
+  }
 
   // The largest brick span on an axis the search's arrays hold (a wider reach falls back).
   static constexpr int kMaxSpan = 24;
@@ -96,7 +126,18 @@ class LocalVoxelDistance {
   double extent_;     // |origin|_inf + N h
   mutable std::size_t hint_ = 0;
   mutable bool have_hint_ = false;
-  mutable long queries_ = 0, fallbacks_ = 0, voxels_tested_ = 0;
+  // The balls about earlier answers' points in which their voxel stays the answer (the last
+  // kBalls, the oldest making room).
+  struct Ball {
+    Vec3 x;
+    double lower;   // no other solid voxel is nearer to x than this
+    double margin;  // the rounding allowance of the test
+    std::size_t voxel;
+  };
+  static constexpr int kBalls = 8;
+  mutable std::array<Ball, kBalls> balls_{};
+  mutable int ball_count_ = 0, ball_next_ = 0;
+  mutable long queries_ = 0, fallbacks_ = 0, voxels_tested_ = 0, reused_ = 0;
 };
 
 // The sdf model's free-space certificate (issue #30; the field model's is in fast/tooth/field.h):
