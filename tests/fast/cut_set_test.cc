@@ -26,7 +26,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <filesystem>
 #include <random>
 #include <string>
 #include <tuple>
@@ -39,6 +38,7 @@
 #include "sim/scene.h"
 #include "sim/simulator.h"
 #include "tests/support/alloc_counter.h"
+#include "tests/support/shared_meshes.h"
 #include "tests/tooth/field_shapes.h"
 #include "tooth_io/mesh.h"
 #include "tooth_io/procedural_molar.h"
@@ -395,14 +395,9 @@ TEST(SurfaceCutSet, EqualsTheReferenceAndBruteForceNearTheMolarsSurface) {
 }
 
 TEST(SurfaceCutSet, EqualsTheReferenceAndBruteForceNearAMeshsSurface) {
-  const std::string path = std::string(DENTSIM_SOURCE_DIR) + "/../shared/data/molar-cc0.stl";
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << "../shared/data absent: " << path;
-  LoadedMesh m = load_mesh(path);
-  scale_mesh(m.mesh, scale_for_size(m.mesh, 11e-3));  // a molar 11 mm tall
-  VoxelizeOptions options;
-  options.resolution = 128;
-  const VoxelTooth tooth(voxelize_mesh(m.mesh, options));
-  const Agreement a = random_anchors(tooth, 0.5e-3, 2000, 46);
+  const std::unique_ptr<VoxelTooth> tooth = test::shared_molar_tooth(128);
+  if (tooth == nullptr) GTEST_SKIP() << "absent: " << test::shared_data_path("molar-cc0.stl");
+  const Agreement a = random_anchors(*tooth, 0.5e-3, 2000, 46);
   EXPECT_EQ(a.mismatches, 0);
   EXPECT_GT(a.members, 10 * a.queries);
 }

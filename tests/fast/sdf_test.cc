@@ -18,7 +18,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <string>
 #include <limits>
 #include <memory>
@@ -31,6 +30,7 @@
 #include "sim/scene.h"
 #include "sim/simulator.h"
 #include "tests/support/alloc_counter.h"
+#include "tests/support/shared_meshes.h"
 #include "tooth_io/mesh.h"
 #include "tooth_io/procedural_molar.h"
 #include "tooth_io/voxelize.h"
@@ -563,22 +563,10 @@ TEST(LocalVoxelDistance, EqualsTheReferenceOnTheMolarAt64To512BeforeAndAfterRemo
   }
 }
 
-// The real molar mesh of ../shared/data, 11 mm tall, voxelised at n^3; false when it is absent.
-bool molar_mesh_tooth(int n, std::unique_ptr<VoxelTooth>* out) {
-  const std::string file = std::string(DENTSIM_SOURCE_DIR) + "/../shared/data/molar-cc0.stl";
-  if (!std::filesystem::exists(file)) return false;
-  LoadedMesh mesh = load_mesh(file);
-  scale_mesh(mesh.mesh, scale_for_size(mesh.mesh, 11e-3));
-  VoxelizeOptions voxelize;
-  voxelize.resolution = n;
-  *out = std::make_unique<VoxelTooth>(voxelize_mesh(mesh.mesh, voxelize));
-  return true;
-}
-
 TEST(LocalVoxelDistance, EqualsTheReferenceOnAMeshAt64To256BeforeAndAfterRemovals) {
   for (const int n : {64, 128, 256}) {
-    std::unique_ptr<VoxelTooth> tooth;
-    if (!molar_mesh_tooth(n, &tooth)) GTEST_SKIP() << "../shared/data/molar-cc0.stl absent";
+    const std::unique_ptr<VoxelTooth> tooth = test::shared_molar_tooth(n);
+    if (tooth == nullptr) GTEST_SKIP() << "absent: " << test::shared_data_path("molar-cc0.stl");
     local_query_agrees(tooth.get(), ("mesh " + std::to_string(n)).c_str(), 2000, 2);
   }
 }

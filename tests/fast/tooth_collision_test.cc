@@ -10,7 +10,6 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <random>
 #include <string>
 
@@ -21,6 +20,7 @@
 #include "tooth_io/procedural_molar.h"
 #include "tooth_io/voxelize.h"
 #include "tests/fast/tooth_diff.h"
+#include "tests/support/shared_meshes.h"
 #include "tests/support/stress.h"
 
 namespace dentsim {
@@ -145,13 +145,9 @@ TEST(FastToothCollision, RandomPosesOnTheMolarEqualReference) {
 }
 
 TEST(FastToothCollision, RealMeshEqualsReference) {
-  const std::string path = std::string(DENTSIM_SOURCE_DIR) + "/../shared/data/molar-cc0.stl";
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << "../shared/data absent: " << path;
-  LoadedMesh m = load_mesh(path);
-  scale_mesh(m.mesh, scale_for_size(m.mesh, 11e-3));  // a molar of 11 mm
-  VoxelizeOptions options;
-  options.resolution = 64;
-  const VoxelTooth ref(voxelize_mesh(m.mesh, options));
+  const std::unique_ptr<VoxelTooth> tooth = test::shared_molar_tooth(64);
+  if (tooth == nullptr) GTEST_SKIP() << "absent: " << test::shared_data_path("molar-cc0.stl");
+  const VoxelTooth& ref = *tooth;
   const fast::BrickTooth fst(ref);
   const DiffStats s = random_poses(ref, fst, 1000, kSeed + 1);
   EXPECT_EQ(s.poses, 1000);
