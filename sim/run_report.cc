@@ -56,6 +56,7 @@ nlohmann::json run_report_json(const Scene& scene, const RunResult& r) {
       r.pulp_exposed_at_s ? nlohmann::json(*r.pulp_exposed_at_s) : nlohmann::json(nullptr);
   j["field_edit_late_publishes"] = r.field_edit_late_publishes;
   j["field_edit_servo_takeovers"] = r.field_edit_servo_takeovers;
+  j["field_edit_worker_waits"] = r.field_edit_worker_waits;
   nlohmann::json tj;
   for (const auto& [name, s] : r.timing) {
     tj[name] = {{"median", s.median_us}, {"p99", s.p99_us}, {"max", s.max_us}};

@@ -504,8 +504,9 @@ struct RunMeasurements {
     rec_tau = VecX::Zero(rec_sample.q.size());
   }
 
-  // One tick's measurements; false ends the run.
-  bool consume(const TickRecord& rec, double device_us) {
+  // One tick's measurements; false ends the run. `stand_in_ns`: what the tick's publish spent in
+  // the field edit worker's stead (ToothContactProvider::field_edit_stand_in_ns; 0 in real time).
+  bool consume(const TickRecord& rec, double device_us, long stand_in_ns) {
     if (recorder) record(rec);
     res.virtual_energy_generated_j = rec.energy_virtual_j;
     if (rec.faulted) {
@@ -516,7 +517,7 @@ struct RunMeasurements {
       return false;
     }
     res.hand_work_min_j = std::min(res.hand_work_min_j, hand_work);
-    const long tick_ns = time_stages(rec, device_us);
+    const long tick_ns = time_stages(rec, device_us, stand_in_ns);
     const Vec3 f_hand = measure(rec);
     if (rec.k % std::max(1, options.log_every) == 0) keep_sample(rec, f_hand);
     if (options.observer != nullptr) show(rec, tick_ns);
@@ -532,8 +533,9 @@ struct RunMeasurements {
                    static_cast<std::uint32_t>(rec.contacts));
   }
 
-  // The stages' times, the tick's and the device simulation's [us]; returns the tick's [ns].
-  long time_stages(const TickRecord& rec, double device_us) {
+  // The stages' times, the tick's, the device simulation's, the servo's own tick's and the field
+  // edit's stand-in's [us]; returns the tick's [ns].
+  long time_stages(const TickRecord& rec, double device_us, long stand_in_ns) {
     long tick_ns = 0;
     for (int s = 0; s < kStageCount; ++s) {
       stage_us[s].push_back(1e-3 * rec.stage_ns[s]);
@@ -541,6 +543,11 @@ struct RunMeasurements {
     }
     stage_us[kStageCount].push_back(1e-3 * tick_ns);
     stage_us[kStageCount + 1].push_back(device_us);
+    // The servo's own tick: the publish's stand-in ran inside the collide stage (contacts()).
+    stage_us[kStageCount + 2].push_back(1e-3 * (tick_ns - stand_in_ns));
+    stage_us[kStageCount + 3].push_back(1e-3 * stand_in_ns);
+    res.tick_ns_total += tick_ns;
+    res.servo_tick_ns_total += tick_ns - stand_in_ns;
     return tick_ns;
   }
 
@@ -655,6 +662,8 @@ struct RunMeasurements {
     }
     res.timing.emplace_back("tick", stats_of(stage_us[kStageCount]));
     res.timing.emplace_back("device_simulation", stats_of(stage_us[kStageCount + 1]));
+    res.timing.emplace_back("servo_tick", stats_of(stage_us[kStageCount + 2]));
+    res.timing.emplace_back("field_edit_stand_in", stats_of(stage_us[kStageCount + 3]));
   }
 
   const Scene& scene;
@@ -663,7 +672,8 @@ struct RunMeasurements {
   RunResult& res;
   const long n_ticks;
   const bool truth;  // the simulator's ground truth (no backend)
-  std::vector<double> stage_us[kStageCount + 2];
+  // The stages, then tick, device_simulation, servo_tick, field_edit_stand_in [us].
+  std::vector<double> stage_us[kStageCount + 4];
   double sum_f2 = 0.0, sum_fd = 0.0, sum_dd = 0.0, sum_obs2 = 0.0;
   double hand_work = 0.0;
   double motor_work = 0.0;  // the motors' true work so far (ground truth only)
@@ -703,7 +713,7 @@ double run_in_callback(SceneRig& rig, RunMeasurements& m, const RunSpan& span) {
         t_end = rec.t;
         break;
       }
-      running = m.consume(rec, 0.0);
+      running = m.consume(rec, 0.0, 0);  // real time: no stand-in
       t_end = rec.t;
       if (rec.k + 1 >= span.max_ticks) break;
       continue;
@@ -711,7 +721,7 @@ double run_in_callback(SceneRig& rig, RunMeasurements& m, const RunSpan& span) {
     if (hd.servo_done() || !hd.wait_ticks(1)) {
       // The scheduler stopped calling us (the backend latched scheduler_stopped and disabled
       // force output): what is left in the ring is still measured.
-      while (running && servo.pop(rec)) running = m.consume(rec, 0.0);
+      while (running && servo.pop(rec)) running = m.consume(rec, 0.0, 0);
       if (running) {
         res.faults.push_back(fault_string(rig.loop_device->faults() | kFaultSchedulerStopped) +
                              " at t = " + std::to_string(t_end) + " s");
@@ -738,6 +748,10 @@ double run_direct(SceneRig& rig, RunMeasurements& m, const RunSpan& span, Realti
   DeviceSample step_in = loop.sample();  // the direct loop's copy of a tick's input sample
   TickRecord record;
   double t_end = span.t_begin;
+  // The field edit's stand-in so far (the provider's running total, read on this, the servo's,
+  // thread between ticks): each tick's is the difference.
+  const ToothContactProvider* provider = rig.tooth_provider;
+  long stand_in_seen = 0;
   for (long k = 0; !loop.faulted() && k < span.max_ticks; ++k) {
     if (!truth && loop.sample().t - span.t_begin >= span.duration - 0.5 * T) break;
     if (pacer) pacer->wait_next();
@@ -767,7 +781,10 @@ double run_direct(SceneRig& rig, RunMeasurements& m, const RunSpan& span, Realti
     const double d_dev = loop.faulted() ? 0.0 : rig.tip_depth(r.device);
     fill_tick_record(k, step_in, r, loop, *rig.pipeline, d_dev, record);
     t_end = loop.sample().t;
-    if (!m.consume(record, step_us - 1e-3 * tick_ns)) break;
+    const long stand_in = provider != nullptr ? provider->field_edit_stand_in_ns() : 0;
+    const long stand_in_ns = stand_in - stand_in_seen;
+    stand_in_seen = stand_in;
+    if (!m.consume(record, step_us - 1e-3 * tick_ns, stand_in_ns)) break;
   }
   return t_end;
 }
@@ -786,6 +803,8 @@ void report_tooth(const SceneRig& rig, RunResult& res) {
   if (const ToothContactProvider* tooth = rig.tooth_provider) {
     res.field_edit_late_publishes = tooth->field_edit_late_publishes();
     res.field_edit_servo_takeovers = tooth->field_edit_servo_takeovers();
+    res.field_edit_worker_waits = tooth->field_edit_worker_waits();
+    res.field_edit_stand_in_ns = tooth->field_edit_stand_in_ns();
   }
   res.drill_log = contacts.drill_log();
   res.tooth_after = VoxelRuns(rig.tooth_grid());
@@ -815,6 +834,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   const std::unique_ptr<SceneRig> rig = build_scene_rig(scene, scene_rig_options(options));
   const double T = rig->tick;
   describe_run(scene, options, *rig, res);
+  if (options.prepare_rig) options.prepare_rig(*rig);
   if (options.observer != nullptr) {  // the view's setup, before the first tick (tick_observer.h)
     RunStartView start;
     start.field = res.field_before;

@@ -53,6 +53,8 @@
 
 namespace dentsim {
 
+struct SceneRig;  // below
+
 struct RunOptions {
   std::string pipeline = "reference";  // the tick's implementation (fast/registry.h)
   std::string device;                  // SceneRigOptions::device
@@ -87,6 +89,9 @@ struct RunOptions {
   // next tick boundary and returns what it measured, RunResult::stopped true. Not owned; null:
   // none.
   const std::atomic<bool>* stop = nullptr;
+  // Tests: called once with the rig built, before the first tick (e.g. to hold the field edit's
+  // worker, fast/tooth/field.h FieldEditWorker::hold). Null: none.
+  std::function<void(SceneRig&)> prepare_rig;
 };
 
 // One row of the time series.
@@ -140,9 +145,19 @@ struct RunResult {
   // tick t + L because the worker had not started them (docs/derivations/field_contact.md §8).
   // report.json field_edit_servo_takeovers.
   long field_edit_servo_takeovers = 0;
+  // The same, simulation: field edits the servo waited for at their tick t + L because the worker
+  // was editing them. report.json field_edit_worker_waits.
+  long field_edit_worker_waits = 0;
+  // The servo tick's wall time summed over the run [ns]: all of it (report.json timing_us "tick")
+  // and the servo's own (timing_us "servo_tick": without the field edit's takeovers and waits,
+  // work the worker does in real time); their difference is field_edit_stand_in_ns, the
+  // provider's clock on those two paths (timing_us "field_edit_stand_in" per tick; 0 in real time,
+  // for the reference pipeline and for the other contact models: servo_tick is then tick).
+  long tick_ns_total = 0, servo_tick_ns_total = 0, field_edit_stand_in_ns = 0;
   std::vector<DrillRecord> drill_log;  // every drilling tick (reference/tooth/tooth_contacts.h)
   double tick_s = 0.0;                 // nominal tick 1/tick_hz [s]
-  std::vector<std::pair<std::string, StageStats>> timing;  // stages, "tick", "device_simulation"
+  // The stages, "tick", "device_simulation", "servo_tick" and "field_edit_stand_in" (above).
+  std::vector<std::pair<std::string, StageStats>> timing;
   std::vector<std::string> faults;
   double observer_rms_error_n = 0.0;  // |F1_hat - F_hand| (force part), RMS over the run
   double simulated_s = 0.0;

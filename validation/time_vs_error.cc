@@ -107,11 +107,17 @@ Run simulate(const TimeVsErrorConfig& c, const BenchSettings& s) {
   run.v.ticks = r.ticks;
   run.v.simulated_s = r.simulated_s;
   for (const auto& [stage, st] : r.timing) {
-    if (stage != "tick") continue;
-    run.v.tick_us_median = st.median_us;
-    run.v.tick_us_p99 = st.p99_us;
-    run.v.tick_us_mean = st.mean_us;
+    if (stage == "tick") {
+      run.v.tick_us_median = st.median_us;
+      run.v.tick_us_p99 = st.p99_us;
+      run.v.tick_us_mean = st.mean_us;
+    } else if (stage == "servo_tick") {
+      run.v.servo_tick_us_median = st.median_us;
+      run.v.servo_tick_us_p99 = st.p99_us;
+    }
   }
+  run.v.field_edit_servo_takeovers = r.field_edit_servo_takeovers;
+  run.v.field_edit_worker_waits = r.field_edit_worker_waits;
   run.v.cpu_s_per_simulated_s =
       r.simulated_s > 0.0 ? 1e-6 * run.v.tick_us_mean * static_cast<double>(r.ticks) / r.simulated_s
                           : 0.0;
@@ -159,6 +165,8 @@ nlohmann::json run_to_wire(const Run& run) {
           {"ticks", v.ticks},
           {"simulated_s", wire(v.simulated_s)},
           {"tick_us", {wire(v.tick_us_median), wire(v.tick_us_p99), wire(v.tick_us_mean)}},
+          {"servo_tick_us", {wire(v.servo_tick_us_median), wire(v.servo_tick_us_p99)}},
+          {"stand_ins", {v.field_edit_servo_takeovers, v.field_edit_worker_waits}},
           {"cpu_s_per_simulated_s", wire(v.cpu_s_per_simulated_s)},
           {"removed_volume_mm3", wire(v.removed_volume_mm3)},
           {"max_force_n", wire(v.max_force_n)},
@@ -180,6 +188,12 @@ Run run_from_wire(const nlohmann::json& j) {
   v.tick_us_median = from_wire(tick.at(0));
   v.tick_us_p99 = from_wire(tick.at(1));
   v.tick_us_mean = from_wire(tick.at(2));
+  const nlohmann::json& servo = j.at("servo_tick_us");
+  v.servo_tick_us_median = from_wire(servo.at(0));
+  v.servo_tick_us_p99 = from_wire(servo.at(1));
+  const nlohmann::json& stand_ins = j.at("stand_ins");
+  v.field_edit_servo_takeovers = stand_ins.at(0).get<long>();
+  v.field_edit_worker_waits = stand_ins.at(1).get<long>();
   v.cpu_s_per_simulated_s = from_wire(j.at("cpu_s_per_simulated_s"));
   v.removed_volume_mm3 = from_wire(j.at("removed_volume_mm3"));
   v.max_force_n = from_wire(j.at("max_force_n"));
@@ -345,6 +359,10 @@ nlohmann::json time_vs_error_json(const TimeVsErrorResult& r) {
                              {"tick_us_median", v.tick_us_median},
                              {"tick_us_p99", v.tick_us_p99},
                              {"tick_us_mean", v.tick_us_mean},
+                             {"servo_tick_us_median", v.servo_tick_us_median},
+                             {"servo_tick_us_p99", v.servo_tick_us_p99},
+                             {"field_edit_servo_takeovers", v.field_edit_servo_takeovers},
+                             {"field_edit_worker_waits", v.field_edit_worker_waits},
                              {"cpu_s_per_simulated_s", v.cpu_s_per_simulated_s},
                              {"force_rms_error_n", v.force_rms_error_n},
                              {"force_max_error_n", v.force_max_error_n},
@@ -358,21 +376,26 @@ nlohmann::json time_vs_error_json(const TimeVsErrorResult& r) {
 }
 
 std::string time_vs_error_table(const TimeVsErrorResult& r) {
-  char b[512];
+  // The servo tick's columns: its own time (the field edit's takeovers and waits left out, the
+  // tick a real-time servo runs) and how many batches a simulated run's servo stood in for.
+  char b[1024];
   std::snprintf(b, sizeof(b),
-                "| variant | tick median [us] | tick p99 [us] | CPU s per simulated s | force RMS "
-                "error [N] (%g ms mean) | force max error [N] | tick-by-tick RMS error [N] | "
-                "removed volume [mm^3] | its error [mm^3] |\n"
-                "|---|---|---|---|---|---|---|---|---|\n",
+                "| variant | tick median [us] | tick p99 [us] | servo tick median [us] | servo "
+                "tick p99 [us] | field edits stood in for (taken over + waited) | CPU s per "
+                "simulated s | force RMS error [N] (%g ms mean) | force max error [N] | "
+                "tick-by-tick RMS error [N] | removed volume [mm^3] | its error [mm^3] |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|---|\n",
                 1e3 * r.config.smooth_s);
   std::string s = b;
   for (const BenchVariant& v : r.variants) {
     std::snprintf(b, sizeof(b),
-                  "| %s%s | %.2f | %.2f | %.4f | %.3g | %.3g | %.3g | %.3f | %.3g |\n",
+                  "| %s%s | %.2f | %.2f | %.2f | %.2f | %ld + %ld | %.4f | %.3g | %.3g | %.3g | "
+                  "%.3f | %.3g |\n",
                   v.name.c_str(), v.name == r.reference_variant ? " (finest: the yardstick)" : "",
-                  v.tick_us_median, v.tick_us_p99, v.cpu_s_per_simulated_s, v.force_rms_error_n,
-                  v.force_max_error_n, v.force_rms_error_raw_n, v.removed_volume_mm3,
-                  v.removed_volume_error_mm3);
+                  v.tick_us_median, v.tick_us_p99, v.servo_tick_us_median, v.servo_tick_us_p99,
+                  v.field_edit_servo_takeovers, v.field_edit_worker_waits,
+                  v.cpu_s_per_simulated_s, v.force_rms_error_n, v.force_max_error_n,
+                  v.force_rms_error_raw_n, v.removed_volume_mm3, v.removed_volume_error_mm3);
     s += b;
   }
   return s;

@@ -7,6 +7,10 @@
 // Per variant:
 // - tick_us_median / tick_us_p99: wall-clock time of the servo tick (the pipeline's stages and
 //   drilling; the simulated device's physics excluded) [us];
+// - servo_tick_us_median / servo_tick_us_p99: the servo's own tick, without what its publish did
+//   in the field edit worker's stead (the takeovers and waits of a simulated run, report.json
+//   timing_us servo_tick; sim/simulator.h): the tick a real-time servo runs. Equal to the tick
+//   where nothing was stood in for (another contact model, the reference pipeline);
 // - cpu_s_per_simulated_s: the mean tick time times the ticks per simulated second (the servo
 //   computation one second of haptics costs);
 // - force_rms_error_n / force_max_error_n: the force fed back to the device, T1's force part
@@ -60,6 +64,9 @@ struct BenchVariant {
   long ticks = 0;
   double simulated_s = 0.0;
   double tick_us_median = 0.0, tick_us_p99 = 0.0, tick_us_mean = 0.0;
+  double servo_tick_us_median = 0.0, servo_tick_us_p99 = 0.0;
+  // The field edit's batches the servo edited itself / waited for (simulation; 0 otherwise).
+  long field_edit_servo_takeovers = 0, field_edit_worker_waits = 0;
   double cpu_s_per_simulated_s = 0.0;
   double force_rms_error_n = 0.0, force_max_error_n = 0.0;          // smoothed
   double force_rms_error_raw_n = 0.0, force_max_error_raw_n = 0.0;  // tick by tick
@@ -95,7 +102,8 @@ TimeVsErrorResult run_time_vs_error(
     const BenchJobRunner& runner = {});
 
 // The result as JSON: `variants` (each with `name`, `settings`, `tick_us_median`, `tick_us_p99`,
-// `force_rms_error_n`, `force_max_error_n`, `removed_volume_error_mm3`, ...) and
+// `force_rms_error_n`, `force_max_error_n`, `removed_volume_error_mm3`, `servo_tick_us_median`,
+// `servo_tick_us_p99`, ...) and
 // `reference_variant` (issue #14's contract), and as a Markdown table.
 nlohmann::json time_vs_error_json(const TimeVsErrorResult& r);
 std::string time_vs_error_table(const TimeVsErrorResult& r);

@@ -5,6 +5,7 @@
 #include <sched.h>
 
 #include <algorithm>
+#include <chrono>
 #include <climits>
 #include <cmath>
 #include <cstdlib>
@@ -629,7 +630,7 @@ bool FieldEditWorker::submit(const FieldDrillCut& cut, std::size_t limit) {
 }
 
 void FieldEditWorker::publish(long tick, Sink& sink, FieldEditStats* stats, long* shortfalls,
-                              long* late, long* takeovers) {
+                              long* late, StandIn* stand_in) {
   bool took_over = false;  // at most one batch's edit in this tick
   while (published_here_ < submitted_here_ && sink.room()) {
     Batch& b = ring_[static_cast<std::size_t>(published_here_) % ring_.size()];
@@ -638,7 +639,9 @@ void FieldEditWorker::publish(long tick, Sink& sink, FieldEditStats* stats, long
     if (done <= published_here_) {
       if (real_time_) return;  // published at the first tick it is done (counted late then)
       // Simulation. done == published_here_: every earlier batch is done (and published), so
-      // whoever claims this one edits it on the state they left.
+      // whoever claims this one edits it on the state they left. Timed: the worker's work, not
+      // the servo's (the run's servo_tick leaves it out).
+      const auto t0 = std::chrono::steady_clock::now();
       int unclaimed = published_here_;
       if (!took_over &&
           claimed_.compare_exchange_strong(unclaimed, published_here_ + 1,
@@ -648,13 +651,17 @@ void FieldEditWorker::publish(long tick, Sink& sink, FieldEditStats* stats, long
         done_.store(published_here_ + 1, std::memory_order_release);
         done_.notify_all();  // the worker waits for it when it lost the claim
         took_over = true;
-        ++*takeovers;
+        ++stand_in->takeovers;
       } else {
         while (done <= published_here_) {  // the worker is on it: the rest of one batch
           done_.wait(done, std::memory_order_acquire);
           done = done_.load(std::memory_order_acquire);
         }
+        ++stand_in->waits;
       }
+      stand_in->ns += std::chrono::duration_cast<std::chrono::nanoseconds>(
+                          std::chrono::steady_clock::now() - t0)
+                          .count();
     }
     sink.done(b.cut);
     bricks_->publish(b.swaps, b.lipschitz);
@@ -822,7 +829,10 @@ void FieldContactProvider::hand_off_field_cut(const FieldDrillCut& cut) {
 
 void FieldContactProvider::publish_field_edits(long tick) {
   worker_->publish(tick, *this, &field_edits_, &field_edit_shortfalls_,
-                   &field_edit_late_publishes_, &field_edit_servo_takeovers_);
+                   &field_edit_late_publishes_, &stand_in_);
+  field_edit_servo_takeovers_ = stand_in_.takeovers;
+  field_edit_worker_waits_ = stand_in_.waits;
+  field_edit_stand_in_ns_ = stand_in_.ns;
 }
 
 bool FieldContactProvider::room() const {

@@ -330,12 +330,20 @@ class FieldEditWorker {
   // (the rest: shortfalls). False when every slot of the ring holds an unpublished batch (a late
   // real-time worker: not cut).
   bool submit(const FieldDrillCut& cut, std::size_t limit);
+  // Simulation: what publish did in the worker's stead (in real time it never does either).
+  struct StandIn {
+    long takeovers = 0;  // batches the servo edited itself (the worker had not started them)
+    long waits = 0;      // batches the servo waited for (the worker was editing them)
+    // The wall time of both [ns]: steady_clock read before and after each takeover and each wait
+    // (on those two paths only: no clock is read in real time or when the batch is done).
+    long ns = 0;
+  };
   // Servo, at the start of tick `tick`: publishes the due batches while sink.room(), each to
   // sink.done(); adds their edit stats to `stats`, their incomplete edits to `*shortfalls`, the
-  // late publishes to `*late` (real time), the batches the servo edited itself to `*takeovers`
-  // (simulation).
+  // late publishes to `*late` (real time), the batches the servo edited itself or waited for,
+  // and the time it took, to `*stand_in` (simulation).
   void publish(long tick, Sink& sink, FieldEditStats* stats, long* shortfalls, long* late,
-               long* takeovers);
+               StandIn* stand_in);
   int latency() const { return latency_; }
   bool real_time() const { return real_time_; }
   const VoxelDistanceCache& distance_cache() const { return cache_; }
@@ -436,6 +444,7 @@ class FieldContactProvider final : public CutSetProvider, private FieldEditWorke
   FieldBricks bricks_;
   FieldSolid solid_;
   VoxelDistanceCache cache_;
+  FieldEditWorker::StandIn stand_in_;  // publish's (the base's takeover, wait and ns counts)
   std::unique_ptr<FieldEditWorker> worker_;  // last: joined before the bricks go
 };
 

@@ -231,6 +231,13 @@ class ToothContactProvider : public ToothProviderBase {
   // Batches the servo edited itself because the fast provider's worker had not started them at
   // tick t + L (simulation; 0 here, where the servo applies every batch).
   long field_edit_servo_takeovers() const { return field_edit_servo_takeovers_; }
+  // Batches the servo waited for at tick t + L because the fast provider's worker was editing
+  // them (simulation; 0 here), and the wall time [ns] the servo spent on the takeovers and the
+  // waits, from a clock read on those paths only: the worker's work done or waited for on the
+  // servo's thread, which a real-time servo never does (0 here, where the servo's publish is the
+  // specification's, not a stand-in; a simulated run's servo_tick leaves it out, sim/simulator.h).
+  long field_edit_worker_waits() const { return field_edit_worker_waits_; }
+  long field_edit_stand_in_ns() const { return field_edit_stand_in_ns_; }
   // The room collect_cut_set's candidates need for a bur of radius rho on `grid` (allocated once
   // at setup, so that the query never grows them in the tick).
   static std::size_t cut_candidates_capacity(const VoxelGrid& grid, double rho);
@@ -287,6 +294,8 @@ class ToothContactProvider : public ToothProviderBase {
   long field_edit_shortfalls_ = 0;
   long field_edit_late_publishes_ = 0;
   long field_edit_servo_takeovers_ = 0;
+  long field_edit_worker_waits_ = 0;
+  long field_edit_stand_in_ns_ = 0;
 
  private:
   void measure_anchor(const Vec3& c, const Vec3& g, bool in_contact);

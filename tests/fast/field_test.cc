@@ -18,6 +18,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -666,7 +667,24 @@ void provider_equals_the_reference(int stride, int latency = 0, Worker worker = 
       Pose pose;
       pose.x = bur(tick);
       const bool ok_r = reference.contacts(pose, out_r);
+      // The stand-in's clock (FieldEditWorker::publish) is read inside contacts() and only on a
+      // takeover or a wait: a tick without either adds no time, one with them no more than the
+      // whole call took.
+      const long stood_in = fast_provider.field_edit_servo_takeovers() +
+                            fast_provider.field_edit_worker_waits();
+      const long stand_in_ns = fast_provider.field_edit_stand_in_ns();
+      const auto call_start = std::chrono::steady_clock::now();
       const bool ok_f = fast_provider.contacts(pose, out_f);
+      const long call_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                               std::chrono::steady_clock::now() - call_start)
+                               .count();
+      const long tick_ns = fast_provider.field_edit_stand_in_ns() - stand_in_ns;
+      if (fast_provider.field_edit_servo_takeovers() + fast_provider.field_edit_worker_waits() ==
+          stood_in) {
+        ASSERT_EQ(tick_ns, 0) << "tick " << tick;
+      }
+      ASSERT_GE(tick_ns, 0) << "tick " << tick;
+      ASSERT_LE(tick_ns, call_ns) << "tick " << tick;
       ASSERT_EQ(ok_r, ok_f);
       ASSERT_EQ(out_r.size(), out_f.size()) << "tick " << tick;
       for (std::size_t i = 0; i < out_r.size(); ++i) {
@@ -730,6 +748,11 @@ void provider_equals_the_reference(int stride, int latency = 0, Worker worker = 
     EXPECT_EQ(takeovers + by_worker, batches);
     if (worker == Worker::kHeld) {
       EXPECT_EQ(takeovers, batches);
+      EXPECT_EQ(fast_provider.field_edit_worker_waits(), 0);  // the worker never claims one
+    }
+    // Each takeover's edit and each wait was timed (a clock read before and after).
+    if (takeovers + fast_provider.field_edit_worker_waits() > 0) {
+      EXPECT_GT(fast_provider.field_edit_stand_in_ns(), 0);
     }
     if (worker == Worker::kMixed) {
       EXPECT_GT(takeovers, 0);
@@ -737,7 +760,10 @@ void provider_equals_the_reference(int stride, int latency = 0, Worker worker = 
     }
   } else {
     EXPECT_EQ(fast_provider.field_edit_servo_takeovers(), 0);
+    EXPECT_EQ(fast_provider.field_edit_worker_waits(), 0);
+    EXPECT_EQ(fast_provider.field_edit_stand_in_ns(), 0);  // no worker: nothing stood in for
   }
+  EXPECT_EQ(reference.field_edit_stand_in_ns(), 0);  // the specification's publish: no stand-in
   EXPECT_EQ(compared, latency > 0 ? ticks / kCompareEvery : 0);
   EXPECT_EQ(fast_provider.bricks().lipschitz(), field_r.lipschitz());
   long differ = 0;
