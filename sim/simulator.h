@@ -24,7 +24,9 @@
 //   passive toward the hand when W_h(t) >= 0 at all times: it never gave back more energy than
 //   the hand put in (Hannaford & Ryu's time-domain passivity observer, applied at the handle);
 // - timing: wall-clock time of every tick stage, of the whole servo tick (the pipeline's stages
-//   + drilling) and, apart, of the simulated device's physics per tick [us];
+//   + drilling), of the servo's own tick (the whole less what the field model's publish did in
+//   its edit worker's stead: takeovers and waits, which only a simulated run has) and, apart, of
+//   the simulated device's physics per tick [us];
 // - faults: the device's latched faults (a fault stops the run: the device is in safe stop).
 #pragma once
 
