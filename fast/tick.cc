@@ -13,7 +13,6 @@
 #include "fast/pmi.h"
 #include "reference/decomposition.h"
 #include "reference/encoder_kalman.h"
-#include "reference/grasp_mass_model.h"
 #include "reference/grip_detector.h"
 #include "reference/observer.h"
 #include "reference/pmi.h"
