@@ -4,13 +4,18 @@
 #include <typeinfo>
 
 #include "fast/contact.h"
+#include "fast/coupling.h"
 #include "fast/decomposition.h"
 #include "fast/dense6.h"
+#include "fast/encoder_kalman.h"
+#include "fast/grasp_mass_model.h"
 #include "fast/phantom/phantom_model.h"
 #include "fast/pmi.h"
 #include "reference/decomposition.h"
+#include "reference/encoder_kalman.h"
 #include "reference/grip_detector.h"
 #include "reference/observer.h"
+#include "reference/pmi.h"
 #include "reference/tick_detail.h"
 
 namespace dentsim::fast {
@@ -98,13 +103,89 @@ bool solve_inertia(const Mat6& M, const Vec6& b, Vec6* x) {
   return true;
 }
 
+// The encoder Kalman filter's step of reference/tick.cc (encoder_kalman_step) without its
+// copies: M is the device's own inertia, read in place, unless the hand's hypothesis adds M_hand
+// (then M + M_hand, the reference's sum); the model acceleration a = M^-1 (tau_prev + f_hat - g -
+// tau_f) by fast/dense6.h's Cholesky and the correction by fast/encoder_kalman.h, each the same
+// operations on the same doubles. With the stick-slip friction model the reference's stage runs
+// instead (device_terms below).
+void encoder_kalman_step(const PipelineModel& m, PipelineData& d) {
+  if (!d.enc.ready) {
+    encoder_kalman_reset(d.q, d.qd, m.encoder_quantum, d.enc);
+  } else {
+    const double T = d.have_prev && d.t > d.t_prev ? d.t - d.t_prev : d.T;
+    const DeviceTerms& t = d.dev;
+    const bool gripped = m.grasp && d.grip.gripped;
+    Mat6 M_gripped;
+    if (gripped) M_gripped.noalias() = t.M + d.M_hand;
+    const Mat6& M = gripped ? M_gripped : t.M;
+    // sigma_a,i = sigma_f (|J_v,i| + lever |J_w,i|) / M_ii (fast/encoder_kalman.h)
+    const EncoderKalmanParams& p = m.encoder_kalman_params;
+    Vec6 sigma_a;
+    encoder_acceleration_noise(t.J_t, M, p, &sigma_a);
+    const Vec6 f_hat = !m.observe ? Vec6::Zero() : gripped ? d.obs1.f_hat : d.obs0.f_hat;
+    Vec6 b = d.tau_prev + f_hat - t.g;
+    if (p.model_friction) b -= t.tau_f;
+    Vec6 accel;
+    if (!solve_inertia(M, b, &accel) || !reference::detail::all_finite(accel)) accel.setZero();
+    fast::encoder_kalman_update(d.q, d.qd, m.encoder_quantum, accel, sigma_a, T, d.enc);
+  }
+  d.q = d.enc.q;
+  d.qd = d.enc.qd;
+}
+
+// reference/tick.cc's assemble_given_contact_with(m, d, pd_step), line for line, with both
+// coupling wrenches from fast/coupling.h (bitwise the reference's two calls). While the
+// saturation-passive shape control is engaged (after a saturated command) the reference's stage
+// runs, with the same pd_step.
+TickStatus assemble_given_contact(const PipelineModel& m, PipelineData& d) {
+  if (m.saturation_passive && d.shape_engaged) {
+    return reference::detail::assemble_given_contact_with(m, d, pd_step);
+  }
+  TickResult& r = d.r;
+  coupling_wrenches_unchecked(m.coupling, r.device, r.V1, d.proxy, d.T, m.scheme, &d.coupling,
+                              &r.T1_vc);
+  r.shape_sigma = 1.0;
+  r.coupling_force_cap = 0.0;
+  d.coupling_capped = false;
+  if (m.method == Method::kPmiPd && !pd_step(m, d)) return TickStatus::kDeviceModelFailure;
+  if (m.method != Method::kExplicitVc) {
+    // PMI (4.9): inertia, coupling, contact and the feed-forward in one 6x6 system.
+    d.sys = pmi_inertia_system_unchecked(m.proxy, d.proxy, d.T);
+    d.sys.add(d.coupling);
+    d.sys.add(d.contact);
+    if (m.method == Method::kPmiPd) d.sys.add(d.pd_T2);
+  }
+  return TickStatus::kOk;
+}
+
 }  // namespace
 
-// The device model does the work (fast::PhantomModel with the fast pipeline); the stage around it
-// (finite checks, V1, the hand's terms) is the reference's; J1 = J_t^-1 and the inertia's solve
-// are fast/ kernels (above).
+// The device model does the work (fast::PhantomModel with the fast pipeline); J1 = J_t^-1, the
+// inertia's solve and the encoder Kalman filter are fast/ kernels (above); the stage around them
+// is reference/tick.cc's device_terms_with, line for line. The loop-lag compensation and the
+// stick-slip friction model of the encoder filter take the reference's stage (with the same
+// kernels).
 TickStatus device_terms(const PipelineModel& m, PipelineData& d) {
-  return reference::detail::device_terms_with(m, d, invert_jacobian, solve_inertia);
+  if (m.lag_compensation ||
+      (m.encoder_kalman && m.encoder_kalman_params.model_friction &&
+       m.encoder_kalman_params.stick_slip)) {
+    return reference::detail::device_terms_with(m, d, invert_jacobian, solve_inertia);
+  }
+  if (m.encoder_kalman) encoder_kalman_step(m, d);
+  // One pass of the device model: x1, R1, J_t (V1 = J_t qd), M, C^T qd, g, tau_f   (2.1), (2.2)
+  DeviceTerms& t = d.dev;
+  m.device->terms(d.q, d.qd, m.grasp, t);
+  if (!reference::detail::all_finite(t.pose.x, t.pose.R, t.J_t, t.J_t_dot, t.M, t.CTqd, t.g,
+                                     t.tau_f)) {
+    return TickStatus::kDeviceModelFailure;
+  }
+  invert_jacobian(m, t.J_t, d);  // J1 = J_t^-1 (2.2)
+  if (!reference::detail::all_finite(d.J1)) return TickStatus::kDeviceModelFailure;
+  d.r.device = t.pose;
+  d.r.V1.noalias() = t.J_t * d.qd;  // V1 = J_t qd                                   (2.2)
+  if (m.grasp) fast::grasp_mass_terms(m.grasp_mass.Mt, t, d.r.V1, &d.M_hand, &d.CTqd_hand);
+  return TickStatus::kOk;
 }
 
 // Two 6-vector observer updates: already allocation-free and O(36) flops; shared. Skipped (by the
@@ -129,7 +210,7 @@ TickStatus assemble(const PipelineModel& m, PipelineData& d) {
                                           m.coupling.b_ang + m.proxy.damping_ang);
     }
   }
-  const TickStatus st = reference::detail::assemble_given_contact_with(m, d, pd_step);
+  const TickStatus st = assemble_given_contact(m, d);
   if (st == TickStatus::kOk && !m.skip_unneeded && m.method != Method::kPmiPd) {
     unneeded_decomposition(m, d);
   }

@@ -5,15 +5,19 @@
 //
 // Where the work is, and what fast/ does about it:
 //   device_terms  the device model's one pass: with the fast pipeline the model is
-//                 fast::PhantomModel (fast/phantom/), specialised to the Phantom's tree
+//                 fast::PhantomModel (fast/phantom/), specialised to the Phantom's tree; the
+//                 encoder Kalman filter two joints at a time (fast/encoder_kalman.h) and the
+//                 hand's terms (fast/grasp_mass_model.h), bitwise the reference's
 //   collide       the environment's query: fast::ToothContactProvider (fast/tooth/)
-//   assemble      the contact wrench as symmetric rank-1 updates (fast/contact.h); the pmi-pd
-//                 feed-forward on its block structure (fast/decomposition.h)
+//   assemble      the contact wrench as symmetric rank-1 updates (fast/contact.h); both coupling
+//                 wrenches in one pass (fast/coupling.h, bitwise); the pmi-pd feed-forward on its
+//                 block structure (fast/decomposition.h)
 //   solve         partial-pivoting LU of the scaled PMI system (fast/pmi.h)
 //   drill         the environment's cut: fast::drill_tick through the fast provider
 // The stage code itself is shared with the reference where nothing faster exists (observe,
-// command, and the rest of assemble and solve: reference/tick.h `detail`), so the two cannot
-// drift apart. Skips: a stage returns at once when the scene does not need it (no observer
+// command, solve around its kernel, device_terms with loop-lag compensation or the stick-slip
+// filter, assemble while the shape control is engaged: reference/tick.h `detail`), so the two
+// cannot drift apart. Skips: a stage returns at once when the scene does not need it (no observer
 // without a gain, no decomposition unless pmi-pd, no friction without mu, no drill unless the
 // environment drills, no contact work on an empty set).
 #pragma once
