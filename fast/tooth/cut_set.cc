@@ -294,27 +294,26 @@ bool SurfaceCutSet::material_alone(const Vec3& g, Nearest* nearest) {
   const VoxelGrid& grid = tooth_.grid();
   const double R = cut_band(rho_).reach;
   const double m = proxy_material_reach(rho_);
-  double best2 = std::min(R * R, m * m);  // collect's ball test and outside_distance's reach
-  SignedDistance best;                    // found and voxel, as the walk reads them
+  VoxelWalk<NoVoxelWatch> best;             // found and voxel in best.sd, as the walk reads them
+  best.d2 = std::min(R * R, m * m);  // collect's ball test and outside_distance's reach
   const std::size_t nn = static_cast<std::size_t>(grid.n);
   if (seeded_ && seed_ < grid.voxels.size()) {
     const int i = static_cast<int>(seed_ % nn), j = static_cast<int>((seed_ / nn) % nn);
     const int k = static_cast<int>(seed_ / (nn * nn));
     if (surface_.exposed(i, j, k)) {
       const double d2 = voxel_walk::voxel_distance2(grid, i, j, k, g);
-      if (d2 < best2) {
-        best2 = d2;
-        best.voxel = seed_;
-        best.found = true;
+      if (d2 < best.d2) {
+        best.d2 = d2;
+        best.sd.voxel = seed_;
+        best.sd.found = true;
         ++seeded_queries_;
       }
     }
   }
   // The walk's span: the ball of radius sqrt(best) (every voxel with D <= best lies within it).
-  NoVoxelWatch watch;
-  const double r = best.found ? std::sqrt(best2) : std::min(R, m);
-  if (!walk_nearest_voxel(surface_, grid, g, r, &best, &best2, watch)) return false;
-  return answer(g, best.found, best.voxel, nearest);
+  const double r = best.sd.found ? std::sqrt(best.d2) : std::min(R, m);
+  if (!walk_nearest_voxel(surface_, grid, g, r, &best)) return false;
+  return answer(g, best.sd.found, best.sd.voxel, nearest);
 }
 
 bool SurfaceCutSet::collect(const Vec3& g, const Contact& contact, std::vector<Contact>* shares,

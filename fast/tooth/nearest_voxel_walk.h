@@ -109,12 +109,26 @@ inline void axis_terms(const VoxelGrid& grid, int a, int b, double x, AxisTerms*
   out->m4[1] = std::min(out->pair[2][3], out->pair[3][3]);
 }
 
+}  // namespace voxel_walk
+
+// The walk's state: the best so far as sdf_nearer and sdf_prunable read it (sd.found, sd.voxel)
+// and its D (d2), and the watch. One object, so that the watch's stores are known not to touch
+// d2 (separate pointers to doubles would make the compiler reload it after each).
+template <class Watch>
+struct VoxelWalk {
+  SignedDistance sd;
+  double d2 = 0.0;
+  Watch watch;
+};
+
+namespace voxel_walk {
+
 // Brick (bx, by, bz) (its words `bits`, its axes' terms X, Y, Z): its words nearest first, in a
 // word its bytes by their boxes shrunk to their set bits, and their voxels.
 template <class Watch>
 void search_brick(const std::uint64_t* bits, const AxisTerms& X, const AxisTerms& Y,
-                  const AxisTerms& Z, int bx, int by, int bz, std::size_t nn, SignedDistance* sd,
-                  double* best2, Watch& watch) {
+                  const AxisTerms& Z, int bx, int by, int bz, std::size_t nn,
+                  VoxelWalk<Watch>* best) {
   struct Word {
     double d2;
     int w;
@@ -125,8 +139,8 @@ void search_brick(const std::uint64_t* bits, const AxisTerms& X, const AxisTerms
     if (bits[w] == 0) continue;
     // Word w: the 4^3 block (x, y, z) = bits 0, 1, 2 of w (the Morton layout, cut_set.h).
     const double d2 = (X.m4[w & 1] + Y.m4[(w >> 1) & 1]) + Z.m4[w >> 2];
-    if (sdf_detail::sdf_prunable(d2, *best2, *sd)) {
-      watch.ruled_out(d2);
+    if (sdf_detail::sdf_prunable(d2, best->d2, best->sd)) {
+      best->watch.ruled_out(d2);
       continue;
     }
     int at = count++;
@@ -138,8 +152,8 @@ void search_brick(const std::uint64_t* bits, const AxisTerms& X, const AxisTerms
   }
   for (int i = 0; i < count; ++i) {
     // In increasing order: once one is no nearer than the best, none after it is.
-    if (sdf_detail::sdf_prunable(order[i].d2, *best2, *sd)) {
-      watch.ruled_out(order[i].d2);
+    if (sdf_detail::sdf_prunable(order[i].d2, best->d2, best->sd)) {
+      best->watch.ruled_out(order[i].d2);
       break;
     }
     const int w = order[i].w;
@@ -158,8 +172,8 @@ void search_brick(const std::uint64_t* bits, const AxisTerms& X, const AxisTerms
       const unsigned layers = kByteLayers[block];
       const double d2q = (px[4 * ox + (layers & 3)] + py[4 * oy + ((layers >> 2) & 3)]) +
                          pz[4 * oz + (layers >> 4)];
-      if (sdf_detail::sdf_prunable(d2q, *best2, *sd)) {
-        watch.ruled_out(d2q);
+      if (sdf_detail::sdf_prunable(d2q, best->d2, best->sd)) {
+        best->watch.ruled_out(d2q);
         continue;
       }
       const int qx = 2 * wx + ox, qy = 2 * wy + oy, qz = 2 * wz + oz;
@@ -170,23 +184,23 @@ void search_brick(const std::uint64_t* bits, const AxisTerms& X, const AxisTerms
       for (int c = 0; c < 8; ++c) {
         if ((block & (1u << c)) == 0) continue;
         const double d2 = (tx[c & 1] + ty[(c >> 1) & 1]) + tz[c >> 2];  // box_distance2's sum
-        watch.tested_one();
-        if (d2 > *best2) {  // not nearer (sdf_nearer), whatever its index
-          watch.ruled_out(d2);
+        best->watch.tested_one();
+        if (d2 > best->d2) {  // not nearer (sdf_nearer), whatever its index
+          best->watch.ruled_out(d2);
           continue;
         }
         const std::size_t v = static_cast<std::size_t>(kB * bx + 2 * qx + (c & 1)) +
                               nn * (static_cast<std::size_t>(kB * by + 2 * qy + ((c >> 1) & 1)) +
                                     nn * static_cast<std::size_t>(kB * bz + 2 * qz + (c >> 2)));
-        if (sd->found && v == sd->voxel) continue;  // the best itself (the seed)
-        if (!sdf_detail::sdf_nearer(d2, v, *best2, *sd)) {
-          watch.ruled_out(d2);
+        if (best->sd.found && v == best->sd.voxel) continue;  // the best itself (the seed)
+        if (!sdf_detail::sdf_nearer(d2, v, best->d2, best->sd)) {
+          best->watch.ruled_out(d2);
           continue;
         }
-        if (sd->found) watch.ruled_out(*best2);
-        *best2 = d2;
-        sd->voxel = v;
-        sd->found = true;
+        if (best->sd.found) best->watch.ruled_out(best->d2);
+        best->d2 = d2;
+        best->sd.voxel = v;
+        best->sd.found = true;
       }
     }
   }
@@ -194,13 +208,13 @@ void search_brick(const std::uint64_t* bits, const AxisTerms& X, const AxisTerms
 
 }  // namespace voxel_walk
 
-// The walk (header comment) at x within r over `surface` (the bits of grid's tooth): *sd's found
-// and voxel and *best2 hold the seed (or found = false and the bound: a voxel is taken only with
-// D < *best2) and receive the answer. Returns false, nothing searched, when the span of r exceeds
+// The walk (header comment) at x within r over `surface` (the bits of grid's tooth): best->sd's
+// found and voxel and best->d2 hold the seed (or found = false and the bound: a voxel is taken
+// only with D < d2) and receive the answer; best->watch is told what the walk rules out. Returns false, nothing searched, when the span of r exceeds
 // voxel_walk::kMaxSpan bricks on an axis (r finite, >= 0). No allocation, no throw.
 template <class Watch>
 bool walk_nearest_voxel(const SurfaceVoxels& surface, const VoxelGrid& grid, const Vec3& x,
-                        double r, SignedDistance* sd, double* best2, Watch& watch) {
+                        double r, VoxelWalk<Watch>* best) {
   using namespace voxel_walk;
   const int n = grid.n;
   const std::size_t nn = static_cast<std::size_t>(n);
@@ -234,7 +248,7 @@ bool walk_nearest_voxel(const SurfaceVoxels& surface, const VoxelGrid& grid, con
     return terms[a][at];
   };
   auto search = [&](const std::uint64_t* bits, int bx, int by, int bz) {
-    search_brick(bits, axis(0, bx), axis(1, by), axis(2, bz), bx, by, bz, nn, sd, best2, watch);
+    search_brick(bits, axis(0, bx), axis(1, by), axis(2, bz), bx, by, bz, nn, best);
   };
   // The bricks not prunable, nearest first (by their boxes' d2); beyond the room of the list, a
   // brick is searched at once (the order decides no answer, sdf_nearer: only the work).
@@ -248,22 +262,22 @@ bool walk_nearest_voxel(const SurfaceVoxels& surface, const VoxelGrid& grid, con
   int count = 0;
   for (int bz = b_lo[2]; bz <= b_hi[2]; ++bz) {
     const double tz = brick_term[2][bz - b_lo[2]];
-    if (sdf_detail::sdf_prunable(tz, *best2, *sd)) {  // (t_x + t_y) + t_z >= t_z
-      watch.ruled_out(tz);
+    if (sdf_detail::sdf_prunable(tz, best->d2, best->sd)) {  // (t_x + t_y) + t_z >= t_z
+      best->watch.ruled_out(tz);
       continue;
     }
     for (int by = b_lo[1]; by <= b_hi[1]; ++by) {
       const double ty = brick_term[1][by - b_lo[1]];
-      if (sdf_detail::sdf_prunable(ty, *best2, *sd)) {
-        watch.ruled_out(ty);
+      if (sdf_detail::sdf_prunable(ty, best->d2, best->sd)) {
+        best->watch.ruled_out(ty);
         continue;
       }
       for (int bx = b_lo[0]; bx <= b_hi[0]; ++bx) {
         const std::uint64_t* bits = surface.brick(surface.slot(bx, by, bz));
         if (bits == nullptr) continue;
         const double d2b = (brick_term[0][bx - b_lo[0]] + ty) + tz;
-        if (sdf_detail::sdf_prunable(d2b, *best2, *sd)) {
-          watch.ruled_out(d2b);
+        if (sdf_detail::sdf_prunable(d2b, best->d2, best->sd)) {
+          best->watch.ruled_out(d2b);
           continue;
         }
         if (count == kRoom) {
@@ -281,8 +295,8 @@ bool walk_nearest_voxel(const SurfaceVoxels& surface, const VoxelGrid& grid, con
   }
   for (int i = 0; i < count; ++i) {
     const Brick& b = order[i];
-    if (sdf_detail::sdf_prunable(b.d2, *best2, *sd)) {  // and every brick after it
-      watch.ruled_out(b.d2);
+    if (sdf_detail::sdf_prunable(b.d2, best->d2, best->sd)) {  // and every brick after it
+      best->watch.ruled_out(b.d2);
       break;
     }
     search(b.bits, b.bx, b.by, b.bz);

@@ -186,11 +186,10 @@ bool LocalVoxelDistance::outside(const Vec3& x, double reach, SignedDistance* ou
     ++fallbacks_;
     return false;
   }
-  // The walk's best so far (fast/tooth/nearest_voxel_walk.h): found and voxel in `best`, its D in
-  // best2; `watch` the bounds it ruled voxels out by (the balls', below).
-  SignedDistance best;
-  double best2 = reach * reach;  // outside_distance's bound: a candidate has D < reach^2
-  BallWatch watch;
+  // The walk's best so far (fast/tooth/nearest_voxel_walk.h): found and voxel in best.sd, its D in
+  // best.d2; best.watch the bounds it ruled voxels out by (the balls', below).
+  VoxelWalk<BallWatch> best;
+  best.d2 = reach * reach;  // outside_distance's bound: a candidate has D < reach^2
   // The last answer's voxel and the balls' first: any solid voxel's (D, index) bounds the answer's
   // (the exposed minimum is the solid one, header comment), and the answer is often one of them.
   auto candidate = [&](std::size_t v) {
@@ -198,11 +197,11 @@ bool LocalVoxelDistance::outside(const Vec3& x, double reach, SignedDistance* ou
     const int i = static_cast<int>(v % nn), j = static_cast<int>((v / nn) % nn);
     const int k = static_cast<int>(v / (nn * nn));
     const double d2 = voxel_distance2(grid, i, j, k, x);
-    if (!sdf_detail::sdf_nearer(d2, v, best2, best)) return;
-    if (best.found) watch.ruled_out(best2);
-    best2 = d2;
-    best.voxel = v;
-    best.found = true;
+    if (!sdf_detail::sdf_nearer(d2, v, best.d2, best.sd)) return;
+    if (best.sd.found) best.watch.ruled_out(best.d2);
+    best.d2 = d2;
+    best.sd.voxel = v;
+    best.sd.found = true;
   };
   if (have_hint_) candidate(hint_);
   for (int at = 0; at < ball_count_; ++at) {
@@ -211,17 +210,17 @@ bool LocalVoxelDistance::outside(const Vec3& x, double reach, SignedDistance* ou
     }
   }
   // The bricks within the bound r (the walk's span: a brick beyond it is more than r + 7 h away).
-  const double r = best.found ? std::sqrt(best2) : reach;
-  if (!walk_nearest_voxel(surface_, grid, x, r, &best, &best2, watch)) {
+  const double r = best.sd.found ? std::sqrt(best.d2) : reach;
+  if (!walk_nearest_voxel(surface_, grid, x, r, &best)) {
     ++fallbacks_;
     return false;
   }
-  voxels_tested_ += watch.tested;
+  voxels_tested_ += best.watch.tested;
   SignedDistance sd;
   sd.phi = reach;
   *best2_out = std::numeric_limits<double>::infinity();
-  if (best.found) {
-    const std::size_t v = best.voxel;
+  if (best.sd.found) {
+    const std::size_t v = best.sd.voxel;
     const int idx[3] = {static_cast<int>(v % nn), static_cast<int>((v / nn) % nn),
                         static_cast<int>(v / (nn * nn))};
     for (int a = 0; a < 3; ++a) {
@@ -229,14 +228,14 @@ bool LocalVoxelDistance::outside(const Vec3& x, double reach, SignedDistance* ou
     }
     sd.voxel = v;
     sd.found = true;
-    sd.phi = std::sqrt(best2);
-    *best2_out = best2;
+    sd.phi = std::sqrt(best.d2);
+    *best2_out = best.d2;
     hint_ = v;
     have_hint_ = true;
     // The ball about x in which v stays the answer: every other solid voxel is at least
     // sqrt(L) from x, L the least of the search's `other`, the bricks beyond its span ((r + 7 h)^2
     // and more) and the solid face neighbours of v (header comment).
-    double lower2 = std::min(watch.other, (r + 4.0 * h) * (r + 4.0 * h));
+    double lower2 = std::min(best.watch.other, (r + 4.0 * h) * (r + 4.0 * h));
     for (int a = 0; a < 3; ++a) {
       for (const int d : {-1, 1}) {
         int m[3] = {idx[0], idx[1], idx[2]};
@@ -245,7 +244,7 @@ bool LocalVoxelDistance::outside(const Vec3& x, double reach, SignedDistance* ou
         lower2 = std::min(lower2, voxel_distance2(grid, m[0], m[1], m[2], x));
       }
     }
-    if (lower2 > best2) {
+    if (lower2 > best.d2) {
       const double lower = std::sqrt(lower2);
       balls_[static_cast<std::size_t>(ball_next_)] = {x, lower, 1e-9 * h + 1e-12 * lower, v};
       ball_next_ = (ball_next_ + 1) % kBalls;

@@ -72,17 +72,19 @@ struct Tally {
 void check(const VoxelTooth& tooth, const fast::SurfaceVoxels& surface, const Vec3& x,
            double bound, const Answer& seed, const char* what, Tally* tally) {
   const VoxelGrid& grid = tooth.grid();
-  SignedDistance sd;
-  double best2 = bound;
+  fast::VoxelWalk<Watch> walk;
+  walk.d2 = bound;
   if (seed.found) {
     ASSERT_LT(seed.d2, bound);
-    sd.found = true;
-    sd.voxel = seed.voxel;
-    best2 = seed.d2;
+    walk.sd.found = true;
+    walk.sd.voxel = seed.voxel;
+    walk.d2 = seed.d2;
   }
-  const double r = sd.found ? std::sqrt(best2) : std::sqrt(bound);
-  Watch watch;
-  ASSERT_TRUE(fast::walk_nearest_voxel(surface, grid, x, r, &sd, &best2, watch)) << what;
+  const double r = walk.sd.found ? std::sqrt(walk.d2) : std::sqrt(bound);
+  ASSERT_TRUE(fast::walk_nearest_voxel(surface, grid, x, r, &walk)) << what;
+  const SignedDistance& sd = walk.sd;
+  const double best2 = walk.d2;
+  const Watch& watch = walk.watch;
   const Answer want = brute_force(grid, surface, x, bound, seed);
   ++tally->queries;
   tally->found += want.found;
@@ -224,18 +226,17 @@ TEST(NearestVoxelWalk, RefusesASpanBeyondItsArrays) {
   const fast::SurfaceVoxels surface(tooth);
   const VoxelGrid& g = tooth.grid();
   const Vec3 x = at(g, 128.3, 128.3, 128.3);
-  fast::NoVoxelWatch watch;
-  SignedDistance sd;
+  fast::VoxelWalk<fast::NoVoxelWatch> walk;
   // 2 r / 8 h + 3 bricks: 23 for r = 80 h fits, 27 for r = 96 h does not.
-  double best2 = 1e9;
-  EXPECT_TRUE(fast::walk_nearest_voxel(surface, g, x, 80.0 * g.voxel_size, &sd, &best2, watch));
-  EXPECT_TRUE(sd.found);
-  EXPECT_EQ(sd.voxel, g.index(100, 100, 100));
-  SignedDistance untouched;
-  double bound = 1e9;
-  EXPECT_FALSE(
-      fast::walk_nearest_voxel(surface, g, x, 96.0 * g.voxel_size, &untouched, &bound, watch));
-  EXPECT_FALSE(untouched.found);
+  walk.d2 = 1e9;
+  EXPECT_TRUE(fast::walk_nearest_voxel(surface, g, x, 80.0 * g.voxel_size, &walk));
+  EXPECT_TRUE(walk.sd.found);
+  EXPECT_EQ(walk.sd.voxel, g.index(100, 100, 100));
+  fast::VoxelWalk<fast::NoVoxelWatch> untouched;
+  untouched.d2 = 1e9;
+  EXPECT_FALSE(fast::walk_nearest_voxel(surface, g, x, 96.0 * g.voxel_size, &untouched));
+  EXPECT_FALSE(untouched.sd.found);
+  const double bound = untouched.d2;
   EXPECT_EQ(bound, 1e9);
 }
 
