@@ -178,6 +178,19 @@ void BM_CutSet(benchmark::State& state) {
 }
 BENCHMARK(BM_CutSet)->ArgsProduct({{128, 256, 512}, {0, 1}});
 
+// The anchor of the material's and the local query's benchmarks: g0 moved 0.5 um a call along a
+// 2 mm line (x and y) and back (a tip at 0.5 mm/s at 1 kHz).
+struct LineWalk {
+  static constexpr int kSteps = 4000;  // 2 mm at 0.5 um
+  Vec3 g0;
+  int step = 0;
+  Vec3 next() {
+    const int s = step < kSteps ? step : 2 * kSteps - step;  // there and back
+    step = step + 1 == 2 * kSteps ? 0 : step + 1;
+    return g0 + Vec3(0.5e-6 * (s - kSteps / 2), 0.2e-6 * (s - kSteps / 2), 0.0);
+  }
+};
+
 // The contact's material alone (issue #30, stop 47: the field model's servo asks for it without a
 // cut set, its cut being the worker's): the solid voxel nearest to the anchor within 2 rho, on the
 // procedural molar at `resolution`, 0.5 mm bur, the anchor g moving 0.5 um a call along a
@@ -192,13 +205,10 @@ void BM_ContactMaterial(benchmark::State& state) {
   Contact contact;
   fast::SurfaceCutSet cut(tooth, rho, &fast::signed_distance);
   fast::SurfaceCutSet::Nearest nearest;
-  constexpr int kSteps = 4000;  // 2 mm at 0.5 um
-  int step = 0;
+  LineWalk line{g0};
   long found = 0;
   for (auto _ : state) {
-    const int s = step < kSteps ? step : 2 * kSteps - step;  // there and back
-    step = step + 1 == 2 * kSteps ? 0 : step + 1;
-    const Vec3 g = g0 + Vec3(0.5e-6 * (s - kSteps / 2), 0.2e-6 * (s - kSteps / 2), 0.0);
+    const Vec3 g = line.next();
     std::uint8_t material = kEmpty;
     if (state.range(1) == 0) {
       material = proxy_material(tooth, g, rho, &fast::signed_distance);
@@ -212,6 +222,41 @@ void BM_ContactMaterial(benchmark::State& state) {
   state.SetLabel(state.range(1) == 0 ? "octree" : "surface voxels");
 }
 BENCHMARK(BM_ContactMaterial)->ArgsProduct({{128, 256, 512}, {0, 1}});
+
+// The sdf model's local distance query (fast::LocalVoxelDistance::outside, the nearest-first walk of
+// fast/tooth/nearest_voxel_walk.h) along BM_ContactMaterial's line (the anchor 0.1 mm above the
+// occlusal pose moving 0.5 um a call, there and back), reach 1 mm widened as the provider widens
+// it (FreeSpaceCertificate::widened). Args: resolution, 0 as the provider asks (the last answer's
+// voxel and the balls kept) / 1 forgotten before each call (the walk alone, unseeded). Results:
+// docs/benchmarks.md "One nearest-first walker".
+void BM_LocalVoxelDistance(benchmark::State& state) {
+  const VoxelTooth& tooth = bench::built_once<MolarTooth>(static_cast<int>(state.range(0))).tooth;
+  const double rho = 0.5e-3;
+  const double reach = fast::FreeSpaceCertificate::widened(2.0 * rho, tooth.grid().voxel_size);
+  const Vec3 g0 = occlusal_pose(tooth.grid(), rho).x + Vec3(0, 0, 1e-4);
+  const fast::SurfaceVoxels surface(tooth);
+  const fast::LocalVoxelDistance local(tooth, surface);
+  LineWalk line{g0};
+  long found = 0;
+  for (auto _ : state) {
+    const Vec3 g = line.next();
+    int cell[3];
+    if (sdf_detail::voxel_of(tooth.grid(), g, cell) &&
+        tooth.grid().solid(cell[0], cell[1], cell[2])) {
+      continue;  // outside() is for points outside the solid
+    }
+    if (state.range(1) == 1) local.forget();
+    SignedDistance sd;
+    double best2 = 0.0;
+    found += local.outside(g, reach, &sd, &best2) && sd.found;
+    benchmark::DoNotOptimize(sd);
+  }
+  state.counters["found"] = static_cast<double>(found) / static_cast<double>(state.iterations());
+  state.counters["balls"] =
+      static_cast<double>(local.reused()) / static_cast<double>(std::max(1L, local.queries()));
+  state.SetLabel(state.range(1) == 0 ? "kept" : "forgotten");
+}
+BENCHMARK(BM_LocalVoxelDistance)->ArgsProduct({{128, 256, 512}, {0, 1}});
 
 // The field model's query (issue #30): value and gradient at a point, i.e. the surface proxy's
 // distance(x, rho) and, where found, normal(x), on the drill scene's tooth (procedural molar at

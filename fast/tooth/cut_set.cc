@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "fast/tooth/nearest_voxel_walk.h"
 #include "reference/tooth/drilling.h"
 #include "reference/tooth/sdf.h"
 
@@ -23,21 +24,6 @@ std::uint64_t spread3(std::uint64_t v) {
   v = (v | (v << 4)) & 0x30c30c3ull;
   v = (v | (v << 2)) & 0x9249249ull;
   return v;
-}
-
-// Axis a's term of sphere_intersects_cells for voxel i: the squared gap from g_a to the voxel's
-// slab [origin + h i, origin + h (i + 1)] (0 inside it). One function, so that the tables and the
-// seed of the material's search compute the same double.
-inline double gap_term(const VoxelGrid& grid, int a, int i, double ga) {
-  const double l = grid.origin[a] + grid.voxel_size * i;
-  const double u = grid.origin[a] + grid.voxel_size * (i + 1);
-  double d = 0.0;
-  if (ga < l) {
-    d = l - ga;
-  } else if (ga > u) {
-    d = ga - u;
-  }
-  return d * d;
 }
 
 }  // namespace
@@ -247,10 +233,10 @@ int SurfaceCutSet::box_about(const Vec3& g, double r, int lo[3], int hi[3], int 
 }
 
 void SurfaceCutSet::fill_tables(const Vec3& g, const int lo[3], const int hi[3],
-                                const int b_lo[3], const int b_hi[3], bool centres) {
+                                const int b_lo[3], const int b_hi[3]) {
   // Per axis over the bricks' voxels i = 8 b_lo + r: the squared gap t (sphere_intersects_cells's
   // term, +inf outside [lo, hi]: such a voxel is never a candidate), the squared centre offset c
-  // (cut_band_depth's term, if asked), and the least t of each aligned run of 2, 4 and 8. A run's
+  // (cut_band_depth's term), and the least t of each aligned run of 2, 4 and 8. A run's
   // least, summed as a voxel's terms are, bounds every voxel of the block below (the sums round
   // monotonically): a block whose bound is not < R^2 holds no voxel of the ball.
   constexpr double kFar = std::numeric_limits<double>::infinity();
@@ -266,8 +252,9 @@ void SurfaceCutSet::fill_tables(const Vec3& g, const int lo[3], const int hi[3],
         t[r] = kFar;
         continue;
       }
-      t[r] = gap_term(grid, a, i, g[a]);
-      if (!centres) continue;
+      // sphere_intersects_cells's term: box_distance2's squared gap (the same double).
+      t[r] = voxel_walk::gap2(g[a], voxel_walk::plane(grid, a, i),
+                              voxel_walk::plane(grid, a, i + 1));
       const double e = (grid.origin[a] + grid.voxel_size * (i + 0.5)) - g[a];  // centre - g
       c[r] = e * e;
     }
@@ -299,91 +286,34 @@ bool SurfaceCutSet::answer(const Vec3& g, bool found, std::size_t best, Nearest*
 
 bool SurfaceCutSet::material_alone(const Vec3& g, Nearest* nearest) {
   // The minimum of (D, v) over the exposed voxels with D < min(R^2, (2 rho)^2), as collect's pass
-  // finds it, but nearest first: seeded by the last answer's voxel if it is still exposed and
-  // within reach (the contact moves little from tick to tick), then every brick, word and 2^3
-  // block whose bound can hold a voxel with D < best, or D = best and a smaller index, is read;
-  // the others cannot hold the minimiser (header comment). The visiting order does not matter:
-  // the minimum of a total order is unique.
+  // finds it, but by the nearest-first walk (fast/tooth/nearest_voxel_walk.h) seeded by the last
+  // answer's voxel if it is still exposed and within reach (the contact moves little from tick to
+  // tick): the walk reads only the bricks, words and 2^3 blocks whose bound can hold a voxel with
+  // D < best, or D = best and a smaller index; the others cannot hold the minimiser (header
+  // comment). The visiting order does not matter: the minimum of a total order is unique.
   const VoxelGrid& grid = tooth_.grid();
   const double R = cut_band(rho_).reach;
   const double m = proxy_material_reach(rho_);
-  double best2 = std::min(R * R, m * m);  // collect's ball test and outside_distance's reach
-  std::size_t best = 0;
-  bool found = false;
+  VoxelWalk<NoVoxelWatch> best;             // found and voxel in best.sd, as the walk reads them
+  best.d2 = std::min(R * R, m * m);  // collect's ball test and outside_distance's reach
   const std::size_t nn = static_cast<std::size_t>(grid.n);
   if (seeded_ && seed_ < grid.voxels.size()) {
     const int i = static_cast<int>(seed_ % nn), j = static_cast<int>((seed_ / nn) % nn);
     const int k = static_cast<int>(seed_ / (nn * nn));
     if (surface_.exposed(i, j, k)) {
-      const double d2 = (gap_term(grid, 0, i, g[0]) + gap_term(grid, 1, j, g[1])) +
-                        gap_term(grid, 2, k, g[2]);
-      if (d2 < best2) {
-        best2 = d2;
-        best = seed_;
-        found = true;
+      const double d2 = voxel_walk::voxel_distance2(grid, i, j, k, g);
+      if (d2 < best.d2) {
+        best.d2 = d2;
+        best.sd.voxel = seed_;
+        best.sd.found = true;
         ++seeded_queries_;
       }
     }
   }
-  // The box of the ball of radius sqrt(best): every voxel with D <= best has each term <= best,
-  // so lies within it (the box's voxel of margin covers the rounding).
-  int lo[3], hi[3], b_lo[3], b_hi[3];
-  const int box = box_about(g, found ? std::sqrt(best2) : R, lo, hi, b_lo, b_hi);
-  if (box < 0) return false;
-  if (box == 0) {
-    fill_tables(g, lo, hi, b_lo, b_hi, false);
-    const double *tx = terms_[0].data(), *ty = terms_[1].data(), *tz = terms_[2].data();
-    const double *x2 = least2_[0].data(), *y2 = least2_[1].data(), *z2 = least2_[2].data();
-    const double *x4 = least4_[0].data(), *y4 = least4_[1].data(), *z4 = least4_[2].data();
-    const double *x8 = least8_[0].data(), *y8 = least8_[1].data(), *z8 = least8_[2].data();
-    // A block may hold the minimiser iff its bound is < best, or = best once one is found (a
-    // smaller index). Partial sums bound the full one below (rounded addition is monotone).
-    auto may = [&](double bound) { return bound < best2 || (found && bound == best2); };
-    const int across[3] = {b_hi[0] - b_lo[0] + 1, b_hi[1] - b_lo[1] + 1, b_hi[2] - b_lo[2] + 1};
-    for (int bz = 0; bz < across[2]; ++bz) {
-      if (!may(z8[bz])) continue;
-      for (int by = 0; by < across[1]; ++by) {
-        if (!may(y8[by] + z8[bz])) continue;
-        for (int bx = 0; bx < across[0]; ++bx) {
-          if (!may((x8[bx] + y8[by]) + z8[bz])) continue;
-          const std::uint64_t* bits =
-              surface_.brick(surface_.slot(b_lo[0] + bx, b_lo[1] + by, b_lo[2] + bz));
-          if (bits == nullptr) continue;
-          for (int w = 0; w < SurfaceVoxels::kWords; ++w) {
-            std::uint64_t word = bits[w];
-            if (word == 0) continue;
-            const int wx = 2 * bx + (w & 1), wy = 2 * by + ((w >> 1) & 1), wz = 2 * bz + (w >> 2);
-            if (!may((x4[wx] + y4[wy]) + z4[wz])) continue;
-            while (word != 0) {
-              const int q = std::countr_zero(word) >> 3;  // the lowest 2^3 block left
-              std::uint64_t block = (word >> (8 * q)) & 0xff;
-              word &= ~(std::uint64_t{0xff} << (8 * q));
-              const int qx = 2 * wx + (q & 1), qy = 2 * wy + ((q >> 1) & 1);
-              const int qz = 2 * wz + (q >> 2);
-              if (!may((x2[qx] + y2[qy]) + z2[qz])) continue;
-              while (block != 0) {
-                const int c = std::countr_zero(block);
-                block &= block - 1;
-                const int rx = 2 * qx + (c & 1), ry = 2 * qy + ((c >> 1) & 1);
-                const int rz = 2 * qz + (c >> 2);
-                const double d2 = (tx[rx] + ty[ry]) + tz[rz];
-                if (!may(d2)) continue;
-                const std::size_t v = static_cast<std::size_t>(kB * b_lo[0] + rx) +
-                                      nn * (static_cast<std::size_t>(kB * b_lo[1] + ry) +
-                                            nn * static_cast<std::size_t>(kB * b_lo[2] + rz));
-                if (d2 < best2 || (found && v < best)) {  // sdf_nearer (may: d2 <= best)
-                  best2 = d2;
-                  best = v;
-                  found = true;
-                }
-              }
-            }
-          }
-        }
-      }
-    }
-  }
-  return answer(g, found, best, nearest);
+  // The walk's span: the ball of radius sqrt(best) (every voxel with D <= best lies within it).
+  const double r = best.sd.found ? std::sqrt(best.d2) : std::min(R, m);
+  if (!walk_nearest_voxel(surface_, grid, g, r, &best)) return false;
+  return answer(g, best.sd.found, best.sd.voxel, nearest);
 }
 
 bool SurfaceCutSet::collect(const Vec3& g, const Contact& contact, std::vector<Contact>* shares,
@@ -417,7 +347,7 @@ bool SurfaceCutSet::collect(const Vec3& g, const Contact& contact, std::vector<C
     nearest->voxel = grid.index(cell[0], cell[1], cell[2]);
   }
   if (box == 0) {
-    fill_tables(g, lo, hi, b_lo, b_hi, true);
+    fill_tables(g, lo, hi, b_lo, b_hi);
     order_bricks(b_lo, b_hi);
     const double *tx = terms_[0].data(), *ty = terms_[1].data(), *tz = terms_[2].data();
     const double *cx = centre_[0].data(), *cy = centre_[1].data(), *cz = centre_[2].data();

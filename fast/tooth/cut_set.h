@@ -68,16 +68,18 @@
 //
 // The material alone (stop 47: the field model's servo asks for it without a cut set, its cut being
 // the worker's). The same minimum of (D(v), v) over the exposed voxels with D < min(R^2,
-// (2 rho)^2), found nearest first instead of by the pass over the ball's band (N^2 voxels): the
-// last answer's voxel, if still exposed and within reach, bounds best = D from the start (the
-// contact moves little from tick to tick); the box shrinks to the ball of radius sqrt(best) (every
-// voxel with D <= best has each axis term <= best: it lies in that ball's box); a brick, a word or
-// a 2^3 block is read only if its bound (the least terms per axis, summed as a voxel's are; partial
-// sums bound it below) is < best, or = best once a voxel is found (a tie with a smaller index),
-// and best falls as nearer voxels come. No skipped block can hold the minimiser, so the answer is
-// collect's with a cut set (the same certificate and fallback), whatever the seed; the cost is that
-// of the blocks about the ball of radius D(v*): the surface within a block's size of it (a cap on
-// an open surface; in a cavity about g, the bur's own hole, its whole wall).
+// (2 rho)^2), found nearest first instead of by the pass over the ball's band (N^2 voxels), by the
+// walk the sdf model's local query uses too (fast/tooth/nearest_voxel_walk.h, stop 48): the last
+// answer's voxel, if still exposed and within reach, bounds best = D from the start (the contact
+// moves little from tick to tick); the walk lists the bricks within sqrt(best) (every voxel with
+// D <= best has each axis term <= best), reads them nearest first, and a brick, a word or a 2^3
+// block (its box shrunk to its set bits) only if its bound is < best, or = best once a voxel is
+// found (a tie with a smaller index); best falls as nearer voxels come. No skipped block can hold
+// the minimiser, so the answer is collect's with a cut set (the same certificate and fallback),
+// whatever the seed; the cost is that of the blocks about the ball of radius D(v*): the surface
+// within a block's size of it (a cap on an open surface; in a cavity about g, the bur's own hole,
+// its whole wall). A span wider than the walk's arrays (voxel_walk::kMaxSpan bricks: a reach of
+// ~90 voxels) returns false: the reference answers.
 //
 // Real-time: collect() and update() neither allocate nor throw (their buffers are sized by the
 // constructor from the tip's radius and the grid).
@@ -200,9 +202,9 @@ class SurfaceCutSet {
   // The box of voxels of the ball (g, r), a voxel of margin each side, clipped to the grid, and
   // its bricks: 0, 1 if it misses the grid, -1 if wider than the tables.
   int box_about(const Vec3& g, double r, int lo[3], int hi[3], int b_lo[3], int b_hi[3]) const;
-  // The tables below for the box (the centre offsets only if `centres`).
+  // The tables below for the box (collect's pass).
   void fill_tables(const Vec3& g, const int lo[3], const int hi[3], const int b_lo[3],
-                   const int b_hi[3], bool centres);
+                   const int b_hi[3]);
   // The material alone, nearest first (header comment, "The material alone").
   bool material_alone(const Vec3& g, Nearest* nearest);
   // The material outside g's voxel: the found exposed voxel if certified, else sd (the seed).

@@ -2,12 +2,12 @@
 
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 
 #include "fast/tooth/cut_set.h"
+#include "fast/tooth/nearest_voxel_walk.h"
 
 namespace dentsim::fast {
 namespace {
@@ -102,18 +102,9 @@ SignedDistance outside_distance(const FullOctree& octree, const Vec3& x, double 
 
 namespace {
 
-constexpr int kB = 8;  // SurfaceVoxels::kBrick
-
-// The squared gap of coordinate x to [lo, hi], as box_distance2 computes it.
-inline double gap2(double x, double lo, double hi) {
-  const double q = std::clamp(x, lo, hi);
-  return (x - q) * (x - q);
-}
-
-// The grid plane origin_a + h i (box_distance2's bounds, the same expression).
-inline double plane(const VoxelGrid& grid, int a, int i) {
-  return grid.origin[a] + grid.voxel_size * i;
-}
+using voxel_walk::gap2;
+using voxel_walk::plane;
+using voxel_walk::voxel_distance2;
 
 // Whether x lies within eps (<= h) of a plane origin_a + h i, 0 <= i <= N, on some axis: the
 // planes about x's grid coordinate u (its truncation is within one cell of its floor, and a
@@ -130,145 +121,15 @@ bool near_grid_plane(const VoxelGrid& grid, const Vec3& x, double eps) {
   return false;
 }
 
-// Per 2^3 byte of the bits (bit c its voxel (c & 1, (c >> 1) & 1, c >> 2)), per axis, which of its
-// two layers hold a set bit: 1 the lower, 2 the upper, 3 both; packed x | y << 2 | z << 4.
-constexpr std::array<std::uint8_t, 256> kByteLayers = [] {
-  std::array<std::uint8_t, 256> t{};
-  for (int b = 1; b < 256; ++b) {
-    const int lx = ((b & 0x55) != 0 ? 1 : 0) | ((b & 0xaa) != 0 ? 2 : 0);
-    const int ly = ((b & 0x33) != 0 ? 1 : 0) | ((b & 0xcc) != 0 ? 2 : 0);
-    const int lz = ((b & 0x0f) != 0 ? 1 : 0) | ((b & 0xf0) != 0 ? 2 : 0);
-    t[static_cast<std::size_t>(b)] = static_cast<std::uint8_t>(lx | ly << 2 | lz << 4);
-  }
-  return t;
-}();
-
-// One axis of a brick: its voxels' squared gaps to x (box_distance2's terms; +inf beyond the
-// grid); per run q of 2 voxels and layer set l (kByteLayers' code) the least term of the voxels in
-// l, and the least of each run of 4. A block's term on an axis is then no larger than any of its
-// set voxels', so a block no nearer than the best holds no better voxel.
-struct AxisTerms {
-  double t[kB];
-  double pair[kB / 2][4];  // [q][l], l = 1 (the lower voxel), 2 (the upper), 3 (both)
-  double m4[2];
-};
-
-void axis_terms(const VoxelGrid& grid, int a, int b, double x, AxisTerms* out) {
-  const int first = kB * b;
-  double lo = plane(grid, a, first);
-  for (int l = 0; l < kB; ++l) {
-    const int i = first + l;
-    const double hi = plane(grid, a, i + 1);
-    out->t[l] = i < grid.n ? gap2(x, lo, hi) : std::numeric_limits<double>::infinity();
-    lo = hi;
-  }
-  for (int q = 0; q < kB / 2; ++q) {
-    out->pair[q][1] = out->t[2 * q];
-    out->pair[q][2] = out->t[2 * q + 1];
-    out->pair[q][3] = std::min(out->t[2 * q], out->t[2 * q + 1]);
-  }
-  out->m4[0] = std::min(out->pair[0][3], out->pair[1][3]);
-  out->m4[1] = std::min(out->pair[2][3], out->pair[3][3]);
-}
-
-// The search's best so far as sdf_nearer and sdf_prunable read it (found, voxel) and its d2, and
-// `other`: a lower bound on D of every exposed voxel the search has ruled out (the least of the
-// bounds of the blocks it pruned and of the D of the voxels it tested and did not keep).
-struct Best {
-  SignedDistance sd;
-  double d2;
+// The walk's watch (fast/tooth/nearest_voxel_walk.h): `other`, a lower bound on D of every exposed
+// voxel the search has ruled out (the least of the bounds of the blocks it pruned and of the D of
+// the voxels it tested and did not keep), and the voxels whose D was computed.
+struct BallWatch {
   double other = std::numeric_limits<double>::infinity();
-  long tested = 0;  // voxels whose D was computed
+  long tested = 0;
+  void ruled_out(double d2) { other = std::min(other, d2); }
+  void tested_one() { ++tested; }
 };
-
-// Brick (bx, by, bz) (its words `bits`, its axes' terms X, Y, Z): its words nearest first, in a
-// word its bytes by their boxes shrunk to their set bits, and their voxels, each by
-// box_distance2's terms summed in its order ((t_x + t_y) + t_z: the same D).
-void search_brick(const std::uint64_t* bits, const AxisTerms& X, const AxisTerms& Y,
-                  const AxisTerms& Z, int bx, int by, int bz, std::size_t nn, Best* best) {
-  struct Word {
-    double d2;
-    int w;
-  };
-  Word order[SurfaceVoxels::kWords];
-  int count = 0;
-  for (int w = 0; w < SurfaceVoxels::kWords; ++w) {
-    if (bits[w] == 0) continue;
-    // Word w: the 4^3 block (x, y, z) = bits 0, 1, 2 of w (the Morton layout, cut_set.h).
-    const double d2 = (X.m4[w & 1] + Y.m4[(w >> 1) & 1]) + Z.m4[w >> 2];
-    if (sdf_detail::sdf_prunable(d2, best->d2, best->sd)) {
-      best->other = std::min(best->other, d2);
-      continue;
-    }
-    int at = count++;
-    while (at > 0 && order[at - 1].d2 > d2) {
-      order[at] = order[at - 1];
-      --at;
-    }
-    order[at] = {d2, w};
-  }
-  for (int i = 0; i < count; ++i) {
-    // In increasing order: once one is no nearer than the best, none after it is.
-    if (sdf_detail::sdf_prunable(order[i].d2, best->d2, best->sd)) {
-      best->other = std::min(best->other, order[i].d2);
-      break;
-    }
-    const int w = order[i].w;
-    const int wx = w & 1, wy = (w >> 1) & 1, wz = w >> 2;
-    const std::uint64_t word = bits[w];
-    // The word's runs of 2 on each axis: pair rows 2 w_a and 2 w_a + 1, 4 layer sets each.
-    const double* px = X.pair[2 * wx];
-    const double* py = Y.pair[2 * wy];
-    const double* pz = Z.pair[2 * wz];
-#pragma GCC unroll 8
-    for (int byte = 0; byte < 8; ++byte) {
-      const unsigned block = static_cast<unsigned>(word >> (8 * byte)) & 0xffu;
-      if (block == 0) continue;
-      // Byte `byte`: the 2^3 block (2 w_a + its bit a) of the brick; bit c its child c.
-      const int ox = byte & 1, oy = (byte >> 1) & 1, oz = byte >> 2;
-      const unsigned layers = kByteLayers[block];
-      const double d2q = (px[4 * ox + (layers & 3)] + py[4 * oy + ((layers >> 2) & 3)]) +
-                         pz[4 * oz + (layers >> 4)];
-      if (sdf_detail::sdf_prunable(d2q, best->d2, best->sd)) {
-        best->other = std::min(best->other, d2q);
-        continue;
-      }
-      const int qx = 2 * wx + ox, qy = 2 * wy + oy, qz = 2 * wz + oz;
-      const double* tx = X.t + 2 * qx;
-      const double* ty = Y.t + 2 * qy;
-      const double* tz = Z.t + 2 * qz;
-#pragma GCC unroll 8
-      for (int c = 0; c < 8; ++c) {
-        if ((block & (1u << c)) == 0) continue;
-        const double d2 = (tx[c & 1] + ty[(c >> 1) & 1]) + tz[c >> 2];  // box_distance2's sum
-        ++best->tested;
-        if (d2 > best->d2) {  // not nearer (sdf_nearer), whatever its index
-          best->other = std::min(best->other, d2);
-          continue;
-        }
-        const std::size_t v = static_cast<std::size_t>(kB * bx + 2 * qx + (c & 1)) +
-                              nn * (static_cast<std::size_t>(kB * by + 2 * qy + ((c >> 1) & 1)) +
-                                    nn * static_cast<std::size_t>(kB * bz + 2 * qz + (c >> 2)));
-        if (best->sd.found && v == best->sd.voxel) continue;  // the best itself (the hint)
-        if (!sdf_detail::sdf_nearer(d2, v, best->d2, best->sd)) {
-          best->other = std::min(best->other, d2);
-          continue;
-        }
-        if (best->sd.found) best->other = std::min(best->other, best->d2);
-        best->d2 = d2;
-        best->sd.voxel = v;
-        best->sd.found = true;
-      }
-    }
-  }
-}
-
-// D of voxel (i, j, k) at x: box_distance2's terms summed in its order.
-inline double voxel_distance2(const VoxelGrid& grid, int i, int j, int k, const Vec3& x) {
-  return (gap2(x[0], plane(grid, 0, i), plane(grid, 0, i + 1)) +
-          gap2(x[1], plane(grid, 1, j), plane(grid, 1, j + 1))) +
-         gap2(x[2], plane(grid, 2, k), plane(grid, 2, k + 1));
-}
 
 }  // namespace
 
@@ -281,7 +142,7 @@ LocalVoxelDistance::LocalVoxelDistance(const VoxelTooth& tooth, const SurfaceVox
 
 bool LocalVoxelDistance::outside(const Vec3& x, double reach, SignedDistance* out,
                                  double* best2_out) const {
-  static_assert(SurfaceVoxels::kBrick == kB && SurfaceVoxels::kWords == 8);
+  static_assert(kMaxSpan == voxel_walk::kMaxSpan);
   ++queries_;
   const VoxelGrid& grid = tooth_.grid();
   const int n = grid.n;
@@ -325,7 +186,9 @@ bool LocalVoxelDistance::outside(const Vec3& x, double reach, SignedDistance* ou
     ++fallbacks_;
     return false;
   }
-  Best best;
+  // The walk's best so far (fast/tooth/nearest_voxel_walk.h): found and voxel in best.sd, its D in
+  // best.d2; best.watch the bounds it ruled voxels out by (the balls', below).
+  VoxelWalk<BallWatch> best;
   best.d2 = reach * reach;  // outside_distance's bound: a candidate has D < reach^2
   // The last answer's voxel and the balls' first: any solid voxel's (D, index) bounds the answer's
   // (the exposed minimum is the solid one, header comment), and the answer is often one of them.
@@ -335,7 +198,7 @@ bool LocalVoxelDistance::outside(const Vec3& x, double reach, SignedDistance* ou
     const int k = static_cast<int>(v / (nn * nn));
     const double d2 = voxel_distance2(grid, i, j, k, x);
     if (!sdf_detail::sdf_nearer(d2, v, best.d2, best.sd)) return;
-    if (best.sd.found) best.other = std::min(best.other, best.d2);
+    if (best.sd.found) best.watch.ruled_out(best.d2);
     best.d2 = d2;
     best.sd.voxel = v;
     best.sd.found = true;
@@ -346,98 +209,13 @@ bool LocalVoxelDistance::outside(const Vec3& x, double reach, SignedDistance* ou
       candidate(balls_[static_cast<std::size_t>(at)].voxel);
     }
   }
-  // The bricks within the bound r, one brick of margin each side (a brick beyond is more than
-  // r + 7 h away: the truncations below are within one brick of the floors, and conservative),
-  // and their boxes' term on each axis.
+  // The bricks within the bound r (the walk's span: a brick beyond it is more than r + 7 h away).
   const double r = best.sd.found ? std::sqrt(best.d2) : reach;
-  const double side = kB * h;
-  const double last = surface_.slots_per_axis() - 1.0;
-  int b_lo[3], b_hi[3];
-  double brick_term[3][kMaxSpan];
-  bool none = false;
-  for (int a = 0; a < 3; ++a) {
-    const double t0 = std::clamp((x[a] - r - grid.origin[a]) / side, -1.0, last + 2.0);
-    const double t1 = std::clamp((x[a] + r - grid.origin[a]) / side, -1.0, last + 2.0);
-    b_lo[a] = std::max(0, static_cast<int>(t0) - 1);
-    b_hi[a] = std::min(static_cast<int>(last), static_cast<int>(t1) + 1);
-    none = none || b_lo[a] > b_hi[a];  // no brick of the grid within r (then no hint either)
-    if (b_hi[a] - b_lo[a] + 1 > kMaxSpan) {
-      ++fallbacks_;
-      return false;
-    }
-    for (int b = b_lo[a]; b <= b_hi[a]; ++b) {
-      brick_term[a][b - b_lo[a]] =
-          gap2(x[a], plane(grid, a, kB * b), plane(grid, a, std::min(kB * (b + 1), n)));
-    }
+  if (!walk_nearest_voxel(surface_, grid, x, r, &best)) {
+    ++fallbacks_;
+    return false;
   }
-  if (!none) {
-    // Each axis's voxel terms, per brick coordinate, computed when a brick first needs them.
-    AxisTerms terms[3][kMaxSpan];
-    bool have[3][kMaxSpan] = {};
-    auto axis = [&](int a, int b) -> const AxisTerms& {
-      const int at = b - b_lo[a];
-      if (!have[a][at]) {
-        axis_terms(grid, a, b, x[a], &terms[a][at]);
-        have[a][at] = true;
-      }
-      return terms[a][at];
-    };
-    auto search = [&](const std::uint64_t* bits, int bx, int by, int bz) {
-      search_brick(bits, axis(0, bx), axis(1, by), axis(2, bz), bx, by, bz, nn, &best);
-    };
-    // The bricks not prunable, nearest first (by their boxes' d2); beyond the room of the list,
-    // a brick is searched at once (the order decides no answer, sdf_nearer: only the work).
-    struct Brick {
-      double d2;
-      const std::uint64_t* bits;
-      int bx, by, bz;
-    };
-    constexpr int kRoom = 128;
-    Brick order[kRoom];
-    int count = 0;
-    for (int bz = b_lo[2]; bz <= b_hi[2]; ++bz) {
-      const double tz = brick_term[2][bz - b_lo[2]];
-      if (sdf_detail::sdf_prunable(tz, best.d2, best.sd)) {  // (t_x + t_y) + t_z >= t_z
-        best.other = std::min(best.other, tz);
-        continue;
-      }
-      for (int by = b_lo[1]; by <= b_hi[1]; ++by) {
-        const double ty = brick_term[1][by - b_lo[1]];
-        if (sdf_detail::sdf_prunable(ty, best.d2, best.sd)) {
-          best.other = std::min(best.other, ty);
-          continue;
-        }
-        for (int bx = b_lo[0]; bx <= b_hi[0]; ++bx) {
-          const std::uint64_t* bits = surface_.brick(surface_.slot(bx, by, bz));
-          if (bits == nullptr) continue;
-          const double d2b = (brick_term[0][bx - b_lo[0]] + ty) + tz;
-          if (sdf_detail::sdf_prunable(d2b, best.d2, best.sd)) {
-            best.other = std::min(best.other, d2b);
-            continue;
-          }
-          if (count == kRoom) {
-            search(bits, bx, by, bz);
-            continue;
-          }
-          int at = count++;
-          while (at > 0 && order[at - 1].d2 > d2b) {
-            order[at] = order[at - 1];
-            --at;
-          }
-          order[at] = {d2b, bits, bx, by, bz};
-        }
-      }
-    }
-    for (int i = 0; i < count; ++i) {
-      const Brick& b = order[i];
-      if (sdf_detail::sdf_prunable(b.d2, best.d2, best.sd)) {  // and every brick after it
-        best.other = std::min(best.other, b.d2);
-        break;
-      }
-      search(b.bits, b.bx, b.by, b.bz);
-    }
-    voxels_tested_ += best.tested;
-  }
+  voxels_tested_ += best.watch.tested;
   SignedDistance sd;
   sd.phi = reach;
   *best2_out = std::numeric_limits<double>::infinity();
@@ -457,7 +235,7 @@ bool LocalVoxelDistance::outside(const Vec3& x, double reach, SignedDistance* ou
     // The ball about x in which v stays the answer: every other solid voxel is at least
     // sqrt(L) from x, L the least of the search's `other`, the bricks beyond its span ((r + 7 h)^2
     // and more) and the solid face neighbours of v (header comment).
-    double lower2 = std::min(best.other, (r + 4.0 * h) * (r + 4.0 * h));
+    double lower2 = std::min(best.watch.other, (r + 4.0 * h) * (r + 4.0 * h));
     for (int a = 0; a < 3; ++a) {
       for (const int d : {-1, 1}) {
         int m[3] = {idx[0], idx[1], idx[2]};

@@ -69,7 +69,8 @@ class SurfaceVoxels;  // fast/tooth/cut_set.h
 // not current, a reach beyond the bounds below) outside() returns false and the caller asks the
 // octree (counted: fallbacks()).
 //
-// Nearest first (stop 47). The bricks within the bound are searched by increasing box distance,
+// Nearest first (stop 47; the walk shared with the field model's material since stop 48, fast/
+// tooth/nearest_voxel_walk.h). The bricks within the bound are searched by increasing box distance,
 // in a brick its 4^3 words likewise, and a 2^3 byte's box is shrunk to its set bits per axis
 // (kByteLayers, a table of 256: a byte's term on an axis is the least of its set voxels'), so
 // bytes in the cap about the tangent point are pruned. The first bound is the least (D, index)
