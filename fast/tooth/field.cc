@@ -374,6 +374,9 @@ struct SampledCell {
 
 }  // namespace
 
+// The twin takes the proxy core's field-only paths as dentsim::FieldSolid does.
+static_assert(proxy_detail::kFieldPaths<FieldSolid> && proxy_detail::FieldPathSolid<FieldSolid>);
+
 FieldSample FieldBricks::sample(const Vec3& x, bool* deep) const {
   return sample_bricks(*this, x, deep);
 }

@@ -172,6 +172,8 @@ class FieldBricks {
 class FieldSolid {
  public:
   FieldSolid(const VoxelTooth& tooth, const FieldBricks& bricks) : tooth_(tooth), bricks_(bricks) {}
+  // The proxy core's field-only paths, as dentsim::FieldSolid (its twin: the same steps).
+  static constexpr bool kFieldPaths = true;
 
   const VoxelTooth& tooth() const { return tooth_; }
   SignedDistance distance(const Vec3& x, double reach) const;

@@ -12,6 +12,9 @@
 
 namespace dentsim {
 
+// The field takes the proxy core's field-only paths (surface_proxy_core.h) and answers them.
+static_assert(proxy_detail::kFieldPaths<FieldSolid> && proxy_detail::FieldPathSolid<FieldSolid>);
+
 SignedDistance FieldSolid::distance(const Vec3& x, double reach) const {
   if (field_.deep_inside(x)) return signed_distance(tooth_, x, reach);
   const FieldSample s = field_.sample(x);

@@ -59,6 +59,9 @@ inline double field_cell_advance(const float c[8], const double t[3], double h, 
 class FieldSolid {
  public:
   FieldSolid(const VoxelTooth& tooth, const SampledField& field) : tooth_(tooth), field_(field) {}
+  // The proxy core's field-only paths (surface_proxy_core.h: the Newton push-out step, the
+  // cell-certified sweep, the stalled-slide stop; docs/derivations/field_contact.md §3).
+  static constexpr bool kFieldPaths = true;
 
   const VoxelTooth& tooth() const { return tooth_; }
   const SampledField& field() const { return field_; }
