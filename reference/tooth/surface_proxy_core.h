@@ -48,7 +48,7 @@ inline constexpr bool kFieldPaths = requires { requires Solid::kFieldPaths; };
 template <class Solid>
 concept FieldPathSolid = requires(const Solid& solid, const Vec3& v, const SignedDistance& sd) {
   { solid.slope(v) } -> std::convertible_to<double>;
-  { solid.sweep_advance(v, sd, v, 0.0, 0.0) } -> std::convertible_to<double>;
+  { solid.sweep_advance(v, sd, v, 0.0, 0.0, 0.0) } -> std::convertible_to<double>;
 };
 
 // The claim checked where the core is instantiated: a Solid that claims the paths has them.
@@ -205,15 +205,17 @@ bool sweep(const ProxyConstants& k, const Solid& solid, Vec3* from, const Vec3& 
     const SignedDistance sd = solid.distance(*from, reach);
     const double clearance = sd.phi - floor_phi;
     double advance = clearance / lip;  // a step this long stays in A_skin (Lipschitz)
-    // A Solid that bounds its slope along the segment within the cell about y (the field,
-    // field_contact.h field_cell_advance) may certify a longer step: to where its lower bound
-    // meets rho - s + slack, slack = half the blocking threshold below, so a blocked sweep ends
-    // in A_skin with clearance in (0, 1e-3 s] after one more query instead of the Lipschitz
+    // The field (field_contact.h field_cell_advance) follows phi along the segment within the
+    // cell about y exactly (a cubic from the cell's corners) and certifies a longer step: to the
+    // cell's exit (a little beyond, by the Lipschitz bound) or to where phi first comes within
+    // [slack, 1.5 slack] of rho - s, slack = half the blocking threshold below, so a blocked sweep
+    // ends in A_skin with clearance in (0, 1e-3 s] after one more query instead of the Lipschitz
     // step's geometric approach (docs/derivations/field_contact.md §3).
     if constexpr (kFieldPaths<Solid>) {
       const double slack = kSweepSlack * k.skin;
       if (sd.found && clearance > 2.0 * slack && advance < left) {
-        advance = std::max(advance, solid.sweep_advance(*from, sd, gap / left, clearance, slack));
+        advance =
+            std::max(advance, solid.sweep_advance(*from, sd, gap / left, clearance, slack, left));
       }
     }
     if (advance >= left) {

@@ -290,8 +290,8 @@ TEST(FastFieldSolid, TheSweepsCellStepNeverLeavesTheSkinByBruteForce) {
       const SignedDistance sf = solid.distance(y, 1.0);
       ASSERT_TRUE(sr.found && sf.found && sr.phi == phi);
       const double clearance = phi - floor_phi;
-      const double a = reference.sweep_advance(y, sr, d, clearance, slack);
-      differ += a != solid.sweep_advance(y, sf, d, clearance, slack);
+      const double a = reference.sweep_advance(y, sr, d, clearance, slack, 1.0);
+      differ += a != solid.sweep_advance(y, sf, d, clearance, slack, 1.0);
       ++steps;
       if (a > clearance / field.lipschitz()) ++longer;
       for (int k = 0; k <= 200; ++k) {
@@ -401,8 +401,8 @@ struct RecordingSolid {
     return solid.slope(x);
   }
   double sweep_advance(const Vec3& y, const SignedDistance& sd, const Vec3& d, double clearance,
-                       double slack) const {
-    return solid.sweep_advance(y, sd, d, clearance, slack);
+                       double slack, double left) const {
+    return solid.sweep_advance(y, sd, d, clearance, slack, left);
   }
 };
 
@@ -423,8 +423,8 @@ struct ForwardingSolid {
   double lipschitz() const { return solid.lipschitz(); }
   double slope(const Vec3& x) const { return solid.slope(x); }
   double sweep_advance(const Vec3& y, const SignedDistance& sd, const Vec3& d, double clearance,
-                       double slack) const {
-    return solid.sweep_advance(y, sd, d, clearance, slack);
+                       double slack, double left) const {
+    return solid.sweep_advance(y, sd, d, clearance, slack, left);
   }
 };
 // Without the claim the field's methods are not reached; with it they are required.
