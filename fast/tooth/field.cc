@@ -308,20 +308,15 @@ namespace {
 // FieldBricks::sample's work, with internal linkage so that FieldSolid::query inlines it (the
 // member itself is an exported symbol, which -fPIC keeps out of line; GCC 12 does not inline a
 // function called twice of this size without the attribute).
-// The cell a sample read (FieldSolid keeps it for sweep_advance, and for the next query).
+// The cell a sample read (FieldSolid keeps it for sweep_advance).
 struct SampledCell {
   float corners[8];
   double t[3];
-  int s[3];
   bool in_lattice;
 };
 
-// With `kept` (a cell read at the bricks' current generation), a query that locates in the same
-// cell takes its corners from it instead of the bricks (the same floats: no mirror() changed a
-// value since), so the same doubles.
 [[gnu::always_inline]] inline FieldSample sample_bricks(const FieldBricks& bricks, const Vec3& x,
-                                                       bool* deep, SampledCell* cell = nullptr,
-                                                       const SampledCell* kept = nullptr) {
+                                                       bool* deep, SampledCell* cell = nullptr) {
   FieldSample out;
   if (deep != nullptr) *deep = false;
   const SampledField& f = bricks.field();
@@ -341,15 +336,10 @@ struct SampledCell {
     t[a] = u - i;
   }
   float cf[8];
-  if (kept != nullptr && kept->s[0] == s[0] && kept->s[1] == s[1] && kept->s[2] == s[2]) {
-    std::copy_n(kept->corners, 8, cf);
-  } else {
-    bricks.corners(s, cf);
-  }
+  bricks.corners(s, cf);
   if (cell != nullptr) {
     std::copy_n(cf, 8, cell->corners);
     std::copy_n(t, 3, cell->t);
-    std::copy_n(s, 3, cell->s);
     cell->in_lattice = in_lattice;
   }
   if (deep != nullptr) {
@@ -397,23 +387,13 @@ const FieldSolid::Query& FieldSolid::query(const Vec3& x) const {
     return last_;
   }
   ++evaluated_;
-  // The last query's cell, if read at this generation: a query in the same cell (the push-out's
-  // steps, a sweep's next step within the cell) reads no brick.
-  SampledCell kept_cell{};
-  const bool keep = last_.has_cell && last_.generation == bricks_.generation();
-  if (keep) {
-    std::copy_n(last_.corners, 8, kept_cell.corners);
-    std::copy_n(last_.s, 3, kept_cell.s);
-  }
   last_.x = x;
   last_.generation = bricks_.generation();
   bool deep = false;
   SampledCell cell{};
-  const FieldSample s = sample_bricks(bricks_, x, &deep, &cell, keep ? &kept_cell : nullptr);
+  const FieldSample s = sample_bricks(bricks_, x, &deep, &cell);
   std::copy_n(cell.corners, 8, last_.corners);
   std::copy_n(cell.t, 3, last_.t);
-  std::copy_n(cell.s, 3, last_.s);
-  last_.has_cell = bricks_.field().samples_per_axis() >= 2;
   last_.in_lattice = cell.in_lattice;
   last_.deep = deep;
   last_.value = s.value;

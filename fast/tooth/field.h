@@ -203,8 +203,6 @@ class FieldSolid {
     // lattice (no coordinate clamped).
     float corners[8] = {};
     double t[3] = {};
-    int s[3] = {};  // the cell's lower corner (has_cell: corners hold it at `generation`)
-    bool has_cell = false;
     bool in_lattice = false;
   };
   // The field at x: deep-inside test, phi and gradient (the reference's arithmetic), kept.
