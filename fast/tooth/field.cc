@@ -375,6 +375,9 @@ struct SampledCell {
 
 }  // namespace
 
+// The twin takes the proxy core's field-only paths as dentsim::FieldSolid does.
+static_assert(proxy_detail::kFieldPaths<FieldSolid> && proxy_detail::FieldPathSolid<FieldSolid>);
+
 FieldSample FieldBricks::sample(const Vec3& x, bool* deep) const {
   return sample_bricks(*this, x, deep);
 }
@@ -436,35 +439,11 @@ double FieldSolid::slope(const Vec3& x) const {
 }
 
 double FieldSolid::sweep_advance(const Vec3& y, const SignedDistance&, const Vec3& dir,
-                                 double clearance, double slack) const {
-  const Query& q = query(y);  // the kept query of distance(y)
+                                 double clearance, double slack, double left) const {
+  const Query& q = query(y);  // the kept query of distance(y): its cell's corners, no second gather
   if (!q.in_lattice) return 0.0;
-  // field_cell_advance (reference/tooth/field_contact.h) unrolled: the 12 edge differences once,
-  // each corner's slope the same products summed in the same order, so the same doubles
-  // (FastFieldSolid.TheSweepsCellStepNeverLeavesTheSkinByBruteForce compares them).
-  double v[8];
-  for (int k = 0; k < 8; ++k) v[k] = q.corners[k];
-  const double dx = dir.x(), dy = dir.y(), dz = dir.z();
-  // x-edges at (j, l) as [j + 2 l], y-edges at (i, l) as [i + 2 l], z-edges at (i, j) as [i + 2 j].
-  const double sx[4] = {dx * (v[1] - v[0]), dx * (v[3] - v[2]), dx * (v[5] - v[4]),
-                        dx * (v[7] - v[6])};
-  const double sy[4] = {dy * (v[2] - v[0]), dy * (v[3] - v[1]), dy * (v[6] - v[4]),
-                        dy * (v[7] - v[5])};
-  const double sz[4] = {dz * (v[4] - v[0]), dz * (v[5] - v[1]), dz * (v[6] - v[2]),
-                        dz * (v[7] - v[3])};
-  double least = std::numeric_limits<double>::infinity();
-  for (int k = 0; k < 8; ++k) {
-    const int i = k & 1, j = (k >> 1) & 1, l = k >> 2;
-    least = std::min(least, sx[j + 2 * l] + sy[i + 2 * l] + sz[i + 2 * j]);
-  }
-  const double h = bricks_.field().spacing();
-  double exit = std::numeric_limits<double>::infinity();
-  for (int a = 0; a < 3; ++a) {
-    if (dir[a] > 0.0) exit = std::min(exit, (1.0 - q.t[a]) * h / dir[a]);
-    if (dir[a] < 0.0) exit = std::min(exit, q.t[a] * h / -dir[a]);
-  }
-  if (least >= 0.0) return exit;
-  return std::min(exit, (clearance - slack) * h / -least);
+  return field_cell_advance(q.corners, q.t, bricks_.field().spacing(), dir, clearance, slack, left,
+                            bricks_.lipschitz());
 }
 
 Vec3 FieldSolid::normal(const Vec3& x, const SignedDistance& sd) const {

@@ -172,6 +172,8 @@ class FieldBricks {
 class FieldSolid {
  public:
   FieldSolid(const VoxelTooth& tooth, const FieldBricks& bricks) : tooth_(tooth), bricks_(bricks) {}
+  // The proxy core's field-only paths, as dentsim::FieldSolid (its twin: the same steps).
+  static constexpr bool kFieldPaths = true;
 
   const VoxelTooth& tooth() const { return tooth_; }
   SignedDistance distance(const Vec3& x, double reach) const;
@@ -183,7 +185,7 @@ class FieldSolid {
   // dentsim::FieldSolid::sweep_advance on the kept query's cell (the sweep asks it right after
   // distance(y) at the same y: no second gather).
   double sweep_advance(const Vec3& y, const SignedDistance& sd, const Vec3& dir, double clearance,
-                       double slack) const;
+                       double slack, double left) const;
   // distance() calls, those answered by the free-space certificate, and queries that read the
   // field (counters for tests and benchmarks).
   long distances() const { return distances_; }

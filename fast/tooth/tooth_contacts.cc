@@ -41,6 +41,10 @@ SdfContactProvider::SdfContactProvider(VoxelTooth& tooth, const PipelineToothSet
       certify_(setup.skip_unneeded),
       local_(tooth, cut_set().surface()) {}
 
+// The `sdf` model's Solid takes the thesis's steps only (surface_proxy_core.h: no field-only
+// path), as the reference's VoxelSolid (reference/tooth/sdf.cc).
+static_assert(!proxy_detail::kFieldPaths<RecallingVoxelSolid>);
+
 const Vec3& SdfContactProvider::update_sdf_proxy(SurfaceProxy* proxy, const Vec3& c) {
   // One update: the tooth does not change within it (the certificate, the local query's last voxel
   // and the remembered answers outlive it: drilling only removes voxels).

@@ -12,6 +12,9 @@
 
 namespace dentsim {
 
+// The field takes the proxy core's field-only paths (surface_proxy_core.h) and answers them.
+static_assert(proxy_detail::kFieldPaths<FieldSolid> && proxy_detail::FieldPathSolid<FieldSolid>);
+
 SignedDistance FieldSolid::distance(const Vec3& x, double reach) const {
   if (field_.deep_inside(x)) return signed_distance(tooth_, x, reach);
   const FieldSample s = field_.sample(x);
@@ -45,7 +48,7 @@ double FieldSolid::slope(const Vec3& x) const {
 }
 
 double FieldSolid::sweep_advance(const Vec3& y, const SignedDistance&, const Vec3& dir,
-                                 double clearance, double slack) const {
+                                 double clearance, double slack, double left) const {
   // y's cell as SampledField::sample locates it; a clamped coordinate (y beyond the lattice)
   // gives no cell of y's own: no advance from it.
   const int m = field_.samples_per_axis();
@@ -62,7 +65,7 @@ double FieldSolid::sweep_advance(const Vec3& y, const SignedDistance&, const Vec
   }
   float c[8];
   for (int k = 0; k < 8; ++k) c[k] = field_.at(s[0] + (k & 1), s[1] + ((k >> 1) & 1), s[2] + (k >> 2));
-  return field_cell_advance(c, t, h, dir, clearance, slack);
+  return field_cell_advance(c, t, h, dir, clearance, slack, left, field_.lipschitz());
 }
 
 namespace {

@@ -17,48 +17,124 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <limits>
 #include <span>
+#include <utility>
 
 #include "reference/tooth/sampled_field.h"
 #include "reference/tooth/sdf.h"
 
 namespace dentsim {
 
-// The sweep's advance from the cell's own slope (docs/derivations/field_contact.md §3, "The
-// sweep's step in one cell"; both twins call this, so their steps are the same doubles). The
-// point y lies in the lattice cell with corners c[dx + 2 dy + 4 dz] (stored values) at cell
-// coordinates t (each in [0, 1]); h the lattice spacing; dir a unit direction; clearance =
-// phi(y) - (rho - s) > slack > 0. Along dir, phi's slope dir . grad phi is multilinear over the
-// cell (d phi / dx is the bilinear interpolation of the x-edge differences over (y, z), and so
-// on), so its least value over the cell is at one of the 8 corners: `least`. Returns the distance
-// along dir to the cell's exit if least >= 0, else the smaller of that and
-// (clearance - slack) / -least: every point of the step has phi >= rho - s + slack (minus the
-// rounding the slack covers). 0 when y is not strictly in the lattice's cell (clamped).
+// The sweep's advance along the cell's own cubic (docs/derivations/field_contact.md §3, "The
+// sweep's step along the cell's cubic"; both twins call this, so their steps are the same
+// doubles). The point y lies in the lattice cell with corners c[dx + 2 dy + 4 dz] (stored values)
+// at cell coordinates t (each in [0, 1]); h the lattice spacing; dir a unit direction;
+// clearance = phi(y) - (rho - s) > 2 slack > 0; left the distance to the segment's end; lipschitz
+// the field's L. Along dir, phi(y + tau dir) within the cell is the cubic
+// p(tau) = phi(y) + a1 tau + a2 tau^2 + a3 tau^3 (the trilinear interpolant restricted to a line),
+// so the first tau at which p meets rho - s + slack is found from the 8 corners, with no query:
+// q = p - (rho - s + slack) is monotone between the roots of q' (at most two), so q >= 0 on
+// [0, T] (T = min(cell exit, left)) iff q >= 0 at those roots and at T, and on the first monotone
+// piece where q falls below 0 a bracketing iteration (regula falsi, Illinois) keeps a point lo
+// with q(lo) >= 0 (so q >= 0 on [0, lo]) until q(lo) <= slack / 2. Returns lo there (the next
+// query at y + lo dir then finds clearance in [slack, 1.5 slack], below the sweep's blocking
+// threshold 2 slack); else T if T = left; else (the cell's exit) T + q(T) / (2 L), a little
+// beyond the exit by the Lipschitz bound (phi >= rho - s + slack + q(T) / 2 there), so that the
+// next query lies in the next cell. 0 when y is not strictly in the lattice's cell (clamped).
 inline double field_cell_advance(const float c[8], const double t[3], double h, const Vec3& dir,
-                                 double clearance, double slack) {
-  double least = std::numeric_limits<double>::infinity();
-  for (int k = 0; k < 8; ++k) {
-    const int i = k & 1, j = (k >> 1) & 1, l = k >> 2;
-    const double gx = static_cast<double>(c[1 + 2 * j + 4 * l]) - c[2 * j + 4 * l];
-    const double gy = static_cast<double>(c[i + 2 + 4 * l]) - c[i + 4 * l];
-    const double gz = static_cast<double>(c[i + 2 * j + 4]) - c[i + 2 * j];
-    least = std::min(least, dir.x() * gx + dir.y() * gy + dir.z() * gz);
-  }
+                                 double clearance, double slack, double left, double lipschitz) {
+  const double v0 = c[0], v1 = c[1], v2 = c[2], v3 = c[3];
+  const double v4 = c[4], v5 = c[5], v6 = c[6], v7 = c[7];
+  // The interpolant in the cell's monomials 1, x, y, z, xy, xz, yz, xyz.
+  const double c100 = v1 - v0, c010 = v2 - v0, c001 = v4 - v0;
+  const double c110 = (v3 - v2) - c100, c101 = (v5 - v4) - c100, c011 = (v6 - v4) - c010;
+  const double c111 = ((v7 - v6) - (v5 - v4)) - ((v3 - v2) - c100);
+  const double tx = t[0], ty = t[1], tz = t[2];
+  // Its partial derivatives at y (cell units) and the cross terms, then the cubic's coefficients
+  // in tau (metres along dir: the cell coordinates move by dir / h a metre).
+  const double ex = c100 + c110 * ty + c101 * tz + c111 * (ty * tz);
+  const double ey = c010 + c110 * tx + c011 * tz + c111 * (tx * tz);
+  const double ez = c001 + c101 * tx + c011 * ty + c111 * (tx * ty);
+  const double ax = dir.x() / h, ay = dir.y() / h, az = dir.z() / h;
+  const double a1 = ex * ax + ey * ay + ez * az;
+  const double a2 = (c110 + c111 * tz) * (ax * ay) + (c101 + c111 * ty) * (ax * az) +
+                    (c011 + c111 * tx) * (ay * az);
+  const double a3 = c111 * (ax * ay * az);
   double exit = std::numeric_limits<double>::infinity();
   for (int a = 0; a < 3; ++a) {
     if (dir[a] > 0.0) exit = std::min(exit, (1.0 - t[a]) * h / dir[a]);
     if (dir[a] < 0.0) exit = std::min(exit, t[a] * h / -dir[a]);
   }
-  if (least >= 0.0) return exit;
-  return std::min(exit, (clearance - slack) * h / -least);
+  const double end = std::min(exit, left);
+  const double a0 = clearance - slack;
+  const auto q = [&](double s) { return a0 + s * (a1 + s * (a2 + s * a3)); };
+  // The roots of q' = a1 + 2 a2 s + 3 a3 s^2 inside (0, end), ascending, then end.
+  double stops[3];
+  int count = 0;
+  {
+    const double qa = 3.0 * a3, qb = 2.0 * a2;
+    double r[2];
+    int n = 0;
+    if (qa != 0.0) {
+      const double disc = qb * qb - 4.0 * qa * a1;
+      if (disc > 0.0) {
+        const double w = -0.5 * (qb + std::copysign(std::sqrt(disc), qb));
+        r[n++] = w / qa;
+        r[n++] = a1 / w;
+      }
+    } else if (qb != 0.0) {
+      r[n++] = -a1 / qb;
+    }
+    if (n == 2 && r[1] < r[0]) std::swap(r[0], r[1]);
+    for (int i = 0; i < n; ++i) {
+      if (r[i] > 0.0 && r[i] < end) stops[count++] = r[i];
+    }
+    stops[count++] = end;
+  }
+  double lo = 0.0, qlo = a0;
+  for (int i = 0; i < count; ++i) {
+    const double hi0 = stops[i], qhi0 = q(hi0);
+    if (qhi0 >= 0.0) {
+      lo = hi0;
+      qlo = qhi0;
+      continue;
+    }
+    // q falls from qlo >= 0 at lo to qhi0 < 0 at hi0, monotone: its first root lies between.
+    double hi = hi0, wlo = qlo, whi = qhi0;
+    int side = 0;
+    for (int it = 0; it < 64 && qlo > 0.5 * slack; ++it) {
+      double m = (lo * whi - hi * wlo) / (whi - wlo);
+      if (!(m > lo && m < hi)) m = 0.5 * (lo + hi);
+      if (!(m > lo && m < hi)) break;  // no double between lo and hi
+      const double qm = q(m);
+      if (qm >= 0.0) {
+        lo = m;
+        qlo = wlo = qm;
+        if (side > 0) whi *= 0.5;  // Illinois: the end kept twice has its weight halved
+        side = 1;
+      } else {
+        hi = m;
+        whi = qm;
+        if (side < 0) wlo *= 0.5;
+        side = -1;
+      }
+    }
+    return lo;
+  }
+  if (end >= left) return end;
+  return end + qlo / (2.0 * lipschitz);
 }
 
 // The sampled field as the surface proxy's Solid (surface_proxy_core.h). Both must outlive it.
 class FieldSolid {
  public:
   FieldSolid(const VoxelTooth& tooth, const SampledField& field) : tooth_(tooth), field_(field) {}
+  // The proxy core's field-only paths (surface_proxy_core.h: the Newton push-out step, the
+  // cell-certified sweep, the stalled-slide stop; docs/derivations/field_contact.md §3).
+  static constexpr bool kFieldPaths = true;
 
   const VoxelTooth& tooth() const { return tooth_; }
   const SampledField& field() const { return field_; }
@@ -72,10 +148,10 @@ class FieldSolid {
   // Newton step (surface_proxy_core.h plain_step).
   double slope(const Vec3& x) const;
   // The sweep's certified advance from y (sd = distance(y, ..), found) along the unit direction
-  // dir with the given clearance and slack: field_cell_advance on y's cell (0 where y lies
-  // outside the lattice, so that the caller's Lipschitz step is kept).
+  // dir with the given clearance and slack, `left` from the segment's end: field_cell_advance on
+  // y's cell (0 where y lies outside the lattice, so that the caller's Lipschitz step is kept).
   double sweep_advance(const Vec3& y, const SignedDistance& sd, const Vec3& dir, double clearance,
-                       double slack) const;
+                       double slack, double left) const;
 
  private:
   const VoxelTooth& tooth_;

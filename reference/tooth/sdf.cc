@@ -215,6 +215,9 @@ struct VoxelSolid {
   }
   double lipschitz() const { return 1.0; }
 };
+// The thesis's steps only (surface_proxy_core.h: no field-only path), so the `sdf` model's proxy
+// is the same doubles whatever the core adds for the field.
+static_assert(!proxy_detail::kFieldPaths<VoxelSolid>);
 
 }  // namespace
 

@@ -10,9 +10,18 @@
 //       `nearest` of the surface along the normal: x - phi n;
 //   Vec3 normal(const Vec3& x, const SignedDistance& sd) const;   unit grad phi at x;
 //   double lipschitz() const;                 L: |phi(x) - phi(y)| <= L |x - y|;
-// and optionally (the field, field_contact.h) sweep_advance (the sweep's step from the cell's
-// slope) and slope(x) = |grad phi(x)| (the push-out's Newton step, plain_step below; its presence
-// also turns on update's stalled-slide stop).
+// and, to take the field-only paths (below), the compile-time claim
+//   static constexpr bool kFieldPaths = true;
+// with, then required (a static_assert), sweep_advance (the sweep's step from the cell's slope)
+// and slope(x) = |grad phi(x)| (the push-out's Newton step, plain_step below).
+//
+// The field-only paths (proxy_detail::kFieldPaths<Solid>): the push-out's Newton step
+// (plain_step), the cell-certified sweep step (sweep) and the stalled-slide stop (update). Each
+// rests on the sampled field's interpolant (docs/derivations/field_contact.md §3) and moves the
+// proxy to a different admissible point than the steps it replaces, so a Solid takes them only by
+// saying so: a Solid that does not declare kFieldPaths (the `sdf` model's, reference/tooth/sdf.cc
+// VoxelSolid and fast/tooth/sdf.h RecallingVoxelSolid, which static_assert that they do not)
+// takes the thesis's steps, the same doubles as before the refactor, whatever methods it has.
 // The swept test advances by (phi - (rho - s)) / L per step (conservative advancement under the
 // L-Lipschitz bound), so the sweep never leaves {phi >= rho - s}; for the exact distance L = 1
 // and the steps are the same doubles as before the refactor.
@@ -21,6 +30,7 @@
 #pragma once
 
 #include <algorithm>
+#include <concepts>
 
 #include <Eigen/LU>
 
@@ -28,6 +38,22 @@
 #include "reference/tooth/sdf.h"
 
 namespace dentsim::proxy_detail {
+
+// Whether Solid claims the field-only paths (header comment): Solid::kFieldPaths, false when it
+// declares none.
+template <class Solid>
+inline constexpr bool kFieldPaths = requires { requires Solid::kFieldPaths; };
+
+// What a Solid that claims the field-only paths must answer (header comment).
+template <class Solid>
+concept FieldPathSolid = requires(const Solid& solid, const Vec3& v, const SignedDistance& sd) {
+  { solid.slope(v) } -> std::convertible_to<double>;
+  { solid.sweep_advance(v, sd, v, 0.0, 0.0, 0.0) } -> std::convertible_to<double>;
+};
+
+// The claim checked where the core is instantiated: a Solid that claims the paths has them.
+template <class Solid>
+inline constexpr bool kSolidChecked = !kFieldPaths<Solid> || FieldPathSolid<Solid>;
 
 // A wall the push-out has met: its offset plane {y : n . (y - q) = rho} (n the unit normal at
 // the query, q the nearest point; docs/derivations/sdf_contact.md §2 step 1).
@@ -93,7 +119,8 @@ inline bool corner_step(const ProxyConstants& k, const PushWall* walls, const do
 template <class Solid>
 Vec3 plain_step(const ProxyConstants& k, const Solid& solid, const Vec3& x,
                 const SignedDistance& sd, const Vec3& u) {
-  if constexpr (requires { solid.slope(x); }) {
+  static_assert(kSolidChecked<Solid>, "kFieldPaths claimed without slope() and sweep_advance()");
+  if constexpr (kFieldPaths<Solid>) {
     const double slope = solid.slope(x);
     if (slope > 0.0 && sd.phi > 0.0) {
       const double t = (k.rho - sd.phi) / slope;
@@ -163,6 +190,7 @@ inline constexpr double kSweepSlack = 0.5e-3;
 // true if `to` was reached, else *from is the last point reached.
 template <class Solid>
 bool sweep(const ProxyConstants& k, const Solid& solid, Vec3* from, const Vec3& to) {
+  static_assert(kSolidChecked<Solid>, "kFieldPaths claimed without slope() and sweep_advance()");
   const double h = solid.tooth().grid().voxel_size;
   const double lip = solid.lipschitz();
   const double floor_phi = k.rho - k.skin;
@@ -177,15 +205,17 @@ bool sweep(const ProxyConstants& k, const Solid& solid, Vec3* from, const Vec3& 
     const SignedDistance sd = solid.distance(*from, reach);
     const double clearance = sd.phi - floor_phi;
     double advance = clearance / lip;  // a step this long stays in A_skin (Lipschitz)
-    // A Solid that bounds its slope along the segment within the cell about y (the field,
-    // field_contact.h field_cell_advance) may certify a longer step: to where its lower bound
-    // meets rho - s + slack, slack = half the blocking threshold below, so a blocked sweep ends
-    // in A_skin with clearance in (0, 1e-3 s] after one more query instead of the Lipschitz
+    // The field (field_contact.h field_cell_advance) follows phi along the segment within the
+    // cell about y exactly (a cubic from the cell's corners) and certifies a longer step: to the
+    // cell's exit (a little beyond, by the Lipschitz bound) or to where phi first comes within
+    // [slack, 1.5 slack] of rho - s, slack = half the blocking threshold below, so a blocked sweep
+    // ends in A_skin with clearance in (0, 1e-3 s] after one more query instead of the Lipschitz
     // step's geometric approach (docs/derivations/field_contact.md §3).
-    if constexpr (requires(const Vec3& v) { solid.sweep_advance(v, sd, v, 0.0, 0.0); }) {
+    if constexpr (kFieldPaths<Solid>) {
       const double slack = kSweepSlack * k.skin;
       if (sd.found && clearance > 2.0 * slack && advance < left) {
-        advance = std::max(advance, solid.sweep_advance(*from, sd, gap / left, clearance, slack));
+        advance =
+            std::max(advance, solid.sweep_advance(*from, sd, gap / left, clearance, slack, left));
       }
     }
     if (advance >= left) {
@@ -232,7 +262,7 @@ void update(const ProxyConstants& k, const Solid& solid, bool* valid, Vec3* g, c
     // at once by the same wall, up to the cap. Only where the next slide would be taken; g is
     // admissible either way (Claim 1 rests on the sweep and the push-out, not on the target;
     // docs/derivations/field_contact.md §3, "The slide cap").
-    if constexpr (kStallStop && requires { solid.slope(c); }) {
+    if constexpr (kStallStop && kFieldPaths<Solid>) {
       if (slide > 0 && !reached && (*g - start).norm() <= k.push_tol) break;
     }
     if (reached && (target - c).norm() <= k.tol) break;  // the tool itself is admissible

@@ -291,8 +291,8 @@ TEST(FastFieldSolid, TheSweepsCellStepNeverLeavesTheSkinByBruteForce) {
       const SignedDistance sf = solid.distance(y, 1.0);
       ASSERT_TRUE(sr.found && sf.found && sr.phi == phi);
       const double clearance = phi - floor_phi;
-      const double a = reference.sweep_advance(y, sr, d, clearance, slack);
-      differ += a != solid.sweep_advance(y, sf, d, clearance, slack);
+      const double a = reference.sweep_advance(y, sr, d, clearance, slack, 1.0);
+      differ += a != solid.sweep_advance(y, sf, d, clearance, slack, 1.0);
       ++steps;
       if (a > clearance / field.lipschitz()) ++longer;
       for (int k = 0; k <= 200; ++k) {
@@ -381,10 +381,12 @@ TEST(FastFieldSolid, TheSweepOnAFlatFaceTakesOneQueryPerCellCrossed) {
 }
 
 // A Solid that forwards to the fast FieldSolid and records where distance() was asked (the
-// push-out's iterates, the sweep's steps); with kNewton false it hides slope(), so push_out takes
-// the unit step (the sdf model's, and the field's before stop 46).
+// push-out's iterates, the sweep's steps); with kNewton false it claims no field-only path
+// (surface_proxy_core.h kFieldPaths) and hides slope(), so push_out takes the unit step (the sdf
+// model's, and the field's before stop 46).
 template <bool kNewton>
 struct RecordingSolid {
+  static constexpr bool kFieldPaths = kNewton;
   const fast::FieldSolid& solid;
   std::vector<Vec3>* asked;
   const VoxelTooth& tooth() const { return solid.tooth(); }
@@ -400,10 +402,95 @@ struct RecordingSolid {
     return solid.slope(x);
   }
   double sweep_advance(const Vec3& y, const SignedDistance& sd, const Vec3& d, double clearance,
-                       double slack) const {
-    return solid.sweep_advance(y, sd, d, clearance, slack);
+                       double slack, double left) const {
+    return solid.sweep_advance(y, sd, d, clearance, slack, left);
   }
 };
+
+// The gate of the field-only paths is the Solid's claim (surface_proxy_core.h kFieldPaths), not
+// the methods it has: a Solid that answers slope() and sweep_advance() but claims nothing takes
+// the thesis's steps, the unit push-out and the Lipschitz sweep (the sdf model's).
+template <bool kClaim>
+struct ForwardingSolid {
+  static constexpr bool kFieldPaths = kClaim;
+  const fast::FieldSolid& solid;
+  long* queries;
+  const VoxelTooth& tooth() const { return solid.tooth(); }
+  SignedDistance distance(const Vec3& x, double reach) const {
+    ++*queries;
+    return solid.distance(x, reach);
+  }
+  Vec3 normal(const Vec3& x, const SignedDistance& sd) const { return solid.normal(x, sd); }
+  double lipschitz() const { return solid.lipschitz(); }
+  double slope(const Vec3& x) const { return solid.slope(x); }
+  double sweep_advance(const Vec3& y, const SignedDistance& sd, const Vec3& d, double clearance,
+                       double slack, double left) const {
+    return solid.sweep_advance(y, sd, d, clearance, slack, left);
+  }
+};
+// Without the claim the field's methods are not reached; with it they are required.
+static_assert(!proxy_detail::kFieldPaths<ForwardingSolid<false>>);
+static_assert(proxy_detail::kFieldPaths<ForwardingSolid<true>>);
+static_assert(proxy_detail::kFieldPaths<fast::FieldSolid>);
+static_assert(proxy_detail::kFieldPaths<dentsim::FieldSolid>);
+
+// A Solid claiming nothing computes the sweep the Lipschitz step alone computes (its own loop
+// below, the core's before stop 45), the same doubles, and takes more queries than the claim.
+TEST(FastFieldSolid, TheFieldPathsAreTakenOnlyByTheSolidsClaim) {
+  const VoxelGrid sphere = sphere_grid();
+  const SampledField field = sphere_field(sphere);
+  const TwinSolids twins(sphere, field);
+  const SurfaceProxy proxy(kRho, sphere.voxel_size);
+  const proxy_detail::ProxyConstants k = proxy.constants();
+  long plain_queries = 0, claimed_queries = 0, sweeps = 0, differ = 0;
+  const ForwardingSolid<false> plain{twins.solid, &plain_queries};
+  const ForwardingSolid<true> claimed{twins.solid, &claimed_queries};
+  std::mt19937_64 rng(48);
+  std::uniform_real_distribution<double> dir(-1.0, 1.0);
+  for (int trial = 0; trial < 400; ++trial) {
+    Vec3 r(dir(rng), dir(rng), dir(rng));
+    if (r.norm() < 1e-3) continue;
+    r.normalize();
+    // From rho off the sphere towards a point 1 mm inside it: a blocked sweep.
+    const Vec3 from = kCentre + (kR + kRho) * r;
+    const Vec3 to = kCentre + (kR - 1e-3) * r + 0.5e-3 * Vec3(dir(rng), dir(rng), dir(rng));
+    Vec3 yp = from, yc = from, yl = from;
+    const bool reached = proxy_detail::sweep(k, plain, &yp, to);
+    proxy_detail::sweep(k, claimed, &yc, to);
+    // The Lipschitz step alone (conservative advancement, surface_proxy_core.h sweep without the
+    // cell's step).
+    bool lip_reached = false;
+    for (int step = 0; step < kSurfaceProxySweepSteps; ++step) {
+      const Vec3 gap = to - yl;
+      const double left = gap.norm();
+      if (left <= k.tol) {
+        yl = to;
+        lip_reached = true;
+        break;
+      }
+      const double floor_phi = k.rho - k.skin;
+      const double reach =
+          floor_phi + twins.solid.lipschitz() * std::min(left, 4.0 * sphere.voxel_size) + k.skin;
+      const double clearance = twins.solid.distance(yl, reach).phi - floor_phi;
+      const double advance = clearance / twins.solid.lipschitz();
+      if (advance >= left) {
+        yl = to;
+        lip_reached = true;
+        break;
+      }
+      if (clearance <= 1e-3 * k.skin) break;
+      yl += (advance / left) * gap;
+    }
+    ++sweeps;
+    differ += !(yp == yl && reached == lip_reached);
+  }
+  std::printf("%ld sweeps: %ld queries claiming nothing, %ld claiming the field paths; %ld differ "
+              "from the Lipschitz step alone\n",
+              sweeps, plain_queries, claimed_queries, differ);
+  EXPECT_GT(sweeps, 300);
+  EXPECT_EQ(differ, 0);
+  EXPECT_LT(claimed_queries, plain_queries);
+}
 
 // The push-out's Newton step (reference/tooth/surface_proxy_core.h plain_step,
 // docs/derivations/field_contact.md §3): from random points in the skin {rho - s <= phi < rho}
