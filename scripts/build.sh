@@ -11,6 +11,10 @@ shift || true
 jobs=$(nproc 2>/dev/null || echo 2)
 # ccache (when installed) keys on paths relative to the checkout, so clones share the cache.
 export CCACHE_BASEDIR="$PWD"
+# The compiler's temporary files go under build/ (the disk that holds the build), not to /tmp:
+# stop 48's CI run failed with /tmp full ("error writing to /tmp/cc*.s: No space left on device").
+mkdir -p build/tmp
+export TMPDIR="$PWD/build/tmp"
 case "$flavour" in
   release) extra=(-DCMAKE_BUILD_TYPE=Release) ;;
   # -O1 keeps the sanitizer build quick to compile (CI builds both flavours); asserts stay on.

@@ -12,6 +12,8 @@ cd "$(dirname "$0")/.."
 root=$PWD
 scripts/setup.sh
 jobs=$(nproc 2>/dev/null || echo 2)
+# Free disk where the build and the tests write (a CI log then shows it if a write fails).
+df -h "$root" "${TMPDIR:-/tmp}" | awk 'NR == 1 || !seen[$0]++' | sed 's/^/== disk: /'
 flavours=("$@")
 [ ${#flavours[@]} -gt 0 ] || flavours=(release asan fuzz)
 for f in "${flavours[@]}"; do
@@ -62,5 +64,5 @@ for f in "${flavours[@]}"; do
      LSAN_OPTIONS="suppressions=$root/scripts/lsan.supp" \
      UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
      ctest --output-on-failure -j"$jobs" --timeout 900 "${exclude[@]}")
-  echo "== tests ($f) took $(( $(date +%s) - start )) s"
+  echo "== tests ($f) took $(( $(date +%s) - start )) s; build/$f holds $(du -sh "build/$f" | cut -f1)"
 done
