@@ -12,6 +12,10 @@ namespace {
 // The shipped gimbal's joint axes (yaw +y, pitch +x, roll +z, each body's rot0 = E):
 // PhantomDynamics::shipped_gimbal().
 constexpr std::array<int, 3> kShippedGimbalAxis = {1, 0, 2};
+// The shipped forearm's orientation in {B} at q3 = 0 (perm flip of reference/phantom's tree): its
+// columns e_y, -e_z, -e_x (fore_from_, fore_sign_ of the closed form).
+constexpr std::array<int, 3> kShippedForearmFrom = {1, 2, 0};
+constexpr std::array<double, 3> kShippedForearmSign = {1.0, -1.0, -1.0};
 
 constexpr std::array<int, kPhantomTreeDof> kParent = {-1,     kBase,    kUpperArm,  kBase,
                                                       kCrank, kForearm, kGimbalYaw, kGimbalPitch};
@@ -83,6 +87,19 @@ struct Sym3 {
     xy -= h(0) * d(1) + d(0) * g(1);
     xz -= h(0) * d(2) + d(0) * g(2);
     yz -= h(1) * d(2) + d(1) * g(2);
+  }
+  // add_shift from the CoM (h = 0) to a point at d = r from it: += m (|r|^2 E - r r^T), as
+  // (g.r) E - r g^T with g = m r. add_shift(m, 0, r)'s own sums less their products with h's
+  // zeros (x + 0 = x, x - 0 = x): the same doubles, a zero's sign aside.
+  void add_from_com(T m, const Eigen::Matrix<T, 3, 1>& r) {
+    const Eigen::Matrix<T, 3, 1> g = m * r;
+    const T tr = g.dot(r);
+    xx += tr - r(0) * g(0);
+    yy += tr - r(1) * g(1);
+    zz += tr - r(2) * g(2);
+    xy -= r(0) * g(1);
+    xz -= r(0) * g(2);
+    yz -= r(1) * g(2);
   }
   Eigen::Matrix<T, 3, 1> operator*(const Eigen::Matrix<T, 3, 1>& v) const {
     return {xx * v(0) + xy * v(1) + xz * v(2), xy * v(0) + yy * v(1) + yz * v(2),
@@ -192,6 +209,10 @@ PhantomDynamics<T>::PhantomDynamics(const PhantomParams& params, bool specialise
     shipped = shipped && b.k == kShippedGimbalAxis[g] && b.axis_sign == T(1);
     for (int c = 0; c < 3; ++c) shipped = shipped && b.col_from[c] == c && b.col_sign[c] == T(1);
   }
+  for (int c = 0; c < 3; ++c) {
+    shipped = shipped && fore_from_[c] == kShippedForearmFrom[c] &&
+              fore_sign_[c] == T(kShippedForearmSign[c]);
+  }
   shipped_gimbal_ = shipped;
 }
 
@@ -293,7 +314,7 @@ void PhantomDynamics<T>::terms_tree(const Vec6& q_in, const Vec6& qd_in, bool wi
     P[i] = b.mass * vc[i];
     L[i] = cross(r[i], P[i]) + I * w[i];
     K[i] = I;
-    K[i].add_shift(b.mass, V3::Zero(), r[i]);  // from the CoM to the joint point
+    K[i].add_from_com(b.mass, r[i]);  // from the CoM to the joint point
   }
 #pragma GCC unroll 8
   for (int k = n - 1; k > 0; --k) {  // children have larger indices than their parents
@@ -449,21 +470,37 @@ void PhantomDynamics<T>::terms_closed(const Vec6& q_in, const Vec6& qd_in,
   M3 R[3];
   V3 a[3], w[3];
   {
+    V3 wpar(T(0), -qd3, qd1);
     M3 RB;  // the forearm's orientation Ry(-q3) F, F a signed permutation
-    for (int c = 0; c < 3; ++c) {
-      const int from = fore_from_[c];
-      const T sg = fore_sign_[c];
-      if (from == 0) {
-        RB.col(c) = V3(sg * c3, T(0), sg * s3);
-      } else if (from == 1) {
-        RB.col(c) = V3(T(0), sg, T(0));
-      } else {
-        RB.col(c) = V3(-sg * s3, T(0), sg * c3);
+    int g0 = 0;  // the first gimbal body the loop below turns
+    if constexpr (Shipped) {
+      // The shipped forearm, F = (e_y, -e_z, -e_x) (kShippedForearmFrom, kShippedForearmSign):
+      // RB = (e_y, (s3, 0, -c3), (-c3, 0, -s3)), and yaw turns its columns 2 and 0 about its
+      // column 1. The loop's products with RB's exact 0 and 1 left out: the same doubles, a
+      // zero's sign aside.
+      const T sn = sin(q(3)), cs = cos(q(3)), qd4 = qd(3);
+      R[0].col(0) = V3(sn * c3, cs, sn * s3);
+      R[0].col(1) = V3(s3, T(0), -c3);
+      R[0].col(2) = V3(-(cs * c3), sn, -(cs * s3));
+      a[0] = R[0].col(1);
+      w[0] = V3(s3 * qd4, -qd3, qd1 - c3 * qd4);
+      wpar = w[0];
+      g0 = 1;
+    } else {
+      for (int c = 0; c < 3; ++c) {
+        const int from = fore_from_[c];
+        const T sg = fore_sign_[c];
+        if (from == 0) {
+          RB.col(c) = V3(sg * c3, T(0), sg * s3);
+        } else if (from == 1) {
+          RB.col(c) = V3(T(0), sg, T(0));
+        } else {
+          RB.col(c) = V3(-sg * s3, T(0), sg * c3);
+        }
       }
     }
-    V3 wpar(T(0), -qd3, qd1);
 #pragma GCC unroll 3
-    for (int g = 0; g < 3; ++g) {
+    for (int g = g0; g < 3; ++g) {
       const Body& b = body_[kGimbalYaw + g];
       const M3& Rp = g == 0 ? RB : R[g - 1];
       M3& Ri = R[g];
@@ -498,7 +535,7 @@ void PhantomDynamics<T>::terms_closed(const Vec6& q_in, const Vec6& qd_in,
     const Sym3<T> I = Sym3<T>::rotated(R[g], b.inertia);
     const V3 Pi = b.mass * (vC + cross(w[g], r));
     K[g] = I;
-    K[g].add_shift(b.mass, V3::Zero(), r);
+    K[g].add_from_com(b.mass, r);
     mg[g] = b.mass;
     h[g] = b.mass * r;
     P[g] = Pi;
@@ -585,28 +622,29 @@ void PhantomDynamics<T>::terms_closed(const Vec6& q_in, const Vec6& qd_in,
       out.pose.R(0, c) = rc[0], out.pose.R(1, c) = rc[1], out.pose.R(2, c) = double(R1(2, c));
     }
   }
-  Eigen::Matrix<T, 6, 6> Jb;
-  Jb.col(0) << -x1(1), x1(0), T(0), R1.row(2).transpose();       // z x x1, R1^T z
-  Jb.col(1) << -Ez, T(0), Ex, T(0), T(0), T(0);                  // dE/dq2
-  Jb.col(2) << -(x1(2) - Ez), T(0), x1(0) - Ex, -R1.row(1).transpose();  // -y x (x1 - E)
+  // Column c of J (J_t or dJ_t/dt) from its {B} entries, turned and written in place (no 6x6 in
+  // between).
+  auto put = [&](Mat6& J, int c, T vx, T vy, T vz, T wx, T wy, T wz) {
+    const auto xy = yaw(vx, vy);
+    J(0, c) = xy[0], J(1, c) = xy[1], J(2, c) = double(vz);
+    J(3, c) = double(wx), J(4, c) = double(wy), J(5, c) = double(wz);
+  };
+  auto put6 = [&](Mat6& J, int c, const V6& v) { put(J, c, v(0), v(1), v(2), v(3), v(4), v(5)); };
+  put(out.J_t, 0, -x1(1), x1(0), T(0), R1(2, 0), R1(2, 1), R1(2, 2));  // z x x1, R1^T z
+  put(out.J_t, 1, -Ez, T(0), Ex, T(0), T(0), T(0));                     // dE/dq2
+  put(out.J_t, 2, -(x1(2) - Ez), T(0), x1(0) - Ex, -R1(1, 0), -R1(1, 1),
+      -R1(1, 2));  // -y x (x1 - E)
   for (int j = 0; j < 3; ++j) {
     const V3 v = cross(a[j], rt);
-    Jb.col(3 + j) << v(0), v(1), v(2), R1.col(0).dot(a[j]), R1.col(1).dot(a[j]),
-        R1.col(2).dot(a[j]);
+    put(out.J_t, 3 + j, v(0), v(1), v(2), R1.col(0).dot(a[j]), R1.col(1).dot(a[j]),
+        R1.col(2).dot(a[j]));
   }
-  auto to_world = [&](const Eigen::Matrix<T, 6, 6>& Jin, Mat6& J) {
-    for (int c = 0; c < 6; ++c) {
-      const auto xy = yaw(Jin(0, c), Jin(1, c));
-      J(0, c) = xy[0], J(1, c) = xy[1];
-      for (int rr = 2; rr < 6; ++rr) J(rr, c) = double(Jin(rr, c));
-    }
-  };
-  to_world(Jb, out.J_t);
   if (!with_jacobian_rate) {
     out.J_t_dot.setZero();
     return;
   }
   // dJ_t/dt: header section 4's columns at q1 = 0, then turned (§6).
+  Mat6& dJ = out.J_t_dot;
   const V3& w1 = w[2];
   const V3 xd1 = vC + cross(w1, rt);
   const V3 ey(T(0), T(1), T(0)), ez(T(0), T(0), T(1));
@@ -615,7 +653,7 @@ void PhantomDynamics<T>::terms_closed(const Vec6& q_in, const Vec6& qd_in,
     const V3 da = cross(wj, aj);
     const V3 xp = x1 - pj, xv = xd1 - voj, dv = cross(da, xp), av = cross(aj, xv);
     const V3 dw = da - cross(w1, aj);
-    Eigen::Matrix<T, 6, 1> v;
+    V6 v;
     v << dv(0) + av(0), dv(1) + av(1), dv(2) + av(2), R1.col(0).dot(dw), R1.col(1).dot(dw),
         R1.col(2).dot(dw);
     return v;
@@ -631,23 +669,22 @@ void PhantomDynamics<T>::terms_closed(const Vec6& q_in, const Vec6& qd_in,
     const V3 xv = xd1 - vE;
     const T xp2 = x1(2) - Ez;
     const T dwx = qd1 - w1(2);
+    T ang0[3], ang2[3];
     for (int c = 0; c < 3; ++c) {
-      Jb(3 + c, 0) = R1(0, c) * -w1(1) + R1(1, c) * w1(0);
-      Jb(3 + c, 1) = T(0);
-      Jb(3 + c, 2) = R1(0, c) * dwx + R1(2, c) * w1(0);
+      ang0[c] = R1(0, c) * -w1(1) + R1(1, c) * w1(0);
+      ang2[c] = R1(0, c) * dwx + R1(2, c) * w1(0);
     }
-    Jb(0, 0) = -xd1(1), Jb(1, 0) = xd1(0), Jb(2, 0) = T(0);
-    Jb(0, 2) = -xv(2), Jb(1, 2) = -(qd1 * xp2), Jb(2, 2) = qd1 * x1(1) + xv(0);
-    Jb(0, 1) = -xd1(2) + xv(2);
-    Jb(1, 1) = qd1 * xp2 - qd1 * x1(2);
-    Jb(2, 1) = (qd1 * x1(1) + xd1(0)) - Jb(2, 2);
+    const T z2 = qd1 * x1(1) + xv(0);
+    put(dJ, 0, -xd1(1), xd1(0), T(0), ang0[0], ang0[1], ang0[2]);
+    put(dJ, 1, -xd1(2) + xv(2), qd1 * xp2 - qd1 * x1(2), (qd1 * x1(1) + xd1(0)) - z2, T(0), T(0),
+        T(0));
+    put(dJ, 2, -xv(2), -(qd1 * xp2), z2, ang2[0], ang2[1], ang2[2]);
   } else {
-    Jb.col(0) = col(ez, V3(T(0), T(0), qd1), zero, zero);
-    Jb.col(1) = col(-ey, OA, zero, zero) - col(-ey, OB, E, vE);
-    Jb.col(2) = col(-ey, OB, E, vE);
+    put6(dJ, 0, col(ez, V3(T(0), T(0), qd1), zero, zero));
+    put6(dJ, 1, col(-ey, OA, zero, zero) - col(-ey, OB, E, vE));
+    put6(dJ, 2, col(-ey, OB, E, vE));
   }
-  for (int j = 0; j < 3; ++j) Jb.col(3 + j) = col(a[j], w[j], C, vC);
-  to_world(Jb, out.J_t_dot);
+  for (int j = 0; j < 3; ++j) put6(dJ, 3 + j, col(a[j], w[j], C, vC));
 }
 
 namespace {

@@ -108,9 +108,11 @@ class PhantomDynamics : public SixDofDeviceModel {
   // (decided once, at construction): terms() then takes it; otherwise the tree sweeps above.
   bool closed_form() const { return closed_form_; }
   // True when the closed form runs its specialisation for the shipped gimbal (decided at
-  // construction): rot0 = E for yaw, pitch and roll, axes +y, +x, +z (the shipped file's), fixed
-  // at compile time; any other file that fits the closed form takes its run-time column turns
-  // (col_from, col_sign, axis_sign). The same operations on the same numbers: bitwise equal.
+  // construction): rot0 = E for yaw, pitch and roll, axes +y, +x, +z, and the forearm's {B}
+  // orientation at q3 = 0 (e_y, -e_z, -e_x) (the shipped file's), fixed at compile time; any
+  // other file that fits the closed form takes its run-time column turns (col_from, col_sign,
+  // axis_sign, fore_from_, fore_sign_). The same operations on the same numbers less products
+  // with exact zeros and ones: equal as doubles (a zero's sign aside).
   bool shipped_gimbal() const { return shipped_gimbal_; }
   // True when jacobian_inverse() applies (the gimbal's joints meet at a point; at construction).
   bool block_jacobian_inverse() const { return gimbal_at_point_; }

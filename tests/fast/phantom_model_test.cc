@@ -156,8 +156,9 @@ TEST(FastPhantomModel, ClosedFormFitIsDecidedAtSetup) {
   EXPECT_FALSE(fast::PhantomModel(p).closed_form());
 }
 
-// The shipped gimbal's specialisation (its column turns fixed at compile time, dJ_t/dt's arm
-// columns without their known zeros) does the run-time path's operations on the same numbers:
+// The shipped gimbal's specialisation (its column turns and the forearm's orientation fixed at
+// compile time, the yaw's rotation without RB's exact 0 and 1, dJ_t/dt's arm columns without
+// their known zeros) does the run-time path's operations on the same numbers:
 // every output equal as a double (a zero's sign aside), with and without the Jacobian rate, on
 // 10^4 random states of the shipped file (half beyond the joint box, qd up to 20 rad/s). Taken for
 // the shipped file only: the fitting perturbed file (other gimbal axes) and the generic one keep
