@@ -340,8 +340,30 @@ bool SurfaceCutSet::certified_material(const Vec3& g, std::uint8_t* material) {
     }
     if (!solid) return false;
   }
+  // The seed follows g: up to kSteps moves to the solid face neighbour with the least D below its
+  // own (a smaller D(s), a smaller ball for the pyramid; any solid voxel would do).
+  double d2 = voxel_walk::voxel_distance2(grid, u[0], u[1], u[2], g);
+  constexpr int kSteps = 2;
+  for (int step = 0; step < kSteps; ++step) {
+    int to = -1;
+    double to2 = d2;
+    for (int f = 0; f < 6; ++f) {
+      int w[3] = {u[0], u[1], u[2]};
+      w[face_axis(f)] += face_sign(f);
+      if (!grid.inside(w[0], w[1], w[2]) || grid.voxels[grid.index(w[0], w[1], w[2])] == kEmpty) {
+        continue;
+      }
+      const double e2 = voxel_walk::voxel_distance2(grid, w[0], w[1], w[2], g);
+      if (e2 < to2) {
+        to2 = e2;
+        to = f;
+      }
+    }
+    if (to < 0) break;
+    u[face_axis(to)] += face_sign(to);
+    d2 = to2;
+  }
   // s = u: solid, within the reference's reach, and the pyramid holds nothing else within D(s).
-  const double d2 = voxel_walk::voxel_distance2(grid, u[0], u[1], u[2], g);
   const double m = proxy_material_reach(rho_);
   if (!(d2 < m * m)) return false;
   const std::size_t s = grid.index(u[0], u[1], u[2]);

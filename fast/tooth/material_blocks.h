@@ -17,10 +17,12 @@
 // the block's (fl(h i) and fl(origin + .) are monotone in i), so its terms, and their rounded sum,
 // are no smaller: bound(B) <= D(v) for every v in B, and for every block holding v*, at every
 // level, bound <= D(s). So if every block with bound <= D(s) is kEmpty or m, or kMixed with each
-// child so (recursively, down to level 0, where kMixed fails the certificate), then the level-0
-// block holding v* or an ancestor of it was met, held a solid voxel (v* was solid at construction:
-// removals never add solid), so it was not kEmpty: it was m, and v* is of material m: the
-// reference's material, bitwise, whatever the voxels' exposure and g's position on a grid plane.
+// child so (recursively; a kMixed block of level 0 passes if none of its voxels solid now and of
+// another material has D <= D(s), its voxels' own D), then the level-0 block holding v* or an
+// ancestor of it was met and passed: it held a solid voxel (v* was solid at construction:
+// removals never add solid), so it was not kEmpty; it was m, or v* (solid, D(v*) <= D(s)) was
+// read and is m. So v* is of material m: the reference's material, bitwise, whatever the voxels'
+// exposure and g's position on a grid plane.
 //
 // The status stays sound while the tooth only loses voxels (every solid voxel now was solid, with
 // the same material, at construction); a block that lost its other material stays kMixed (only
@@ -29,8 +31,9 @@
 // The cost. The descent reads the blocks about the ball of radius sqrt(D(s)): a few at each level
 // above the one where blocks are about the ball's size, then the kMixed ones' children near the
 // ball. With uniform material about g that is ~8 blocks a level (log N levels), whatever the
-// wall's voxels: independent of N but for the levels. Where two materials meet within the ball
-// the certificate fails (the caller's exact walk answers).
+// wall's voxels: independent of N but for the levels. Where two materials meet near the ball, the
+// kMixed level-0 blocks (4^3) it meets are read voxel by voxel (64 bytes each); where a voxel of
+// another material is as near as s the certificate fails (the caller's exact walk answers).
 //
 // Real-time: only() neither allocates nor throws (a fixed stack); the constructor allocates
 // (~n^3 / 56 bytes: 2.4 MB at 512^3) and reads every voxel once.
@@ -64,20 +67,29 @@ class MaterialBlocks {
                    a * (static_cast<std::size_t>(y) + a * static_cast<std::size_t>(z))];
   }
 
-  // Whether no block with bound <= d2 at x (header comment) may hold a solid voxel of a material
-  // other than m: every such block is kEmpty or m, or kMixed above level 0 with each child so.
-  // `grid` is the constructor's (it may have lost solid voxels since). No allocation, no throw.
+  // Whether no voxel solid in `grid` with D <= d2 at x has a material other than m (header
+  // comment): every block with bound <= d2 is kEmpty or m, or kMixed with each child so, and a
+  // kMixed block of level 0 has no voxel solid now, of another material, with D <= d2 (its voxels
+  // read from `grid`). `grid` is the constructor's (it may have lost solid voxels since). No
+  // allocation, no throw.
   bool only(const VoxelGrid& grid, const Vec3& x, double d2, std::uint8_t m) const;
 
-  // Blocks whose bound only() computed (tests and benchmarks).
+  // Blocks whose bound only() computed, and kMixed level-0 blocks whose voxels it read (tests and
+  // benchmarks).
   long blocks_read() const { return blocks_read_; }
+  long mixed_read() const { return mixed_read_; }
 
  private:
   int edge0_ = 1;
   std::vector<int> across_;
   std::vector<std::size_t> offset_;
   std::vector<std::uint8_t> status_;
+  // only() on level-0 block (bx, by, bz), kMixed: its voxels.
+  bool voxels_only(const VoxelGrid& grid, const Vec3& x, double d2, std::uint8_t m, int bx, int by,
+                   int bz) const;
+
   mutable long blocks_read_ = 0;
+  mutable long mixed_read_ = 0;
 };
 
 }  // namespace dentsim::fast
