@@ -141,7 +141,7 @@ std::size_t SurfaceVoxels::count() const {
 }
 
 SurfaceCutSet::SurfaceCutSet(const VoxelTooth& tooth, double rho, SignedDistanceFn sd)
-    : tooth_(tooth), rho_(rho), sd_(sd), surface_(tooth) {
+    : tooth_(tooth), rho_(rho), sd_(sd), surface_(tooth), blocks_(tooth.grid()) {
   const VoxelGrid& grid = tooth.grid();
   const double h = grid.voxel_size;
   const double reach = std::max(cut_band(rho).reach, proxy_material_reach(rho));  // R'
@@ -316,6 +316,85 @@ bool SurfaceCutSet::material_alone(const Vec3& g, Nearest* nearest) {
   return answer(g, best.sd.found, best.sd.voxel, nearest);
 }
 
+bool SurfaceCutSet::certified_material(const Vec3& g, std::uint8_t* material) {
+  const VoxelGrid& grid = tooth_.grid();
+  if (!seeded_ || seed_ >= grid.voxels.size()) return false;
+  const std::size_t nn = static_cast<std::size_t>(grid.n);
+  int u[3] = {static_cast<int>(seed_ % nn), static_cast<int>((seed_ / nn) % nn),
+              static_cast<int>(seed_ / (nn * nn))};
+  if (grid.voxels[seed_] == kEmpty) {
+    // Drilling took the seed (the voxel nearest to the bur goes first): the first solid voxel
+    // behind it, along the axis on which its centre lies farthest from g, within a few voxels.
+    const Vec3 off = grid.center(u[0], u[1], u[2]) - g;
+    int a = 0;
+    for (int b = 1; b < 3; ++b) {
+      if (std::abs(off[b]) > std::abs(off[a])) a = b;
+    }
+    const int step = off[a] < 0.0 ? -1 : 1;
+    constexpr int kBehind = 4;
+    bool solid = false;
+    for (int t = 0; t < kBehind && !solid; ++t) {
+      u[a] += step;
+      if (u[a] < 0 || u[a] >= grid.n) return false;
+      solid = grid.voxels[grid.index(u[0], u[1], u[2])] != kEmpty;
+    }
+    if (!solid) return false;
+  }
+  // The seed follows g: up to kSteps moves to the solid face neighbour with the least D below its
+  // own (a smaller D(s), a smaller ball for the pyramid; any solid voxel would do).
+  double d2 = voxel_walk::voxel_distance2(grid, u[0], u[1], u[2], g);
+  constexpr int kSteps = 2;
+  for (int step = 0; step < kSteps; ++step) {
+    int to = -1;
+    double to2 = d2;
+    for (int f = 0; f < 6; ++f) {
+      int w[3] = {u[0], u[1], u[2]};
+      w[face_axis(f)] += face_sign(f);
+      if (!grid.inside(w[0], w[1], w[2]) || grid.voxels[grid.index(w[0], w[1], w[2])] == kEmpty) {
+        continue;
+      }
+      const double e2 = voxel_walk::voxel_distance2(grid, w[0], w[1], w[2], g);
+      if (e2 < to2) {
+        to2 = e2;
+        to = f;
+      }
+    }
+    if (to < 0) break;
+    u[face_axis(to)] += face_sign(to);
+    d2 = to2;
+  }
+  // s = u: solid, within the reference's reach, and the pyramid holds nothing else within D(s).
+  const double m = proxy_material_reach(rho_);
+  if (!(d2 < m * m)) return false;
+  const std::size_t s = grid.index(u[0], u[1], u[2]);
+  if (!blocks_.only(grid, g, d2, grid.voxels[s])) return false;
+  *material = grid.voxels[s];
+  seed_ = s;
+  return true;
+}
+
+bool SurfaceCutSet::material(const Vec3& g, std::uint8_t* material) {
+  if (!surface_.current() || !g.allFinite()) return false;
+  const VoxelGrid& grid = tooth_.grid();
+  // The inside case of signed_distance: g in a solid voxel's cell, that voxel.
+  int cell[3];
+  if (sdf_detail::voxel_of(grid, g, cell) &&
+      grid.voxels[grid.index(cell[0], cell[1], cell[2])] != kEmpty) {
+    ++queries_;
+    *material = grid.voxels[grid.index(cell[0], cell[1], cell[2])];
+    return true;
+  }
+  if (certified_material(g, material)) {
+    ++queries_;
+    ++certified_;
+    return true;
+  }
+  Nearest nearest;
+  if (!collect(g, Contact{}, nullptr, nullptr, &nearest)) return false;
+  *material = nearest.found ? grid.voxels[nearest.voxel] : std::uint8_t{kEmpty};
+  return true;
+}
+
 bool SurfaceCutSet::collect(const Vec3& g, const Contact& contact, std::vector<Contact>* shares,
                             std::vector<std::size_t>* voxels, Nearest* nearest) {
   if (!surface_.current() || !g.allFinite()) return false;
@@ -427,7 +506,16 @@ int CutSetProvider::drill(std::span<const Contact> contacts, double T) {
 void CutSetProvider::surface_contact_voxels(const Vec3& g, Contact* contact,
                                             std::vector<Contact>* shares,
                                             std::vector<std::size_t>* voxels) {
-  const std::size_t first = shares != nullptr ? shares->size() : 0;
+  if (shares == nullptr) {  // the material alone: without its voxel where the pyramid certifies it
+    std::uint8_t material = kEmpty;
+    if (!cut_.material(g, &material)) {
+      dentsim::ToothContactProvider::surface_contact_voxels(g, contact, shares, voxels);
+      return;
+    }
+    set_contact_material(material, k_tooth_, b_tooth_, contact);
+    return;
+  }
+  const std::size_t first = shares->size();
   SurfaceCutSet::Nearest nearest;
   if (!cut_.collect(g, *contact, shares, voxels, &nearest)) {
     dentsim::ToothContactProvider::surface_contact_voxels(g, contact, shares, voxels);
@@ -436,7 +524,6 @@ void CutSetProvider::surface_contact_voxels(const Vec3& g, Contact* contact,
   const std::uint8_t material =
       nearest.found ? voxel_tooth().grid().voxels[nearest.voxel] : std::uint8_t{kEmpty};
   set_contact_material(material, k_tooth_, b_tooth_, contact);
-  if (shares == nullptr) return;
   // The members were copied from the contact before its material was known: its stiffness and
   // damping (the same doubles collect_cut_set copies).
   for (std::size_t i = first; i < shares->size(); ++i) {

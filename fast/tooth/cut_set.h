@@ -81,8 +81,17 @@
 // its whole wall). A span wider than the walk's arrays (voxel_walk::kMaxSpan bricks: a reach of
 // ~90 voxels) returns false: the reference answers.
 //
-// Real-time: collect() and update() neither allocate nor throw (their buffers are sized by the
-// constructor from the tip's radius and the grid).
+// The material without its voxel (stop 49; fast/tooth/material_blocks.h). The provider needs only
+// the voxel's material, which material() finds without the voxel where the tooth's materials are
+// uniform about g: from a voxel s still solid within 2 rho (the last answer's, or a voxel behind it
+// when drilling took it), if every block of the material pyramid that may hold a solid voxel at
+// least as near as s holds only s's material, that is the reference's voxel's material (proof in
+// material_blocks.h); else the nearest-first walk (material_alone) finds the voxel. The cost is then
+// the pyramid's blocks about the ball of radius sqrt(D(s)) (~8 a level), not the exposed voxels of
+// the cavity's wall within a block of that sphere (~N^2).
+//
+// Real-time: collect(), material() and update() neither allocate nor throw (their buffers are
+// sized by the constructor from the tip's radius and the grid).
 #pragma once
 
 #include <cstddef>
@@ -90,6 +99,7 @@
 #include <span>
 #include <vector>
 
+#include "fast/tooth/material_blocks.h"
 #include "reference/tooth/tooth_contacts.h"
 
 namespace dentsim::fast {
@@ -179,7 +189,16 @@ class SurfaceCutSet {
   bool collect(const Vec3& g, const Contact& contact, std::vector<Contact>* shares,
                std::vector<std::size_t>* voxels, Nearest* nearest);
 
+  // The material of the solid voxel nearest to g within 2 rho (proxy_material's; kEmpty if none)
+  // into *material, without the voxel where the material pyramid certifies it (header comment,
+  // "The material without its voxel"), else by collect(g, .., nullptr, ..). Returns false,
+  // touching nothing, where collect would. No allocation, no throw.
+  bool material(const Vec3& g, std::uint8_t* material);
+
   const SurfaceVoxels& surface() const { return surface_; }
+  const MaterialBlocks& material_blocks() const { return blocks_; }
+  // material() queries the pyramid answered (tests and benchmarks).
+  long certified() const { return certified_; }
   // Material queries answered by sd (no exposed voxel within reach, or g near a grid plane), and
   // all of them (tests and benchmarks).
   long fallbacks() const { return fallbacks_; }
@@ -209,6 +228,9 @@ class SurfaceCutSet {
   bool material_alone(const Vec3& g, Nearest* nearest);
   // The material outside g's voxel: the found exposed voxel if certified, else sd (the seed).
   bool answer(const Vec3& g, bool found, std::size_t best, Nearest* nearest);
+  // material()'s certificate outside g's voxel: from the seed (or the first solid voxel behind it,
+  // away from g), true with *material if the pyramid holds only its material about g.
+  bool certified_material(const Vec3& g, std::uint8_t* material);
 
   const VoxelTooth& tooth_;
   double rho_;
@@ -229,6 +251,8 @@ class SurfaceCutSet {
   bool seeded_ = false;    // seed_ holds the last material query's voxel outside g's
   std::size_t seed_ = 0;
   long seeded_queries_ = 0;
+  MaterialBlocks blocks_;  // the tooth's materials at construction
+  long certified_ = 0;
 };
 
 // dentsim::ToothContactProvider with its voxel side replaced by SurfaceCutSet: the fast

@@ -413,14 +413,16 @@ TEST(SurfaceCutSet, EqualsTheReferenceAndBruteForceNearAMeshsSurface) {
 // about the grid's top corner), with the molar's voxel at 64^3, 128^3 and 512^3 (the ball 4 to
 // 32 voxels across; at 512^3's voxel the box spans 5 to 6 bricks): the cut set and the material
 // equal to the reference's and to the brute force (compare_at).
-VoxelTooth edge_tooth(int n, double h) {
+VoxelGrid edge_grid(int n, double h) {
   const double side = n * h;
-  return VoxelTooth(test::solid_grid(n, side, [side](const Vec3& p) {
+  return test::solid_grid(n, side, [side](const Vec3& p) {
     const double u = p.x() / side, v = p.y() / side;
     const double floor = side * (0.45 + 0.12 * std::sin(7.0 * u) * std::cos(5.0 * v));
     return p.z() < floor || (p - Vec3(side, side, side)).norm() < 0.3 * side;
-  }));
+  });
 }
+
+VoxelTooth edge_tooth(int n, double h) { return VoxelTooth(edge_grid(n, h)); }
 
 TEST(SurfaceCutSet, EqualsTheReferenceAtBricksCornersAndTheGridsEdges) {
   const MolarParams molar;
@@ -504,12 +506,16 @@ TEST(SurfaceCutSet, EqualsTheReferenceAtBricksCornersAndTheGridsEdges) {
 // often a tie.
 struct Walks {
   long steps = 0, seeded = 0, removed = 0, mismatches = 0;
+  long certified = 0;  // material() answers the pyramid gave (a second twin, stop 49)
 };
 
 Walks material_walks(VoxelTooth& tooth, double rho, int walks, int steps, std::uint64_t seed,
                      bool lattice = false) {
   const VoxelGrid& grid = tooth.grid();
   fast::SurfaceCutSet twin(tooth, rho, &signed_distance);
+  // The material without its voxel (material(), stop 49) along the same walk, on its own twin
+  // (its seed moves its own way).
+  fast::SurfaceCutSet blocks(tooth, rho, &signed_distance);
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(-1.0, 1.0), fraction(0.0, 1.0);
   const std::size_t nn = static_cast<std::size_t>(grid.n);
@@ -564,9 +570,11 @@ Walks material_walks(VoxelTooth& tooth, double rho, int walks, int steps, std::u
       }
       fast::SurfaceCutSet::Nearest alone;
       const long seeded_before = twin.seeded();
+      std::uint8_t material = 0xee;
       {
         testing::AllocationScope scope;
         EXPECT_TRUE(twin.collect(g, contact, nullptr, nullptr, &alone));
+        EXPECT_TRUE(blocks.material(g, &material));
         EXPECT_EQ(scope.count(), 0);
       }
       w.seeded += twin.seeded() - seeded_before;
@@ -575,13 +583,16 @@ Walks material_walks(VoxelTooth& tooth, double rho, int walks, int steps, std::u
       ++w.steps;
       const SignedDistance sd = signed_distance(tooth, g, proxy_material_reach(rho));
       const Oracle o = brute_force(tooth, g, rho, 0);
+      const std::uint8_t want = proxy_material(tooth, g, rho);
       const bool ok = alone.found == sd.found && (!sd.found || alone.voxel == sd.voxel) &&
-                      o.found == sd.found && (!sd.found || o.voxel == sd.voxel);
+                      o.found == sd.found && (!sd.found || o.voxel == sd.voxel) &&
+                      material == want;
       if (!ok) {
         ++w.mismatches;
         ADD_FAILURE() << "walk " << walk << " step " << s << " g " << g.transpose() << ": sd "
                       << sd.found << " " << sd.voxel << ", fast " << alone.found << " "
-                      << alone.voxel << ", oracle " << o.found << " " << o.voxel;
+                      << alone.voxel << ", oracle " << o.found << " " << o.voxel << "; material "
+                      << int{want} << ", without the voxel " << int{material};
       }
       if (s % 10 == 9 && alone.found) {  // drill the answer's voxel and some neighbours away
         std::vector<std::size_t> gone;
@@ -598,14 +609,16 @@ Walks material_walks(VoxelTooth& tooth, double rho, int walks, int steps, std::u
           gone.push_back(grid.index(u[0], u[1], u[2]));
         }
         twin.update(gone);
+        blocks.update(gone);
         w.removed += static_cast<long>(gone.size());
       }
     }
   }
+  w.certified = blocks.certified();
   std::printf("%dx, h %.4g mm, rho %.3g mm: %ld steps, %ld seeded, %ld voxels removed, %ld "
-              "material queries by sd of %ld\n",
+              "material queries by sd of %ld; without the voxel %ld of %ld\n",
               grid.n, 1e3 * h, 1e3 * rho, w.steps, w.seeded, w.removed, twin.fallbacks(),
-              twin.queries());
+              twin.queries(), w.certified, blocks.queries());
   return w;
 }
 
@@ -640,6 +653,198 @@ TEST(SurfaceCutSet, TheMaterialAloneNearestFirstEqualsTheReferenceAlongWalks) {
     EXPECT_EQ(w.mismatches, 0) << e;
     EXPECT_GT(w.seeded, w.steps / 3) << e;
   }
+}
+
+// ---- The material without its voxel (stop 49) ---------------------------------------------------
+
+// The wavy slab's solid voxels repainted: 0 as is (enamel), 1 slabs 3 voxels thick across x
+// (enamel, dentin), 2 one-voxel walls of dentin on brick planes (x = 8 i + 7, y = 8 j), 3 caries
+// specks (1 voxel in 200), 4 an enamel shell `shell` voxels deep over dentin (z below the column's
+// top, as a tooth's).
+VoxelGrid painted(VoxelGrid grid, int pattern, int shell = 6) {
+  const int n = grid.n;
+  std::mt19937_64 rng(4900 + pattern);
+  std::uniform_int_distribution<int> speck(0, 199);
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      int depth = 0;  // solid voxels above in the column, from its top
+      for (int k = n - 1; k >= 0; --k) {
+        if (!grid.solid(i, j, k)) {
+          depth = 0;
+          continue;
+        }
+        Material m = kEnamel;
+        switch (pattern) {
+          case 1: m = (i / 3) % 2 == 1 ? kDentin : kEnamel; break;
+          case 2: m = i % 8 == 7 || j % 8 == 0 ? kDentin : kEnamel; break;
+          case 3: m = speck(rng) == 0 ? kCaries : kEnamel; break;
+          case 4: m = depth >= shell ? kDentin : kEnamel; break;
+          default: break;
+        }
+        grid.set(i, j, k, m);
+        ++depth;
+      }
+    }
+  }
+  return grid;
+}
+
+// material() (the pyramid's certificate, else the nearest-first walk) along material_walks' walks
+// (material_walks compares it at every step with proxy_material(tooth, g, rho), the reference,
+// with no allocation, the answer's voxel and neighbours drilled away every tenth step) on the
+// procedural molar (enamel, dentin, pulp, caries) at 64^3 and 128^3 and on the wavy slab painted
+// with walls and layers crossing blocks (painted above), at 128^3's voxel and at 512^3's, and on
+// the exact lattice (ties). The pyramid answers most queries where the materials are uniform and
+// some where they are not; the walk the rest.
+TEST(SurfaceCutSet, TheMaterialWithoutItsVoxelIsTheReferencesAlongWalks) {
+  for (const int n : {64, 128}) {
+    VoxelTooth tooth(voxelize_procedural_molar(MolarParams{}, n));
+    const Walks w = material_walks(tooth, 0.5e-3, 30, 60, 4900 + n);
+    EXPECT_EQ(w.mismatches, 0) << n;
+    EXPECT_GT(w.certified, w.steps / 3) << n;  // signal: the pyramid answers
+  }
+  const double h128 = voxelize_procedural_molar(MolarParams{}, 32).voxel_size * 32.0 / 128.0;
+  for (const double h : {0.25 * h128, h128}) {
+    for (int pattern = 0; pattern <= 4; ++pattern) {
+      VoxelTooth tooth(painted(edge_grid(64, h), pattern));
+      const Walks w = material_walks(tooth, 0.5e-3, 12, 60, 4910 + pattern);
+      EXPECT_EQ(w.mismatches, 0) << h << " pattern " << pattern;
+      // Signal: the pyramid answers on a uniform tooth, and the walk where walls cross the ball.
+      if (pattern == 0) {
+        EXPECT_GT(w.certified, w.steps * 2 / 3) << h;
+      } else if (pattern == 2) {
+        EXPECT_LT(w.certified, w.steps * 4 / 5) << h;
+      }
+    }
+  }
+  for (const int e : {12, 14}) {
+    for (const int pattern : {1, 2, 4}) {
+      VoxelTooth tooth(painted(edge_grid(64, std::ldexp(1.0, -e)), pattern, 2));
+      const Walks w = material_walks(tooth, 0.5e-3, 12, 60, 4920 + e, true);
+      EXPECT_EQ(w.mismatches, 0) << e << " pattern " << pattern;
+    }
+  }
+}
+
+// The pyramid's status: every block's, at every level, the one material of its solid voxels
+// (kEmpty if none, kMixed if more), by brute force over random grids (8 to 32 voxels, sparse to
+// dense, one to three materials) and the single-voxel grid.
+TEST(MaterialBlocks, StatusIsEachBlocksMaterialsAtEveryLevel) {
+  std::mt19937_64 rng(4930);
+  std::uniform_real_distribution<double> fraction(0.0, 1.0);
+  long mixed = 0, uniform = 0, empty = 0;
+  for (const int n : {1, 2, 8, 16, 32}) {
+    for (const double solid : {0.01, 0.5, 1.0}) {
+      for (const int materials : {1, 3}) {
+        VoxelGrid grid(n, Vec3(1e-3, -2e-3, 0.5e-3), 0.1e-3);
+        for (std::uint8_t& v : grid.voxels) {
+          if (!(fraction(rng) < solid)) continue;
+          // Mostly enamel; with three materials, 1 in 10 dentin or pulp.
+          v = materials == 1 || fraction(rng) < 0.9 ? kEnamel
+              : fraction(rng) < 0.5                  ? kDentin
+                                                     : kPulp;
+        }
+        const fast::MaterialBlocks blocks(grid);
+        ASSERT_EQ(blocks.across(blocks.levels() - 1), 1);
+        for (int l = 0; l < blocks.levels(); ++l) {
+          const int e = blocks.edge(l);
+          ASSERT_EQ(blocks.across(l) * e, n);
+          for (int z = 0; z < blocks.across(l); ++z) {
+            for (int y = 0; y < blocks.across(l); ++y) {
+              for (int x = 0; x < blocks.across(l); ++x) {
+                std::uint8_t want = kEmpty;
+                for (int k = e * z; k < e * (z + 1); ++k) {
+                  for (int j = e * y; j < e * (y + 1); ++j) {
+                    for (int i = e * x; i < e * (x + 1); ++i) {
+                      const std::uint8_t m = grid.at(i, j, k);
+                      if (m == kEmpty || m == want) continue;
+                      want = want == kEmpty ? m : fast::MaterialBlocks::kMixed;
+                    }
+                  }
+                }
+                ASSERT_EQ(blocks.status(l, x, y, z), want) << n << " level " << l;
+                mixed += want == fast::MaterialBlocks::kMixed;
+                uniform += want != kEmpty && want != fast::MaterialBlocks::kMixed;
+                empty += want == kEmpty;
+              }
+            }
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(mixed, 100);
+  EXPECT_GT(uniform, 100);
+  EXPECT_GT(empty, 100);
+}
+
+// only(grid, x, d2, m) is the certificate: when true, no voxel solid in the grid with D <= d2 at x
+// has a material other than m (D by the reference's box_distance2). Asked at the very D of a solid
+// voxel v (the tie: a block whose bound equals d2 may hold v) with m = v's material and with each
+// other material (then it must refuse), at random points about the grid, on grid planes and nodes
+// (where D ties between voxels) with the origin at 0 and h a power of two (exact gaps), on painted
+// slabs (walls, specks, a shell); then again after random removals from the grid (the pyramid not
+// rebuilt: a grid that only loses voxels). A bound one ulp or one voxel too loose fails it.
+TEST(MaterialBlocks, OnlyNeverPassesAVoxelOfAnotherMaterialAsNear) {
+  std::mt19937_64 rng(4940);
+  std::uniform_real_distribution<double> fraction(0.0, 1.0);
+  long passed = 0, refused = 0, queries = 0;
+  for (const int pattern : {1, 2, 3, 4}) {
+    VoxelGrid grid = painted(edge_grid(32, std::ldexp(1.0, -12)), pattern, 3);
+    const fast::MaterialBlocks blocks(grid);
+    std::vector<std::size_t> solid;
+    for (std::size_t v = 0; v < grid.voxels.size(); ++v) {
+      if (grid.voxels[v] != kEmpty) solid.push_back(v);
+    }
+    const int n = grid.n;
+    const double h = grid.voxel_size;
+    for (int round = 0; round < 2; ++round) {
+      if (round == 1) {  // remove a third of the solid voxels (the pyramid as built)
+        for (const std::size_t v : solid) {
+          if (fraction(rng) < 0.33) grid.voxels[v] = kEmpty;
+        }
+      }
+      for (int q = 0; q < 400; ++q) {
+        const std::size_t v = solid[std::uniform_int_distribution<std::size_t>(
+            0, solid.size() - 1)(rng)];
+        if (grid.voxels[v] == kEmpty) continue;
+        const int ijk[3] = {static_cast<int>(v % n), static_cast<int>((v / n) % n),
+                            static_cast<int>(v / (static_cast<std::size_t>(n) * n))};
+        // Within 4 voxels of v on each axis: on a grid plane (1 in 2), a quarter-voxel lattice
+        // point (1 in 4), else anywhere.
+        Vec3 x;
+        for (int a = 0; a < 3; ++a) {
+          const double u = ijk[a] + 0.5 + 8.0 * (fraction(rng) - 0.5);
+          const int how = static_cast<int>(4.0 * fraction(rng));
+          x[a] = h * (how < 2 ? std::round(u) : how == 2 ? 0.25 * std::round(4.0 * u) : u);
+        }
+        const int hi[3] = {ijk[0] + 1, ijk[1] + 1, ijk[2] + 1};
+        const double d2 = sdf_detail::box_distance2(grid, ijk, hi, x, nullptr);
+        for (std::uint8_t m = kEnamel; m <= kCaries; ++m) {
+          ++queries;
+          if (!blocks.only(grid, x, d2, m)) {
+            ++refused;
+            continue;
+          }
+          ++passed;
+          ASSERT_EQ(m, grid.voxels[v]) << "pattern " << pattern << " x " << x.transpose();
+          for (int k = 0; k < n; ++k) {
+            for (int j = 0; j < n; ++j) {
+              for (int i = 0; i < n; ++i) {
+                const std::uint8_t mu = grid.at(i, j, k);
+                if (mu == kEmpty || mu == m) continue;
+                const int lo[3] = {i, j, k}, up[3] = {i + 1, j + 1, k + 1};
+                ASSERT_GT(sdf_detail::box_distance2(grid, lo, up, x, nullptr), d2)
+                    << "pattern " << pattern << " voxel " << grid.index(i, j, k);
+              }
+            }
+          }
+        }
+      }
+    }
+  }
+  std::printf("only(): %ld queries, %ld passed, %ld refused\n", queries, passed, refused);
+  EXPECT_GT(passed, queries / 50);  // signal: it certifies (at most 1 material in 4 can)
 }
 
 // The twin's band depth: the squared centre offsets per axis, (origin + h (i + 1/2)) - g squared,
