@@ -18,18 +18,13 @@ bool solve_with_friction_unchecked(const PmiSystem& sys, std::span<const Contact
   PmiFactor lu;
   if (!pmi_factor(sys.A, &lu)) return false;
   FrictionSolution& out = *result;
-  Vec6 V0;
-  pmi_factor_solve(lu, sys.b, &V0);  // the frictionless solution
-  out.V = V0;
-  out.f_t.setZero();
-  out.f_n = 0.0;
-  out.sliding = false;
-  out.F.setZero();
-  out.active = false;
+  out = FrictionSolution{};             // no friction force, not active, not sliding
+  pmi_factor_solve(lu, sys.b, &out.V);  // the frictionless solution V0
   if (!fp.enabled || fp.mu == 0.0) return true;
   const BlendedContact bc = blended_contact(contacts, proxy);
   if (!bc.active) return true;
   out.active = true;
+  const Vec6 V0 = out.V;
 
   const Vec3& n = bc.n;
   // Normal force at a solution: n^T f(V) = fn0 + g^T V, f the force part of `normal`.

@@ -50,9 +50,9 @@ std::vector<FrictionState> record_friction_states(const std::string& scene_name,
       throw std::runtime_error(std::string("record_friction_states: tick ") + std::to_string(k) +
                                " failed: " + tick_status_name(st));
     }
+    const double t_prev = s.t;  // the next tick's length: the sample clock's step
     dev.write(d->r.tau);
     dev.advance();
-    const double t_prev = s.t;
     dev.read(s);
     if (s.t > t_prev) T = s.t - t_prev;
   }
