@@ -5,22 +5,25 @@
 // BM_Tick/<impl>/<method>/<model>/<free|contact>: one servo tick (the pipeline's seven stages;
 // the simulated device's physics runs between ticks and is not timed: manual time = the tick's own
 // stage times). model: sdf (the scene's surface proxy), faces (the thesis's face model, ~68
-// contacts for this bur) or field (the surface proxy on the sampled field, issue #30); free: ticks before the first contact, contact: in contact (and
-// drilling). Counters: the mean time of each stage over the timed ticks [ns], and the mean
-// contact count.
-// Results: docs/benchmarks.md "The tick, stage by stage".
+// contacts for this bur) or field (the surface proxy on the sampled field, issue #30); free: ticks
+// before the first contact, contact: in contact (and drilling). Counters: the mean time of each
+// stage over the timed ticks [ns], and the mean contact count. BM_Friction/<impl>: the friction
+// solve alone (below). Results: docs/benchmarks.md "The tick, stage by stage".
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <array>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "bench/stage_times.h"
-#include "sim/scene.h"
-#include "sim/simulator.h"
 #include "fast/registry.h"
 #include "reference/core/contact_provider.h"
 #include "reference/core/pipeline.h"
+#include "sim/scene.h"
+#include "sim/simulator.h"
+#include "validation/friction_states.h"
 
 namespace dentsim {
 namespace {
@@ -86,7 +89,38 @@ void BM_TickTiming(benchmark::State& state) {
 }
 BENCHMARK(BM_TickTiming)->Arg(0)->Arg(1)->Unit(benchmark::kNanosecond);
 
+// BM_Friction/<impl>: the registry's friction solve (Implementation::friction) alone, on the
+// drill scene's contact ticks (validation/friction_states.h: the solve stage's input on every tick
+// of the fast pipeline's closed loop with a contact set, sdf model), one solve per iteration in
+// turn over them. Results: docs/benchmarks.md "Stop 49: the friction solve's fast twin".
+void BM_Friction(benchmark::State& state, const Implementation* impl) {
+  static const std::vector<FrictionState> kStates = record_friction_states("drill", 5000);
+  std::size_t i = 0;
+  long sliding = 0, ticks = 0;
+  FrictionSolution out;
+  for (auto _ : state) {
+    const FrictionState& c = kStates[i];
+    i = i + 1 == kStates.size() ? 0 : i + 1;
+    if (!impl->friction(c.sys, c.contacts, c.proxy, c.normal, c.fp, &out)) {
+      state.SkipWithError("the friction solve failed");
+      return;
+    }
+    benchmark::DoNotOptimize(out);
+    sliding += out.sliding ? 1 : 0;
+    ++ticks;
+  }
+  state.counters["states"] = static_cast<double>(kStates.size());
+  state.counters["sliding"] =
+      static_cast<double>(sliding) / static_cast<double>(std::max(1L, ticks));
+  state.SetLabel(std::string(impl->name()) + ", drill scene contact ticks (sdf)");
+}
+
 const int kRegistered = [] {
+  for (const Implementation* impl : implementations()) {
+    benchmark::RegisterBenchmark((std::string("BM_Friction/") + impl->name()).c_str(), BM_Friction,
+                                 impl)
+        ->Unit(benchmark::kNanosecond);
+  }
   for (const StageTable* t : stage_tables()) {
     for (const char* method : {"pmi-pd", "pmi"}) {
       for (const char* model : {"sdf", "faces", "field"}) {

@@ -2,6 +2,7 @@
 
 #include <array>
 
+#include "fast/friction.h"
 #include "fast/phantom/phantom_model.h"
 #include "fast/tick.h"
 #include "fast/tooth/tooth_contacts.h"
@@ -22,9 +23,11 @@ std::unique_ptr<SixDofDeviceModel> make_model(const PhantomParams& params) {
 std::span<const Implementation* const> implementations() {
   // Function-local, so that a caller's static initialiser sees them built.
   static const Implementation kReference{&reference_stage_table(), &make_model<PhantomModel>,
-                                         nullptr, &make_reference_tooth};
+                                         nullptr, &make_reference_tooth,
+                                         &solve_with_friction_unchecked};
   static const Implementation kFast{&fast::fast_stage_table(), &make_model<fast::PhantomModel>,
-                                    &make_model<fast::PhantomModelFloat>, &fast::make_fast_tooth};
+                                    &make_model<fast::PhantomModelFloat>, &fast::make_fast_tooth,
+                                    &fast::solve_with_friction_unchecked};
   static const std::array<const Implementation*, 2> kAll = {&kReference, &kFast};
   return kAll;
 }

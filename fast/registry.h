@@ -31,6 +31,9 @@ struct Implementation {
   // The implementation's tooth over the reference tooth `tooth` (which must outlive it).
   std::unique_ptr<PipelineTooth> (*tooth)(VoxelTooth& tooth,
                                           const PipelineToothSetup& setup) = nullptr;
+  // The friction solve its solve stage runs (reference/friction.h's contract): compared with the
+  // reference's by tests/fast/friction_test.cc and timed by bench/tick_bench.cc (BM_Friction).
+  FrictionSolve friction = nullptr;
 
   const char* name() const { return stages->implementation; }
 };

@@ -8,6 +8,7 @@
 #include "fast/decomposition.h"
 #include "fast/dense6.h"
 #include "fast/encoder_kalman.h"
+#include "fast/friction.h"
 #include "fast/grasp_mass_model.h"
 #include "fast/phantom/phantom_model.h"
 #include "fast/pmi.h"
@@ -219,11 +220,14 @@ TickStatus assemble(const PipelineModel& m, PipelineData& d) {
 
 TickStatus solve(const PipelineModel& m, PipelineData& d) {
   if (m.skip_unneeded || m.friction.enabled || m.method == Method::kExplicitVc) {
-    return reference::detail::solve_with(m, d, fast::pmi_try_solve, m.friction);
+    return reference::detail::solve_with(m, d, fast::pmi_try_solve,
+                                         fast::solve_with_friction_unchecked, m.friction);
   }
-  // Friction off, skips off: the friction solver at mu = 0 (its frictionless solution).
+  // Friction off, skips off: the friction solver at mu = 0 (its frictionless solution: the same
+  // factor and solve as pmi_try_solve, so bitwise the skip's V_hat).
   static constexpr FrictionParams kNoFriction{true, 0.0};
-  return reference::detail::solve_with(m, d, fast::pmi_try_solve, kNoFriction, true);
+  return reference::detail::solve_with(m, d, fast::pmi_try_solve,
+                                       fast::solve_with_friction_unchecked, kNoFriction, true);
 }
 
 TickStatus command(const PipelineModel& m, PipelineData& d) { return reference::command(m, d); }

@@ -30,8 +30,8 @@ FrictionSolution solve_with_friction(const PmiSystem& sys, std::span<const Conta
   FrictionSolution out;
   if (!solve_with_friction_unchecked(sys, contacts, proxy, normal, fp, &out)) {
     throw InputError(
-        "solve_with_friction: the proxy system matrix A is singular (expected the "
-        "inertia term M 2/T to make it invertible)");
+        "solve_with_friction: the proxy system matrix A is singular or the system is not "
+        "finite (expected the inertia term M 2/T to make A invertible)");
   }
   return out;
 }
@@ -39,6 +39,9 @@ FrictionSolution solve_with_friction(const PmiSystem& sys, std::span<const Conta
 bool solve_with_friction_unchecked(const PmiSystem& sys, std::span<const Contact> contacts,
                                    const Pose& proxy, const AffineWrench& normal,
                                    const FrictionParams& fp, FrictionSolution* result) {
+  // A system that is not finite fails here, as in pmi_try_solve (Eigen's rank test is not
+  // specified for NaN entries, and a NaN in b would only surface as a NaN V).
+  if (!sys.A.allFinite() || !sys.b.allFinite()) return false;
   const Eigen::FullPivLU<Mat6> lu(sys.A);
   if (!lu.isInvertible()) return false;
   FrictionSolution& out = *result;

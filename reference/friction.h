@@ -51,15 +51,22 @@ void tangent_basis(const Vec3& n, Vec3& t1, Vec3& t2);
 // at the blended contact point of `contacts` (see above). `normal` is the normal contact wrench
 // that sys contains (contact_wrench(...)), used to evaluate f_n at the solution. Without friction
 // (fp.enabled false, mu = 0, or no penetrating contact) it returns the plain solve of A V = b.
-// Throws InputError if mu is negative or not finite, or if A is singular.
+// Throws InputError if mu is negative or not finite, if A is singular or if A or b is not
+// finite.
 FrictionSolution solve_with_friction(const PmiSystem& sys, std::span<const Contact> contacts,
                                      const Pose& proxy, const AffineWrench& normal,
                                      const FrictionParams& fp);
 
 // The servo tick's form (mu validated once when its model is built): fills `out` and returns
-// true, or returns false when A is singular. Never throws.
+// true, or returns false when A or b is not finite or A is singular. Never throws.
 bool solve_with_friction_unchecked(const PmiSystem& sys, std::span<const Contact> contacts,
                                    const Pose& proxy, const AffineWrench& normal,
                                    const FrictionParams& fp, FrictionSolution* out);
+
+// The servo tick's friction solve as a parameter (reference::detail::solve_with): the reference's
+// above or its fast twin (fast/friction.h), same contract.
+using FrictionSolve = bool (*)(const PmiSystem& sys, std::span<const Contact> contacts,
+                               const Pose& proxy, const AffineWrench& normal,
+                               const FrictionParams& fp, FrictionSolution* out);
 
 }  // namespace dentsim

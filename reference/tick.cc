@@ -427,14 +427,14 @@ TickStatus assemble_given_contact_with(const PipelineModel& m, PipelineData& d, 
 }  // namespace detail
 
 TickStatus solve(const PipelineModel& m, PipelineData& d) {
-  return detail::solve_with(m, d, pmi_try_solve, m.friction);
+  return detail::solve_with(m, d, pmi_try_solve, solve_with_friction_unchecked, m.friction);
 }
 
 namespace detail {
 
 TickStatus solve_with(const PipelineModel& m, PipelineData& d,
-                      bool (*pmi_solver)(const PmiSystem&, Vec6*), const FrictionParams& friction,
-                      bool even_without_contacts) {
+                      bool (*pmi_solver)(const PmiSystem&, Vec6*), FrictionSolve friction_solver,
+                      const FrictionParams& friction, bool even_without_contacts) {
   TickResult& r = d.r;
   r.friction_sliding = false;
   if (m.method == Method::kExplicitVc) {
@@ -452,7 +452,7 @@ TickStatus solve_with(const PipelineModel& m, PipelineData& d,
   Vec6 friction_wrench = Vec6::Zero();
   if (friction.enabled && (!r.contacts.empty() || even_without_contacts)) {
     FrictionSolution fs;
-    if (!solve_with_friction_unchecked(d.sys, r.contacts, d.proxy.pose, d.contact, friction, &fs)) {
+    if (!friction_solver(d.sys, r.contacts, d.proxy.pose, d.contact, friction, &fs)) {
       return TickStatus::kSolverFailure;
     }
     r.V_hat = fs.V;

@@ -30,6 +30,7 @@
 
 #include "reference/core/contact_provider.h"
 #include "reference/core/pipeline.h"
+#include "reference/friction.h"
 #include "reference/grasp_mass_model.h"
 
 namespace dentsim {
@@ -98,12 +99,13 @@ TickStatus reset(const PipelineModel& m, PipelineData& d);
 namespace detail {
 // assemble with d.contact already computed.
 TickStatus assemble_given_contact(const PipelineModel& m, PipelineData& d);
-// solve with `pmi_solver` for the frictionless PMI system (4.9) and `friction` (m.friction, or
+// solve with `pmi_solver` for the frictionless PMI system (4.9), `friction_solver` for the system
+// with friction (reference/friction.h's or fast/friction.h's) and `friction` (m.friction, or
 // fast/'s mu = 0 stand-in when skips are off). The friction solver runs when friction is enabled
 // and the contact set is not empty (or `even_without_contacts`).
 TickStatus solve_with(const PipelineModel& m, PipelineData& d,
-                      bool (*pmi_solver)(const PmiSystem&, Vec6*), const FrictionParams& friction,
-                      bool even_without_contacts = false);
+                      bool (*pmi_solver)(const PmiSystem&, Vec6*), FrictionSolve friction_solver,
+                      const FrictionParams& friction, bool even_without_contacts = false);
 }  // namespace detail
 }  // namespace reference
 

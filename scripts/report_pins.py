@@ -27,6 +27,9 @@ import tempfile
 
 # What a busy machine changes: never pinned, whatever two runs say.
 MACHINE_DEPENDENT = ("timing_us", "wall_s", "setup_s")
+# What thread scheduling decides (the field edit's worker against the servo thread): never pinned,
+# even when two runs happen to agree (both are 0 on an idle machine).
+SCHEDULING_DEPENDENT = ("field_edit_worker_waits", "field_edit_servo_takeovers")
 
 CASES = [
     ("probe", ["probe"]),
@@ -132,7 +135,8 @@ def write(dentsim, pins, only):
         b, cb = run_case(dentsim, kind, args) if twice else (a, ca)
         keep = {k: v for k, v in a.items()
                 if b.get(k) == v and not k.split(".")[-1].startswith(MACHINE_DEPENDENT)
-                and not k.startswith(MACHINE_DEPENDENT)}
+                and not k.startswith(MACHINE_DEPENDENT)
+                and k.split(".")[-1] not in SCHEDULING_DEPENDENT}
         dropped = sorted(k for k in a if k not in keep)
         case = {"args": args, "kind": kind, "long_form_only": full, "report_unpinned": dropped,
                 "timeseries_sha256": {k: v for k, v in ca.items() if cb.get(k) == v}}

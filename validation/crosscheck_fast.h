@@ -48,7 +48,7 @@
 //                                     and the tip on other voxels' faces, edges and corners)
 //   frictionless                      friction off: in contact the solve is the PMI solve of the
 //                                     contact system (fast/pmi.h; with friction, the friction
-//                                     solver shared with the reference runs in contact)
+//                                     solve's twin fast/friction.h runs in contact)
 //
 // Closed loop: each scene runs on both pipelines from the same start; the per-tick difference of
 // the force fed back to the device |f(T1_fast) - f(T1_ref)| [N] is recorded with the time where it

@@ -24,7 +24,7 @@ const std::vector<SkipVariant>& skip_variants() {
          faces(s);
          s.method.method = Method::kPmiVc;
        },
-       no_observer, true},
+       no_observer},
       {"explicit-no-observer", "observer, grip, decomposition, drill (probe, face model)", "probe",
        [](Scene& s) {
          faces(s);
@@ -32,19 +32,19 @@ const std::vector<SkipVariant>& skip_variants() {
          s.method.friction.enabled = false;  // explicit Euler has no friction solve
          s.method.friction.mu = 0.0;
        },
-       no_observer, true},
+       no_observer},
       {"pmi-pd-no-hand", "grip, early out (drill, face model)", "drill",
        [](Scene& s) {
          faces(s);
          no_hand_mass(s);
        },
-       nullptr, true},
+       nullptr},
       {"pmi-observer-sdf", "decomposition, grip (drill, sdf model)", "drill",
        [](Scene& s) {
          s.method.method = Method::kPmiVc;
          no_hand_mass(s);
        },
-       nullptr, true},
+       nullptr},
       {"pmi-pd-no-friction", "friction, grip, early out (drill, face model)", "drill",
        [](Scene& s) {
          faces(s);
@@ -52,10 +52,10 @@ const std::vector<SkipVariant>& skip_variants() {
          s.method.friction.enabled = false;
          s.method.friction.mu = 0.0;
        },
-       nullptr, false},
+       nullptr},
       {"pmi-pd-drill",
        "the empty set only (the drill scene as built in: sdf model, hand mass, friction)", "drill",
-       nullptr, nullptr, true},
+       nullptr, nullptr},
   };
   return kVariants;
 }

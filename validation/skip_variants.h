@@ -8,8 +8,8 @@
 //                  run at gain 0 with skips off (their estimate stays zero)
 //   grip           no hand mass: the grip detector's second hypothesis equals the first
 //   decomposition  pmi and explicit: the decomposition and feed-forward (4.7), never applied
-//   friction       friction off: the friction solver at mu = 0 (a full-pivoting LU where the
-//                  skip uses the PMI's partial-pivoting one: equal to round-off, not bitwise)
+//   friction       friction off: the friction solver at mu = 0 (fast/friction.h: the PMI
+//                  solve's own factor and solve, so bitwise the skip's fast::pmi_try_solve)
 //   drill          a tool that does not drill: the environment asked to cut anyway
 //   empty set      every variant's free-space ticks: the contact wrench of an empty set
 //   early out      the face model's free-space box test (fast/tooth/brick_tooth.h)
@@ -33,7 +33,6 @@ struct SkipVariant {
   std::string scene;  // built-in scene
   std::function<void(Scene&)> edit_scene;
   std::function<void(PipelineConfig&)> edit_config;  // SceneRigOptions::configure_pipeline
-  bool bitwise = true;  // false: round-off differences allowed (the friction skip)
 };
 
 const std::vector<SkipVariant>& skip_variants();

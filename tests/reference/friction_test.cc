@@ -20,6 +20,7 @@
 #include "reference/contact.h"
 #include "reference/core/io.h"
 #include "reference/core/so3.h"
+#include "tests/support/friction_cases.h"
 #include "tests/support/stress.h"
 
 namespace dentsim {
@@ -36,10 +37,6 @@ double uni(Rng& rng, double a, double b) {
 Vec3 random_unit(Rng& rng) {
   std::normal_distribution<double> g(0.0, 1.0);
   return Vec3(g(rng), g(rng), g(rng)).normalized();
-}
-
-Vec3 random_vec(Rng& rng, double scale) {
-  return Vec3(uni(rng, -1, 1), uni(rng, -1, 1), uni(rng, -1, 1)) * scale;
 }
 
 Mat6 block_inertia() { return block_diag(0.05 * Mat3::Identity(), 2e-5 * Mat3::Identity()); }
@@ -232,58 +229,9 @@ TEST(Friction, SpringPulledBlockBreaksAwayAtMuMg) {
   EXPECT_LT(pose.x.norm(), 1e-15);  // no creep before break-away (round-off only)
 }
 
-// A random PMI-like system: A = M 2/T + coupling (K_vc T/2 + B_vc, SPD) + proxy damping
-// + gyroscopic C_k (skew), b random; the contact wrench of a random set is added to it.
-struct RandomCase {
-  PmiSystem sys;
-  std::vector<Contact> set;
-  Pose pose;
-  AffineWrench normal;
-  FrictionParams fp;
-};
-
-RandomCase random_case(Rng& rng) {
-  RandomCase rc;
-  const double T = uni(rng, 1e-4, 2e-3);
-  const double m = uni(rng, 0.01, 0.5);
-  Mat3 L;
-  L << random_vec(rng, 1e-5), random_vec(rng, 1e-5), random_vec(rng, 1e-5);
-  const Mat3 J = L * L.transpose() + uni(rng, 1e-6, 1e-4) * Mat3::Identity();
-  const Mat6 M = block_diag(m * Mat3::Identity(), J);
-  const Mat6 Kvc =
-      block_diag(uni(rng, 0, 2000) * Mat3::Identity(), uni(rng, 0, 1) * Mat3::Identity());
-  const Mat6 Bvc =
-      block_diag(uni(rng, 0, 5) * Mat3::Identity(), uni(rng, 0, 0.01) * Mat3::Identity());
-  const Vec3 w_k = random_vec(rng, 5.0);
-  Mat6 C = Mat6::Zero();
-  C.bottomRightCorner<3, 3>() = -skew(J * w_k);  // C_k = diag(0, -S(J w_k))   (2.8)
-  // Velocities and loads over several decades so that sticking and sliding both occur.
-  const double v_scale = std::pow(10.0, uni(rng, -5.0, -0.5));
-  const double load = std::pow(10.0, uni(rng, -2.0, 1.0));
-  const Vec6 V_k = stack(random_vec(rng, v_scale), w_k * (v_scale / 0.3));
-  rc.sys.A = M * (2.0 / T) + Kvc * (T / 2) + Bvc + C;
-  rc.sys.b = M * (2.0 / T) * V_k + stack(random_vec(rng, load), random_vec(rng, 0.01 * load));
-  rc.pose = Pose{random_vec(rng, 0.05), exp_so3(random_unit(rng) * uni(rng, 0, 3))};
-  const Vec3 n0 = random_unit(rng);
-  const int count = 1 + static_cast<int>(rng() % 4);
-  const bool separated = rng() % 10 == 0;  // every member outside the tooth
-  for (int i = 0; i < count; ++i) {
-    Contact c;
-    c.n = (n0 + random_vec(rng, 0.3)).normalized();
-    c.r = random_vec(rng, 0.01);
-    const double depth = separated ? uni(rng, -2e-4, 0.0) : uni(rng, -2e-4, 1e-3);
-    c.x_o = rc.pose.x + rc.pose.R * c.r + depth * c.n;
-    c.stiffness = uni(rng, 1e2, 5e4);
-    c.damping = uni(rng, 0.0, 10.0);
-    c.weight = uni(rng, 0.0, 1.0);
-    rc.set.push_back(c);
-  }
-  rc.normal = contact_wrench(rc.set, rc.pose, T, Scheme::kMidpoint);
-  rc.sys.add(rc.normal);
-  rc.fp.enabled = true;
-  rc.fp.mu = uni(rng, 0.05, 1.5);
-  return rc;
-}
+// A random PMI-like system and contact set (tests/support/friction_cases.h, shared with the fast
+// twin's differential test).
+FrictionState random_case(Rng& rng) { return testing::random_friction_case(rng); }
 
 // Over many random states and loads: |f_t| <= mu |f_n| (+1e-12), friction never does positive
 // work on the contact point, the solution satisfies A V = b + J^T f_t, sticking stops the
@@ -297,9 +245,10 @@ TEST(FrictionStress, ConeAndDissipationHoldOverRandomStates) {
   double worst_cone = -1e300, worst_power = -1e300, worst_residual = 0.0, worst_kkt = 0.0,
          worst_slip = 0.0;
   for (long s = 0; s < samples; ++s) {
-    const RandomCase rc = random_case(rng);
-    const FrictionSolution sol = solve_with_friction(rc.sys, rc.set, rc.pose, rc.normal, rc.fp);
-    const BlendedContact bc = blended_contact(rc.set, rc.pose);
+    const FrictionState rc = random_case(rng);
+    const FrictionSolution sol =
+        solve_with_friction(rc.sys, rc.contacts, rc.proxy, rc.normal, rc.fp);
+    const BlendedContact bc = blended_contact(rc.contacts, rc.proxy);
     ASSERT_EQ(sol.active, bc.active) << "sample " << s;
     if (!sol.active) {
       ++inactive;
@@ -307,7 +256,7 @@ TEST(FrictionStress, ConeAndDissipationHoldOverRandomStates) {
       EXPECT_LT((rc.sys.A * sol.V - rc.sys.b).norm(), 1e-10 * rc.sys.b.norm());
       continue;
     }
-    const Mat36 J = contact_point_jacobian(bc.r, rc.pose.R);
+    const Mat36 J = contact_point_jacobian(bc.r, rc.proxy.R);
     // The normal force at the solution, recomputed here.
     const double fn = std::max(0.0, bc.n.dot(lin(rc.normal.at(sol.V))));
     EXPECT_NEAR(sol.f_n, fn, 1e-12 * (1 + fn)) << "sample " << s;
@@ -321,7 +270,7 @@ TEST(FrictionStress, ConeAndDissipationHoldOverRandomStates) {
     worst_power = std::max(worst_power, power);
     EXPECT_LE(power, 1e-12) << "sample " << s;
     // (c) The solution solves the system with the friction wrench J^T f_t = [I; S(r) R^T] f_t.
-    const Vec6 F = stack(sol.f_t, skew(bc.r) * rc.pose.R.transpose() * sol.f_t);
+    const Vec6 F = stack(sol.f_t, skew(bc.r) * rc.proxy.R.transpose() * sol.f_t);
     EXPECT_LT((sol.F - F).norm(), 1e-12 * (1 + F.norm()));
     const double residual = (rc.sys.A * sol.V - rc.sys.b - F).norm() / (1 + rc.sys.b.norm());
     worst_residual = std::max(worst_residual, residual);
@@ -378,9 +327,9 @@ TEST(Friction, SolutionIndependentOfReportCount) {
   double worst = 0.0;
   long sliding = 0, sticking = 0;
   for (int s = 0; s < 300; ++s) {
-    RandomCase rc = random_case(rng);
-    rc.set.resize(1);
-    if (penetration_depth(rc.set[0], rc.pose) <= 0.0) continue;
+    FrictionState rc = random_case(rng);
+    rc.contacts.resize(1);
+    if (penetration_depth(rc.contacts[0], rc.proxy) <= 0.0) continue;
     const PmiSystem base = [&] {
       PmiSystem sys = rc.sys;
       sys.A += rc.normal.G;  // remove the multi-member normal that random_case added
@@ -388,18 +337,18 @@ TEST(Friction, SolutionIndependentOfReportCount) {
       return sys;
     }();
     const double T = 1e-3;
-    const AffineWrench n1 = contact_wrench(rc.set, rc.pose, T, Scheme::kMidpoint);
+    const AffineWrench n1 = contact_wrench(rc.contacts, rc.proxy, T, Scheme::kMidpoint);
     PmiSystem sys1 = base;
     sys1.add(n1);
-    const FrictionSolution ref = solve_with_friction(sys1, rc.set, rc.pose, n1, rc.fp);
+    const FrictionSolution ref = solve_with_friction(sys1, rc.contacts, rc.proxy, n1, rc.fp);
     (ref.sliding ? sliding : sticking)++;
     for (int N : {4, 16, 64}) {
-      std::vector<Contact> set(N, rc.set[0]);
+      std::vector<Contact> set(N, rc.contacts[0]);
       for (Contact& c : set) c.weight = uni(rng, 0.1, 1.0);
-      const AffineWrench nN = contact_wrench(set, rc.pose, T, Scheme::kMidpoint);
+      const AffineWrench nN = contact_wrench(set, rc.proxy, T, Scheme::kMidpoint);
       PmiSystem sysN = base;
       sysN.add(nN);
-      const FrictionSolution sol = solve_with_friction(sysN, set, rc.pose, nN, rc.fp);
+      const FrictionSolution sol = solve_with_friction(sysN, set, rc.proxy, nN, rc.fp);
       EXPECT_EQ(sol.sliding, ref.sliding);
       worst = std::max({worst, (sol.V - ref.V).norm() / (1e-9 + ref.V.norm()),
                         (sol.f_t - ref.f_t).norm() / (1e-9 + ref.f_t.norm())});
@@ -416,17 +365,18 @@ TEST(Friction, DisabledOrNoContactIsThePlainSolve) {
   std::printf("seed %u\n", seed);
   Rng rng(seed);
   for (int s = 0; s < 200; ++s) {
-    RandomCase rc = random_case(rng);
+    FrictionState rc = random_case(rng);
     const Vec6 plain = rc.sys.A.fullPivLu().solve(rc.sys.b);
     rc.fp.enabled = s % 2 == 0;
     if (rc.fp.enabled) rc.fp.mu = 0.0;
-    const FrictionSolution sol = solve_with_friction(rc.sys, rc.set, rc.pose, rc.normal, rc.fp);
+    const FrictionSolution sol =
+        solve_with_friction(rc.sys, rc.contacts, rc.proxy, rc.normal, rc.fp);
     EXPECT_FALSE(sol.active);
     EXPECT_LT((sol.V - plain).norm(), 1e-12 * (1 + plain.norm()));
     EXPECT_EQ(sol.f_t.norm(), 0.0);
     rc.fp.enabled = true;
     rc.fp.mu = 0.5;
-    const FrictionSolution none = solve_with_friction(rc.sys, {}, rc.pose, rc.normal, rc.fp);
+    const FrictionSolution none = solve_with_friction(rc.sys, {}, rc.proxy, rc.normal, rc.fp);
     EXPECT_FALSE(none.active);
     EXPECT_LT((none.V - plain).norm(), 1e-12 * (1 + plain.norm()));
   }
