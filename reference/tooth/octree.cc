@@ -189,6 +189,15 @@ std::uint8_t FullOctree::remove_voxel(int i, int j, int k) {
 
 namespace {
 
+// spread_bits of the bytes 0..255 (morton() of a node's coordinates without the loop).
+constexpr std::array<std::size_t, 256> kSpread8 = [] {
+  std::array<std::size_t, 256> t{};
+  for (std::size_t v = 0; v < 256; ++v) {
+    for (int b = 0; b < 8; ++b) t[v] |= ((v >> b) & 1) << (3 * b);
+  }
+  return t;
+}();
+
 // Copies a run of n bytes (a row of 8 voxels, a mask: one move).
 inline void copy_run(const std::uint8_t* from, std::size_t n, std::uint8_t* to) {
   if (n == 8) {
@@ -209,11 +218,18 @@ void for_node_runs(Byte* voxels, Byte* masks, int n, int levels, int level, int 
   const std::size_t nn = static_cast<std::size_t>(n);
   Byte* plane = voxels + e * (static_cast<std::size_t>(x) +
                               nn * (static_cast<std::size_t>(y) + nn * static_cast<std::size_t>(z)));
-  for (std::size_t k = 0; k < e; ++k, plane += nn * nn) {
-    Byte* row = plane;
-    for (std::size_t j = 0; j < e; ++j, row += nn) f(row, e);
+  if (e == 8) {  // a brick of 8^3 (the field model's replay): rows of a constant 8 bytes
+    for (std::size_t k = 0; k < 8; ++k, plane += nn * nn) {
+      for (std::size_t j = 0; j < 8; ++j) f(plane + j * nn, std::size_t{8});
+    }
+  } else {
+    for (std::size_t k = 0; k < e; ++k, plane += nn * nn) {
+      for (std::size_t j = 0; j < e; ++j) f(plane + j * nn, e);
+    }
   }
-  const std::size_t m = morton(x, y, z);
+  const std::size_t m = kSpread8[x & 255] | (kSpread8[(x >> 8) & 3] << 24) |
+                        ((kSpread8[y & 255] | (kSpread8[(y >> 8) & 3] << 24)) << 1) |
+                        ((kSpread8[z & 255] | (kSpread8[(z >> 8) & 3] << 24)) << 2);
   // Level l's first node: (8^l - 1) / 7 (internal_node_count).
   const auto first = [](int l) { return ((std::size_t{1} << (3 * l)) - 1) / 7; };
   for (int l = level; l < levels; ++l) {
