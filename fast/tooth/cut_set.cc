@@ -153,12 +153,9 @@ bool SurfaceVoxels::replace(std::size_t s, const std::uint64_t* words) {
     bits_.resize(bits_.size() + kWords, 0);  // within the reserve: no allocation
     index_[s] = id;
   }
-  std::uint64_t* to = &bits_[static_cast<std::size_t>(id) * kWords];
-  if (words == nullptr) {
-    std::fill_n(to, kWords, std::uint64_t{0});
-  } else {
-    std::copy_n(words, kWords, to);
-  }
+  static constexpr std::uint64_t kClear[kWords] = {};
+  std::copy_n(words != nullptr ? words : kClear, kWords,
+              &bits_[static_cast<std::size_t>(id) * kWords]);
   return current_;
 }
 

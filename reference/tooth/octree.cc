@@ -216,8 +216,8 @@ void for_node_runs(Byte* voxels, Byte* masks, int n, int levels, int level, int 
                    F f) {
   const std::size_t e = std::size_t{1} << (levels - level);
   const std::size_t nn = static_cast<std::size_t>(n);
-  Byte* plane = voxels + e * (static_cast<std::size_t>(x) +
-                              nn * (static_cast<std::size_t>(y) + nn * static_cast<std::size_t>(z)));
+  const std::size_t sx = static_cast<std::size_t>(x), sy = static_cast<std::size_t>(y);
+  Byte* plane = voxels + e * (sx + nn * (sy + nn * static_cast<std::size_t>(z)));
   if (e == 8) {  // a brick of 8^3 (the field model's replay): rows of a constant 8 bytes
     for (std::size_t k = 0; k < 8; ++k, plane += nn * nn) {
       for (std::size_t j = 0; j < 8; ++j) f(plane + j * nn, std::size_t{8});

@@ -760,7 +760,9 @@ TEST(ToothBricks, CopiedBackEqualTheRemovalVoxelByVoxel) {
         const int b[3] = {8 * (any(rng) / 8), 8 * (any(rng) / 8), 8 * (any(rng) / 8)};
         for (int k = b[2]; k < std::min(n, b[2] + 8); ++k) {
           for (int j = b[1]; j < std::min(n, b[1] + 8); ++j) {
-            for (int i = b[0]; i < std::min(n, b[0] + 8); ++i) coords.insert(coords.end(), {i, j, k});
+            for (int i = b[0]; i < std::min(n, b[0] + 8); ++i) {
+              coords.insert(coords.end(), {i, j, k});
+            }
           }
         }
       } else {
