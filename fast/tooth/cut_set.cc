@@ -2,6 +2,7 @@
 #include "fast/tooth/cut_set.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <limits>
@@ -138,6 +139,116 @@ std::size_t SurfaceVoxels::count() const {
   std::size_t c = 0;
   for (const std::uint64_t w : bits_) c += static_cast<std::size_t>(std::popcount(w));
   return c;
+}
+
+bool SurfaceVoxels::replace(std::size_t s, const std::uint64_t* words) {
+  std::int32_t id = index_[s];
+  if (id < 0) {
+    if (words == nullptr) return current_;  // an absent brick reads clear already
+    if (id == kNoRoom || bits_.size() + kWords > bits_.capacity()) {
+      current_ = false;
+      return false;
+    }
+    id = static_cast<std::int32_t>(bits_.size() / kWords);
+    bits_.resize(bits_.size() + kWords, 0);  // within the reserve: no allocation
+    index_[s] = id;
+  }
+  static constexpr std::uint64_t kClear[kWords] = {};
+  std::copy_n(words != nullptr ? words : kClear, kWords,
+              &bits_[static_cast<std::size_t>(id) * kWords]);
+  return current_;
+}
+
+namespace {
+
+constexpr std::size_t kBrickCodes = static_cast<std::size_t>(kB) * kB * kB;
+
+}  // namespace
+
+void ToothBricks::reserve(const VoxelTooth& tooth, std::size_t capacity) {
+  level_ = std::max(tooth.octree.levels() - 3, 0);
+  per_axis_ = static_cast<std::size_t>((tooth.grid().n + kB - 1) / kB);
+  node_bytes_ = tooth.octree.node_bytes(level_);
+  capacity_ = capacity;
+  count_ = 0;
+  fits_ = true;
+  entries_ = std::make_unique<Entry[]>(capacity);
+  codes_ = std::make_unique_for_overwrite<std::uint8_t[]>(capacity * kBrickCodes);
+  bits_ = std::make_unique_for_overwrite<std::uint64_t[]>(capacity * SurfaceVoxels::kWords);
+  nodes_ = std::make_unique_for_overwrite<std::uint8_t[]>(capacity * node_bytes_);
+}
+
+bool ToothBricks::take(const VoxelTooth& tooth, const SurfaceVoxels& surface,
+                       std::span<const std::size_t> removed, std::span<std::uint8_t> marks) {
+  count_ = 0;
+  fits_ = true;
+  const VoxelGrid& grid = tooth.grid();
+  const std::size_t n = static_cast<std::size_t>(grid.n);
+  // marks[s]: 1 a face neighbour's brick (codes and bits), 2 a removed voxel's (and its node).
+  // The slots listed in entries_ are the marked ones (a slot past the capacity is not marked).
+  const auto mark = [&](const int u[3], std::uint8_t what) {
+    const std::size_t s = surface.slot(u[0] / kB, u[1] / kB, u[2] / kB);
+    if (marks[s] == 0) {
+      if (count_ == capacity_) {
+        fits_ = false;
+        return;
+      }
+      entries_[count_++].slot = static_cast<std::uint32_t>(s);
+    }
+    marks[s] = std::max(marks[s], what);
+  };
+  for (const std::size_t v : removed) {
+    const int c[3] = {static_cast<int>(v % n), static_cast<int>((v / n) % n),
+                      static_cast<int>(v / (n * n))};
+    mark(c, 2);
+    for (int f = 0; f < 6; ++f) {  // the face neighbours in another brick
+      int u[3] = {c[0], c[1], c[2]};
+      const int a = face_axis(f);
+      u[a] += face_sign(f);
+      if (!grid.inside(u[0], u[1], u[2]) || u[a] / kB == c[a] / kB) continue;
+      mark(u, 1);
+    }
+    if (!fits_) break;
+  }
+  for (std::size_t e = 0; e < count_; ++e) {
+    Entry& entry = entries_[e];
+    std::uint8_t& m = marks[entry.slot];
+    entry.node = m == 2;
+    m = 0;
+    if (!fits_) continue;  // the marks cleared only
+    const std::uint8_t* codes = tooth.codes.brick(entry.slot);  // the same slots as the bits'
+    entry.codes = codes != nullptr;
+    if (entry.codes) std::copy_n(codes, kBrickCodes, &codes_[e * kBrickCodes]);
+    const std::uint64_t* bits = surface.brick(entry.slot);
+    entry.bits = bits != nullptr;
+    if (entry.bits) {
+      std::copy_n(bits, SurfaceVoxels::kWords, &bits_[e * SurfaceVoxels::kWords]);
+    }
+    if (entry.node) {
+      const std::array<int, 3> b = brick_of(entry.slot);
+      tooth.octree.save_node(level_, b[0], b[1], b[2], &nodes_[e * node_bytes_]);
+    }
+  }
+  if (!fits_) count_ = 0;
+  return fits_;
+}
+
+bool ToothBricks::apply(VoxelTooth& tooth, SurfaceVoxels& surface) const {
+  bool stored = true;
+  for (std::size_t e = 0; e < count_; ++e) {
+    const Entry& entry = entries_[e];
+    stored = tooth.codes.replace_brick(entry.slot,
+                                       entry.codes ? &codes_[e * kBrickCodes] : nullptr) &&
+             stored;
+    stored = surface.replace(entry.slot,
+                             entry.bits ? &bits_[e * SurfaceVoxels::kWords] : nullptr) &&
+             stored;
+    if (entry.node) {
+      const std::array<int, 3> b = brick_of(entry.slot);
+      tooth.octree.load_node(level_, b[0], b[1], b[2], &nodes_[e * node_bytes_]);
+    }
+  }
+  return stored;
 }
 
 SurfaceCutSet::SurfaceCutSet(const VoxelTooth& tooth, double rho, SignedDistanceFn sd)

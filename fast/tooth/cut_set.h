@@ -94,8 +94,10 @@
 // sized by the constructor from the tip's radius and the grid).
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -126,6 +128,9 @@ class SurfaceVoxels {
   // bit is set; an empty voxel is skipped (nothing changes). 6 grid reads per voxel instead of 49,
   // and no neighbour read twice. Same return as update(). No allocation.
   bool remove(VoxelTooth& tooth, std::span<const std::size_t> removed);
+  // Slot s's 8 words become `words` (as brick() gives them; null: all clear), taking a brick from
+  // the reserve if it has none and a bit is set. Same return as update(). No allocation.
+  bool replace(std::size_t s, const std::uint64_t* words);
   bool current() const { return current_; }
 
   bool exposed(int i, int j, int k) const;
@@ -161,6 +166,60 @@ class SurfaceVoxels {
   std::vector<std::uint64_t> bits_;   // brick id * 8 + word; capacity: the reserve
 };
 
+// The 8^3 bricks a batch of removals changed on one tooth (the field worker's, fast/tooth/field.h),
+// copied so that another tooth in the state the first had before the batch (the servo's) takes the
+// state that removing the same voxels one by one (SurfaceVoxels::remove) leaves, by copying them
+// back: no code, bit or mask is re-derived on the second tooth (issue #30, stop 49). A removal
+// changes the voxel's code and bit and those of its six face neighbours (neighbors.h), and in the
+// octree the voxel and the masks of its ancestors only: so the bricks holding a removed voxel or a
+// face neighbour of one (the brick slots of SparseNeighborCodes and SurfaceVoxels, the same
+// numbering) hold every changed code and bit, and the octree nodes of the bricks holding a removed
+// voxel (FullOctree::save_node at the bricks' level: the brick's voxels, its subtree's masks and
+// its ancestors') every changed voxel and mask. Every other byte of the two teeth was equal before
+// and is untouched by both, so after apply() the two are equal byte for byte (codes by slot, bits
+// by slot, voxels, masks; tests/fast/field_test.cc).
+class ToothBricks {
+ public:
+  ToothBricks() = default;
+  // Room for `capacity` bricks of `tooth` (allocates; the storage is written only as it is used).
+  void reserve(const VoxelTooth& tooth, std::size_t capacity);
+  // After `removed` was removed from `tooth` (its codes re-encoded) and `surface` updated: copies
+  // the bricks (class comment). `marks`: one byte per brick slot (SurfaceVoxels::slot), all 0
+  // (left so). Returns false, holding no brick (fits() false), when they are more than
+  // capacity(). No allocation.
+  bool take(const VoxelTooth& tooth, const SurfaceVoxels& surface,
+            std::span<const std::size_t> removed, std::span<std::uint8_t> marks);
+  // Copies them into `tooth` and `surface`, in the state take()'s had before the removal. Returns
+  // false if a code or bit brick could not be taken there (impossible while the tooth only loses
+  // voxels: the reserves are the same). No allocation.
+  bool apply(VoxelTooth& tooth, SurfaceVoxels& surface) const;
+  bool fits() const { return fits_; }
+  std::size_t size() const { return count_; }
+  std::size_t capacity() const { return capacity_; }
+
+ private:
+  struct Entry {
+    std::uint32_t slot = 0;
+    bool codes = false, bits = false;  // whether the slot had a brick of codes, of bits
+    bool node = false;                 // whether it held a removed voxel (its node copied)
+  };
+  // Slot s's brick coordinates, its octree node's at level_ (a grid below 8^3: the root).
+  std::array<int, 3> brick_of(std::size_t s) const {
+    return {static_cast<int>(s % per_axis_), static_cast<int>((s / per_axis_) % per_axis_),
+            static_cast<int>(s / (per_axis_ * per_axis_))};
+  }
+
+  int level_ = 0;              // the bricks' octree level: max(L - 3, 0)
+  std::size_t per_axis_ = 0;   // brick slots per axis
+  std::size_t node_bytes_ = 0;
+  std::size_t capacity_ = 0, count_ = 0;
+  bool fits_ = true;
+  std::unique_ptr<Entry[]> entries_;
+  std::unique_ptr<std::uint8_t[]> codes_;   // 512 per entry
+  std::unique_ptr<std::uint64_t[]> bits_;   // SurfaceVoxels::kWords per entry
+  std::unique_ptr<std::uint8_t[]> nodes_;   // node_bytes_ per entry
+};
+
 // The cut set and the material of the surface-proxy contact at g (header comment) for a tip of
 // radius rho on `tooth` (which must outlive it; its changes reported to update()).
 class SurfaceCutSet {
@@ -181,6 +240,8 @@ class SurfaceCutSet {
   void remove(VoxelTooth& tooth, std::span<const std::size_t> removed) {
     surface_.remove(tooth, removed);
   }
+  // The same removal as copies of another tooth's bricks (ToothBricks::apply).
+  void replace(VoxelTooth& tooth, const ToothBricks& bricks) { bricks.apply(tooth, surface_); }
 
   // The nearest voxel into *nearest and, if `shares` is not null, collect_cut_set(tooth, contact,
   // g, rho, ...)'s members appended to `shares` and `voxels`. Returns false, touching nothing,
@@ -276,6 +337,8 @@ class CutSetProvider : public dentsim::ToothContactProvider {
   void remove_voxels(VoxelTooth& tooth, std::span<const std::size_t> removed) {
     cut_.remove(tooth, removed);
   }
+  // The same from the bricks another tooth's removal changed (ToothBricks::apply).
+  void replace_bricks(VoxelTooth& tooth, const ToothBricks& bricks) { cut_.replace(tooth, bricks); }
 
  private:
   SurfaceCutSet cut_;

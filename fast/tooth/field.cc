@@ -554,6 +554,9 @@ constexpr int kWorkerSlack = 64;
 // The copy-on-write pool, per batch in flight (L + 2: the batches of the last L ticks, the one
 // being edited, and the one whose retired bricks wait for the next publish): 512 bricks (1.5 MB).
 constexpr std::size_t kPoolPerBatch = 512;
+// The 8^3 bricks of the tooth one batch's removal may change (ToothBricks: ~1.2 kB each at 512^3,
+// written only as used).
+constexpr std::size_t kReplayBricks = 256;
 
 }  // namespace
 
@@ -578,11 +581,13 @@ FieldEditWorker::FieldEditWorker(SampledField* field, FieldBricks* bricks,
       dentsim::ToothContactProvider::cut_candidates_capacity(tooth_.grid(), tip.radius));
   shares_.reserve(kContactCapacity);
   share_voxels_.reserve(kContactCapacity);
+  brick_marks_.assign(tooth_.codes.slot_count(), 0);
   ring_.resize(static_cast<std::size_t>(latency + kWorkerSlack));
   const std::size_t total = bricks_->brick_count();
   for (Batch& b : ring_) {
     b.voxels.reserve(std::min(batch_capacity, kContactCapacity));
     b.cut.removed.reserve(kContactCapacity);
+    b.cut.bricks.reserve(tooth_, kReplayBricks);
     b.swaps.reserve(total);
   }
   retired_.reserve(total);
@@ -751,6 +756,7 @@ void FieldEditWorker::drill(Batch& b) {
     dentsim::drill_tick(shares_, share_voxels_, tip_, params_, cut.T, &tooth_, &drill_state_,
                         &c.removed);
     if (!c.removed.empty()) cut_set_.update(c.removed);
+    c.bricks.take(tooth_, cut_set_.surface(), c.removed, brick_marks_);
     const std::size_t fit = std::min({c.removed.size(), b.limit, b.voxels.capacity()});
     b.voxels.assign(c.removed.begin(), c.removed.begin() + static_cast<std::ptrdiff_t>(fit));
     b.dropped = static_cast<long>(c.removed.size() - fit);
@@ -820,15 +826,21 @@ bool FieldContactProvider::room() const {
 }
 
 void FieldContactProvider::done(const FieldEditWorker::Cut& cut) {
-  // The worker's drilling of tick cut.cut.tick on the servo's grid: the same voxels removed in
-  // the same order (drill_tick's removal: the octree, then the codes), the drill state's figures,
-  // the drill log's record (the reference's publish_field_edits).
+  // The worker's drilling of tick cut.cut.tick on the servo's grid: the state the same voxels
+  // removed in the same order leave (drill_tick's removal: the octree, then the codes), the drill
+  // state's figures, the drill log's record (the reference's publish_field_edits).
   if (!cut.collected) return;
   const std::array<std::int64_t, kMaterialCount> removed_before = drill_state_.removed_voxels;
   const bool pulp_before = drill_state_.pulp_exposed;
-  // The octree, the codes and the surface bits at once, from the codes held (the state of
-  // remove_voxel and reencode_local for each, then surface_removed: SurfaceVoxels::remove).
-  remove_voxels(tooth_, cut.removed);
+  // The octree, the codes and the surface bits: the worker's bricks the removal changed, copied
+  // (the servo's tooth was the worker's before it); else, from the codes held, the state of
+  // remove_voxel and reencode_local for each, then surface_removed (SurfaceVoxels::remove).
+  if (cut.bricks.fits()) {
+    replace_bricks(tooth_, cut.bricks);
+  } else {
+    remove_voxels(tooth_, cut.removed);
+    ++replay_shortfalls_;
+  }
   removed_.insert(removed_.end(), cut.removed.begin(), cut.removed.end());  // within capacity
   drill_state_.removed_voxels = cut.removed_voxels;
   drill_state_.pulp_exposed = cut.pulp_exposed;

@@ -276,8 +276,12 @@ bool edit_field_for_removed_voxels(SampledField* field, FieldBricks* bricks,
 // drilling), subtracts the removed voxels from `field` and from the bricks' copies (FieldBricks
 // copy-on-write: the servo keeps reading the published bricks), and marks the batch done.
 // publish(t), at the start of tick t's contacts(), swaps in the bricks of every batch of tick
-// <= t - L and hands each batch's drilling (Cut: the removed voxels, the drill state's counts)
-// to the servo's sink, which removes the same voxels from the servo's grid and logs the tick.
+// <= t - L and hands each batch's drilling (Cut: the removed voxels, the drill state's counts,
+// the 8^3 bricks of the worker's tooth the removal changed) to the servo's sink, which copies
+// those bricks into the servo's tooth (its grid, octree, codes and surface bits: the state the
+// same removal voxel by voxel leaves, without re-deriving it; ToothBricks, fast/tooth/cut_set.h)
+// and logs the tick. A removal that changed more bricks than a batch holds (kReplayBricks) is
+// replayed voxel by voxel (SurfaceVoxels::remove; counted: replay_shortfalls).
 // In simulation a due batch that is not done is the servo's to finish:
 // if the worker has not started it, the servo does it itself (the same edit on the same state,
 // so the run is the reference's, bitwise, and repeatable; counted as a takeover, at most one a
@@ -301,6 +305,7 @@ class FieldEditWorker {
     bool collected = false;            // the cut set was not empty (the tick is logged)
     std::uint8_t material = kEmpty;    // the heaviest share's
     std::vector<std::size_t> removed;  // in removal order (drill_tick's)
+    ToothBricks bricks;                // the worker's tooth's bricks the removal changed
     // The drill state's figures right after the removal (the work table stays the worker's).
     std::array<std::int64_t, kMaterialCount> removed_voxels{};
     bool pulp_exposed = false, work_table_full = false;
@@ -388,6 +393,7 @@ class FieldEditWorker {
   std::vector<std::size_t> candidates_;  // collect_cut_set's, where cut_set_ cannot answer
   std::vector<Contact> shares_;
   std::vector<std::size_t> share_voxels_;
+  std::vector<std::uint8_t> brick_marks_;  // ToothBricks::take's, one per brick slot
   VoxelDistanceCache cache_;
   FieldEditStats worker_stats_;  // the edit's running counts
   int latency_;
@@ -423,6 +429,8 @@ class FieldContactProvider final : public CutSetProvider, private FieldEditWorke
   }
   double field_value(const Vec3& x) const override;
   std::string set_worker_priority(int priority) override;
+  // Published removals replayed voxel by voxel: more changed bricks than a batch holds (tests).
+  long replay_shortfalls() const { return replay_shortfalls_; }
   // The worker's thread, if any (tests).
   const FieldEditWorker* worker() const { return worker_.get(); }
   FieldEditWorker* worker() { return worker_.get(); }
@@ -447,6 +455,7 @@ class FieldContactProvider final : public CutSetProvider, private FieldEditWorke
   FieldSolid solid_;
   VoxelDistanceCache cache_;
   FieldEditWorker::StandIn stand_in_;  // publish's (the base's takeover, wait and ns counts)
+  long replay_shortfalls_ = 0;
   std::unique_ptr<FieldEditWorker> worker_;  // last: joined before the bricks go
 };
 

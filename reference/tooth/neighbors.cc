@@ -1,5 +1,6 @@
 #include "reference/tooth/neighbors.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -107,6 +108,23 @@ bool SparseNeighborCodes::set(std::size_t v, std::uint8_t c) {
     bricks_.resize(bricks_.size() + kBrickVoxels, 0);  // within the reserve: no allocation
   }
   bricks_[static_cast<std::size_t>(id) * kBrickVoxels + local_of(v)] = c;
+  return true;
+}
+
+bool SparseNeighborCodes::replace_brick(std::size_t s, const std::uint8_t* codes) {
+  std::int32_t& id = index_[s];
+  if (id < 0) {
+    if (codes == nullptr) return true;  // an absent brick reads 0 already
+    if (id == kNoRoom || bricks_.size() + kBrickVoxels > bricks_.capacity()) return false;
+    id = static_cast<std::int32_t>(bricks_.size() / kBrickVoxels);
+    bricks_.resize(bricks_.size() + kBrickVoxels);  // within the reserve: no allocation
+  }
+  std::uint8_t* to = &bricks_[static_cast<std::size_t>(id) * kBrickVoxels];
+  if (codes == nullptr) {
+    std::fill_n(to, kBrickVoxels, std::uint8_t{0});
+  } else {
+    std::copy_n(codes, kBrickVoxels, to);
+  }
   return true;
 }
 

@@ -79,6 +79,18 @@ class SparseNeighborCodes {
   // c != 0. Returns false, storing nothing, when that brick's slot had no solid voxel at
   // construction (no room reserved: a code there cannot arise from removals). No allocation.
   bool set(std::size_t v, std::uint8_t c);
+  // Brick slots (i / 8 + nb (j / 8 + nb (k / 8)), nb = ceil(N / 8)), and slot s's 512 codes (local
+  // index x + 8 (y + 8 z)), null when it holds no brick (all 0). The field model's replay of the
+  // worker's removals copies them (fast/tooth/cut_set.h ToothBricks).
+  std::size_t slot_count() const { return index_.size(); }
+  const std::uint8_t* brick(std::size_t s) const {
+    const std::int32_t id = index_[s];
+    return id < 0 ? nullptr : &bricks_[static_cast<std::size_t>(id) * kBrickVoxels];
+  }
+  // Slot s's codes become `codes` (512 as brick() gives them; null: all 0), taking a brick from
+  // the reserve if it has none. Returns false, storing nothing, when that brick cannot be taken
+  // (as set()). No allocation.
+  bool replace_brick(std::size_t s, const std::uint8_t* codes);
   // Every code as one byte per voxel (tests and the fast tooth's copy; allocates N^3 bytes).
   NeighborCodes dense() const;
   // Bricks in use, and reserved.

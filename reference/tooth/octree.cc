@@ -1,7 +1,9 @@
 #include "reference/tooth/octree.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <string>
 
 #include "reference/core/io.h"
@@ -183,6 +185,81 @@ std::uint8_t FullOctree::remove_voxel(int i, int j, int k) {
     if (mask != 0) break;
   }
   return material;
+}
+
+namespace {
+
+// spread_bits of the bytes 0..255 (morton() of a node's coordinates without the loop).
+constexpr std::array<std::size_t, 256> kSpread8 = [] {
+  std::array<std::size_t, 256> t{};
+  for (std::size_t v = 0; v < 256; ++v) {
+    for (int b = 0; b < 8; ++b) t[v] |= ((v >> b) & 1) << (3 * b);
+  }
+  return t;
+}();
+
+// Copies a run of n bytes (a row of 8 voxels, a mask: one move).
+inline void copy_run(const std::uint8_t* from, std::size_t n, std::uint8_t* to) {
+  if (n == 8) {
+    std::memcpy(to, from, 8);
+  } else if (n == 1) {
+    *to = *from;
+  } else {
+    std::copy_n(from, n, to);
+  }
+}
+
+// A node's state as save_node lays it out, visited in order: f(pointer into the grid's voxels or
+// the masks, count) for each run (the voxels' rows, then the masks' levels).
+template <class Byte, class F>
+void for_node_runs(Byte* voxels, Byte* masks, int n, int levels, int level, int x, int y, int z,
+                   F f) {
+  const std::size_t e = std::size_t{1} << (levels - level);
+  const std::size_t nn = static_cast<std::size_t>(n);
+  const std::size_t sx = static_cast<std::size_t>(x), sy = static_cast<std::size_t>(y);
+  Byte* plane = voxels + e * (sx + nn * (sy + nn * static_cast<std::size_t>(z)));
+  if (e == 8) {  // a brick of 8^3 (the field model's replay): rows of a constant 8 bytes
+    for (std::size_t k = 0; k < 8; ++k, plane += nn * nn) {
+      for (std::size_t j = 0; j < 8; ++j) f(plane + j * nn, std::size_t{8});
+    }
+  } else {
+    for (std::size_t k = 0; k < e; ++k, plane += nn * nn) {
+      for (std::size_t j = 0; j < e; ++j) f(plane + j * nn, e);
+    }
+  }
+  const std::size_t m = kSpread8[x & 255] | (kSpread8[(x >> 8) & 3] << 24) |
+                        ((kSpread8[y & 255] | (kSpread8[(y >> 8) & 3] << 24)) << 1) |
+                        ((kSpread8[z & 255] | (kSpread8[(z >> 8) & 3] << 24)) << 2);
+  // Level l's first node: (8^l - 1) / 7 (internal_node_count).
+  const auto first = [](int l) { return ((std::size_t{1} << (3 * l)) - 1) / 7; };
+  for (int l = level; l < levels; ++l) {
+    const int shift = 3 * (l - level);
+    f(masks + first(l) + (m << shift), std::size_t{1} << shift);
+  }
+  for (int l = level - 1; l >= 0; --l) f(masks + first(l) + (m >> (3 * (level - l))), 1);
+}
+
+}  // namespace
+
+std::size_t FullOctree::node_bytes(int level) const {
+  const std::size_t e = std::size_t{1} << (levels_ - level);
+  return e * e * e + internal_node_count(levels_ - level) + static_cast<std::size_t>(level);
+}
+
+void FullOctree::save_node(int level, int x, int y, int z, std::uint8_t* out) const {
+  for_node_runs(grid_.voxels.data(), masks_.data(), grid_.n, levels_, level, x, y, z,
+                [&](const std::uint8_t* at, std::size_t n) {
+                  copy_run(at, n, out);
+                  out += n;
+                });
+}
+
+void FullOctree::load_node(int level, int x, int y, int z, const std::uint8_t* in) {
+  for_node_runs(grid_.voxels.data(), masks_.data(), grid_.n, levels_, level, x, y, z,
+                [&](std::uint8_t* at, std::size_t n) {
+                  copy_run(in, n, at);
+                  in += n;
+                });
 }
 
 }  // namespace dentsim

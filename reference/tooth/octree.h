@@ -96,6 +96,18 @@ class FullOctree {
   // they become empty. Returns the material it held (kEmpty if it was already empty: no change).
   std::uint8_t remove_voxel(int i, int j, int k);
 
+  // A node's state as bytes (the field model's replay of the worker's removals on the servo's
+  // tooth, fast/tooth/cut_set.h ToothBricks): the voxels of its box (edge e = 2^(L - level); x
+  // fastest, then y, then z), the masks of its subtree (levels level..L-1, each level's e'^3 nodes
+  // in Morton order, contiguous there), then its ancestors' masks (levels level-1 down to 0).
+  // node_bytes(level) of them; level in [0, L].
+  std::size_t node_bytes(int level) const;
+  void save_node(int level, int x, int y, int z, std::uint8_t* out) const;
+  // Node (level, x, y, z)'s box, subtree and ancestors take what save_node wrote from an octree of
+  // the same size. Every mask is again that of the definition when, outside the node's box, the
+  // two grids hold the same voxels. No allocation, no throw.
+  void load_node(int level, int x, int y, int z, const std::uint8_t* in);
+
  private:
   VoxelGrid grid_;
   int levels_ = 0;

@@ -18,6 +18,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -694,6 +696,163 @@ bool same(const Contact& a, const Contact& b) {
          a.material == b.material;
 }
 
+// ---- The replay of the worker's removals (fast/tooth/cut_set.h ToothBricks) -------------------
+
+// A grid of n^3 voxels, each solid with probability 3/4 (exposed voxels everywhere: at every
+// brick boundary and on the grid's faces).
+VoxelGrid speckled_grid(int n, std::uint64_t seed) {
+  VoxelGrid grid(n, Vec3::Zero(), 1e-4);
+  std::mt19937_64 rng(seed);
+  for (std::uint8_t& v : grid.voxels) v = rng() % 4 == 0 ? kEmpty : kEnamel;
+  return grid;
+}
+
+// How many voxels, masks, codes and surface bits of `a` differ from `b`'s.
+long tooth_differs(const VoxelTooth& a, const fast::SurfaceVoxels& sa, const VoxelTooth& b,
+                   const fast::SurfaceVoxels& sb) {
+  const VoxelGrid& g = a.grid();
+  long differ = 0;
+  for (std::size_t v = 0; v < g.voxels.size(); ++v) {
+    differ += a.grid().voxels[v] != b.grid().voxels[v];
+    differ += a.codes.code(v) != b.codes.code(v);
+  }
+  for (std::size_t m = 0; m < a.octree.masks().size(); ++m) {
+    differ += a.octree.masks()[m] != b.octree.masks()[m];
+  }
+  for (int k = 0; k < g.n; ++k) {
+    for (int j = 0; j < g.n; ++j) {
+      for (int i = 0; i < g.n; ++i) differ += sa.exposed(i, j, k) != sb.exposed(i, j, k);
+    }
+  }
+  return differ;
+}
+
+// The field worker's removal copied back (FieldContactProvider::done): a tooth removes random
+// batches voxel by voxel as drill_tick does (remove_voxel, reencode_local; its surface bits by
+// update()) and ToothBricks::take copies the bricks that changed; a second tooth, equal before,
+// applies them. After every batch the second tooth's voxels, every octree mask, every code and
+// every bit equal the first's, its masks those rebuilt from its voxels and its codes those
+// re-encoded from them; take and apply allocate nothing and leave the marks clear. The batches:
+// random voxels, voxels at brick boundaries (a coordinate 7 or 8 mod 8) and on the grid's faces,
+// and whole bricks (their node and ancestors' masks emptied), at 4^3 (a grid inside one brick,
+// the root's node), 8^3 (one brick) and 32^3.
+TEST(ToothBricks, CopiedBackEqualTheRemovalVoxelByVoxel) {
+  for (const int n : {4, 8, 32}) {
+    const VoxelTooth start(speckled_grid(n, 49 + static_cast<std::uint64_t>(n)));
+    VoxelTooth worker = start, servo = start;
+    fast::SurfaceVoxels s_worker(worker), s_servo(servo);
+    fast::ToothBricks bricks;
+    bricks.reserve(worker, 512);
+    std::vector<std::uint8_t> marks(worker.codes.slot_count(), 0);
+    std::mt19937_64 rng(4900 + static_cast<std::uint64_t>(n));
+    std::uniform_int_distribution<int> any(0, n - 1), edge(0, 1);
+    const auto boundary = [&] {  // 7 or 8 mod 8 (within the grid), or 0 / n - 1
+      const int b = 8 * static_cast<int>(rng() % static_cast<unsigned>(std::max(1, n / 8)));
+      const int c = b + 7 + edge(rng);
+      return c < n ? c : (edge(rng) == 0 ? 0 : n - 1);
+    };
+    const std::size_t nn = static_cast<std::size_t>(n);
+    long removed = 0, node_batches = 0;
+    for (int batch = 0; batch < 60; ++batch) {
+      std::vector<int> coords;  // i, j, k triples
+      const int kind = batch % 4;
+      if (kind == 3) {  // a whole brick
+        const int b[3] = {8 * (any(rng) / 8), 8 * (any(rng) / 8), 8 * (any(rng) / 8)};
+        for (int k = b[2]; k < std::min(n, b[2] + 8); ++k) {
+          for (int j = b[1]; j < std::min(n, b[1] + 8); ++j) {
+            for (int i = b[0]; i < std::min(n, b[0] + 8); ++i) {
+              coords.insert(coords.end(), {i, j, k});
+            }
+          }
+        }
+      } else {
+        for (int r = 0; r < 40; ++r) {
+          int c[3] = {any(rng), any(rng), any(rng)};
+          if (kind >= 1) c[rng() % 3] = boundary();
+          if (kind == 2) c[rng() % 3] = boundary();
+          coords.insert(coords.end(), {c[0], c[1], c[2]});
+        }
+      }
+      std::vector<std::size_t> gone;
+      for (std::size_t q = 0; q < coords.size(); q += 3) {
+        const int i = coords[q], j = coords[q + 1], k = coords[q + 2];
+        if (worker.octree.remove_voxel(i, j, k) == kEmpty) continue;
+        reencode_local(worker.octree.grid(), i, j, k, &worker.codes);
+        gone.push_back(worker.grid().index(i, j, k));
+      }
+      removed += static_cast<long>(gone.size());
+      ASSERT_TRUE(s_worker.update(worker, gone));
+      {
+        testing::AllocationScope scope;
+        ASSERT_TRUE(bricks.take(worker, s_worker, gone, marks));
+        ASSERT_TRUE(bricks.apply(servo, s_servo));
+        EXPECT_EQ(scope.count(), 0);
+      }
+      EXPECT_EQ(std::count(marks.begin(), marks.end(), 0), static_cast<long>(marks.size()));
+      node_batches += kind == 3 && !gone.empty();
+      ASSERT_EQ(tooth_differs(servo, s_servo, worker, s_worker), 0) << n << "^3, batch " << batch;
+      const FullOctree rebuilt(servo.grid());
+      ASSERT_EQ(rebuilt.masks(), servo.octree.masks()) << n << "^3, batch " << batch;
+      ASSERT_EQ(encode_neighbors(servo.grid()).code, servo.codes.dense().code)
+          << n << "^3, batch " << batch;
+    }
+    EXPECT_TRUE(s_servo.current());
+    EXPECT_GT(removed, static_cast<long>(nn * nn * nn / 8)) << n;
+    EXPECT_GT(node_batches, 0);
+  }
+}
+
+// The batch's bound: a removal whose changed bricks exceed the capacity is refused (fits() false,
+// no brick held, the marks clear, nothing allocated) and the servo replays it voxel by voxel
+// (SurfaceVoxels::remove); one that fits exactly is taken.
+TEST(ToothBricks, ARemovalBeyondTheCapacityIsRefusedWithoutAllocating) {
+  VoxelGrid solid = speckled_grid(32, 7);
+  std::fill(solid.voxels.begin(), solid.voxels.end(), kEnamel);
+  const VoxelTooth start(solid);
+  VoxelTooth worker = start, servo = start;
+  fast::SurfaceVoxels s_worker(worker), s_servo(servo);
+  fast::ToothBricks bricks;
+  bricks.reserve(worker, 2);
+  EXPECT_EQ(bricks.capacity(), 2u);
+  std::vector<std::uint8_t> marks(worker.codes.slot_count(), 0);
+  const auto remove = [&](std::initializer_list<std::array<int, 3>> voxels) {
+    std::vector<std::size_t> gone;
+    for (const auto& c : voxels) {
+      if (worker.octree.remove_voxel(c[0], c[1], c[2]) == kEmpty) continue;
+      reencode_local(worker.octree.grid(), c[0], c[1], c[2], &worker.codes);
+      gone.push_back(worker.grid().index(c[0], c[1], c[2]));
+    }
+    EXPECT_TRUE(s_worker.update(worker, gone));
+    return gone;
+  };
+  // Voxels inside bricks 0 and 1 along x of the solid grid (no face neighbour in another brick).
+  const std::vector<std::size_t> two = remove({{3, 3, 3}, {4, 4, 4}, {11, 3, 3}, {12, 5, 4}});
+  ASSERT_FALSE(two.empty());
+  {
+    testing::AllocationScope scope;
+    EXPECT_TRUE(bricks.take(worker, s_worker, two, marks));
+    EXPECT_EQ(bricks.size(), 2u);
+    EXPECT_TRUE(bricks.apply(servo, s_servo));
+    EXPECT_EQ(scope.count(), 0);
+  }
+  EXPECT_EQ(tooth_differs(servo, s_servo, worker, s_worker), 0);
+  // Three bricks (one more along z), then a voxel at a corner of four.
+  const std::vector<std::size_t> three = remove({{2, 2, 2}, {10, 2, 2}, {2, 2, 20}, {7, 7, 4}});
+  ASSERT_FALSE(three.empty());
+  {
+    testing::AllocationScope scope;
+    EXPECT_FALSE(bricks.take(worker, s_worker, three, marks));
+    EXPECT_FALSE(bricks.fits());
+    EXPECT_EQ(bricks.size(), 0u);
+    EXPECT_EQ(std::count(marks.begin(), marks.end(), 0), static_cast<long>(marks.size()));
+    EXPECT_TRUE(s_servo.remove(servo, three));  // the servo's replay, voxel by voxel
+    EXPECT_EQ(scope.count(), 0);
+  }
+  EXPECT_EQ(tooth_differs(servo, s_servo, worker, s_worker), 0);
+  EXPECT_EQ(servo.octree.masks(), worker.octree.masks());
+}
+
+
 // latency 0: the budget path on the servo thread (both providers); L > 0: the reference's
 // synchronous edit at latency L against the fast provider's worker thread, with the reference
 // field and the fast provider's published bricks compared at every sample every
@@ -864,6 +1023,21 @@ void provider_equals_the_reference(int stride, int latency = 0, Worker worker = 
   }
   EXPECT_EQ(differ, 0);
   EXPECT_EQ(tooth_r.grid().voxels, tooth_f.grid().voxels);
+  // The servo's tooth took the worker's bricks (ToothBricks): its octree, codes and surface bits
+  // are the reference's removal's.
+  EXPECT_EQ(tooth_r.octree.masks(), tooth_f.octree.masks());
+  EXPECT_EQ(tooth_r.codes.dense().code, tooth_f.codes.dense().code);
+  long bits_wrong = 0;
+  for (int k = 0; k < g.n; ++k) {
+    for (int j = 0; j < g.n; ++j) {
+      for (int i = 0; i < g.n; ++i) {
+        bits_wrong += fast_provider.cut_set().surface().exposed(i, j, k) !=
+                      (tooth_r.codes.code(g.index(i, j, k)) != 0);
+      }
+    }
+  }
+  EXPECT_EQ(bits_wrong, 0);
+  EXPECT_EQ(fast_provider.replay_shortfalls(), 0);
   EXPECT_GT(fast_provider.solid().certified(), kFree);  // free space read no sample
   const fast::VoxelDistanceCache& cache = fast_provider.distance_cache();
   std::printf("edit queries: %ld answered by the kept distances, %ld asked; %ld rows read, %ld "
