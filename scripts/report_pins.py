@@ -29,7 +29,8 @@ import tempfile
 MACHINE_DEPENDENT = ("timing_us", "wall_s", "setup_s")
 # What thread scheduling decides (the field edit's worker against the servo thread): never pinned,
 # even when two runs happen to agree (both are 0 on an idle machine).
-SCHEDULING_DEPENDENT = ("field_edit_worker_waits", "field_edit_servo_takeovers")
+SCHEDULING_DEPENDENT = ("field_edit_worker_waits", "field_edit_servo_takeovers",
+                        "field_edit_worker_wakes")
 
 CASES = [
     ("probe", ["probe"]),

@@ -57,6 +57,7 @@ nlohmann::json run_report_json(const Scene& scene, const RunResult& r) {
   j["field_edit_late_publishes"] = r.field_edit_late_publishes;
   j["field_edit_servo_takeovers"] = r.field_edit_servo_takeovers;
   j["field_edit_worker_waits"] = r.field_edit_worker_waits;
+  j["field_edit_worker_wakes"] = r.field_edit_worker_wakes;
   nlohmann::json tj;
   for (const auto& [name, s] : r.timing) {
     tj[name] = {{"median", s.median_us}, {"p99", s.p99_us}, {"max", s.max_us}};

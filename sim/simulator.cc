@@ -804,6 +804,7 @@ void report_tooth(const SceneRig& rig, RunResult& res) {
     res.field_edit_late_publishes = tooth->field_edit_late_publishes();
     res.field_edit_servo_takeovers = tooth->field_edit_servo_takeovers();
     res.field_edit_worker_waits = tooth->field_edit_worker_waits();
+    res.field_edit_worker_wakes = tooth->field_edit_worker_wakes();
     res.field_edit_stand_in_ns = tooth->field_edit_stand_in_ns();
   }
   res.drill_log = contacts.drill_log();

@@ -150,6 +150,10 @@ struct RunResult {
   // The same, simulation: field edits the servo waited for at their tick t + L because the worker
   // was editing them. report.json field_edit_worker_waits.
   long field_edit_worker_waits = 0;
+  // The same, fast pipeline: hand-overs of a cut that found the edit worker asleep and woke it
+  // (a futex wake in the servo's drill stage; thread scheduling decides it). report.json
+  // field_edit_worker_wakes.
+  long field_edit_worker_wakes = 0;
   // The servo tick's wall time summed over the run [ns]: all of it (report.json timing_us "tick")
   // and the servo's own (timing_us "servo_tick": without the field edit's takeovers and waits,
   // work the worker does in real time); their difference is field_edit_stand_in_ns, the

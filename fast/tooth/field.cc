@@ -558,13 +558,22 @@ constexpr std::size_t kPoolPerBatch = 512;
 // written only as used).
 constexpr std::size_t kReplayBricks = 256;
 
+// A spin-wait hint to the core (x86 PAUSE; elsewhere nothing).
+inline void spin_pause() {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#endif
+}
+
 }  // namespace
 
 FieldEditWorker::FieldEditWorker(SampledField* field, FieldBricks* bricks,
                                  const VoxelTooth& tooth, int latency, bool real_time,
                                  std::size_t batch_capacity, const ToolTip& tip,
-                                 const DrillParams& params, const DrillState& state)
-    : field_(field),
+                                 const DrillParams& params, const DrillState& state,
+                                 std::chrono::nanoseconds spin)
+    : spin_(spin),
+      field_(field),
       bricks_(bricks),
       tooth_(tooth),
       cut_set_(tooth_, tip.radius, &fast::signed_distance),
@@ -607,9 +616,16 @@ bool FieldEditWorker::submit(const FieldDrillCut& cut, std::size_t limit) {
   b.cut.cut = cut;
   b.limit = limit;
   ++submitted_here_;
-  submitted_.store(submitted_here_, std::memory_order_release);
-  signal_.fetch_add(1, std::memory_order_release);
-  signal_.notify_one();
+  // Sequentially consistent with the worker's parking (run()): either the worker sees this
+  // signal before it sleeps, or this sees it parked and wakes it. A worker that is editing or
+  // spinning is not woken: the futex wake of a sleeping thread is the dearest step of a drilling
+  // tick (~6 us of the servo's 10 at 128^3 on an idle 2-core VM, docs/benchmarks.md "lead50").
+  submitted_.store(submitted_here_, std::memory_order_seq_cst);
+  signal_.fetch_add(1, std::memory_order_seq_cst);
+  if (parked_.load(std::memory_order_seq_cst)) {
+    signal_.notify_one();
+    ++wakes_;
+  }
   return true;
 }
 
@@ -665,7 +681,14 @@ void FieldEditWorker::run() {
     const int next = done_.load(std::memory_order_acquire);  // every earlier batch is done
     if (submitted_.load(std::memory_order_acquire) <= next ||
         held_.load(std::memory_order_acquire)) {
-      signal_.wait(seen, std::memory_order_acquire);
+      // Nothing to do: watch the signal for the spin window (the servo's next cut comes within a
+      // tick while it drills), then park on it.
+      if (spin_until_signalled(seen)) continue;
+      parked_.store(true, std::memory_order_seq_cst);
+      if (signal_.load(std::memory_order_seq_cst) == seen) {
+        signal_.wait(seen, std::memory_order_acquire);
+      }
+      parked_.store(false, std::memory_order_relaxed);
       continue;
     }
     int unclaimed = next;
@@ -678,6 +701,27 @@ void FieldEditWorker::run() {
     worker_batches_.fetch_add(1, std::memory_order_relaxed);
     done_.store(next + 1, std::memory_order_release);
     done_.notify_all();
+  }
+}
+
+bool FieldEditWorker::spin_until_signalled(int seen) const {
+  if (spin_.count() <= 0) return false;
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point start = Clock::now();
+  Clock::time_point yielded = start;
+  for (;;) {
+    for (int i = 0; i < 64; ++i) {
+      if (signal_.load(std::memory_order_acquire) != seen) return true;
+      spin_pause();
+    }
+    const Clock::time_point now = Clock::now();
+    if (now - start >= spin_) return false;
+    // Every 50 us the core goes to whatever else is ready to run on it (another process, the
+    // view): the spin only takes time nobody else wants.
+    if (now - yielded >= std::chrono::microseconds(50)) {
+      sched_yield();
+      yielded = now;
+    }
   }
 }
 
@@ -810,6 +854,7 @@ void FieldContactProvider::prepare_field_latency(int ticks) {
 void FieldContactProvider::hand_off_field_cut(const FieldDrillCut& cut) {
   // As the reference's: a full ring (a late real-time worker) leaves the tick uncut.
   if (!worker_->submit(cut, field_batch_limit())) ++field_edit_shortfalls_;
+  field_edit_worker_wakes_ = worker_->wakes();
 }
 
 void FieldContactProvider::publish_field_edits(long tick) {

@@ -51,6 +51,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <chrono>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -294,7 +295,10 @@ bool edit_field_for_removed_voxels(SampledField* field, FieldBricks* bricks,
 // edits run one at a time, in order, each on the state the last one left (the tooth's copy, the
 // field, the bricks' pool and table, the kept distances), whichever thread did it; the worker
 // that loses a claim waits for done to pass k. The waits are futex waits on 32-bit atomics
-// (std::atomic<int>::wait: no mutex). Nothing on the servo's side allocates, throws or locks
+// (std::atomic<int>::wait: no mutex). The worker with nothing to do watches the signal for a spin
+// window (`spin`, yielding its core every 50 us) before it parks, and submit() wakes it only when
+// it is parked (a flag both sides access sequentially consistently, so no wake is lost): while
+// the servo drills, its next cut comes within a tick and the servo never pays a wake. Nothing on the servo's side allocates, throws or locks
 // (a takeover included); the worker neither allocates nor throws. The thread is joined by the
 // destructor.
 class FieldEditWorker {
@@ -326,9 +330,13 @@ class FieldEditWorker {
   // `field` and `bricks` (copy-on-write enabled here) must outlive it; `tooth` (the grid before
   // the first cut) and `state` (its drill state) are copied. `batch_capacity`: the most voxels a
   // batch's edit takes. `tip`, `params`: the drilling's.
+  // `spin`: how long the worker watches for the next cut before it parks (0: it parks at once).
+  // The default covers a 1 kHz servo's tick with room: a drilling servo never wakes the worker.
+  static constexpr std::chrono::nanoseconds kDefaultSpin = std::chrono::milliseconds(2);
   FieldEditWorker(SampledField* field, FieldBricks* bricks, const VoxelTooth& tooth, int latency,
                   bool real_time, std::size_t batch_capacity, const ToolTip& tip,
-                  const DrillParams& params, const DrillState& state);
+                  const DrillParams& params, const DrillState& state,
+                  std::chrono::nanoseconds spin = kDefaultSpin);
   ~FieldEditWorker();
   FieldEditWorker(const FieldEditWorker&) = delete;
   FieldEditWorker& operator=(const FieldEditWorker&) = delete;
@@ -360,6 +368,11 @@ class FieldEditWorker {
   // The batches the worker thread edited (the rest of the published ones the servo did); read
   // them with every batch published.
   int worker_batches() const { return worker_batches_.load(std::memory_order_acquire); }
+  // Servo: the submits that found the worker parked and woke it (the rest found it editing or
+  // spinning). Thread scheduling decides it: a figure, not a result.
+  long wakes() const { return wakes_; }
+  // Whether the worker has parked (tests: a submit now wakes it).
+  bool parked() const { return parked_.load(std::memory_order_seq_cst); }
   // Tests: while held, the worker claims no batch (the servo does each when it is due);
   // wait_until_done() blocks until every submitted batch is done (not while held).
   void hold(bool held);
@@ -377,12 +390,16 @@ class FieldEditWorker {
     bool complete = true;
   };
   void run();  // the worker thread
+  // The worker: true as soon as the signal moves from `seen` within the spin window, false when
+  // the window passes first.
+  bool spin_until_signalled(int seen) const;
   // Batch `number`'s drilling and edit, by whichever thread claimed it (the state it edits is one
   // batch's at a time: the claims are in order, each after the last batch is done).
   void edit(Batch& b, int number);
   // The drilling of b's cut on tooth_ (into b.cut and b.voxels).
   void drill(Batch& b);
 
+  std::chrono::nanoseconds spin_;
   SampledField* field_;
   FieldBricks* bricks_;
   VoxelTooth tooth_;  // the worker's: the grid after the batches drilled so far
@@ -407,6 +424,8 @@ class FieldEditWorker {
   std::atomic<int> signal_{0};  // bumped by submit(), hold() and the destructor (wakes the worker)
   std::atomic<int> worker_batches_{0};
   std::atomic<bool> stop_{false}, held_{false};
+  std::atomic<bool> parked_{false};  // the worker is (about to be) asleep on signal_
+  long wakes_ = 0;                   // the servo's
   std::thread thread_;
 };
 

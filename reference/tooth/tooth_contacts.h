@@ -237,6 +237,9 @@ class ToothContactProvider : public ToothProviderBase {
   // servo's thread, which a real-time servo never does (0 here, where the servo's publish is the
   // specification's, not a stand-in; a simulated run's servo_tick leaves it out, sim/simulator.h).
   long field_edit_worker_waits() const { return field_edit_worker_waits_; }
+  // Cuts whose hand-over found the fast provider's worker asleep and woke it (a futex wake on the
+  // servo's thread; the rest found it editing or watching for the next cut; 0 here).
+  long field_edit_worker_wakes() const { return field_edit_worker_wakes_; }
   long field_edit_stand_in_ns() const { return field_edit_stand_in_ns_; }
   // The room collect_cut_set's candidates need for a bur of radius rho on `grid` (allocated once
   // at setup, so that the query never grows them in the tick).
@@ -295,6 +298,7 @@ class ToothContactProvider : public ToothProviderBase {
   long field_edit_late_publishes_ = 0;
   long field_edit_servo_takeovers_ = 0;
   long field_edit_worker_waits_ = 0;
+  long field_edit_worker_wakes_ = 0;
   long field_edit_stand_in_ns_ = 0;
 
  private:

@@ -25,6 +25,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <random>
+#include <thread>
 #include <vector>
 
 #include "fast/tooth/sdf.h"
@@ -1082,6 +1083,47 @@ TEST(FastFieldProvider, TakeoversMixedWithWorkerBatchesEqualTheReferenceEditAt5)
 }
 TEST(FastFieldProvider, TakeoversMixedWithWorkerBatchesEqualTheReferenceAtStride2) {
   provider_equals_the_reference(2, ToothContactProvider::kFieldEditLatency, Worker::kMixed);
+}
+// How the servo hands a cut to the worker (fast/tooth/field.h FieldEditWorker): the worker watches
+// for the next cut for its spin window before it parks, and submit() wakes it only when it has
+// parked. With a window longer than the test the worker never parks, and no hand-over pays a wake;
+// with none, every hand-over to the parked worker wakes it exactly once, and the worker does the
+// batch (a lost wake would leave wait_until_done() blocked: the test would time out).
+TEST(FastFieldWorker, TheServoWakesTheWorkerOnlyWhenItHasParked) {
+  const VoxelGrid g = sphere_grid();
+  const VoxelTooth tooth(g);
+  const SampledField field0 = sphere_field(g);
+  DrillParams drill;
+  drill.cutting_coefficient = 10.0;
+  const ToolTip tip{kRho, Vec3::Zero()};
+  // Cuts far outside the tooth (nothing to remove: the hand-over alone).
+  FieldDrillCut cut;
+  cut.g = kCentre + Vec3(0, 0, 2 * kR);
+  cut.T = kT;
+  constexpr int kCuts = 40;
+  for (const std::chrono::nanoseconds spin :
+       {std::chrono::nanoseconds(0), std::chrono::nanoseconds(std::chrono::hours(1))}) {
+    SampledField field = field0;
+    fast::FieldBricks bricks(field, 0);
+    fast::FieldEditWorker worker(&field, &bricks, tooth, ToothContactProvider::kFieldEditLatency,
+                                 false, ToothContactProvider::kFieldEditQueue, tip, drill,
+                                 make_drill_state(tooth), spin);
+    for (int k = 0; k < kCuts; ++k) {
+      if (spin.count() == 0) {
+        while (!worker.parked()) std::this_thread::yield();  // parks as soon as it is idle
+      }
+      const long before = worker.wakes();
+      cut.tick = k;
+      ASSERT_TRUE(worker.submit(cut, ToothContactProvider::kFieldEditQueue)) << k;
+      EXPECT_EQ(worker.wakes() - before, spin.count() == 0 ? 1 : 0) << k;
+      worker.wait_until_done();
+    }
+    EXPECT_EQ(worker.worker_batches(), kCuts);  // every batch the worker's (none published)
+    EXPECT_EQ(worker.wakes(), spin.count() == 0 ? kCuts : 0);
+    if (spin.count() > 0) {
+      EXPECT_FALSE(worker.parked());
+    }
+  }
 }
 // The same at stride 2 (a sample at every other voxel centre): the edit at stride k (reference/
 // tooth/field_edit_core.h) is one code for both twins, so the twins agree bit for bit again.
