@@ -48,6 +48,7 @@ set_target_properties(dentsim_hd_emulator PROPERTIES EXPORT_NAME hd_emulator)
 
 install(TARGETS ${dentsim_exported_libs} EXPORT dentsimTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+        LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/dentsim)
 # dentsim::dentsim, the command, for consumers that run it ($<TARGET_FILE:dentsim::dentsim>).
 install(TARGETS dentsim_volume_libs dentsim_hd_emulator dentsim EXPORT dentsimTargets
