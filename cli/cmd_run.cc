@@ -43,8 +43,9 @@ struct RunCliOptions {
   RunViewOptions view;
   std::string pipeline = "fast";
   std::string inject_fault;
-  std::string record;  // --record FILE
-  std::string device;  // "" = the scene's device.type
+  std::string record;      // --record FILE
+  std::string tick_times;  // --tick-times FILE
+  std::string device;      // "" = the scene's device.type
   std::string hd_library;
   std::string hd_loop = "callback";
   bool no_skip = false;  // --no-skip
@@ -302,8 +303,8 @@ void run(const RunCliOptions& o) {
   const InjectedFault fault = o.inject_fault.empty()
                                   ? InjectedFault{}
                                   : parse_injected_fault(o.inject_fault, "--inject-fault");
-  check_outputs({{"--record", o.record}}, {{"--out", o.out}, {"--view-shots", o.view.shots_dir}},
-                {{"scene", o.scene}});
+  check_outputs({{"--record", o.record}, {"--tick-times", o.tick_times}},
+                {{"--out", o.out}, {"--view-shots", o.view.shots_dir}}, {{"scene", o.scene}});
   const Scene scene =
       o.tick_hz > 0.0
           ? load_scene_patched(o.scene, {{"tick_hz", o.tick_hz}},
@@ -329,6 +330,7 @@ void run(const RunCliOptions& o) {
   ro.duration_override = o.duration;
   ro.log_every = o.log_every;
   ro.record_path = o.record;
+  ro.tick_times_path = o.tick_times;
   ro.device = o.device;
   ro.hd_library = o.hd_library;
   ro.hd_loop = o.hd_loop;
@@ -473,6 +475,10 @@ void setup_run(CLI::App& app) {
   sub->add_option("--record", o->record,
                   "Record every tick's device sample, command and contact count to FILE (a "
                   "session for `dentsim replay`; kept up to a fault)");
+  sub->add_option("--tick-times", o->tick_times,
+                  "Write one CSV row per tick to FILE: the stages' and the device simulation's "
+                  "times [us], contacts, voxels removed, and the loop thread's page faults and "
+                  "context switches over the tick (diagnosis of the tick's tail)");
   sub->add_flag("--force", o->force,
                 "Run a scene that its method's stability conditions refuse (an experiment; the "
                 "supervisor still ends a diverging run in a named fault, sim/scene_stability.h)");

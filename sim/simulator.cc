@@ -1,5 +1,6 @@
 #include "sim/simulator.h"
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -8,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <numbers>
 #include <thread>
@@ -386,6 +388,7 @@ void check_loop_options(const Scene& scene, const RunOptions& options) {
     const char* why = options.fault.kind != InjectedFault::kNone ? "--inject-fault wraps"
                       : options.observer != nullptr              ? "the view runs on"
                       : options.realtime                         ? "--realtime paces"
+                      : !options.tick_times_path.empty()         ? "--tick-times counts on"
                                                                  : nullptr;
     if (why != nullptr) {
       throw InputError(std::string("with --device hdapi the tick runs in the vendor's callback (") +
@@ -483,6 +486,21 @@ void place_worker_below_scheduler(SceneRig& rig) {
   if (!why.empty()) std::fprintf(stderr, "dentsim run: warning: %s\n", why.c_str());
 }
 
+// What the loop thread's kernel counted over one tick's loop step (RunOptions::tick_times_path).
+struct StepCounts {
+  long minor_faults = 0;
+  long voluntary_switches = 0;
+  long involuntary_switches = 0;
+  long removed_voxels = 0;  // the tick's drilling's (ToothProviderBase::last_removed)
+};
+
+// The calling thread's rusage (RUSAGE_THREAD).
+rusage thread_usage() {
+  rusage u{};
+  getrusage(RUSAGE_THREAD, &u);
+  return u;
+}
+
 // The measurements of a scene run, tick by tick, whichever thread ran the tick (run_direct's loop,
 // or the vendor's scheduler callback: device/callback_loop.h), and the session recorder's feed.
 struct RunMeasurements {
@@ -495,6 +513,10 @@ struct RunMeasurements {
         n_ticks(n_ticks_in),
         truth(rig_in.backend == nullptr) {
     for (auto& v : stage_us) v.reserve(n_ticks);
+    if (!options.tick_times_path.empty()) {
+      tick_counts.reserve(static_cast<std::size_t>(std::max(0L, n_ticks)));
+      tick_contacts.reserve(static_cast<std::size_t>(std::max(0L, n_ticks)));
+    }
     res.series.reserve(n_ticks / std::max(1, options.log_every) + 1);
     res.quiet_series.tick_s = rig.tick;
     res.quiet_series.reserve(static_cast<std::size_t>(std::max(0L, n_ticks)) + 1);
@@ -548,6 +570,10 @@ struct RunMeasurements {
     stage_us[kStageCount + 3].push_back(1e-3 * stand_in_ns);
     res.tick_ns_total += tick_ns;
     res.servo_tick_ns_total += tick_ns - stand_in_ns;
+    if (!options.tick_times_path.empty()) {
+      tick_counts.push_back(step_counts);
+      tick_contacts.push_back(rec.contacts);
+    }
     return tick_ns;
   }
 
@@ -657,6 +683,8 @@ struct RunMeasurements {
     res.rendered_stiffness_n_per_m = sum_dd > 0.0 ? sum_fd / sum_dd : 0.0;
     res.hand_work_j = hand_work;
     res.observer_rms_error_n = res.ticks > 0 ? std::sqrt(sum_obs2 / res.ticks) : 0.0;
+    // Before the statistics, which sort the times in place.
+    if (!options.tick_times_path.empty()) write_tick_times();
     for (int s = 0; s < kStageCount; ++s) {
       res.timing.emplace_back(tick_stage_name(s), stats_of(stage_us[s]));
     }
@@ -664,6 +692,25 @@ struct RunMeasurements {
     res.timing.emplace_back("device_simulation", stats_of(stage_us[kStageCount + 1]));
     res.timing.emplace_back("servo_tick", stats_of(stage_us[kStageCount + 2]));
     res.timing.emplace_back("field_edit_stand_in", stats_of(stage_us[kStageCount + 3]));
+  }
+
+  // RunOptions::tick_times_path: one row per measured tick.
+  void write_tick_times() const {
+    std::ofstream f(options.tick_times_path);
+    if (!f) throw InputError("cannot write " + options.tick_times_path);
+    f.precision(12);  // every ns of the times
+    f << "k";
+    for (int s = 0; s < kStageCount; ++s) f << ',' << tick_stage_name(s) << "_us";
+    f << ",tick_us,device_simulation_us,servo_tick_us,field_edit_stand_in_us,contacts,"
+         "removed_voxels,minor_faults,voluntary_switches,involuntary_switches\n";
+    for (std::size_t k = 0; k < tick_counts.size(); ++k) {
+      f << k;
+      for (const std::vector<double>& us : stage_us) f << ',' << us[k];
+      const StepCounts& c = tick_counts[k];
+      f << ',' << tick_contacts[k] << ',' << c.removed_voxels << ',' << c.minor_faults << ','
+        << c.voluntary_switches << ',' << c.involuntary_switches << '\n';
+    }
+    if (!f) throw InputError("cannot write " + options.tick_times_path);
   }
 
   const Scene& scene;
@@ -681,6 +728,11 @@ struct RunMeasurements {
   std::unique_ptr<SessionWriter> recorder;
   DeviceSample rec_sample;
   VecX rec_tau;
+  // RunOptions::tick_times_path: the current step's counts (set by the loop before consume) and
+  // every measured tick's, with its contact count.
+  StepCounts step_counts;
+  std::vector<StepCounts> tick_counts;
+  std::vector<int> tick_contacts;
 };
 
 // Where the run's ticks go: from t_begin (the device clock at start) for the duration, at most
@@ -752,9 +804,12 @@ double run_direct(SceneRig& rig, RunMeasurements& m, const RunSpan& span, Realti
   // thread between ticks): each tick's is the difference.
   const ToothContactProvider* provider = rig.tooth_provider;
   long stand_in_seen = 0;
+  const bool count_steps = !m.options.tick_times_path.empty();
+  rusage usage_before{};
   for (long k = 0; !loop.faulted() && k < span.max_ticks; ++k) {
     if (!truth && loop.sample().t - span.t_begin >= span.duration - 0.5 * T) break;
     if (pacer) pacer->wait_next();
+    if (count_steps) usage_before = thread_usage();
     const auto t0 = std::chrono::steady_clock::now();
     if (truth) q_true_prev = device.true_q();
     const DeviceSample& in = loop.sample();
@@ -766,6 +821,13 @@ double run_direct(SceneRig& rig, RunMeasurements& m, const RunSpan& span, Realti
     const double step_us = 1e-3 * std::chrono::duration_cast<std::chrono::nanoseconds>(
                                       std::chrono::steady_clock::now() - t0)
                                       .count();
+    if (count_steps) {
+      const rusage after = thread_usage();
+      m.step_counts.minor_faults = after.ru_minflt - usage_before.ru_minflt;
+      m.step_counts.voluntary_switches = after.ru_nvcsw - usage_before.ru_nvcsw;
+      m.step_counts.involuntary_switches = after.ru_nivcsw - usage_before.ru_nivcsw;
+      m.step_counts.removed_voxels = static_cast<long>(rig.contacts->last_removed().size());
+    }
     // Hand port: the hand's joint torques (averaged over the tick) times the true joint motion.
     // The motors' true work: the torque applied over the tick times the same true motion.
     if (truth) {
@@ -848,6 +910,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   ClosedLoop& loop = *rig->loop;
 
   const long n_ticks = static_cast<long>(std::ceil(duration / T));
+  // The drill log's pages before the first tick, not in the ticks that fill them (issue #30).
+  if (rig->contacts != nullptr && rig->contacts->drills()) {
+    rig->contacts->prefault_drill_log(static_cast<std::size_t>(std::max(0L, n_ticks)));
+  }
   RunMeasurements measurements(scene, options, *rig, res, n_ticks);
   const auto wall_start = std::chrono::steady_clock::now();
   res.setup_s = std::chrono::duration<double>(wall_start - setup_start).count();

@@ -82,6 +82,12 @@ struct RunOptions {
   // (sim/session_record.h; the context holds the scene's JSON and the pipeline, so that
   // `dentsim replay` can rebuild the environment). The file is complete up to a fault.
   std::string record_path;
+  // Non-empty: write one CSV row per tick to this file after the run (the tick's tail, issue #30):
+  // the stages' times, the tick's and the device simulation's [us], the tick's contacts and
+  // removed voxels, and the loop thread's minor page faults and voluntary / involuntary context
+  // switches over the tick's loop step (getrusage, read outside the timed step). The simulated
+  // device's own loop only (not with an hdapi scheduler callback).
+  std::string tick_times_path;
   // Called every ~1 % of the run with the fraction done (progress bar).
   std::function<void(double)> progress;
   // Called once per tick at the end of the loop body, on the loop's thread (sim/tick_observer.h;

@@ -45,6 +45,12 @@ ToothProviderBase::ToothProviderBase(const VoxelGrid& grid, ToolTip tip, double 
   removed_.reserve(kContactCapacity);
 }
 
+void ToothProviderBase::prefault_drill_log(std::size_t records) {
+  if (!drill_log_.empty()) return;  // the appended records are the run's
+  drill_log_.resize(std::min(records, drill_log_.capacity()));
+  drill_log_.clear();
+}
+
 std::size_t ToothProviderBase::begin_query(std::vector<Contact>& out) {
   ++ticks_;
   out.clear();

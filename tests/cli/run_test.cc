@@ -198,4 +198,35 @@ TEST(RunCli, RealtimeRunReportsServoTimingStatistics) {
   EXPECT_EQ(granted, c.output.find("warning:") == std::string::npos) << c.output;
 }
 
+// --tick-times FILE: one row per tick with the header's columns; a path that cannot be written is
+// refused before the run (exit 2, no report).
+TEST(RunCli, TickTimesWritesOneRowPerTickAndRefusesAnUnwritablePath) {
+  const fs::path out = temp_dir("tick_times");
+  fs::create_directories(out);  // the file's directory must exist before the run (--out's is made)
+  const Cmd c = run("run probe --duration 0.1 --out " + out.string() + " --tick-times " +
+                    (out / "ticks.csv").string());
+  ASSERT_EQ(c.status, 0) << c.output;
+  std::ifstream csv(out / "ticks.csv");
+  std::string line;
+  ASSERT_TRUE(std::getline(csv, line));
+  EXPECT_EQ(line.rfind("k,", 0), 0u) << line;
+  EXPECT_NE(line.find(",collide_us,"), std::string::npos) << line;
+  EXPECT_NE(line.find(",tick_us,"), std::string::npos) << line;
+  EXPECT_NE(line.find(",minor_faults,"), std::string::npos) << line;
+  const auto columns = std::count(line.begin(), line.end(), ',') + 1;
+  long rows = 0;
+  while (std::getline(csv, line)) {
+    EXPECT_EQ(std::count(line.begin(), line.end(), ',') + 1, columns);
+    EXPECT_EQ(line.rfind(std::to_string(rows) + ",", 0), 0u) << line;
+    ++rows;
+  }
+  EXPECT_EQ(rows, 100);  // 0.1 s at the probe scene's 1 kHz
+  const fs::path refused = temp_dir("tick_times_refused");
+  const Cmd bad = run("run probe --duration 0.1 --out " + refused.string() + " --tick-times " +
+                      (refused / "no_such_dir" / "sub" / "t.csv").string());
+  EXPECT_EQ(bad.status, 2) << bad.output;
+  EXPECT_NE(bad.output.find("--tick-times"), std::string::npos) << bad.output;
+  EXPECT_FALSE(fs::exists(refused / "report.json"));
+}
+
 }  // namespace

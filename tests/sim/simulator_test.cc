@@ -7,9 +7,14 @@
 #include "sim/simulator.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
+#include <filesystem>
+#include <fstream>
 #include <map>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "fast/tooth/field.h"
 #include "sim/run_report.h"
@@ -100,6 +105,54 @@ TEST(RunScene, TheServoTickIsTheTickWithoutAWorker) {
   EXPECT_EQ(t.at("servo_tick").max_us, t.at("tick").max_us);
   EXPECT_EQ(t.at("field_edit_stand_in").max_us, 0.0);
   expect_servo_tick_within_the_tick(r);
+}
+
+// RunOptions::tick_times_path: one row per measured tick, whose stage times add up to the run's
+// tick total, whose contacts are the quiet series', and whose removed voxels are the drill log's.
+TEST(RunScene, TickTimesHoldEveryTicksStagesContactsAndRemovals) {
+  const std::filesystem::path path = std::filesystem::temp_directory_path() /
+                                     ("dentsim_tick_times_" + std::to_string(getpid()) + ".csv");
+  RunOptions o;
+  o.pipeline = "fast";
+  o.duration_override = 2.0;  // contact from ~0.9 s, drilling from ~1.5 s
+  o.tick_times_path = path.string();
+  const RunResult r = run_scene(load_scene("drill"), o);
+  ASSERT_TRUE(r.faults.empty()) << r.faults.front();
+  std::ifstream f(path);
+  std::string line;
+  ASSERT_TRUE(std::getline(f, line));
+  std::vector<std::string> header;
+  for (std::stringstream ss(line); std::getline(ss, header.emplace_back(), ',');) {
+  }
+  header.pop_back();
+  ASSERT_EQ(header.size(), 1u + kStageCount + 4u + 5u);
+  EXPECT_EQ(header[1], std::string(tick_stage_name(0)) + "_us");
+  EXPECT_EQ(header[kStageCount + 1], "tick_us");
+  EXPECT_EQ(header[kStageCount + 6], "removed_voxels");
+  long rows = 0, removed = 0;
+  double tick_us = 0.0, stages_us = 0.0;
+  while (std::getline(f, line)) {
+    std::vector<double> v;
+    std::string cell;
+    for (std::stringstream ss(line); std::getline(ss, cell, ',');) v.push_back(std::stod(cell));
+    ASSERT_EQ(v.size(), header.size());
+    EXPECT_EQ(v[0], rows);
+    for (int s = 0; s < kStageCount; ++s) stages_us += v[1 + s];
+    tick_us += v[kStageCount + 1];
+    EXPECT_EQ(v[kStageCount + 5], r.quiet_series.contacts[static_cast<std::size_t>(rows)]);
+    removed += static_cast<long>(v[kStageCount + 6]);
+    ++rows;
+  }
+  std::filesystem::remove(path);
+  EXPECT_EQ(rows, r.ticks);
+  EXPECT_NEAR(tick_us, 1e-3 * static_cast<double>(r.tick_ns_total), 1e-6 * tick_us);
+  EXPECT_NEAR(stages_us, tick_us, 1e-6 * tick_us);
+  long logged = 0;
+  for (const DrillRecord& d : r.drill_log) {
+    for (const int n : d.removed) logged += n;
+  }
+  EXPECT_GT(logged, 0);
+  EXPECT_EQ(removed, logged);
 }
 
 }  // namespace
