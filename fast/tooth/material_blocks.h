@@ -53,6 +53,8 @@ class MaterialBlocks {
   static constexpr int kEdge = 4;        // level 0's block edge [voxels] (the grid's if smaller)
   static constexpr int kMaxLevels = 12;  // more (n > 2^13) and only() refuses
 
+  // No block (levels() 0: a cut set that never asks for the material, SurfaceCutSet's flag).
+  MaterialBlocks() = default;
   // The status of every block of `grid` (n a power of two). Allocates.
   explicit MaterialBlocks(const VoxelGrid& grid);
 
@@ -72,7 +74,26 @@ class MaterialBlocks {
   // kMixed block of level 0 has no voxel solid now, of another material, with D <= d2 (its voxels
   // read from `grid`). `grid` is the constructor's (it may have lost solid voxels since). No
   // allocation, no throw.
-  bool only(const VoxelGrid& grid, const Vec3& x, double d2, std::uint8_t m) const;
+  bool only(const VoxelGrid& grid, const Vec3& x, double d2, std::uint8_t m) const {
+    return only(grid, x, d2, m, nullptr);
+  }
+  // A voxel solid now, of a material other than only()'s m, with D < only()'s d2 (found false:
+  // none named).
+  struct Witness {
+    bool found = false;
+    std::size_t voxel = 0;
+    double d2 = 0.0;
+  };
+  // only(), and where it refuses on a level-0 block's voxels, that block's solid voxel of another
+  // material with the least D (the first in the grid's order among equals) into *witness if its D
+  // is < d2 (a tie names none). A caller re-asks from the witness, with its D and material
+  // (SurfaceCutSet::material): a smaller ball, about the other side of a junction of materials.
+  // A block of one other material is read like a kMixed one at level 0 (its voxels may all have
+  // been removed since), and below level kPureDescent descended into; above, it refuses.
+  bool only(const VoxelGrid& grid, const Vec3& x, double d2, std::uint8_t m,
+            Witness* witness) const;
+  static constexpr int kPureDescent = 2;  // a block of another material of level < this is read
+  static constexpr int kStartSpan = 6;    // only()'s start blocks per axis at most
 
   // Blocks whose bound only() computed, and kMixed level-0 blocks whose voxels it read (tests and
   // benchmarks).
@@ -84,9 +105,10 @@ class MaterialBlocks {
   std::vector<int> across_;
   std::vector<std::size_t> offset_;
   std::vector<std::uint8_t> status_;
-  // only() on level-0 block (bx, by, bz), kMixed: its voxels.
+  // only() on level-0 block (bx, by, bz), kMixed or of another material: its voxels (and the
+  // witness, if not null, where it refuses).
   bool voxels_only(const VoxelGrid& grid, const Vec3& x, double d2, std::uint8_t m, int bx, int by,
-                   int bz) const;
+                   int bz, Witness* witness) const;
 
   mutable long blocks_read_ = 0;
   mutable long mixed_read_ = 0;
