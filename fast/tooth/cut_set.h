@@ -86,9 +86,10 @@
 // uniform about g: from a voxel s still solid within 2 rho (the last answer's, or a voxel behind it
 // when drilling took it), if every block of the material pyramid that may hold a solid voxel at
 // least as near as s holds only s's material, that is the reference's voxel's material (proof in
-// material_blocks.h); else the nearest-first walk (material_alone) finds the voxel. The cost is then
-// the pyramid's blocks about the ball of radius sqrt(D(s)) (~8 a level), not the exposed voxels of
-// the cavity's wall within a block of that sphere (~N^2).
+// material_blocks.h), or, where the pyramid names a witness of another material nearer than s,
+// again from it (collide50); else the nearest-first walk (material_alone) finds the voxel. The
+// cost is then the pyramid's blocks about the ball of radius sqrt(D(s)) from the level of its
+// size down, not the exposed voxels of the cavity's wall within a block of that sphere (~N^2).
 //
 // Real-time: collect(), material() and update() neither allocate nor throw (their buffers are
 // sized by the constructor from the tip's radius and the grid).

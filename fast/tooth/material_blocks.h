@@ -28,10 +28,20 @@
 // the same material, at construction); a block that lost its other material stays kMixed (only
 // the work grows). No hook on removals.
 //
-// The cost. The descent reads the blocks about the ball of radius sqrt(D(s)): a few at each level
-// above the one where blocks are about the ball's size, then the kMixed ones' children near the
-// ball. With uniform material about g that is ~8 blocks a level (log N levels), whatever the
-// wall's voxels: independent of N but for the levels. Where two materials meet near the ball, the
+// A block of level 0 of one other material is read voxel by voxel as a kMixed one (it passes if
+// drilling took its voxels within the ball; the proof reads it as a kMixed block's), and one of
+// level 1 descended into (collide50; above, such a block refuses).
+//
+// The witness (collide50). Where the refusal comes from a level-0 block's voxels, the block's
+// solid voxel w of another material with the least D (< D(s); a tie names none) is a voxel solid
+// now with D(w) < D(s) < (2 rho)^2: an s for the certificate again, with w's material and a
+// smaller ball (SurfaceCutSet::material asks again, a few rounds: D falls each round). With g on
+// a junction of materials the first s is often on the wrong side; the second certifies.
+//
+// The cost. The descent starts at the finest level whose blocks are at least the ball's radius
+// sqrt(D(s)) across (collide50; until then at the root): the blocks of the ball's box there (at
+// most 6 per axis, with a block of margin each side), then the kMixed ones' children near the
+// ball: independent of N (the levels above are not read). Where two materials meet near the ball, the
 // kMixed level-0 blocks (4^3) it meets are read voxel by voxel (64 bytes each); where a voxel of
 // another material is as near as s the certificate fails (the caller's exact walk answers).
 //
