@@ -251,8 +251,14 @@ bool ToothBricks::apply(VoxelTooth& tooth, SurfaceVoxels& surface) const {
   return stored;
 }
 
-SurfaceCutSet::SurfaceCutSet(const VoxelTooth& tooth, double rho, SignedDistanceFn sd)
-    : tooth_(tooth), rho_(rho), sd_(sd), surface_(tooth), blocks_(tooth.grid()) {
+SurfaceCutSet::SurfaceCutSet(const VoxelTooth& tooth, double rho, SignedDistanceFn sd,
+                             bool material_pyramid)
+    : tooth_(tooth),
+      rho_(rho),
+      sd_(sd),
+      surface_(tooth),
+      pyramid_(material_pyramid),
+      blocks_(material_pyramid ? MaterialBlocks(tooth.grid()) : MaterialBlocks()) {
   const VoxelGrid& grid = tooth.grid();
   const double h = grid.voxel_size;
   const double reach = std::max(cut_band(rho).reach, proxy_material_reach(rho));  // R'
@@ -429,7 +435,7 @@ bool SurfaceCutSet::material_alone(const Vec3& g, Nearest* nearest) {
 
 bool SurfaceCutSet::certified_material(const Vec3& g, std::uint8_t* material) {
   const VoxelGrid& grid = tooth_.grid();
-  if (!seeded_ || seed_ >= grid.voxels.size()) return false;
+  if (!pyramid_ || !seeded_ || seed_ >= grid.voxels.size()) return false;
   const std::size_t nn = static_cast<std::size_t>(grid.n);
   int u[3] = {static_cast<int>(seed_ % nn), static_cast<int>((seed_ / nn) % nn),
               static_cast<int>(seed_ / (nn * nn))};
@@ -475,13 +481,26 @@ bool SurfaceCutSet::certified_material(const Vec3& g, std::uint8_t* material) {
     d2 = to2;
   }
   // s = u: solid, within the reference's reach, and the pyramid holds nothing else within D(s).
+  // Where it refuses naming a witness w (solid, of another material, D(w) < D(s): g near a
+  // junction of materials), w is such an s too, with a smaller ball: asked again, up to kRounds
+  // times (each round's D smaller, so no cycle).
   const double m = proxy_material_reach(rho_);
   if (!(d2 < m * m)) return false;
-  const std::size_t s = grid.index(u[0], u[1], u[2]);
-  if (!blocks_.only(grid, g, d2, grid.voxels[s])) return false;
-  *material = grid.voxels[s];
-  seed_ = s;
-  return true;
+  std::size_t s = grid.index(u[0], u[1], u[2]);
+  constexpr int kRounds = 4;
+  for (int round = 0; round < kRounds; ++round) {
+    MaterialBlocks::Witness w;
+    if (blocks_.only(grid, g, d2, grid.voxels[s], &w)) {
+      *material = grid.voxels[s];
+      seed_ = s;
+      return true;
+    }
+    if (!w.found) return false;
+    ++reseeded_;
+    s = w.voxel;
+    d2 = w.d2;
+  }
+  return false;
 }
 
 bool SurfaceCutSet::material(const Vec3& g, std::uint8_t* material) {

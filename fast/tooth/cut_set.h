@@ -86,9 +86,10 @@
 // uniform about g: from a voxel s still solid within 2 rho (the last answer's, or a voxel behind it
 // when drilling took it), if every block of the material pyramid that may hold a solid voxel at
 // least as near as s holds only s's material, that is the reference's voxel's material (proof in
-// material_blocks.h); else the nearest-first walk (material_alone) finds the voxel. The cost is then
-// the pyramid's blocks about the ball of radius sqrt(D(s)) (~8 a level), not the exposed voxels of
-// the cavity's wall within a block of that sphere (~N^2).
+// material_blocks.h), or, where the pyramid names a witness of another material nearer than s,
+// again from it (collide50); else the nearest-first walk (material_alone) finds the voxel. The
+// cost is then the pyramid's blocks about the ball of radius sqrt(D(s)) from the level of its
+// size down, not the exposed voxels of the cavity's wall within a block of that sphere (~N^2).
 //
 // Real-time: collect(), material() and update() neither allocate nor throw (their buffers are
 // sized by the constructor from the tip's radius and the grid).
@@ -231,7 +232,10 @@ class SurfaceCutSet {
   };
 
   // `sd`: the provider's signed-distance query (the material's uncertified case). Allocates.
-  SurfaceCutSet(const VoxelTooth& tooth, double rho, SignedDistanceFn sd);
+  // Without `material_pyramid` no MaterialBlocks is built (~n^3 / 56 bytes and a pass over the
+  // grid): material() then always walks (the field edit worker's, which never asks it).
+  SurfaceCutSet(const VoxelTooth& tooth, double rho, SignedDistanceFn sd,
+                bool material_pyramid = true);
 
   // drill_tick removed `removed` from the tooth.
   void update(std::span<const std::size_t> removed) { surface_.update(tooth_, removed); }
@@ -266,6 +270,8 @@ class SurfaceCutSet {
   long queries() const { return queries_; }
   // Material-alone queries that started from the last answer's voxel (tests).
   long seeded() const { return seeded_queries_; }
+  // The pyramid's refusals that named a witness material() asked again from (tests).
+  long reseeded() const { return reseeded_; }
 
  private:
   // A brick of the box: its slot and its place in the box (brick coordinates less the box's low
@@ -312,8 +318,9 @@ class SurfaceCutSet {
   bool seeded_ = false;    // seed_ holds the last material query's voxel outside g's
   std::size_t seed_ = 0;
   long seeded_queries_ = 0;
+  bool pyramid_ = true;    // blocks_ built (the constructor's flag)
   MaterialBlocks blocks_;  // the tooth's materials at construction
-  long certified_ = 0;
+  long certified_ = 0, reseeded_ = 0;
 };
 
 // dentsim::ToothContactProvider with its voxel side replaced by SurfaceCutSet: the fast

@@ -2,6 +2,7 @@
 #include "fast/tooth/material_blocks.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #include "fast/tooth/nearest_voxel_walk.h"
@@ -70,72 +71,118 @@ MaterialBlocks::MaterialBlocks(const VoxelGrid& grid) {
 }
 
 bool MaterialBlocks::voxels_only(const VoxelGrid& grid, const Vec3& x, double d2, std::uint8_t m,
-                                 int bx, int by, int bz) const {
-  // Each voxel of the level-0 block: solid now, of another material and D <= d2 fails.
+                                 int bx, int by, int bz, Witness* witness) const {
+  // Each voxel of the level-0 block: solid now, of another material and D <= d2 fails; with a
+  // witness, the block is read to its end for the least such D (the first in (k, j, i) order, the
+  // grid's, among equals), named only if < d2.
   ++mixed_read_;
   const int e = edge0_;
+  bool pass = true;
+  double least = d2;
+  std::size_t at = 0;
   for (int k = e * bz; k < e * (bz + 1); ++k) {
     for (int j = e * by; j < e * (by + 1); ++j) {
       const std::uint8_t* row = &grid.voxels[grid.index(0, j, k)];
       for (int i = e * bx; i < e * (bx + 1); ++i) {
         if (row[i] == kEmpty || row[i] == m) continue;
-        if (!(voxel_walk::voxel_distance2(grid, i, j, k, x) > d2)) return false;
+        const double dv = voxel_walk::voxel_distance2(grid, i, j, k, x);
+        if (dv > d2) continue;
+        if (witness == nullptr) return false;
+        if (pass || dv < least) {
+          least = dv;
+          at = grid.index(i, j, k);
+        }
+        pass = false;
       }
     }
   }
-  return true;
+  if (!pass && least < d2) *witness = {true, at, least};
+  return pass;
 }
 
-bool MaterialBlocks::only(const VoxelGrid& grid, const Vec3& x, double d2, std::uint8_t m) const {
+bool MaterialBlocks::only(const VoxelGrid& grid, const Vec3& x, double d2, std::uint8_t m,
+                          Witness* witness) const {
+  if (witness != nullptr) witness->found = false;
   if (levels() == 0) return true;  // no voxel at all
   if (levels() > kMaxLevels) return false;
   // A block's bound is its box's D at x: box_distance2's terms at the planes origin + h i, summed
   // as a voxel's are, no more than any of its voxels' D (header comment). A block is passed if its
   // bound is > d2 (none of its voxels has D <= d2) or it is kEmpty or m; a kMixed one above level
-  // 0 is passed if its children are; anything else fails.
+  // 0 (or of another material below kPureDescent) is passed if its children are; one of level 0
+  // if its voxels are (voxels_only); anything else fails.
   using voxel_walk::gap2;
   using voxel_walk::plane;
+  // The start: the finest level whose blocks are at least the ball's radius r = sqrt(d2) across
+  // (the top if none), and there the blocks of the ball's box [x - r, x + r], a block of margin
+  // each side: every voxel with D <= d2 has each axis term <= d2 (the terms are >= 0 and rounded
+  // addition is monotone), so lies within r of x on each axis up to rounding far below a block.
+  // At most 6 blocks per axis (the box is at most 2 blocks wide, its ends rounded, and the
+  // margins), whatever n.
   const int top_level = levels() - 1;
-  const int n = edge(top_level);
-  ++blocks_read_;
-  const double root = (gap2(x[0], plane(grid, 0, 0), plane(grid, 0, n)) +
-                       gap2(x[1], plane(grid, 1, 0), plane(grid, 1, n))) +
-                      gap2(x[2], plane(grid, 2, 0), plane(grid, 2, n));
-  const std::uint8_t s0 = status(top_level, 0, 0, 0);
-  if (root > d2 || s0 == kEmpty || s0 == m) return true;
-  if (s0 != kMixed) return false;
-  if (top_level == 0) return voxels_only(grid, x, d2, m, 0, 0, 0);
-  // The kMixed blocks whose children are still to be read, depth first: at most 7 wait at each
-  // level below the top, and the top.
+  const double r = std::sqrt(d2);
+  int start = 0;
+  while (start < top_level && edge(start) * grid.voxel_size < r) ++start;
+  const int e0 = edge(start);
+  int lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    const double side = e0 * grid.voxel_size;
+    const double u0 = std::floor((x[a] - r - grid.origin[a]) / side) - 1.0;
+    const double u1 = std::floor((x[a] + r - grid.origin[a]) / side) + 1.0;
+    if (!(u1 >= 0.0 && u0 <= across(start) - 1.0)) return true;  // the ball misses the grid
+    lo[a] = static_cast<int>(std::max(u0, 0.0));
+    hi[a] = static_cast<int>(std::min(u1, across(start) - 1.0));
+    if (hi[a] - lo[a] >= kStartSpan) return false;  // (not for a finite x and d2 < 4 rho^2)
+  }
+  // The blocks whose children are still to be read, depth first: at most kStartSpan^3 from the
+  // start, and 7 more at each level below it.
   struct Block {
     int level, x, y, z;
   };
-  Block stack[8 * kMaxLevels];
+  Block stack[kStartSpan * kStartSpan * kStartSpan + 8 * kMaxLevels];
   int top = 0;
-  stack[top++] = {top_level, 0, 0, 0};
+  // Block (level, bx, by, bz) of bound `bound`: passed (true) or failed; pushed if its children
+  // decide.
+  auto visit = [&](int level, int bx, int by, int bz, double bound) {
+    ++blocks_read_;
+    if (bound > d2) return true;  // none of its voxels has D <= d2
+    const std::uint8_t s = status(level, bx, by, bz);
+    if (s == kEmpty || s == m) return true;
+    // Another material: read as a kMixed block where small (its voxels may be gone).
+    if (s != kMixed && level >= kPureDescent) return false;
+    if (level == 0) return voxels_only(grid, x, d2, m, bx, by, bz, witness);
+    stack[top++] = {level, bx, by, bz};
+    return true;
+  };
+  double t[3][kStartSpan];
+  for (int a = 0; a < 3; ++a) {
+    for (int b = lo[a]; b <= hi[a]; ++b) {
+      t[a][b - lo[a]] = gap2(x[a], plane(grid, a, e0 * b), plane(grid, a, e0 * (b + 1)));
+    }
+  }
+  for (int bz = lo[2]; bz <= hi[2]; ++bz) {
+    for (int by = lo[1]; by <= hi[1]; ++by) {
+      for (int bx = lo[0]; bx <= hi[0]; ++bx) {
+        const double bound = (t[0][bx - lo[0]] + t[1][by - lo[1]]) + t[2][bz - lo[2]];
+        if (!visit(start, bx, by, bz, bound)) return false;
+      }
+    }
+  }
   while (top > 0) {
     const Block b = stack[--top];
     const int level = b.level - 1, e = edge(level);
     const int at[3] = {2 * b.x, 2 * b.y, 2 * b.z};  // the first child's coordinates
     // Per axis the two children's terms (their planes e at[a], e (at[a] + 1), e (at[a] + 2):
     // each child's bound is the same double as from its own planes).
-    double t[3][2];
+    double u[3][2];
     for (int a = 0; a < 3; ++a) {
       const double p0 = plane(grid, a, e * at[a]), p1 = plane(grid, a, e * (at[a] + 1));
       const double p2 = plane(grid, a, e * (at[a] + 2));
-      t[a][0] = gap2(x[a], p0, p1);
-      t[a][1] = gap2(x[a], p1, p2);
+      u[a][0] = gap2(x[a], p0, p1);
+      u[a][1] = gap2(x[a], p1, p2);
     }
     for (int c = 0; c < 8; ++c) {
       const int cx = c & 1, cy = (c >> 1) & 1, cz = c >> 2;
-      ++blocks_read_;
-      if ((t[0][cx] + t[1][cy]) + t[2][cz] > d2) continue;  // none of its voxels has D <= d2
-      const std::uint8_t s = status(level, at[0] + cx, at[1] + cy, at[2] + cz);
-      if (s == kEmpty || s == m) continue;
-      if (s != kMixed) return false;
-      if (level > 0) {
-        stack[top++] = {level, at[0] + cx, at[1] + cy, at[2] + cz};
-      } else if (!voxels_only(grid, x, d2, m, at[0] + cx, at[1] + cy, at[2] + cz)) {
+      if (!visit(level, at[0] + cx, at[1] + cy, at[2] + cz, (u[0][cx] + u[1][cy]) + u[2][cz])) {
         return false;
       }
     }

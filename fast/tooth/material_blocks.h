@@ -28,10 +28,20 @@
 // the same material, at construction); a block that lost its other material stays kMixed (only
 // the work grows). No hook on removals.
 //
-// The cost. The descent reads the blocks about the ball of radius sqrt(D(s)): a few at each level
-// above the one where blocks are about the ball's size, then the kMixed ones' children near the
-// ball. With uniform material about g that is ~8 blocks a level (log N levels), whatever the
-// wall's voxels: independent of N but for the levels. Where two materials meet near the ball, the
+// A block of level 0 of one other material is read voxel by voxel as a kMixed one (it passes if
+// drilling took its voxels within the ball; the proof reads it as a kMixed block's), and one of
+// level 1 descended into (collide50; above, such a block refuses).
+//
+// The witness (collide50). Where the refusal comes from a level-0 block's voxels, the block's
+// solid voxel w of another material with the least D (< D(s); a tie names none) is a voxel solid
+// now with D(w) < D(s) < (2 rho)^2: an s for the certificate again, with w's material and a
+// smaller ball (SurfaceCutSet::material asks again, a few rounds: D falls each round). With g on
+// a junction of materials the first s is often on the wrong side; the second certifies.
+//
+// The cost. The descent starts at the finest level whose blocks are at least the ball's radius
+// sqrt(D(s)) across (collide50; until then at the root): the blocks of the ball's box there (at
+// most 6 per axis, with a block of margin each side), then the kMixed ones' children near the
+// ball: independent of N (the levels above are not read). Where two materials meet near the ball, the
 // kMixed level-0 blocks (4^3) it meets are read voxel by voxel (64 bytes each); where a voxel of
 // another material is as near as s the certificate fails (the caller's exact walk answers).
 //
@@ -53,6 +63,8 @@ class MaterialBlocks {
   static constexpr int kEdge = 4;        // level 0's block edge [voxels] (the grid's if smaller)
   static constexpr int kMaxLevels = 12;  // more (n > 2^13) and only() refuses
 
+  // No block (levels() 0: a cut set that never asks for the material, SurfaceCutSet's flag).
+  MaterialBlocks() = default;
   // The status of every block of `grid` (n a power of two). Allocates.
   explicit MaterialBlocks(const VoxelGrid& grid);
 
@@ -72,7 +84,26 @@ class MaterialBlocks {
   // kMixed block of level 0 has no voxel solid now, of another material, with D <= d2 (its voxels
   // read from `grid`). `grid` is the constructor's (it may have lost solid voxels since). No
   // allocation, no throw.
-  bool only(const VoxelGrid& grid, const Vec3& x, double d2, std::uint8_t m) const;
+  bool only(const VoxelGrid& grid, const Vec3& x, double d2, std::uint8_t m) const {
+    return only(grid, x, d2, m, nullptr);
+  }
+  // A voxel solid now, of a material other than only()'s m, with D < only()'s d2 (found false:
+  // none named).
+  struct Witness {
+    bool found = false;
+    std::size_t voxel = 0;
+    double d2 = 0.0;
+  };
+  // only(), and where it refuses on a level-0 block's voxels, that block's solid voxel of another
+  // material with the least D (the first in the grid's order among equals) into *witness if its D
+  // is < d2 (a tie names none). A caller re-asks from the witness, with its D and material
+  // (SurfaceCutSet::material): a smaller ball, about the other side of a junction of materials.
+  // A block of one other material is read like a kMixed one at level 0 (its voxels may all have
+  // been removed since), and below level kPureDescent descended into; above, it refuses.
+  bool only(const VoxelGrid& grid, const Vec3& x, double d2, std::uint8_t m,
+            Witness* witness) const;
+  static constexpr int kPureDescent = 2;  // a block of another material of level < this is read
+  static constexpr int kStartSpan = 6;    // only()'s start blocks per axis at most
 
   // Blocks whose bound only() computed, and kMixed level-0 blocks whose voxels it read (tests and
   // benchmarks).
@@ -84,9 +115,10 @@ class MaterialBlocks {
   std::vector<int> across_;
   std::vector<std::size_t> offset_;
   std::vector<std::uint8_t> status_;
-  // only() on level-0 block (bx, by, bz), kMixed: its voxels.
+  // only() on level-0 block (bx, by, bz), kMixed or of another material: its voxels (and the
+  // witness, if not null, where it refuses).
   bool voxels_only(const VoxelGrid& grid, const Vec3& x, double d2, std::uint8_t m, int bx, int by,
-                   int bz) const;
+                   int bz, Witness* witness) const;
 
   mutable long blocks_read_ = 0;
   mutable long mixed_read_ = 0;
