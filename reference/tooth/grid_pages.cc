@@ -1,6 +1,9 @@
 // The voxel grid's empty pages (reference/tooth/grid_pages.h).
 #include "reference/tooth/grid_pages.h"
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 #if defined(__linux__)
 #include <sys/mman.h>
 #include <unistd.h>
@@ -75,6 +78,52 @@ std::size_t release_empty_pages(const VoxelGrid& grid) {
     released += static_cast<std::size_t>(p - run);
   }
   return released;
+}
+
+VoxelGrid::VoxelGrid(const VoxelGrid& other)
+    : n(other.n), origin(other.origin), voxel_size(other.voxel_size) {
+  const std::size_t size = other.voxels.size();
+  voxels.reserve(size);
+  const std::uint8_t* src = other.voxels.data();
+  const std::size_t page = page_bytes();
+  if (page == 0) {
+    voxels.assign(src, src + size);
+    return;
+  }
+  // Page by page of the copy's storage (the first piece up to its first page boundary): a piece
+  // of empty voxels is released as soon as it is written, so at most one such page is resident.
+  // Reading a released page may take it back (a system without a shared zero page, such as this
+  // project's VMs): the source's whole pages inside each run of empty pieces go back too (its
+  // content is unchanged; its pages need not be aligned with the copy's).
+  const auto first = reinterpret_cast<std::uintptr_t>(voxels.data());
+  std::size_t to = std::min(size, (page - first % page) % page);
+  std::size_t empty_from = 0;  // the start of the current run of empty pieces
+  for (std::size_t from = 0; from < size; from = to, to = std::min(size, to + page)) {
+    voxels.insert(voxels.end(), src + from, src + to);
+    if (all_zero(src + from, to - from)) {
+      release_zero_pages(voxels.data() + from, voxels.data() + to);
+      // The run's whole pages so far; the run goes on from the last page boundary before `to`.
+      release_zero_pages(src + empty_from, src + to);
+      const auto base = reinterpret_cast<std::uintptr_t>(src);
+      const std::uintptr_t boundary = (base + to) / page * page;
+      if (boundary > base) empty_from = std::max(empty_from, std::size_t{boundary - base});
+    } else {
+      release_zero_pages(src + empty_from, src + from);
+      empty_from = to;
+    }
+  }
+  release_zero_pages(src + empty_from, src + size);
+}
+
+VoxelGrid& VoxelGrid::operator=(const VoxelGrid& other) {
+  if (this != &other) *this = VoxelGrid(other);
+  return *this;
+}
+
+void release_free_heap() {
+#if defined(__GLIBC__)
+  malloc_trim(0);
+#endif
 }
 
 }  // namespace dentsim
