@@ -115,7 +115,7 @@ VoxelGrid::VoxelGrid(const VoxelGrid& other)
       // `to` itself: its pieces end on its pages' boundaries).
       release_run(to);
       const std::uintptr_t boundary = (base + to) / page * page;
-      empty_from = boundary > base ? std::max(empty_from, std::size_t{boundary - base}) : empty_from;
+      if (boundary > base) empty_from = std::max(empty_from, std::size_t{boundary - base});
       pieces = 0;
     }
   }
