@@ -8,6 +8,7 @@
 
 #include "cli/png_writer.h"
 #include "reference/core/io.h"
+#include "reference/tooth/grid_pages.h"
 #include "tooth_io/render_png.h"
 #include "view/pictures.h"
 #include "view/view.h"
@@ -69,6 +70,8 @@ RunResult run_scene_with_view(const Scene& scene, RunOptions options, const RunV
 }
 
 void write_tooth_pictures(const RunResult& r, const std::string& dir) {
+  // The run's rig was freed into the malloc arenas: its pages back before the meshes (issue #30).
+  release_free_heap();
   std::string why;
   if (view::headless_available(&why)) {
     try {

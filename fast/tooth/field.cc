@@ -14,7 +14,6 @@
 #include "fast/tooth/sdf.h"
 #include "reference/core/io.h"
 #include "reference/tooth/field_edit_core.h"
-#include "reference/tooth/grid_pages.h"
 #include "reference/tooth/surface_proxy_core.h"
 
 namespace dentsim::fast {
@@ -582,8 +581,6 @@ FieldEditWorker::FieldEditWorker(SampledField* field, FieldBricks* bricks,
       drill_state_(state),
       latency_(latency),
       real_time_(real_time) {
-  // The copy wrote the whole grid: its empty pages go back (128 MiB at 512^3; issue #30).
-  release_empty_pages(tooth_.grid());
   const std::size_t pool = kPoolPerBatch * static_cast<std::size_t>(latency + 2);
   bricks_->enable_copy_on_write(pool);
   candidates_.reserve(

@@ -22,4 +22,10 @@ void release_zero_pages(const std::uint8_t* begin, const std::uint8_t* end);
 // change, hence const), and returns their bytes. Not in a tick (a pass over the grid, syscalls).
 std::size_t release_empty_pages(const VoxelGrid& grid);
 
+// Hands the free pages of the malloc arenas back to the system (glibc: malloc_trim(0); elsewhere
+// nothing). Memory freed by a phase that is over (a run's rig, a setup's scratch) stays resident
+// in the arenas otherwise: blocks below the mmap threshold, which glibc raises up to 32 MiB after
+// freeing a larger block, are freed into the heap, which gives back only its top. Not in a tick.
+void release_free_heap();
+
 }  // namespace dentsim

@@ -24,6 +24,15 @@ struct VoxelGrid {
   VoxelGrid() = default;
   VoxelGrid(int n_, const Vec3& origin_, double h) : n(n_), origin(origin_), voxel_size(h),
       voxels(static_cast<std::size_t>(n_) * n_ * n_, 0) {}
+  // A copy holds the same voxels, but a whole memory page of the copy that holds only empty
+  // voxels is handed back to the system as soon as it is written (reference/tooth/grid_pages.h;
+  // it reads as zeros again): a copy of a 512^3 tooth (128 MiB, the field edit worker's) never
+  // has all its pages resident at once (issue #30). Defined in grid_pages.cc.
+  VoxelGrid(const VoxelGrid& other);
+  VoxelGrid& operator=(const VoxelGrid& other);
+  VoxelGrid(VoxelGrid&&) noexcept = default;
+  VoxelGrid& operator=(VoxelGrid&&) noexcept = default;
+  ~VoxelGrid() = default;
 
   std::size_t index(int i, int j, int k) const {
     return static_cast<std::size_t>(i) + static_cast<std::size_t>(n) *

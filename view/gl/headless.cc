@@ -5,11 +5,9 @@
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
 #include <stdlib.h>
-#if defined(__GLIBC__)
-#include <malloc.h>
-#endif
 
 #include "reference/core/io.h"
+#include "reference/tooth/grid_pages.h"
 #include "view/gl/gl.h"
 #include "view/gl/renderer.h"
 #include "view/view.h"
@@ -115,15 +113,14 @@ RgbImage render_offscreen(const VoxelGrid& tooth, const TickSnapshot* tick,
       SurfaceMesher mesher =
           SurfaceMesher::borrowing(tooth, options.field, SurfaceMesher::kDefaultBlockSize,
                                    options.cutaway ? centre_cut(tooth) : CutAway{});
+      // Meshing read every voxel, which on a system without a shared zero page (this project's
+      // VMs) takes the grid's released empty pages back (VoxelRuns::unpack): they go again.
+      release_empty_pages(tooth);
       renderer.upload_once(mesher.take_blocks());
     }
-#if defined(__GLIBC__)
-    // The blocks were meshed on the setup's threads, so their freed arrays sit in those
-    // threads' malloc arenas, where the draw and the next picture's blocks (meshed on the
-    // calling thread's arena too) cannot reuse them: hand the arenas' free pages back before the
-    // draw (issue #30: the 512^3 field run's pictures peaked ~50 MB higher without it).
-    malloc_trim(0);
-#endif
+    // The mesher's scratch, freed in the setup's threads' arenas, back before the draw (the
+    // blocks' arrays went back during the upload, GlRenderer::upload_once).
+    release_free_heap();
     OrbitCamera cam = camera_for(tooth, options);
     if (options.focus_tool && tick != nullptr && tick->tick >= 0) {
       cam.target = tick->proxy.x.cast<float>();
@@ -136,6 +133,9 @@ RgbImage render_offscreen(const VoxelGrid& tooth, const TickSnapshot* tick,
     glFinish();
     img = GlRenderer::read_pixels(options.width, options.height);
   }
+  // The GL's buffers and the draw's memory, freed with the renderer: their pages back before the
+  // next picture meshes (issue #30: the next cut-away picture's meshes came on top of ~100 MB).
+  release_free_heap();
   return img;
 }
 

@@ -8,6 +8,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "reference/tooth/grid_pages.h"
 #include "reference/tooth/materials.h"
 #include "view/gl/gl.h"
 #include "view/view.h"
@@ -319,6 +320,11 @@ void GlRenderer::upload_once(std::vector<BlockMesh> blocks) {
     impl_->packed.back().upload(v, idx);
     v.clear();
     idx.clear();
+    // The blocks copied so far were meshed on the setup's threads, so their freed arrays sit in
+    // those threads' malloc arenas, where the GL's buffers (allocated on this thread) cannot
+    // reuse them: hand their pages back as the buffers grow, or the picture holds the whole mesh
+    // twice (issue #30: the 512^3 field run's pictures peaked at ~430 MB).
+    release_free_heap();
   };
   for (BlockMesh& b : blocks) {
     if (!v.empty() && v.size() + b.vertices.size() > kPackVertices) flush();
