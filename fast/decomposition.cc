@@ -26,10 +26,12 @@ bool pd_tool_is_diagonal(const ToolDynamics& tool) {
   return true;
 }
 
-bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const ToolDynamics& tool,
-                             const Mat3& R1, const Mat3& R2, const Vec6& V1, const Vec6& F1_hat,
-                             const AffineWrench& F2, AffineWrench* T1, AffineWrench* T2,
-                             FeedforwardKnown known) {
+namespace {
+
+// The feed-forward with T1 formed (T1 set) or kept factored (W set: T1(V) = M1 W(V) - F1_hat).
+bool feedforward(const Mat6& M1, const ProxyParams& proxy, const ToolDynamics& tool, const Mat3& R1,
+                 const Mat3& R2, const Vec6& V1, const Vec6& F1_hat, const AffineWrench& F2,
+                 AffineWrench* T1, AffineWrench* W_out, AffineWrench* T2, FeedforwardKnown known) {
   using Mat37 = Eigen::Matrix<double, 3, 7>;
   using Mat67 = Eigen::Matrix<double, 6, 7>;
   const double m = proxy.mass;
@@ -86,9 +88,17 @@ bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const Too
   B.rightCols<6>().noalias() -= dd.asDiagonal() * P;
   // W = M_d^-1 B = M_L^-1 X
   const Mat67 W = tool.M_d.diagonal().cwiseInverse().asDiagonal() * B;
-  // T1 + F1_hat = (I - phi^T) X = M1 M_L^-1 X = M1 W
-  Mat67 T1w;
-  T1w.noalias() = M1s * W;
+  // T1 + F1_hat = (I - phi^T) X = M1 M_L^-1 X = M1 W: formed (T1.G = M1 WG, 216
+  // multiplications) or kept as its factor W
+  if (T1 != nullptr) {
+    Mat67 T1w;
+    T1w.noalias() = M1s * W;
+    T1->f0 = T1w.col(0) - F1_hat;
+    T1->G = T1w.rightCols<6>();
+  } else {
+    W_out->f0 = W.col(0);
+    W_out->G = W.rightCols<6>();
+  }
   // T2 + F2 = E phi^T X = E N M_L^-1 X = diag(m I, J Q) W
   const Mat37 QW = Q * W.bottomRows<3>();
   Mat37 T2w;
@@ -97,8 +107,6 @@ bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const Too
   } else {
     T2w.noalias() = J * QW;
   }
-  T1->f0 = T1w.col(0) - F1_hat;
-  T1->G = T1w.rightCols<6>();
   if (known.contact_free) {
     T2->f0.head<3>() = m * W.col(0).head<3>();
     T2->f0.tail<3>() = T2w.col(0);
@@ -111,6 +119,23 @@ bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const Too
   T2->G.topRows<3>() = m * W.topRightCorner<3, 6>() - F2.G.topRows<3>();
   T2->G.bottomRows<3>() = T2w.rightCols<6>() - F2.G.bottomRows<3>();
   return true;
+}
+
+}  // namespace
+
+bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const ToolDynamics& tool,
+                             const Mat3& R1, const Mat3& R2, const Vec6& V1, const Vec6& F1_hat,
+                             const AffineWrench& F2, AffineWrench* T1, AffineWrench* T2,
+                             FeedforwardKnown known) {
+  return feedforward(M1, proxy, tool, R1, R2, V1, F1_hat, F2, T1, nullptr, T2, known);
+}
+
+bool pd_feedforward_diagonal_factored(const Mat6& M1, const ProxyParams& proxy,
+                                      const ToolDynamics& tool, const Mat3& R1, const Mat3& R2,
+                                      const Vec6& V1, const Vec6& F1_hat, const AffineWrench& F2,
+                                      AffineWrench* W, AffineWrench* T2, FeedforwardKnown known) {
+  known.symmetric_M1 = true;
+  return feedforward(M1, proxy, tool, R1, R2, V1, F1_hat, F2, nullptr, W, T2, known);
 }
 
 }  // namespace dentsim::fast

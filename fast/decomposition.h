@@ -52,6 +52,22 @@ bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy, const Too
                              const Mat3& R1, const Mat3& R2, const Vec6& V1, const Vec6& F1_hat,
                              const AffineWrench& F2, AffineWrench* T1, AffineWrench* T2,
                              FeedforwardKnown known = {});
+// The same with T1 kept factored, for a caller that reads T1 only at one velocity (the tick: at
+// V_hat, after the solve): T1(V) = M1 W(V) - F1_hat with W(V) = W0 + WG V written to *W (W =
+// M_d^-1 B above), so that T1.G = M1 WG (a 6x6 product, 216 multiplications) is never formed;
+// evaluating M1 (W0 + WG V) takes 72. T2 is the same doubles as pd_feedforward_diagonal's, and so
+// is W (its T1 is M1 W less [F1_hat 0], entry by entry). M1 must be exactly symmetric (the
+// symmetrisation is left out: known.symmetric_M1 is taken as true). In exact arithmetic T1(V) is
+// pd_feedforward_diagonal's T1.f0 + T1.G V; in floating point the two sum the same products
+// m_ik w_kj v_j (and F1_hat) in another order, each within gamma_14 (|M1| (|W0| + |WG| |V|) +
+// |F1_hat|) of the exact value entrywise (the deepest chain: two multiplications, 36 terms
+// summed as 6 sums of 6, and the additions of W0 and F1_hat), so they differ by at most twice that,
+// < 29 u (...), u = 2^-53 (tests/fast/decomposition_test.cc). No allocation, no throw.
+bool pd_feedforward_diagonal_factored(const Mat6& M1, const ProxyParams& proxy,
+                                      const ToolDynamics& tool, const Mat3& R1, const Mat3& R2,
+                                      const Vec6& V1, const Vec6& F1_hat, const AffineWrench& F2,
+                                      AffineWrench* W, AffineWrench* T2, FeedforwardKnown known = {});
+
 // The same into a PdFeedforward.
 inline bool pd_feedforward_diagonal(const Mat6& M1, const ProxyParams& proxy,
                                     const ToolDynamics& tool, const Mat3& R1, const Mat3& R2,

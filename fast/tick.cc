@@ -61,21 +61,24 @@ void unneeded_decomposition(const PipelineModel& m, PipelineData& d) {
 }
 
 // The decomposition's feed-forward on its block structure (fast/decomposition.h) when M_d and
-// D_d are diagonal (PipelineModel::tool_diagonal, decided at setup); the reference's step otherwise.
+// D_d are diagonal (PipelineModel::tool_diagonal, decided at setup); the reference's step
+// otherwise. T1 is kept factored (PipelineData::pd_T1_factored): the tick reads it at V_hat only.
 bool pd_step(const PipelineModel& m, PipelineData& d) {
+  d.pd_T1_factored = false;
   if (!m.tool_diagonal) return reference::detail::pd_step(m, d);
   const TickResult& r = d.r;
-  Mat6 M1;  // J1^T M J1 (2.2), M under the hypothesis in force (model_joint_inertia)
-  if (m.grasp && d.grip.gripped) {
-    inertia_at_tool(d.J1, reference::detail::model_joint_inertia(m, d, d.dev.M), &M1);
-  } else {
-    inertia_at_tool(d.J1, d.dev.M, &M1);
-  }
+  // M1 = J1^T M J1 (2.2), M under the hypothesis in force (model_joint_inertia): with the hand on
+  // the tool, J1^T (M + J_t^T Mt J_t) J1 = J1^T M J1 + Mt (J_t J1 = I), the hand's inertia at the
+  // tool without M_hand (the reference's sum differs by round-off, eps cond(J_t) |Mt|).
+  Mat6& M1 = d.pd_M1;
+  inertia_at_tool(d.J1, d.dev.M, &M1);  // exactly symmetric
+  if (m.grasp && d.grip.gripped) M1.diagonal() += m.grasp_mass.Mt;
   // A free tick with skips on: fast::assemble set d.contact to zero (no contact, no spring).
-  // M1 from inertia_at_tool: exactly symmetric.
   const FeedforwardKnown known{m.skip_unneeded && r.contacts.empty(), true};
-  return pd_feedforward_diagonal(M1, m.proxy, m.tool, r.device.R, d.proxy.pose.R, r.V1, r.F1_hat,
-                                 d.contact, &d.pd_T1, &d.pd_T2, known);
+  d.pd_T1_factored =
+      pd_feedforward_diagonal_factored(M1, m.proxy, m.tool, r.device.R, d.proxy.pose.R, r.V1,
+                                       r.F1_hat, d.contact, &d.pd_W, &d.pd_T2, known);
+  return d.pd_T1_factored;
 }
 
 // J1 = J_t^-1: on the Phantom's block structure when the device is fast::PhantomModel and its
@@ -189,10 +192,32 @@ TickStatus device_terms(const PipelineModel& m, PipelineData& d) {
   return TickStatus::kOk;
 }
 
-// Two 6-vector observer updates: already allocation-free and O(36) flops; shared. Skipped (by the
-// reference stage) without an observer gain; the grip detector only with a hand mass.
+bool grip_filter_update_kept(const GripDetectorParams& p, const Vec6& norm, GripFilterState& s,
+                             GripGainMemo& memo, const Vec6& h0, const Vec6& h1, double T) {
+  int i = 0;
+  while (i < GripGainMemo::kSize && !(memo.T[i] == T)) ++i;
+  if (i == GripGainMemo::kSize) {  // a new T: its gains replace the oldest kept
+    i = memo.next;
+    memo.next = (i + 1) % GripGainMemo::kSize;
+    memo.T[i] = T;
+    memo.g[i] = grip_filter_gains(p, T);
+  }
+  return grip_filter_update(p, norm, s, h0, h1, memo.g[i], T);
+}
+
+namespace {
+
+bool grip_update(const PipelineModel& m, PipelineData& d, const Vec6& h0, const Vec6& h1) {
+  return grip_filter_update_kept(m.grip, m.grip_norm, d.grip, d.grip_gains, h0, h1, d.T_last);
+}
+
+}  // namespace
+
+// Two 6-vector observer updates: already allocation-free and O(36) flops; the reference's stage
+// with the grip filter's gains kept by tick length (grip_filter_update_kept, fast/tick.h). Skipped
+// (by the reference stage) without an observer gain; the grip detector only with a hand mass.
 TickStatus observe(const PipelineModel& m, PipelineData& d) {
-  const TickStatus st = reference::observe(m, d);
+  const TickStatus st = reference::detail::observe_with(m, d, grip_update);
   if (st == TickStatus::kOk && !m.skip_unneeded && !m.grasp) unneeded_observers(m, d);
   return st;
 }
@@ -243,6 +268,7 @@ TickStatus drill(const PipelineModel& m, PipelineData& d) {
 }
 
 TickStatus reset(const PipelineModel& m, PipelineData& d) {
+  d.grip_gains = GripGainMemo{};  // the gains of another model's filter constants
   const TickStatus st = reference::reset(m, d);
   if (st != TickStatus::kOk || m.skip_unneeded || m.grasp) return st;
   // The observers the scene does not model start as the reference's would (skips off).

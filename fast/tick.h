@@ -37,4 +37,11 @@ TickStatus reset(const PipelineModel& m, PipelineData& d);
 
 const StageTable& fast_stage_table();
 
+// The grip filter's step of the fast observe stage: reference/grip_detector.h's
+// grip_filter_update with its three gains (three exp) looked up by T in `memo` and evaluated only
+// for a T not kept there (GripGainMemo, reference/core/pipeline.h): the same doubles as the
+// reference's step (tests/fast/observe_test.cc). No allocation, no throw.
+bool grip_filter_update_kept(const GripDetectorParams& p, const Vec6& norm, GripFilterState& s,
+                             GripGainMemo& memo, const Vec6& h0, const Vec6& h1, double T);
+
 }  // namespace dentsim::fast

@@ -46,21 +46,34 @@ void grip_filter_reset(const GripDetectorParams& p, GripFilterState& s) {
   s.gripped = p.start_gripped;
 }
 
+GripFilterGains grip_filter_gains(const GripDetectorParams& p, double T) {
+  GripFilterGains g;
+  // Band-pass: b = lowpass_fhi(h), then the high-pass e = b - lowpass_flo(b).
+  g.a_lp = lowpass_gain(p.lowpass_hz, T);
+  g.a_hp = lowpass_gain(p.highpass_hz, T);
+  // The band power's low-pass, time constant tau_p.
+  const double f_p = 1.0 / (2.0 * std::numbers::pi * p.power_time_constant_s);
+  g.a_p = lowpass_gain(f_p, T);
+  return g;
+}
+
 bool grip_filter_update(const GripDetectorParams& p, const Vec6& norm, GripFilterState& s,
                         const Vec6& h0, const Vec6& h1, double T) {
+  return grip_filter_update(p, norm, s, h0, h1, grip_filter_gains(p, T), T);
+}
+
+bool grip_filter_update(const GripDetectorParams& p, const Vec6& norm, GripFilterState& s,
+                        const Vec6& h0, const Vec6& h1, const GripFilterGains& g, double T) {
   s.h0 = h0;
   s.h1 = h1;
   // Band-pass: b = lowpass_fhi(h), then the high-pass e = b - lowpass_flo(b).
-  const double a_lp = lowpass_gain(p.lowpass_hz, T);
-  const double a_hp = lowpass_gain(p.highpass_hz, T);
+  const double a_lp = g.a_lp, a_hp = g.a_hp, a_p = g.a_p;
   s.b0 += a_lp * (s.h0 - s.b0);
   s.b1 += a_lp * (s.h1 - s.b1);
   s.lp0 += a_hp * (s.b0 - s.lp0);
   s.lp1 += a_hp * (s.b1 - s.lp1);
   const Vec6 e0 = s.b0 - s.lp0, e1 = s.b1 - s.lp1;
   // Band power of the linear force in the norm 1/m, low-passed with time constant tau_p.
-  const double f_p = 1.0 / (2.0 * std::numbers::pi * p.power_time_constant_s);
-  const double a_p = lowpass_gain(f_p, T);
   s.p0 += a_p * (e0.cwiseProduct(norm).dot(e0) - s.p0);
   s.p1 += a_p * (e1.cwiseProduct(norm).dot(e1) - s.p1);
   const double stat = s.p1 - s.p0;

@@ -45,6 +45,12 @@ namespace dentsim {
 void grip_filter_reset(const GripDetectorParams& p, GripFilterState& s);
 bool grip_filter_update(const GripDetectorParams& p, const Vec6& norm, GripFilterState& s,
                         const Vec6& h0, const Vec6& h1, double T);
+// The filters' three gains for a tick of length T (GripFilterGains, reference/core/pipeline.h),
+// and the update with them given: grip_filter_update(p, norm, s, h0, h1, T) is this with
+// grip_filter_gains(p, T), so gains kept from an earlier tick of the same T give the same doubles.
+GripFilterGains grip_filter_gains(const GripDetectorParams& p, double T);
+bool grip_filter_update(const GripDetectorParams& p, const Vec6& norm, GripFilterState& s,
+                        const Vec6& h0, const Vec6& h1, const GripFilterGains& g, double T);
 // Throws std::invalid_argument naming the parameter unless the hand has mass and inertia and the
 // filter constants and thresholds are valid (used when a pipeline model is built, too).
 void validate_grip_detector(double hand_mass, double hand_inertia, const GripDetectorParams& p);

@@ -253,7 +253,7 @@ void update_shape_control(const PipelineModel& m, PipelineData& d, const Vec6& t
   if (m.method == Method::kPmiPd) {
     // The feed-forward at full scale, pd_T1 at V_hat: the solve's r.T1_pd itself unless the
     // control was engaged there (solve_with scaled it by sigma then).
-    const Vec6 T1_pd = d.shape_engaged ? d.pd_T1.at(r.V_hat) : r.T1_pd;
+    const Vec6 T1_pd = d.shape_engaged ? pd_T1_at(d, r.V_hat) : r.T1_pd;
     b.noalias() = d.dev.J_t.transpose() * T1_pd;
   }
   const Vec6 a = tau - d.shape_sigma * b;  // the command without the feed-forward
@@ -312,6 +312,13 @@ TickStatus detail::device_terms_with(const PipelineModel& m, PipelineData& d,
 }
 
 TickStatus observe(const PipelineModel& m, PipelineData& d) {
+  return detail::observe_with(
+      m, d, [](const PipelineModel& mm, PipelineData& dd, const Vec6& h0, const Vec6& h1) {
+        return grip_filter_update(mm.grip, mm.grip_norm, dd.grip, h0, h1, dd.T_last);
+      });
+}
+
+TickStatus detail::observe_with(const PipelineModel& m, PipelineData& d, GripUpdate grip) {
   // Observer (3.7)-(3.8): joint estimate from the torque applied over the last tick, which
   // lasted from the previous sample to this one (tick lengths may vary).
   TickResult& r = d.r;
@@ -339,7 +346,7 @@ TickStatus observe(const PipelineModel& m, PipelineData& d) {
                                  d.T_last);
   const Vec6 h0 = d.J1.transpose() * d.obs0.f_hat;
   const Vec6 h1 = d.J1.transpose() * d.obs1.f_hat;
-  const bool gripped = grip_filter_update(m.grip, m.grip_norm, d.grip, h0, h1, d.T_last);
+  const bool gripped = grip(m, d, h0, h1);
   r.grip_state = gripped ? 1 : 0;
   r.grip_statistic = d.grip.p1 - d.grip.p0;
   r.F1_hat = gripped ? h1 : h0;
@@ -463,7 +470,7 @@ TickStatus solve_with(const PipelineModel& m, PipelineData& d,
   }
   r.F_coupling = d.coupling.at(r.V_hat);
   r.F_contact = d.contact.at(r.V_hat) + friction_wrench;
-  r.T1_pd = m.method == Method::kPmiPd ? d.pd_T1.at(r.V_hat) : Vec6::Zero();
+  r.T1_pd = m.method == Method::kPmiPd ? pd_T1_at(d, r.V_hat) : Vec6::Zero();
   if (m.saturation_passive && d.shape_engaged) r.T1_pd *= d.shape_sigma;  // (saturation_passive.h)
   d.proxy = pmi_advance_unchecked(d.proxy, r.V_hat, d.T);
   return TickStatus::kOk;

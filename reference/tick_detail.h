@@ -19,7 +19,8 @@ inline bool all_finite(const Ms&... ms) {
 
 // The device's joint-space inertia under the hypothesis in force of the grip detector: M, plus the
 // hand's M_hand while the hand is judged on the tool (grasp on). The one place that picks it: the
-// encoder Kalman filter, the loop-lag compensation and both twins' decomposition read it here.
+// encoder Kalman filter, the loop-lag compensation and the reference's decomposition read it here
+// (the fast twin's decomposition adds the hand at the tool, Mt, fast/tick.cc pd_step).
 inline Mat6 model_joint_inertia(const PipelineModel& m, const PipelineData& d, const Mat6& M) {
   Mat6 out = M;
   if (m.grasp && d.grip.gripped) out += d.M_hand;
@@ -40,9 +41,20 @@ using SolveInertia = bool (*)(const Mat6& M, const Vec6& b, Vec6* x);
 TickStatus device_terms_with(const PipelineModel& m, PipelineData& d, InvertJacobian invert,
                              SolveInertia solve);
 
-// The passive decomposition's feed-forward (4.7) of a pmi-pd tick: fills d.pd_T1 and d.pd_T2 from
-// the device inertia under the hypothesis in force, the poses, r.V1, r.F1_hat and d.contact;
-// false when the locked inertia is not positive definite (or phi is not finite).
+// The grip detector's filter step of the observe stage (grasp on): d.grip from the two
+// hypotheses' estimates h0, h1 over the tick that just ended (d.T_last); returns whether the hand
+// is judged on the tool. The reference's evaluates the filter's gains each tick; the fast twin's
+// keeps them by tick length (GripGainMemo): the same doubles.
+using GripUpdate = bool (*)(const PipelineModel& m, PipelineData& d, const Vec6& h0,
+                            const Vec6& h1);
+
+// observe (reference/tick.h) with the grip filter's step as a parameter.
+TickStatus observe_with(const PipelineModel& m, PipelineData& d, GripUpdate grip);
+
+// The passive decomposition's feed-forward (4.7) of a pmi-pd tick: fills d.pd_T1 (or its factors,
+// PipelineData::pd_T1_factored) and d.pd_T2 from the device inertia under the hypothesis in
+// force, the poses, r.V1, r.F1_hat and d.contact; false when the locked inertia is not positive
+// definite (or phi is not finite).
 using PdStep = bool (*)(const PipelineModel& m, PipelineData& d);
 
 // The reference's step: decompose_locked + pd_feedforward (reference/decomposition.h).

@@ -95,8 +95,9 @@ void compare_stage(int stage, const PipelineData& a, const PipelineData& b, Diff
       df->add(a.coupling.G, b.coupling.G);
       df->add(a.contact.f0, b.contact.f0);
       df->add(a.contact.G, b.contact.G);
-      df->add(a.pd_T1.f0, b.pd_T1.f0);
-      df->add(a.pd_T1.G, b.pd_T1.G);
+      // The fast twin keeps T1 factored (PipelineData::pd_T1_factored): compared formed.
+      df->add(pd_T1_formed(a).f0, pd_T1_formed(b).f0);
+      df->add(pd_T1_formed(a).G, pd_T1_formed(b).G);
       df->add(a.pd_T2.f0, b.pd_T2.f0);
       df->add(a.pd_T2.G, b.pd_T2.G);
       df->add(a.sys.A, b.sys.A);

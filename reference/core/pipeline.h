@@ -34,6 +34,7 @@
 #include <Eigen/LU>
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "reference/core/affine_wrench.h"
@@ -173,6 +174,26 @@ struct GripFilterState {
   bool gripped = true;
 };
 
+// The grip filter's gains for a tick of length T (reference/grip_detector.h grip_filter_gains):
+// 1 - exp(-2 pi f T) at its low-pass, high-pass and band-power cut-offs.
+struct GripFilterGains {
+  double a_lp = 0.0, a_hp = 0.0, a_p = 0.0;
+};
+
+// The gains of the last kSize distinct tick lengths (fast/tick.cc's observe). They are a function
+// of T alone (the model's filter constants fixed), and the measured tick length t - t_prev takes
+// a few values that differ by round-off, so the three exp run only for a T not kept here: the same
+// doubles as evaluating them each tick. Emptied by the fast twin's reset.
+struct GripGainMemo {
+  static constexpr int kSize = 4;
+  double T[kSize] = {std::numeric_limits<double>::quiet_NaN(),
+                     std::numeric_limits<double>::quiet_NaN(),
+                     std::numeric_limits<double>::quiet_NaN(),
+                     std::numeric_limits<double>::quiet_NaN()};  // NaN: empty (never == T)
+  GripFilterGains g[kSize];
+  int next = 0;  // the slot the next new T replaces (round robin)
+};
+
 // The tick's fixed-capacity contact buffer: a vector reserved to kContactCapacity that keeps that
 // capacity when copied (a copy of PipelineData is a working tick state too, e.g. in the
 // differential tests). Providers fill it without growing it (contact_provider.h).
@@ -241,6 +262,7 @@ struct PipelineData {
   // observe
   MomentumObserverState<Vec6> obs0, obs1;  // obs0: the device (H0), obs1: device + hand (H1)
   GripFilterState grip;
+  GripGainMemo grip_gains;  // the fast twin's (the reference evaluates the gains each tick)
   Vec6 tau_prev = Vec6::Zero();  // torque applied over the tick that just ended
   double t_prev = 0.0;
   bool have_prev = false;
@@ -255,10 +277,35 @@ struct PipelineData {
   // assemble / solve
   ProxyState proxy;
   AffineWrench coupling, contact, pd_T1, pd_T2;
+  // The fast twin keeps the feed-forward T1 factored (fast/decomposition.h
+  // pd_feedforward_diagonal_factored): T1(V) = pd_M1 pd_W(V) - r.F1_hat, and pd_T1 is not formed.
+  // The tick reads T1 at V_hat only, through pd_T1_at below. The reference forms pd_T1.
+  bool pd_T1_factored = false;
+  Mat6 pd_M1 = Mat6::Zero();
+  AffineWrench pd_W;
   PmiSystem sys;
 
   TickResult r;
 };
+
+// The feed-forward T1 at V: pd_T1's, or from its factors (PipelineData::pd_T1_factored).
+inline Vec6 pd_T1_at(const PipelineData& d, const Vec6& V) {
+  if (!d.pd_T1_factored) return d.pd_T1.at(V);
+  const Vec6 w = d.pd_W.at(V);
+  Vec6 t;
+  t.noalias() = d.pd_M1 * w;
+  return t - d.r.F1_hat;
+}
+
+// pd_T1 itself, formed from its factors when kept factored (the differential tests' view).
+inline AffineWrench pd_T1_formed(const PipelineData& d) {
+  if (!d.pd_T1_factored) return d.pd_T1;
+  AffineWrench T1;
+  T1.f0.noalias() = d.pd_M1 * d.pd_W.f0;
+  T1.f0 -= d.r.F1_hat;
+  T1.G.noalias() = d.pd_M1 * d.pd_W.G;
+  return T1;
+}
 
 // ---- registry ------------------------------------------------------------------------------
 

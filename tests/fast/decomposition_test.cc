@@ -176,6 +176,71 @@ TEST(FastDecomposition, FeedforwardAgreesWithTheReference) {
               worst_isotropic);
 }
 
+// T1 kept factored (pd_feedforward_diagonal_factored: T1(V) = M1 W(V) - F1_hat) against T1 formed
+// (pd_feedforward_diagonal): T2 the same doubles; T1 at random velocities within the derived
+// bound 2 gamma_14 (|M1| (|W0| + |WG| |V|) + |F1_hat|) entrywise (fast/decomposition.h), free
+// and contact ticks, the presets' and random diagonal tools.
+TEST(FastDecomposition, FactoredT1IsTheFormedT1WithinItsRoundOffBound) {
+  constexpr unsigned kSeed = 5103;
+  Rng rng(kSeed);
+  constexpr double u = 0x1p-53;
+  const double gamma14 = 14 * u / (1 - 14 * u);
+  double worst = 0.0;
+  long checked = 0, nonzero_diff = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    SCOPED_TRACE("seed " + std::to_string(kSeed) + " trial " + std::to_string(trial));
+    Mat6 M1 = random_spd(rng, 1e-2, 1e2);
+    M1 = (0.5 * (M1 + M1.transpose())).eval();  // exactly symmetric, as inertia_at_tool's
+    const ProxyParams proxy = random_proxy(rng, trial % 2 == 0);
+    ToolDynamics tool = tool_preset(tool_preset_names()[trial % tool_preset_names().size()]);
+    if (trial % 3 == 1) {
+      Vec6 md, dd;
+      for (int i = 0; i < 6; ++i) {
+        md(i) = std::pow(10.0, uni(rng, -5.0, 1.0));
+        dd(i) = std::pow(10.0, uni(rng, -4.0, 1.0));
+      }
+      tool.M_d = md.asDiagonal();
+      tool.D_d = dd.asDiagonal();
+    }
+    const Mat3 R1 = random_rotation(rng), R2 = random_rotation(rng);
+    Vec6 V1, F1_hat;
+    for (int i = 0; i < 6; ++i) V1(i) = uni(rng, -1.0, 1.0), F1_hat(i) = uni(rng, -5.0, 5.0);
+    AffineWrench F2;
+    const bool free_tick = trial % 2 == 0;
+    if (!free_tick) {
+      for (int i = 0; i < 6; ++i) F2.f0(i) = uni(rng, -5.0, 5.0);
+      F2.G = -random_spd(rng, 1e-2, 1e4);
+    }
+    const fast::FeedforwardKnown known{free_tick, true};
+    AffineWrench T1, T2, W, T2f;
+    ASSERT_TRUE(fast::pd_feedforward_diagonal(M1, proxy, tool, R1, R2, V1, F1_hat, F2, &T1, &T2,
+                                              known));
+    ASSERT_TRUE(fast::pd_feedforward_diagonal_factored(M1, proxy, tool, R1, R2, V1, F1_hat, F2,
+                                                       &W, &T2f, known));
+    EXPECT_EQ(T2.f0, T2f.f0);
+    EXPECT_EQ(T2.G, T2f.G);
+    for (int k = 0; k < 20; ++k) {
+      Vec6 V;
+      for (int i = 0; i < 6; ++i) V(i) = uni(rng, -1.0, 1.0) * std::pow(10.0, uni(rng, -3.0, 1.0));
+      const Vec6 formed = T1.at(V);
+      const Vec6 w = W.at(V);
+      const Vec6 factored = M1 * w - F1_hat;
+      const Vec6 scale =
+          M1.cwiseAbs() * (W.f0.cwiseAbs() + W.G.cwiseAbs() * V.cwiseAbs()) + F1_hat.cwiseAbs();
+      for (int i = 0; i < 6; ++i) {
+        const double e = std::abs(formed(i) - factored(i));
+        EXPECT_LE(e, 2 * gamma14 * scale(i)) << i;
+        worst = std::max(worst, e / scale(i));
+        nonzero_diff += e != 0.0 ? 1 : 0;
+        ++checked;
+      }
+    }
+  }
+  std::printf("factored vs formed T1: worst |diff| / scale %.2e (bound %.2e), %ld of %ld differ\n",
+              worst, 2 * gamma14, nonzero_diff, checked);
+  EXPECT_GT(nonzero_diff, 0);  // the two orders do differ: the bound is what is checked
+}
+
 // M1 = J1^T M J1 (fast/decomposition.h inertia_at_tool) against the reference's (J1^T M) J1: each
 // entry within the derived bound 2 (2 gamma_6 + gamma_6^2) (|J1|^T |M| |J1|)(i, j) < 25 u
 // (|J1|^T |M| |J1|)(i, j), u = 2^-53, and exactly symmetric. J1 the inverse of the Phantom's J_t at
