@@ -83,6 +83,16 @@
 // samples every voxel skips. A group lists no neighbours (U is then the 27 around the sample: a
 // subset, which the proof of the shorter reach allows). At k = 1 a group is one voxel: the
 // code above, bit for bit.
+// The group's minimum, factored per row (edit51): a voxel's squared distances are sums of one
+// term per axis, e_x^2 + e_y^2 + e_z^2 (the grown cube) and a_x^2 + a_y^2 + a_z^2 (the cube),
+// each term an integer or a quarter-integer far below 2^53, so every sum is exact whatever its
+// order. On a row (fixed sy, sz) the y and z terms of a voxel are fixed: the row takes, for each
+// x column of the group (its voxels' c_x, fewer than k distinct values, as all lie in one coarse
+// cell), the least (y + z) sum over the column's voxels, and a sample then the least over the
+// columns of its x term plus the column's least: min_g (x_g + yz_g) = min_j (x_j + min_{g in j}
+// yz_g), exactly, the same doubles as the voxel-by-voxel minimum (so every value, count and unit
+// of work is unchanged), at O(group) a row and O(k) a sample instead of O(group) a sample. At
+// k > kFieldEditGroup (a stride field_stride_for never gives) a group is one voxel.
 //
 // Real-time: no allocation, no throw (the Access must not either).
 #pragma once
@@ -247,7 +257,7 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
     group = 1;
     if (resumed && first_row > 0 && cursor->group > 0) {
       group = std::min(cursor->group, removed.size() - at);
-    } else if (stride > 1) {
+    } else if (stride > 1 && stride <= kFieldEditGroup) {  // a group's x columns fit its rows'
       while (at + group < removed.size() && group < static_cast<std::size_t>(kFieldEditGroup)) {
         int c[3];
         voxel_of(removed[at + group], c);
@@ -324,6 +334,32 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
         if (h * std::sqrt(ey * ey + ez * ez) > ball) continue;  // the row misses the ball
         ++stats->rows_read;
         stats->work += kFieldEditRowWeight;
+        // A group's least distances, factored per row (header comment, "The group's minimum"):
+        // for each x column j = c_x - cl_x of its voxels, the least y and z terms over the voxels
+        // of that column, (e_y^2 + e_z^2) for the grown cube and (a_y^2 + a_z^2) for the cube.
+        int columns[kFieldEditGroup];
+        int column_count = 0;
+        double row_e2[kFieldEditGroup], row_a2[kFieldEditGroup];
+        if (group > 1) {
+          const int qy = stride * (sy - pad), qz = stride * (sz - pad);
+          for (int j = 0; j <= ch[0] - cl[0]; ++j) {
+            row_e2[j] = INFINITY;
+            row_a2[j] = INFINITY;
+          }
+          for (std::size_t g = 0; g < group; ++g) {
+            const int j = gv[g][0] - cl[0];
+            const int o[2] = {std::abs(qy - gv[g][1]), std::abs(qz - gv[g][2])};
+            double e2 = 0.0, a2 = 0.0;
+            for (int a = 0; a < 2; ++a) {
+              const double e = std::max(o[a] - 1.0, 0.0), c = std::max(o[a] - 0.5, 0.0);
+              e2 += e * e;
+              a2 += c * c;
+            }
+            if (row_e2[j] == INFINITY && row_a2[j] == INFINITY) columns[column_count++] = j;
+            row_e2[j] = std::min(row_e2[j], e2);
+            row_a2[j] = std::min(row_a2[j], a2);
+          }
+        }
         // The x extent of this row's raises: the cells with one of them as a corner are
         // re-measured once the row is done (header comment).
         int raised_lo = INT_MAX, raised_hi = -1;
@@ -352,21 +388,15 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
             // of the sums gives the least distance, the same double).
             double grown2 = ex * ex + ey * ey + ez * ez, cube2 = 0.0;
             if (group > 1) {
-              const int qx = stride * (sx - pad), qy = stride * (sy - pad),
-                        qz = stride * (sz - pad);
+              const int qx = stride * (sx - pad);
               grown2 = INFINITY;
               cube2 = INFINITY;
-              for (std::size_t g = 0; g < group; ++g) {
-                const int o[3] = {std::abs(qx - gv[g][0]), std::abs(qy - gv[g][1]),
-                                  std::abs(qz - gv[g][2])};
-                double e2 = 0.0, a2 = 0.0;
-                for (int a = 0; a < 3; ++a) {
-                  const double e = std::max(o[a] - 1.0, 0.0), c = std::max(o[a] - 0.5, 0.0);
-                  e2 += e * e;
-                  a2 += c * c;
-                }
-                grown2 = std::min(grown2, e2);
-                cube2 = std::min(cube2, a2);
+              for (int u = 0; u < column_count; ++u) {
+                const int j = columns[u];
+                const int o = std::abs(qx - (cl[0] + j));
+                const double e = std::max(o - 1.0, 0.0), c = std::max(o - 0.5, 0.0);
+                grown2 = std::min(grown2, e * e + row_e2[j]);
+                cube2 = std::min(cube2, c * c + row_a2[j]);
               }
               stats->work += static_cast<long>(group) / kFieldEditGroupPerUnit;
             }
