@@ -93,6 +93,18 @@
 // yz_g), exactly, the same doubles as the voxel-by-voxel minimum (so every value, count and unit
 // of work is unchanged), at O(group) a row and O(k) a sample instead of O(group) a sample. At
 // k > kFieldEditGroup (a stride field_stride_for never gives) a group is one voxel.
+// The batch's union box (edit51). A whole edit (no cursor: the worker's batch, the reference's
+// fixed-latency publish) groups the consecutive voxels (at most kFieldEditGroup) whose span stays
+// below kFieldEditGroup voxels on every axis, whatever their box centres, and visits once the
+// union box [floor(cl / k) + P - R, floor(ch / k) + P + R] of their boxes ([cl, ch] the group's
+// voxel bounds): every sample within R_v voxels of a group voxel c lies within R of floor(c / k)
+// + P, inside it. Nothing above used the common centre: the least distances over the group, the
+// skips by the distance to [cl, ch] (a lower bound of each voxel's) and the closed forms are the
+// same for any voxels, so every stored value and the Lipschitz constant are the voxel-by-voxel
+// edit's; the counts are per visit (a sample the group's voxels would each have read is read
+// once, each row of the union once, where the centre groups of one tick's drilling each read
+// their whole box of (2R + 1)^2 rows, mostly rows whose row bounds skip every sample). A
+// budgeted edit keeps the common centre (its cursor's rows are rows of one box).
 //
 // Real-time: no allocation, no throw (the Access must not either).
 #pragma once
@@ -258,11 +270,26 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
     if (resumed && first_row > 0 && cursor->group > 0) {
       group = std::min(cursor->group, removed.size() - at);
     } else if (stride > 1 && stride <= kFieldEditGroup) {  // a group's x columns fit its rows'
+      // A whole edit (no cursor) groups the consecutive voxels whose span stays below
+      // kFieldEditGroup voxels on every axis, whatever their box centres (header comment, "The
+      // batch's union box"); a budgeted one those with the same centre.
+      int span_lo[3] = {cv[0], cv[1], cv[2]}, span_hi[3] = {cv[0], cv[1], cv[2]};
       while (at + group < removed.size() && group < static_cast<std::size_t>(kFieldEditGroup)) {
         int c[3];
         voxel_of(removed[at + group], c);
-        if (c[0] / stride + pad != s0[0] || c[1] / stride + pad != s0[1] ||
-            c[2] / stride + pad != s0[2]) {
+        if (cursor == nullptr) {
+          bool fits = true;
+          for (int a = 0; a < 3; ++a) {
+            fits = fits && std::max(span_hi[a], c[a]) - std::min(span_lo[a], c[a]) <
+                               kFieldEditGroup;
+          }
+          if (!fits) break;
+          for (int a = 0; a < 3; ++a) {
+            span_lo[a] = std::min(span_lo[a], c[a]);
+            span_hi[a] = std::max(span_hi[a], c[a]);
+          }
+        } else if (c[0] / stride + pad != s0[0] || c[1] / stride + pad != s0[1] ||
+                   c[2] / stride + pad != s0[2]) {
           break;
         }
         ++group;
@@ -285,6 +312,12 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
       const int q = stride * (sa - pad);
       return q < cl[a] ? cl[a] - q : (q > ch[a] ? q - ch[a] : 0);
     };
+    // The box: the samples within R of the group's box centres, [lo_a - R, lo_a + ext_a + R]
+    // (one centre, ext = 0: the box of R about s0).
+    const int box_lo[3] = {cl[0] / stride + pad, cl[1] / stride + pad, cl[2] / stride + pad};
+    const int ext[3] = {ch[0] / stride + pad - box_lo[0], ch[1] / stride + pad - box_lo[1],
+                        ch[2] / stride + pad - box_lo[2]};
+    const int row_width = width + ext[1];
     if (spent()) {  // the budget is spent before this group's next row: the next call's first
       cursor->next = at;
       cursor->row = first_row;
@@ -310,14 +343,14 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
         }
       }
     }
-    for (int dz = -reach + first_row / width; dz <= reach && !paused; ++dz) {
-      const int sz = s0[2] + dz;
+    for (int dz = -reach + first_row / row_width; dz <= reach + ext[2] && !paused; ++dz) {
+      const int sz = box_lo[2] + dz;
       if (sz < 0 || sz >= m) continue;
       const int oz = offset(2, sz);
       const double ez = std::max(std::abs(oz) - 1.0, 0.0);
       if (h * std::sqrt(ez * ez) > ball) continue;  // the plane misses the ball
-      for (int dy = -reach; dy <= reach && !paused; ++dy) {
-        const int row = (dz + reach) * width + dy + reach;
+      for (int dy = -reach; dy <= reach + ext[1] && !paused; ++dy) {
+        const int row = (dz + reach) * row_width + dy + reach;
         if (row < first_row) continue;  // taken by an earlier call
         if (spent()) {
           cursor->next = at;  // the budget is spent: this row is the next call's first
@@ -327,7 +360,7 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
           break;
         }
         began_row = true;
-        const int sy = s0[1] + dy;
+        const int sy = box_lo[1] + dy;
         if (sy < 0 || sy >= m) continue;
         const int oy = offset(1, sy);
         const double ey = std::max(std::abs(oy) - 1.0, 0.0);
@@ -337,10 +370,12 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
         // A group's least distances, factored per row (header comment, "The group's minimum"):
         // for each x column j = c_x - cl_x of its voxels, the least y and z terms over the voxels
         // of that column, (e_y^2 + e_z^2) for the grown cube and (a_y^2 + a_z^2) for the cube.
+        // Taken at the row's first sample read (most rows read none).
         int columns[kFieldEditGroup];
-        int column_count = 0;
+        int column_count = -1;  // not taken yet
         double row_e2[kFieldEditGroup], row_a2[kFieldEditGroup];
-        if (group > 1) {
+        const auto take_columns = [&] {
+          column_count = 0;
           const int qy = stride * (sy - pad), qz = stride * (sz - pad);
           for (int j = 0; j <= ch[0] - cl[0]; ++j) {
             row_e2[j] = INFINITY;
@@ -359,13 +394,14 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
             row_e2[j] = std::min(row_e2[j], e2);
             row_a2[j] = std::min(row_a2[j], a2);
           }
-        }
+        };
         // The x extent of this row's raises: the cells with one of them as a corner are
         // re-measured once the row is done (header comment).
         int raised_lo = INT_MAX, raised_hi = -1;
         // The row in segments of the field's bricks, each read only where its row bound lets a
         // sample pass the rule's test (header comment, "Only the samples a removal can change").
-        const int x_first = std::max(0, s0[0] - reach), x_last = std::min(m - 1, s0[0] + reach);
+        const int x_first = std::max(0, box_lo[0] - reach),
+                  x_last = std::min(m - 1, box_lo[0] + ext[0] + reach);
         for (int xb = x_first / kFieldBrick; xb * kFieldBrick <= x_last; ++xb) {
           const float bound = field.row_bound(xb, sy, sz);
           if (bound < 0.0f) continue;  // every sample of the segment at c_out
@@ -388,6 +424,7 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
             // of the sums gives the least distance, the same double).
             double grown2 = ex * ex + ey * ey + ez * ez, cube2 = 0.0;
             if (group > 1) {
+              if (column_count < 0) take_columns();
               const int qx = stride * (sx - pad);
               grown2 = INFINITY;
               cube2 = INFINITY;
