@@ -86,13 +86,16 @@
 // The group's minimum, factored per row (edit51): a voxel's squared distances are sums of one
 // term per axis, e_x^2 + e_y^2 + e_z^2 (the grown cube) and a_x^2 + a_y^2 + a_z^2 (the cube),
 // each term an integer or a quarter-integer far below 2^53, so every sum is exact whatever its
-// order. On a row (fixed sy, sz) the y and z terms of a voxel are fixed: the row takes, for each
-// x column of the group (its voxels' c_x, fewer than k distinct values, as all lie in one coarse
-// cell), the least (y + z) sum over the column's voxels, and a sample then the least over the
-// columns of its x term plus the column's least: min_g (x_g + yz_g) = min_j (x_j + min_{g in j}
-// yz_g), exactly, the same doubles as the voxel-by-voxel minimum (so every value, count and unit
-// of work is unchanged), at O(group) a row and O(k) a sample instead of O(group) a sample. At
-// k > kFieldEditGroup (a stride field_stride_for never gives) a group is one voxel.
+// order. On a row (fixed sy, sz) the y and z terms of a voxel are fixed: the row (at its first
+// sample read) takes, for each x column of the group (c_x in [cl_x, ch_x], at most
+// kFieldEditGroup of them), the least (y + z) sum over the column's voxels (+inf: none), and a
+// sample then the least over the columns of its x term plus the column's least: min_g (x_g +
+// yz_g) = min_j (x_j + min_{g in j} yz_g), exactly, the same doubles as the voxel-by-voxel
+// minimum (so every value, count and unit of work is unchanged). The columns are visited outward
+// from the sample's own: the x term grows along each direction and the (y + z) least is >= 0,
+// so a direction stops once both x terms reach the minima found (a farther column cannot lower
+// a minimum: the same double). O(group) a row read, a few columns a sample, instead of O(group)
+// a sample. At k > kFieldEditGroup (a stride field_stride_for never gives) a group is one voxel.
 // The batch's union box (edit51). A whole edit (no cursor: the worker's batch, the reference's
 // fixed-latency publish) groups the consecutive voxels (at most kFieldEditGroup) whose span stays
 // below kFieldEditGroup voxels on every axis, whatever their box centres, and visits once the
@@ -371,11 +374,10 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
         // for each x column j = c_x - cl_x of its voxels, the least y and z terms over the voxels
         // of that column, (e_y^2 + e_z^2) for the grown cube and (a_y^2 + a_z^2) for the cube.
         // Taken at the row's first sample read (most rows read none).
-        int columns[kFieldEditGroup];
-        int column_count = -1;  // not taken yet
+        bool columns_taken = false;
         double row_e2[kFieldEditGroup], row_a2[kFieldEditGroup];
         const auto take_columns = [&] {
-          column_count = 0;
+          columns_taken = true;
           const int qy = stride * (sy - pad), qz = stride * (sz - pad);
           for (int j = 0; j <= ch[0] - cl[0]; ++j) {
             row_e2[j] = INFINITY;
@@ -390,7 +392,6 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
               e2 += e * e;
               a2 += c * c;
             }
-            if (row_e2[j] == INFINITY && row_a2[j] == INFINITY) columns[column_count++] = j;
             row_e2[j] = std::min(row_e2[j], e2);
             row_a2[j] = std::min(row_a2[j], a2);
           }
@@ -424,16 +425,26 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
             // of the sums gives the least distance, the same double).
             double grown2 = ex * ex + ey * ey + ez * ez, cube2 = 0.0;
             if (group > 1) {
-              if (column_count < 0) take_columns();
+              if (!columns_taken) take_columns();
               const int qx = stride * (sx - pad);
               grown2 = INFINITY;
               cube2 = INFINITY;
-              for (int u = 0; u < column_count; ++u) {
-                const int j = columns[u];
+              // The columns outward from the nearest one: the x term only grows along each
+              // direction and the (y + z) least is >= 0, so once both x terms reach the minima
+              // found, no farther column can lower them (the same doubles).
+              const int span = ch[0] - cl[0];
+              const int j0 = std::clamp(qx - cl[0], 0, span);
+              const auto visit = [&](int j) {
                 const int o = std::abs(qx - (cl[0] + j));
                 const double e = std::max(o - 1.0, 0.0), c = std::max(o - 0.5, 0.0);
+                if (e * e >= grown2 && c * c >= cube2) return false;
                 grown2 = std::min(grown2, e * e + row_e2[j]);
                 cube2 = std::min(cube2, c * c + row_a2[j]);
+                return true;
+              };
+              for (int j = j0; j >= 0 && visit(j); --j) {
+              }
+              for (int j = j0 + 1; j <= span && visit(j); ++j) {
               }
               stats->work += static_cast<long>(group) / kFieldEditGroupPerUnit;
             }
