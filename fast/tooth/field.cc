@@ -152,24 +152,44 @@ double FieldBricks::worst_cells(const std::int32_t* table, const int lo[3],
   }
   // SampledField::cell_lipschitz's arithmetic per cell up to the square root (header comment).
   double worst = -1.0;  // no cell
+  const auto measure = [&worst](const float* cf) {
+    double c[8];
+    for (int d = 0; d < 8; ++d) c[d] = cf[d];
+    double mx = 0.0, my = 0.0, mz = 0.0;
+    for (int e = 0; e < 4; ++e) {
+      const int ix = 2 * e;
+      const int iy = (e & 1) + 4 * (e >> 1);
+      const int iz = e;
+      mx = std::max(mx, std::abs(c[ix + 1] - c[ix]));
+      my = std::max(my, std::abs(c[iy + 2] - c[iy]));
+      mz = std::max(mz, std::abs(c[iz + 4] - c[iz]));
+    }
+    worst = std::max(worst, mx * mx + my * my + mz * mz);
+  };
   float cf[8];
   for (int z = a[2]; z <= b[2]; ++z) {
     for (int y = a[1]; y <= b[1]; ++y) {
-      for (int x = a[0]; x <= b[0]; ++x) {
-        const int s[3] = {x, y, z};
-        corners_on(table, s, cf);
-        double c[8];
-        for (int d = 0; d < 8; ++d) c[d] = cf[d];
-        double mx = 0.0, my = 0.0, mz = 0.0;
-        for (int e = 0; e < 4; ++e) {
-          const int ix = 2 * e;
-          const int iy = (e & 1) + 4 * (e >> 1);
-          const int iz = e;
-          mx = std::max(mx, std::abs(c[ix + 1] - c[ix]));
-          my = std::max(my, std::abs(c[iy + 2] - c[iy]));
-          mz = std::max(mz, std::abs(c[iz + 4] - c[iz]));
+      // The row's cells in runs of one 9^3 brick (all 8 corners of a cell are in its lower
+      // corner's brick): the table is read once a run, the corners at fixed offsets (edit51).
+      for (int x = a[0]; x <= b[0];) {
+        const int bx = x / kFieldBrick, by = y / kFieldBrick, bz = z / kFieldBrick;
+        const int last = std::min(b[0], bx * kFieldBrick + kFieldBrick - 1);
+        const std::int32_t id = table[slot(bx, by, bz)];
+        if (id >= 0) {
+          const float* p = bricks_.data() + static_cast<std::size_t>(id) * kSamples +
+                           (x - bx * kFieldBrick) +
+                           kE * ((y - by * kFieldBrick) + kE * (z - bz * kFieldBrick));
+          for (; x <= last; ++x, ++p) {
+            for (int d = 0; d < 8; ++d) cf[d] = p[kCorner[d]];
+            measure(cf);
+          }
+        } else {
+          for (; x <= last; ++x) {
+            const int s[3] = {x, y, z};
+            corners_on(table, s, cf);
+            measure(cf);
+          }
         }
-        worst = std::max(worst, mx * mx + my * my + mz * mz);
       }
     }
   }

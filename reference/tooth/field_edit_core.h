@@ -83,6 +83,31 @@
 // samples every voxel skips. A group lists no neighbours (U is then the 27 around the sample: a
 // subset, which the proof of the shorter reach allows). At k = 1 a group is one voxel: the
 // code above, bit for bit.
+// The group's minimum, factored per row (edit51): a voxel's squared distances are sums of one
+// term per axis, e_x^2 + e_y^2 + e_z^2 (the grown cube) and a_x^2 + a_y^2 + a_z^2 (the cube),
+// each term an integer or a quarter-integer far below 2^53, so every sum is exact whatever its
+// order. On a row (fixed sy, sz) the y and z terms of a voxel are fixed: the row (at its first
+// sample read) takes, for each x column of the group (c_x in [cl_x, ch_x], at most
+// kFieldEditGroup of them), the least (y + z) sum over the column's voxels (+inf: none), and a
+// sample then the least over the columns of its x term plus the column's least: min_g (x_g +
+// yz_g) = min_j (x_j + min_{g in j} yz_g), exactly, the same doubles as the voxel-by-voxel
+// minimum (so every value, count and unit of work is unchanged). The columns are visited outward
+// from the sample's own: the x term grows along each direction and the (y + z) least is >= 0,
+// so a direction stops once both x terms reach the minima found (a farther column cannot lower
+// a minimum: the same double). O(group) a row read, a few columns a sample, instead of O(group)
+// a sample. At k > kFieldEditGroup (a stride field_stride_for never gives) a group is one voxel.
+// The batch's union box (edit51). A whole edit (no cursor: the worker's batch, the reference's
+// fixed-latency publish) groups the consecutive voxels (at most kFieldEditGroup) whose span stays
+// below kFieldEditGroup voxels on every axis, whatever their box centres, and visits once the
+// union box [floor(cl / k) + P - R, floor(ch / k) + P + R] of their boxes ([cl, ch] the group's
+// voxel bounds): every sample within R_v voxels of a group voxel c lies within R of floor(c / k)
+// + P, inside it. Nothing above used the common centre: the least distances over the group, the
+// skips by the distance to [cl, ch] (a lower bound of each voxel's) and the closed forms are the
+// same for any voxels, so every stored value and the Lipschitz constant are the voxel-by-voxel
+// edit's; the counts are per visit (a sample the group's voxels would each have read is read
+// once, each row of the union once, where the centre groups of one tick's drilling each read
+// their whole box of (2R + 1)^2 rows, mostly rows whose row bounds skip every sample). A
+// budgeted edit keeps the common centre (its cursor's rows are rows of one box).
 //
 // Real-time: no allocation, no throw (the Access must not either).
 #pragma once
@@ -247,12 +272,27 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
     group = 1;
     if (resumed && first_row > 0 && cursor->group > 0) {
       group = std::min(cursor->group, removed.size() - at);
-    } else if (stride > 1) {
+    } else if (stride > 1 && stride <= kFieldEditGroup) {  // a group's x columns fit its rows'
+      // A whole edit (no cursor) groups the consecutive voxels whose span stays below
+      // kFieldEditGroup voxels on every axis, whatever their box centres (header comment, "The
+      // batch's union box"); a budgeted one those with the same centre.
+      int span_lo[3] = {cv[0], cv[1], cv[2]}, span_hi[3] = {cv[0], cv[1], cv[2]};
       while (at + group < removed.size() && group < static_cast<std::size_t>(kFieldEditGroup)) {
         int c[3];
         voxel_of(removed[at + group], c);
-        if (c[0] / stride + pad != s0[0] || c[1] / stride + pad != s0[1] ||
-            c[2] / stride + pad != s0[2]) {
+        if (cursor == nullptr) {
+          bool fits = true;
+          for (int a = 0; a < 3; ++a) {
+            fits = fits && std::max(span_hi[a], c[a]) - std::min(span_lo[a], c[a]) <
+                               kFieldEditGroup;
+          }
+          if (!fits) break;
+          for (int a = 0; a < 3; ++a) {
+            span_lo[a] = std::min(span_lo[a], c[a]);
+            span_hi[a] = std::max(span_hi[a], c[a]);
+          }
+        } else if (c[0] / stride + pad != s0[0] || c[1] / stride + pad != s0[1] ||
+                   c[2] / stride + pad != s0[2]) {
           break;
         }
         ++group;
@@ -275,6 +315,12 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
       const int q = stride * (sa - pad);
       return q < cl[a] ? cl[a] - q : (q > ch[a] ? q - ch[a] : 0);
     };
+    // The box: the samples within R of the group's box centres, [lo_a - R, lo_a + ext_a + R]
+    // (one centre, ext = 0: the box of R about s0).
+    const int box_lo[3] = {cl[0] / stride + pad, cl[1] / stride + pad, cl[2] / stride + pad};
+    const int ext[3] = {ch[0] / stride + pad - box_lo[0], ch[1] / stride + pad - box_lo[1],
+                        ch[2] / stride + pad - box_lo[2]};
+    const int row_width = width + ext[1];
     if (spent()) {  // the budget is spent before this group's next row: the next call's first
       cursor->next = at;
       cursor->row = first_row;
@@ -300,14 +346,14 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
         }
       }
     }
-    for (int dz = -reach + first_row / width; dz <= reach && !paused; ++dz) {
-      const int sz = s0[2] + dz;
+    for (int dz = -reach + first_row / row_width; dz <= reach + ext[2] && !paused; ++dz) {
+      const int sz = box_lo[2] + dz;
       if (sz < 0 || sz >= m) continue;
       const int oz = offset(2, sz);
       const double ez = std::max(std::abs(oz) - 1.0, 0.0);
       if (h * std::sqrt(ez * ez) > ball) continue;  // the plane misses the ball
-      for (int dy = -reach; dy <= reach && !paused; ++dy) {
-        const int row = (dz + reach) * width + dy + reach;
+      for (int dy = -reach; dy <= reach + ext[1] && !paused; ++dy) {
+        const int row = (dz + reach) * row_width + dy + reach;
         if (row < first_row) continue;  // taken by an earlier call
         if (spent()) {
           cursor->next = at;  // the budget is spent: this row is the next call's first
@@ -317,19 +363,46 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
           break;
         }
         began_row = true;
-        const int sy = s0[1] + dy;
+        const int sy = box_lo[1] + dy;
         if (sy < 0 || sy >= m) continue;
         const int oy = offset(1, sy);
         const double ey = std::max(std::abs(oy) - 1.0, 0.0);
         if (h * std::sqrt(ey * ey + ez * ez) > ball) continue;  // the row misses the ball
         ++stats->rows_read;
         stats->work += kFieldEditRowWeight;
+        // A group's least distances, factored per row (header comment, "The group's minimum"):
+        // for each x column j = c_x - cl_x of its voxels, the least y and z terms over the voxels
+        // of that column, (e_y^2 + e_z^2) for the grown cube and (a_y^2 + a_z^2) for the cube.
+        // Taken at the row's first sample read (most rows read none).
+        bool columns_taken = false;
+        double row_e2[kFieldEditGroup], row_a2[kFieldEditGroup];
+        const auto take_columns = [&] {
+          columns_taken = true;
+          const int qy = stride * (sy - pad), qz = stride * (sz - pad);
+          for (int j = 0; j <= ch[0] - cl[0]; ++j) {
+            row_e2[j] = INFINITY;
+            row_a2[j] = INFINITY;
+          }
+          for (std::size_t g = 0; g < group; ++g) {
+            const int j = gv[g][0] - cl[0];
+            const int o[2] = {std::abs(qy - gv[g][1]), std::abs(qz - gv[g][2])};
+            double e2 = 0.0, a2 = 0.0;
+            for (int a = 0; a < 2; ++a) {
+              const double e = std::max(o[a] - 1.0, 0.0), c = std::max(o[a] - 0.5, 0.0);
+              e2 += e * e;
+              a2 += c * c;
+            }
+            row_e2[j] = std::min(row_e2[j], e2);
+            row_a2[j] = std::min(row_a2[j], a2);
+          }
+        };
         // The x extent of this row's raises: the cells with one of them as a corner are
         // re-measured once the row is done (header comment).
         int raised_lo = INT_MAX, raised_hi = -1;
         // The row in segments of the field's bricks, each read only where its row bound lets a
         // sample pass the rule's test (header comment, "Only the samples a removal can change").
-        const int x_first = std::max(0, s0[0] - reach), x_last = std::min(m - 1, s0[0] + reach);
+        const int x_first = std::max(0, box_lo[0] - reach),
+                  x_last = std::min(m - 1, box_lo[0] + ext[0] + reach);
         for (int xb = x_first / kFieldBrick; xb * kFieldBrick <= x_last; ++xb) {
           const float bound = field.row_bound(xb, sy, sz);
           if (bound < 0.0f) continue;  // every sample of the segment at c_out
@@ -352,21 +425,26 @@ bool edit_field(const SampledField& field, const VoxelTooth& tooth,
             // of the sums gives the least distance, the same double).
             double grown2 = ex * ex + ey * ey + ez * ez, cube2 = 0.0;
             if (group > 1) {
-              const int qx = stride * (sx - pad), qy = stride * (sy - pad),
-                        qz = stride * (sz - pad);
+              if (!columns_taken) take_columns();
+              const int qx = stride * (sx - pad);
               grown2 = INFINITY;
               cube2 = INFINITY;
-              for (std::size_t g = 0; g < group; ++g) {
-                const int o[3] = {std::abs(qx - gv[g][0]), std::abs(qy - gv[g][1]),
-                                  std::abs(qz - gv[g][2])};
-                double e2 = 0.0, a2 = 0.0;
-                for (int a = 0; a < 3; ++a) {
-                  const double e = std::max(o[a] - 1.0, 0.0), c = std::max(o[a] - 0.5, 0.0);
-                  e2 += e * e;
-                  a2 += c * c;
-                }
-                grown2 = std::min(grown2, e2);
-                cube2 = std::min(cube2, a2);
+              // The columns outward from the nearest one: the x term only grows along each
+              // direction and the (y + z) least is >= 0, so once both x terms reach the minima
+              // found, no farther column can lower them (the same doubles).
+              const int span = ch[0] - cl[0];
+              const int j0 = std::clamp(qx - cl[0], 0, span);
+              const auto visit = [&](int j) {
+                const int o = std::abs(qx - (cl[0] + j));
+                const double e = std::max(o - 1.0, 0.0), c = std::max(o - 0.5, 0.0);
+                if (e * e >= grown2 && c * c >= cube2) return false;
+                grown2 = std::min(grown2, e * e + row_e2[j]);
+                cube2 = std::min(cube2, c * c + row_a2[j]);
+                return true;
+              };
+              for (int j = j0; j >= 0 && visit(j); --j) {
+              }
+              for (int j = j0 + 1; j <= span && visit(j); ++j) {
               }
               stats->work += static_cast<long>(group) / kFieldEditGroupPerUnit;
             }
