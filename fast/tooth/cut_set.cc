@@ -193,14 +193,25 @@ bool ToothBricks::take(const VoxelTooth& tooth, const SurfaceVoxels& surface,
         fits_ = false;
         return;
       }
+      entries_[count_].rows = 0;
       entries_[count_++].slot = static_cast<std::uint32_t>(s);
     }
     marks[s] = std::max(marks[s], what);
   };
+  std::size_t last = 0;  // the entry of the last removed voxel's brick (they come in runs)
   for (const std::size_t v : removed) {
     const int c[3] = {static_cast<int>(v % n), static_cast<int>((v / n) % n),
                       static_cast<int>(v / (n * n))};
     mark(c, 2);
+    if (!fits_) break;
+    // v's row in its brick (Entry::rows): its entry, the last one's or found from the newest.
+    const std::uint32_t s =
+        static_cast<std::uint32_t>(surface.slot(c[0] / kB, c[1] / kB, c[2] / kB));
+    if (entries_[last].slot != s) {
+      last = count_ - 1;
+      while (entries_[last].slot != s) --last;  // marked: listed
+    }
+    entries_[last].rows |= std::uint64_t{1} << ((c[1] % kB) + kB * (c[2] % kB));
     for (int f = 0; f < 6; ++f) {  // the face neighbours in another brick
       int u[3] = {c[0], c[1], c[2]};
       const int a = face_axis(f);
@@ -245,7 +256,7 @@ bool ToothBricks::apply(VoxelTooth& tooth, SurfaceVoxels& surface) const {
              stored;
     if (entry.node) {
       const std::array<int, 3> b = brick_of(entry.slot);
-      tooth.octree.load_node(level_, b[0], b[1], b[2], &nodes_[e * node_bytes_]);
+      tooth.octree.load_node_rows(level_, b[0], b[1], b[2], &nodes_[e * node_bytes_], entry.rows);
     }
   }
   return stored;

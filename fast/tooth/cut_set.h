@@ -203,6 +203,9 @@ class ToothBricks {
     std::uint32_t slot = 0;
     bool codes = false, bits = false;  // whether the slot had a brick of codes, of bits
     bool node = false;                 // whether it held a removed voxel (its node copied)
+    // Its voxels' rows (j, k) holding a removed voxel, bit j + 8 k: the only rows of the node's
+    // voxels the removal changed (the rest equal on both teeth), the only ones apply() copies.
+    std::uint64_t rows = 0;
   };
   // Slot s's brick coordinates, its octree node's at level_ (a grid below 8^3: the root).
   std::array<int, 3> brick_of(std::size_t s) const {
