@@ -498,6 +498,37 @@ bool SurfaceCutSet::certified_material(const Vec3& g, std::uint8_t* material) {
   const double m = proxy_material_reach(rho_);
   if (!(d2 < m * m)) return false;
   std::size_t s = grid.index(u[0], u[1], u[2]);
+  // The held certificate (servo51): a pyramid pass for a wider ball, kept for the next queries.
+  // Claim: if only(grid, x0, W^2, m) passed (W = held_r_ + margin, margin = 1e-9 h), s is solid
+  // now of material m, and sqrt(d2) + |g - x0| + margin <= held_r_ (computed), then every voxel
+  // v solid now with D_g(v) <= d2 is of material m, so the reference's v* (D_g(v*) <= d2) is.
+  // Proof: v's box is within sqrt(D_g(v)) (1 + 3u) of g (D: correctly rounded terms summed,
+  // relative error < 3u, u = 2^-53), hence within sqrt(d2) + |g - x0| (1 + 3u) + 4u sqrt(d2)
+  // <= held_r_ - margin / 2 of x0 (the margin, some 10^6 times the rounding of lengths below a
+  // metre, covers the computed sum's and norm's rounding), so D_x0(v) <= (W - 1.5 margin)^2
+  // (1 + 3u) < fl(W^2): v was solid then (removals only) and within the passed ball, so it is of
+  // material m. The proxy moves a few micrometres a tick while the ball's radius (about rho)
+  // barely changes, so a ball wider by kWiden rho stays held for many ticks.
+  const std::uint8_t ms = grid.voxels[s];
+  const double margin = 1e-9 * grid.voxel_size;
+  const double r = std::sqrt(d2);
+  if (held_ && ms == held_m_ && r + (g - held_x_).norm() + margin <= held_r_) {
+    ++held_hits_;
+    *material = ms;
+    seed_ = s;
+    return true;
+  }
+  constexpr double kWiden = 0.125;
+  const double wide = r + kWiden * rho_;
+  if (blocks_.only(grid, g, wide * wide, ms)) {
+    held_ = true;
+    held_x_ = g;
+    held_r_ = wide - margin;
+    held_m_ = ms;
+    *material = ms;
+    seed_ = s;
+    return true;
+  }
   constexpr int kRounds = 4;
   for (int round = 0; round < kRounds; ++round) {
     MaterialBlocks::Witness w;
