@@ -193,14 +193,25 @@ bool ToothBricks::take(const VoxelTooth& tooth, const SurfaceVoxels& surface,
         fits_ = false;
         return;
       }
+      entries_[count_].rows = 0;
       entries_[count_++].slot = static_cast<std::uint32_t>(s);
     }
     marks[s] = std::max(marks[s], what);
   };
+  std::size_t last = 0;  // the entry of the last removed voxel's brick (they come in runs)
   for (const std::size_t v : removed) {
     const int c[3] = {static_cast<int>(v % n), static_cast<int>((v / n) % n),
                       static_cast<int>(v / (n * n))};
     mark(c, 2);
+    if (!fits_) break;
+    // v's row in its brick (Entry::rows): its entry, the last one's or found from the newest.
+    const std::uint32_t s =
+        static_cast<std::uint32_t>(surface.slot(c[0] / kB, c[1] / kB, c[2] / kB));
+    if (entries_[last].slot != s) {
+      last = count_ - 1;
+      while (entries_[last].slot != s) --last;  // marked: listed
+    }
+    entries_[last].rows |= std::uint64_t{1} << ((c[1] % kB) + kB * (c[2] % kB));
     for (int f = 0; f < 6; ++f) {  // the face neighbours in another brick
       int u[3] = {c[0], c[1], c[2]};
       const int a = face_axis(f);
@@ -245,7 +256,7 @@ bool ToothBricks::apply(VoxelTooth& tooth, SurfaceVoxels& surface) const {
              stored;
     if (entry.node) {
       const std::array<int, 3> b = brick_of(entry.slot);
-      tooth.octree.load_node(level_, b[0], b[1], b[2], &nodes_[e * node_bytes_]);
+      tooth.octree.load_node_rows(level_, b[0], b[1], b[2], &nodes_[e * node_bytes_], entry.rows);
     }
   }
   return stored;
@@ -487,6 +498,37 @@ bool SurfaceCutSet::certified_material(const Vec3& g, std::uint8_t* material) {
   const double m = proxy_material_reach(rho_);
   if (!(d2 < m * m)) return false;
   std::size_t s = grid.index(u[0], u[1], u[2]);
+  // The held certificate (servo51): a pyramid pass for a wider ball, kept for the next queries.
+  // Claim: if only(grid, x0, W^2, m) passed (W = held_r_ + margin, margin = 1e-9 h), s is solid
+  // now of material m, and sqrt(d2) + |g - x0| + margin <= held_r_ (computed), then every voxel
+  // v solid now with D_g(v) <= d2 is of material m, so the reference's v* (D_g(v*) <= d2) is.
+  // Proof: v's box is within sqrt(D_g(v)) (1 + 3u) of g (D: correctly rounded terms summed,
+  // relative error < 3u, u = 2^-53), hence within sqrt(d2) + |g - x0| (1 + 3u) + 4u sqrt(d2)
+  // <= held_r_ - margin / 2 of x0 (the margin, some 10^6 times the rounding of lengths below a
+  // metre, covers the computed sum's and norm's rounding), so D_x0(v) <= (W - 1.5 margin)^2
+  // (1 + 3u) < fl(W^2): v was solid then (removals only) and within the passed ball, so it is of
+  // material m. The proxy moves a few micrometres a tick while the ball's radius (about rho)
+  // barely changes, so a ball wider by kWiden rho stays held for many ticks.
+  const std::uint8_t ms = grid.voxels[s];
+  const double margin = 1e-9 * grid.voxel_size;
+  const double r = std::sqrt(d2);
+  if (held_ && ms == held_m_ && r + (g - held_x_).norm() + margin <= held_r_) {
+    ++held_hits_;
+    *material = ms;
+    seed_ = s;
+    return true;
+  }
+  constexpr double kWiden = 0.125;
+  const double wide = r + kWiden * rho_;
+  if (blocks_.only(grid, g, wide * wide, ms)) {
+    held_ = true;
+    held_x_ = g;
+    held_r_ = wide - margin;
+    held_m_ = ms;
+    *material = ms;
+    seed_ = s;
+    return true;
+  }
   constexpr int kRounds = 4;
   for (int round = 0; round < kRounds; ++round) {
     MaterialBlocks::Witness w;

@@ -203,6 +203,9 @@ class ToothBricks {
     std::uint32_t slot = 0;
     bool codes = false, bits = false;  // whether the slot had a brick of codes, of bits
     bool node = false;                 // whether it held a removed voxel (its node copied)
+    // Its voxels' rows (j, k) holding a removed voxel, bit j + 8 k: the only rows of the node's
+    // voxels the removal changed (the rest equal on both teeth), the only ones apply() copies.
+    std::uint64_t rows = 0;
   };
   // Slot s's brick coordinates, its octree node's at level_ (a grid below 8^3: the root).
   std::array<int, 3> brick_of(std::size_t s) const {
@@ -272,6 +275,8 @@ class SurfaceCutSet {
   long seeded() const { return seeded_queries_; }
   // The pyramid's refusals that named a witness material() asked again from (tests).
   long reseeded() const { return reseeded_; }
+  // material() answers the held certificate gave without reading the pyramid (tests).
+  long held() const { return held_hits_; }
 
  private:
   // A brick of the box: its slot and its place in the box (brick coordinates less the box's low
@@ -321,6 +326,14 @@ class SurfaceCutSet {
   bool pyramid_ = true;    // blocks_ built (the constructor's flag)
   MaterialBlocks blocks_;  // the tooth's materials at construction
   long certified_ = 0, reseeded_ = 0;
+  // The held certificate (servo51; certified_material): the pyramid passed material held_m_ for
+  // the ball about held_x_ of squared radius held_r_ + kHeldMargin, squared (no voxel solid then,
+  // hence none now, of another material has its box within that of held_x_).
+  bool held_ = false;
+  Vec3 held_x_ = Vec3::Zero();
+  double held_r_ = 0.0;
+  std::uint8_t held_m_ = 0;
+  long held_hits_ = 0;
 };
 
 // dentsim::ToothContactProvider with its voxel side replaced by SurfaceCutSet: the fast

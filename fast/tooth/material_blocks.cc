@@ -76,21 +76,40 @@ bool MaterialBlocks::voxels_only(const VoxelGrid& grid, const Vec3& x, double d2
   // witness, the block is read to its end for the least such D (the first in (k, j, i) order, the
   // grid's, among equals), named only if < d2.
   ++mixed_read_;
+  using voxel_walk::gap2;
+  using voxel_walk::plane;
   const int e = edge0_;
+  // The block's per-axis terms (servo51): voxel (i, j, k)'s D is (tx[i] + ty[j]) + tz[k], the
+  // same double as voxel_distance2 (the same terms summed in its order). The terms are >= 0 and
+  // rounded addition is monotone, so D >= fl(ty[j] + tz[k]) >= tz[k]: a plane or a row whose
+  // bound is > d2 holds no voxel with D <= d2 and is skipped unread (the same answer and witness).
+  const int b[3] = {bx, by, bz};
+  double t[3][kEdge];
+  for (int a = 0; a < 3; ++a) {
+    for (int u = 0; u < e; ++u) {
+      const int i = e * b[a] + u;
+      t[a][u] = gap2(x[a], plane(grid, a, i), plane(grid, a, i + 1));
+    }
+  }
   bool pass = true;
   double least = d2;
   std::size_t at = 0;
-  for (int k = e * bz; k < e * (bz + 1); ++k) {
-    for (int j = e * by; j < e * (by + 1); ++j) {
-      const std::uint8_t* row = &grid.voxels[grid.index(0, j, k)];
-      for (int i = e * bx; i < e * (bx + 1); ++i) {
+  for (int k = 0; k < e; ++k) {
+    const double tz = t[2][k];
+    if (tz > d2) continue;
+    for (int j = 0; j < e; ++j) {
+      const double ty = t[1][j];
+      if (ty + tz > d2) continue;
+      const std::size_t first = grid.index(e * bx, e * by + j, e * bz + k);
+      const std::uint8_t* row = &grid.voxels[first];
+      for (int i = 0; i < e; ++i) {
         if (row[i] == kEmpty || row[i] == m) continue;
-        const double dv = voxel_walk::voxel_distance2(grid, i, j, k, x);
+        const double dv = (t[0][i] + ty) + tz;
         if (dv > d2) continue;
         if (witness == nullptr) return false;
         if (pass || dv < least) {
           least = dv;
-          at = grid.index(i, j, k);
+          at = first + static_cast<std::size_t>(i);
         }
         pass = false;
       }

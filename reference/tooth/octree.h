@@ -107,6 +107,12 @@ class FullOctree {
   // the same size. Every mask is again that of the definition when, outside the node's box, the
   // two grids hold the same voxels. No allocation, no throw.
   void load_node(int level, int x, int y, int z, const std::uint8_t* in);
+  // load_node of a node of 8^3 voxels (level L - 3; other levels: load_node) taking of its
+  // voxels the rows (j, k) whose bit j + 8 k is set in `rows` only (servo51: the rows a removal
+  // changed; the caller's claim is that the others hold save_node's bytes already), and every
+  // mask. No allocation, no throw.
+  void load_node_rows(int level, int x, int y, int z, const std::uint8_t* in,
+                      std::uint64_t rows);
 
  private:
   VoxelGrid grid_;

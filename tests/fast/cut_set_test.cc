@@ -508,6 +508,7 @@ struct Walks {
   long steps = 0, seeded = 0, removed = 0, mismatches = 0;
   long certified = 0;  // material() answers the pyramid gave (a second twin, stop 49)
   long reseeded = 0;   // its refusals that named a witness it asked again from (collide50)
+  long held = 0;       // its answers from the held certificate (servo51)
 };
 
 // `pyramid`: the second twin's constructor flag (false: no MaterialBlocks, material() walks).
@@ -618,10 +619,11 @@ Walks material_walks(VoxelTooth& tooth, double rho, int walks, int steps, std::u
   }
   w.certified = blocks.certified();
   w.reseeded = blocks.reseeded();
+  w.held = blocks.held();
   std::printf("%dx, h %.4g mm, rho %.3g mm: %ld steps, %ld seeded, %ld voxels removed, %ld "
-              "material queries by sd of %ld; without the voxel %ld of %ld\n",
+              "material queries by sd of %ld; without the voxel %ld of %ld (%ld held)\n",
               grid.n, 1e3 * h, 1e3 * rho, w.steps, w.seeded, w.removed, twin.fallbacks(),
-              twin.queries(), w.certified, blocks.queries());
+              twin.queries(), w.certified, blocks.queries(), w.held);
   return w;
 }
 
@@ -707,13 +709,14 @@ TEST(SurfaceCutSet, TheMaterialWithoutItsVoxelIsTheReferencesAlongWalks) {
     EXPECT_GT(w.certified, w.steps / 3) << n;  // signal: the pyramid answers
   }
   const double h128 = voxelize_procedural_molar(MolarParams{}, 32).voxel_size * 32.0 / 128.0;
-  long reseeded = 0;
+  long reseeded = 0, held = 0;
   for (const double h : {0.25 * h128, h128}) {
     for (int pattern = 0; pattern <= 4; ++pattern) {
       VoxelTooth tooth(painted(edge_grid(64, h), pattern));
       const Walks w = material_walks(tooth, 0.5e-3, 12, 60, 4910 + pattern);
       EXPECT_EQ(w.mismatches, 0) << h << " pattern " << pattern;
       reseeded += w.reseeded;
+      held += w.held;
       // Signal: the pyramid answers on a uniform tooth, and the walk where walls cross the ball.
       if (pattern == 0) {
         EXPECT_GT(w.certified, w.steps * 2 / 3) << h;
@@ -724,6 +727,7 @@ TEST(SurfaceCutSet, TheMaterialWithoutItsVoxelIsTheReferencesAlongWalks) {
   }
   // Signal: across the junctions the certificate is asked again from a witness (collide50).
   EXPECT_GT(reseeded, 20);
+  EXPECT_GT(held, 100);  // signal: the held certificate answers, junctions included (servo51)
   for (const int e : {12, 14}) {
     for (const int pattern : {1, 2, 4}) {
       VoxelTooth tooth(painted(edge_grid(64, std::ldexp(1.0, -e)), pattern, 2));

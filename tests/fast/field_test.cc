@@ -803,6 +803,59 @@ TEST(ToothBricks, CopiedBackEqualTheRemovalVoxelByVoxel) {
   }
 }
 
+// servo51: ToothBricks::apply copies of a node's voxels only the rows holding a removed voxel
+// (FullOctree::load_node_rows): the rows named are the saved node's, every other row keeps its
+// bytes (here one the saved tooth lost after the save, so a copy of it would show), and the masks
+// are the saved ones; with the rows the removal changed named, the two octrees are equal.
+TEST(ToothBricks, ApplyCopiesOnlyTheRowsTheRemovalChanged) {
+  const VoxelGrid start = speckled_grid(32, 5100);
+  FullOctree worker(start), servo(start);
+  const int level = worker.levels() - 3, b[3] = {1, 2, 0};  // brick (1, 2, 0): voxels 8.., 16..
+  std::uint64_t rows = 0;
+  for (const std::array<int, 3>& c : std::initializer_list<std::array<int, 3>>{
+           {8, 16, 0}, {9, 16, 0}, {15, 19, 3}, {12, 23, 7}}) {
+    if (worker.remove_voxel(c[0], c[1], c[2]) == kEmpty) continue;
+    rows |= std::uint64_t{1} << ((c[1] - 16) + 8 * c[2]);
+  }
+  ASSERT_NE(rows, 0u);
+  std::vector<std::uint8_t> node(worker.node_bytes(level));
+  worker.save_node(level, b[0], b[1], b[2], node.data());
+  FullOctree later = worker;  // the worker's tooth loses a voxel of a row not named after the save
+  int other[3] = {-1, -1, -1};
+  for (int k = 0; k < 8 && other[0] < 0; ++k) {
+    for (int j = 0; j < 8 && other[0] < 0; ++j) {
+      if ((rows >> (j + 8 * k)) & 1) continue;
+      for (int i = 0; i < 8 && other[0] < 0; ++i) {
+        if (start.at(8 + i, 16 + j, k) == kEmpty) continue;
+        other[0] = 8 + i, other[1] = 16 + j, other[2] = k;
+      }
+    }
+  }
+  ASSERT_GE(other[0], 0);
+  later.remove_voxel(other[0], other[1], other[2]);
+  std::vector<std::uint8_t> stale(later.node_bytes(level));
+  later.save_node(level, b[0], b[1], b[2], stale.data());
+  FullOctree partial = servo;
+  partial.load_node_rows(level, b[0], b[1], b[2], stale.data(), rows);
+  EXPECT_NE(partial.grid().at(other[0], other[1], other[2]), kEmpty);  // its row not copied
+  for (int k = 0; k < 8; ++k) {
+    for (int j = 0; j < 8; ++j) {
+      const bool named = ((rows >> (j + 8 * k)) & 1) != 0;
+      for (int i = 0; i < 8; ++i) {
+        const std::uint8_t want =
+            named ? later.grid().at(8 + i, 16 + j, k) : start.at(8 + i, 16 + j, k);
+        ASSERT_EQ(partial.grid().at(8 + i, 16 + j, k), want) << i << " " << j << " " << k;
+      }
+    }
+  }
+  EXPECT_EQ(partial.masks(), later.masks());
+  // The node saved right after the removal, its rows: the servo's octree is the worker's.
+  servo.load_node_rows(level, b[0], b[1], b[2], node.data(), rows);
+  EXPECT_EQ(servo.grid().voxels, worker.grid().voxels);
+  EXPECT_EQ(servo.masks(), worker.masks());
+  EXPECT_EQ(servo.masks(), FullOctree(worker.grid()).masks());
+}
+
 // The batch's bound: a removal whose changed bricks exceed the capacity is refused (fits() false,
 // no brick held, the marks clear, nothing allocated) and the servo replays it voxel by voxel
 // (SurfaceVoxels::remove); one that fits exactly is taken.
