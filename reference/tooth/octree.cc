@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -212,16 +211,14 @@ inline void copy_run(const std::uint8_t* from, std::size_t n, std::uint8_t* to) 
 
 // A node's state as save_node lays it out, visited in order: f(pointer into the grid's voxels or
 // the masks, count) for each run (the voxels' rows, then the masks' levels).
-// kVoxels false: the masks' runs only.
-template <bool kVoxels = true, class Byte, class F>
+template <class Byte, class F>
 void for_node_runs(Byte* voxels, Byte* masks, int n, int levels, int level, int x, int y, int z,
                    F f) {
   const std::size_t e = std::size_t{1} << (levels - level);
   const std::size_t nn = static_cast<std::size_t>(n);
   const std::size_t sx = static_cast<std::size_t>(x), sy = static_cast<std::size_t>(y);
   Byte* plane = voxels + e * (sx + nn * (sy + nn * static_cast<std::size_t>(z)));
-  if (!kVoxels) {
-  } else if (e == 8) {  // a brick of 8^3 (the field model's replay): rows of a constant 8 bytes
+  if (e == 8) {  // a brick of 8^3 (the field model's replay): rows of a constant 8 bytes
     for (std::size_t k = 0; k < 8; ++k, plane += nn * nn) {
       for (std::size_t j = 0; j < 8; ++j) f(plane + j * nn, std::size_t{8});
     }
@@ -271,22 +268,14 @@ void FullOctree::load_node_rows(int level, int x, int y, int z, const std::uint8
     load_node(level, x, y, z, in);
     return;
   }
-  const std::size_t nn = static_cast<std::size_t>(grid_.n);
-  std::uint8_t* box = grid_.voxels.data() + 8 * (static_cast<std::size_t>(x) +
-                                                 nn * (static_cast<std::size_t>(y) +
-                                                       nn * static_cast<std::size_t>(z)));
-  for (std::uint64_t r = rows; r != 0; r &= r - 1) {
-    const int b = std::countr_zero(r);  // row (b % 8, b / 8): save_node's run b
-    std::memcpy(box + nn * static_cast<std::size_t>(b & 7) +
-                    nn * nn * static_cast<std::size_t>(b >> 3),
-                in + 8 * b, 8);
-  }
-  in += 512;
-  for_node_runs<false>(grid_.voxels.data(), masks_.data(), grid_.n, levels_, level, x, y, z,
-                       [&](std::uint8_t* at, std::size_t n) {
-                         copy_run(in, n, at);
-                         in += n;
-                       });
+  // save_node's runs of an 8^3 node: its 64 voxel rows (run j + 8 k: row (j, k)), then the masks.
+  int run = 0;
+  for_node_runs(grid_.voxels.data(), masks_.data(), grid_.n, levels_, level, x, y, z,
+                [&](std::uint8_t* at, std::size_t n) {
+                  if (run >= 64 || ((rows >> run) & 1U) != 0) copy_run(in, n, at);
+                  in += n;
+                  ++run;
+                });
 }
 
 }  // namespace dentsim
